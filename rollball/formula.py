@@ -1,0 +1,256 @@
+"""Landscape formulas: untrusted text in, a sympy expression in x and y out.
+
+The text is screened character by character, tokenized and parsed here by a small
+recursive-descent parser that builds sympy objects directly from a whitelist. No user
+text ever reaches ``eval``, ``sympify`` or ``parse_expr``.
+
+Grammar (MATLAB spellings ``^ .^ .* ./`` are accepted beside Python's)::
+
+    expr  := term (("+" | "-") term)*
+    term  := unary (("*" | "/") unary)*
+    unary := ("+" | "-") unary | power
+    power := atom (("^" | "**") unary)?          # right associative, -x^2 = -(x^2)
+    atom  := number | name | name "(" expr ("," expr)* ")" | "(" expr ")"
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import sympy as sp
+
+X, Y = sp.symbols("x y", real=True)
+
+MAX_LENGTH = 1000
+MAX_DEPTH = 40
+LARGEST_CONSTANT = 1e300
+
+CONSTANTS = {"x": X, "y": Y, "pi": sp.pi, "e": sp.E}
+
+# name: (sympy callable, number of arguments; None for two or more)
+FUNCTIONS = {
+    "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1),
+    "asin": (sp.asin, 1), "acos": (sp.acos, 1), "atan": (sp.atan, 1), "atan2": (sp.atan2, 2),
+    "sinh": (sp.sinh, 1), "cosh": (sp.cosh, 1), "tanh": (sp.tanh, 1),
+    "asinh": (sp.asinh, 1), "acosh": (sp.acosh, 1), "atanh": (sp.atanh, 1),
+    "exp": (sp.exp, 1), "log": (sp.log, 1), "log10": (lambda a: sp.log(a, 10), 1),
+    "sqrt": (sp.sqrt, 1), "abs": (sp.Abs, 1), "hypot": (lambda a, b: sp.sqrt(a**2 + b**2), 2),
+    "min": (sp.Min, None), "max": (sp.Max, None),
+}
+
+_ALLOWED_CHARS = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_+-*/^.,() \t")
+
+_TOKEN = re.compile(
+    r"(?P<space>[ \t]+)"
+    r"|(?P<number>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+    r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)"
+    r"|(?P<op>\*\*|\.\^|\.\*|\./|[-+*/^(),])"
+)
+_OPERATOR_SPELLING = {".^": "^", "**": "^", ".*": "*", "./": "/"}
+
+
+class FormulaError(ValueError):
+    """A formula that cannot be accepted; ``position`` is 1-based (0: the whole text)."""
+
+    def __init__(self, reason: str, position: int = 0):
+        self.reason = reason
+        self.position = position
+        super().__init__(f"{reason} at {position}" if position else reason)
+
+
+@dataclass(frozen=True)
+class _Token:
+    kind: str  # "number", "name", "op", "end"
+    text: str
+    position: int  # 1-based column
+
+
+def _tokenize(text: str) -> list[_Token]:
+    for i, ch in enumerate(text):
+        if ch not in _ALLOWED_CHARS:
+            shown = ch if ch.isprintable() else f"U+{ord(ch):04X}"
+            raise FormulaError(f"unexpected character {shown!r}", i + 1)
+    tokens, i = [], 0
+    while i < len(text):
+        m = _TOKEN.match(text, i)
+        if m is None:
+            raise FormulaError(f"unexpected character {text[i]!r}", i + 1)
+        kind = m.lastgroup
+        if kind != "space":
+            tok = m.group()
+            tokens.append(_Token(kind, _OPERATOR_SPELLING.get(tok, tok), i + 1))
+        i = m.end()
+    tokens.append(_Token("end", "", len(text) + 1))
+    return tokens
+
+
+def _number(text: str, position: int) -> sp.Expr:
+    value = float(text)
+    if not math.isfinite(value) or abs(value) > LARGEST_CONSTANT:
+        raise FormulaError(f"number {text} is too large", position)
+    digits = text.lower().split("e")[0].replace(".", "").strip("0")
+    if len(digits) <= 15 and (value == 0 or 1e-15 <= abs(value) <= 1e15):
+        return sp.Rational(text)
+    return sp.Float(value)
+
+
+def _power(base: sp.Expr, exponent: sp.Expr, position: int) -> sp.Expr:
+    # Constant ** constant is folded by sympy exactly; refuse what would not fit a float
+    # before sympy spends unbounded time on it (9^9^9^9).
+    if base.is_number and exponent.is_number:
+        try:
+            b, p = abs(complex(base)), complex(exponent).real
+        except (TypeError, ValueError, OverflowError):
+            b, p = math.inf, 1.0
+        if b not in (0.0, 1.0) and (not math.isfinite(b) or abs(p * math.log10(b)) > 300):
+            raise FormulaError("constant power is too large", position)
+    return sp.Pow(base, exponent)
+
+
+class _Parser:
+    def __init__(self, tokens: list[_Token]):
+        self.tokens = tokens
+        self.i = 0
+        self.depth = 0
+
+    @property
+    def tok(self) -> _Token:
+        return self.tokens[self.i]
+
+    def take(self) -> _Token:
+        tok = self.tokens[self.i]
+        self.i += 1
+        return tok
+
+    def expect(self, text: str, opened: _Token) -> None:
+        if self.tok.text != text:
+            if self.tok.kind == "end":
+                raise FormulaError("unbalanced parenthesis", opened.position)
+            raise FormulaError(f"expected {text!r} but found {self.tok.text!r}", self.tok.position)
+        self.take()
+
+    def nest(self, position: int) -> None:
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise FormulaError(f"formula is nested too deeply (more than {MAX_DEPTH} levels)", position)
+
+    def parse(self) -> sp.Expr:
+        if self.tok.kind == "end":
+            raise FormulaError("formula is empty")
+        expr = self.expr()
+        if self.tok.kind != "end":
+            tok = self.tok
+            if tok.text == ")":
+                raise FormulaError("unbalanced parenthesis", tok.position)
+            raise FormulaError(f"missing operator before {tok.text!r}", tok.position)
+        return expr
+
+    def expr(self) -> sp.Expr:
+        terms = [self.term()]
+        while self.tok.text in ("+", "-"):
+            sign = self.take().text
+            term = self.term()
+            terms.append(term if sign == "+" else -term)
+        return sp.Add(*terms)
+
+    def term(self) -> sp.Expr:
+        result = self.unary()
+        while self.tok.text in ("*", "/"):
+            op = self.take()
+            operand = self.unary()
+            if op.text == "*":
+                result = result * operand
+            else:
+                if operand == 0:
+                    raise FormulaError("division by zero", op.position)
+                result = result / operand
+        return result
+
+    def unary(self) -> sp.Expr:
+        if self.tok.text in ("+", "-"):
+            op = self.take()
+            self.nest(op.position)
+            operand = self.unary()
+            self.depth -= 1
+            return -operand if op.text == "-" else operand
+        return self.power()
+
+    def power(self) -> sp.Expr:
+        base = self.atom()
+        if self.tok.text == "^":
+            op = self.take()
+            self.nest(op.position)
+            exponent = self.unary()
+            self.depth -= 1
+            return _power(base, exponent, op.position)
+        return base
+
+    def atom(self) -> sp.Expr:
+        tok = self.take()
+        if tok.kind == "number":
+            return _number(tok.text, tok.position)
+        if tok.kind == "name":
+            return self.name(tok)
+        if tok.text == "(":
+            self.nest(tok.position)
+            inner = self.expr()
+            self.expect(")", tok)
+            self.depth -= 1
+            return inner
+        if tok.kind == "end":
+            raise FormulaError("formula ends too early", tok.position)
+        raise FormulaError(f"unexpected {tok.text!r}", tok.position)
+
+    def name(self, tok: _Token) -> sp.Expr:
+        if tok.text in CONSTANTS:
+            if self.tok.text == "(":
+                raise FormulaError(f"{tok.text!r} is not a function", tok.position)
+            return CONSTANTS[tok.text]
+        if tok.text not in FUNCTIONS:
+            raise FormulaError(f"unknown name {tok.text!r}", tok.position)
+        func, arity = FUNCTIONS[tok.text]
+        if self.tok.text != "(":
+            raise FormulaError(f"function {tok.text!r} needs its arguments in parentheses", tok.position)
+        opened = self.take()
+        self.nest(opened.position)
+        args = [self.expr()]
+        while self.tok.text == ",":
+            self.take()
+            args.append(self.expr())
+        self.expect(")", opened)
+        self.depth -= 1
+        if arity is None and len(args) < 2:
+            raise FormulaError(f"{tok.text} takes two or more arguments", tok.position)
+        if arity is not None and len(args) != arity:
+            plural = "argument" if arity == 1 else "arguments"
+            raise FormulaError(f"{tok.text} takes {arity} {plural}, not {len(args)}", tok.position)
+        return func(*args)
+
+
+def parse_formula(text: str) -> sp.Expr:
+    """Parse a landscape formula z = f(x, y) into a sympy expression in ``X`` and ``Y``.
+
+    Raises ``FormulaError`` (a ``ValueError``) naming the position and the reason.
+    """
+    if not isinstance(text, str):
+        raise FormulaError("formula must be text")
+    if len(text) > MAX_LENGTH:
+        raise FormulaError(f"formula is too long ({len(text)} characters, at most {MAX_LENGTH})")
+    expr = _Parser(_tokenize(text)).parse()
+    check_constants(expr)
+    return expr
+
+
+def check_constants(expr: sp.Expr) -> None:
+    """Refuse expressions holding numbers a double cannot represent (or complex ones)."""
+    if expr.has(sp.zoo, sp.oo, sp.nan, sp.I):
+        raise FormulaError("formula is undefined or not real")
+    for number in expr.atoms(sp.Number):
+        try:
+            too_large = abs(float(number)) > LARGEST_CONSTANT
+        except OverflowError:
+            too_large = True
+        if too_large:
+            raise FormulaError("a constant in the formula is too large")

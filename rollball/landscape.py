@@ -1,0 +1,106 @@
+"""A landscape z = f(x, y): its formula, derivatives, and their compiled form.
+
+sympy derives f_x, f_y, f_xx, f_xy, f_yy once; common subexpressions are shared and
+printed as a small scalar function, compiled by numba as a C callback (``cfunc``) that the
+one cached stepping kernel calls. A new formula therefore costs a small compile, not a
+recompile of the integrator. ``evaluate`` gives the same six quantities as numpy arrays
+for grids (drawing) and for the reference solver.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from functools import cached_property, lru_cache
+
+import numpy as np
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+from .formula import X, Y, FormulaError, check_constants, parse_formula
+
+QUANTITIES = ("f", "fx", "fy", "fxx", "fxy", "fyy")
+
+# Compiled callbacks by generated source: the same formula is compiled once per process.
+_COMPILED: dict[str, object] = {}
+
+_PRINTER = PythonCodePrinter({"standard": "python3", "strict": True})
+_GENERATED_NAMES = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
+_SAFE_NAMES = {"def", "landscape", "x", "y", "out", "d", "carray", "math", "abs", "min", "max",
+               "if", "else", "float"} | {n for n in dir(math) if not n.startswith("_")}
+
+
+def _without_delta(expr: sp.Expr) -> sp.Expr:
+    # The second derivative of a kink (abs, min, max) is a Dirac delta: zero away from the
+    # kink, which is where a double can be evaluated.
+    return expr.replace(lambda a: isinstance(a, sp.DiracDelta), lambda a: sp.S.Zero)
+
+
+class Landscape:
+    """A parsed, differentiated landscape formula. Raises ``FormulaError`` for bad text."""
+
+    def __init__(self, text: str):
+        self.text = text
+        self.expr = parse_formula(text)
+        f = self.expr
+        fx, fy = sp.diff(f, X), sp.diff(f, Y)
+        exprs = (f, fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
+        self.derivatives = tuple(_without_delta(e) for e in exprs)
+        for e in self.derivatives:
+            check_constants(e)
+
+    def __repr__(self) -> str:
+        return f"Landscape({self.text!r})"
+
+    @cached_property
+    def source(self) -> str:
+        """Python source of ``landscape(x, y, out)`` filling out[0:6] with f and its derivatives."""
+        replacements, reduced = sp.cse(list(self.derivatives), symbols=sp.numbered_symbols("t"))
+        lines = ["def landscape(x, y, out):", "    d = carray(out, (6,))"]
+        for sym, value in replacements:
+            lines.append(f"    {sym} = {_PRINTER.doprint(value)}")
+        for i, value in enumerate(reduced):
+            lines.append(f"    d[{i}] = float({_PRINTER.doprint(value)})")
+        source = "\n".join(lines) + "\n"
+        unknown = {n for n in _GENERATED_NAMES.findall(source)
+                   if n not in _SAFE_NAMES and not re.fullmatch(r"t\d+|e\d*", n)}
+        if unknown:  # a construct the printer spelled in a way we did not vouch for
+            raise FormulaError(f"cannot compile the formula (uses {', '.join(sorted(unknown))})")
+        return source
+
+    @property
+    def compiled(self):
+        """The numba ``cfunc`` computing f, f_x, f_y, f_xx, f_xy, f_yy at (x, y)."""
+        source = self.source
+        if source not in _COMPILED:
+            from numba import carray, cfunc
+
+            from .kernel import LANDSCAPE_SIGNATURE
+
+            namespace = {"math": math, "carray": carray}
+            exec(compile(source, "<landscape>", "exec"), namespace)  # our generated code, not user text
+            _COMPILED[source] = cfunc(LANDSCAPE_SIGNATURE, error_model="numpy")(namespace["landscape"])
+        return _COMPILED[source]
+
+    @cached_property
+    def _numpy(self):
+        return sp.lambdify((X, Y), list(self.derivatives), modules="numpy")
+
+    def evaluate(self, x, y) -> np.ndarray:
+        """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y): an array of shape (6,) + broadcast shape.
+
+        Points outside the formula's domain give NaN, not warnings or exceptions.
+        """
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        with np.errstate(all="ignore"):
+            values = self._numpy(x, y)
+        return np.stack([np.broadcast_to(np.asarray(v, dtype=float), x.shape) for v in values])
+
+    def height(self, x, y) -> np.ndarray:
+        return self.evaluate(x, y)[0]
+
+
+@lru_cache(maxsize=64)
+def landscape_for(text: str) -> Landscape:
+    """The (shared, cached) landscape of a formula."""
+    return Landscape(text)

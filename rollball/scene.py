@@ -1,0 +1,234 @@
+"""Scenes: everything needed to reproduce a run, as a validated, versioned JSON document.
+
+The schema is declared once, as frozen dataclasses (key, type, default) plus a table of
+constraints; the same validation serves files, the command line and the app. Every
+refusal is a ``SceneError`` whose message starts with the offending key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .files import atomic_write_text
+from .formula import FormulaError, parse_formula
+from .tableaus import TABLEAUS
+
+FORMAT = "rollball-scene"
+VERSION = 1
+MAX_FILE_SIZE = 1 << 20
+
+
+class SceneError(ValueError):
+    """A scene that cannot be accepted; the message names the key."""
+
+
+@dataclass(frozen=True)
+class Ball:
+    radius: float = 0.1
+    mass: float = 1.0
+
+
+@dataclass(frozen=True)
+class Start:
+    x: float = 0.3
+    y: float = -0.2
+    vx: float = 0.0
+    vy: float = 0.0
+    spin: float = 0.0
+
+
+@dataclass(frozen=True)
+class Integrator:
+    method: str = "rk4"
+    munthe_kaas: bool = True
+    dt: float = 0.001
+
+
+@dataclass(frozen=True)
+class View:
+    min: float = -3.0
+    max: float = 3.0
+    step: float = 0.1
+
+
+def _positive(v):
+    return None if v > 0 else "must be greater than 0"
+
+
+def _not_negative(v):
+    return None if v >= 0 else "must not be negative"
+
+
+def _known_method(v):
+    return None if v in TABLEAUS else f"unknown method; valid methods: {', '.join(TABLEAUS)}"
+
+
+def _formula(v):
+    try:
+        parse_formula(v)
+    except FormulaError as e:
+        return str(e)
+    return None
+
+
+# Constraints beyond the type, by dotted key.
+CONSTRAINTS = {
+    "landscape": _formula,
+    "gravity": _not_negative,
+    "ball.radius": _positive,
+    "ball.mass": _positive,
+    "integrator.method": _known_method,
+    "integrator.dt": _positive,
+    "duration": _positive,
+    "view.step": _positive,
+}
+
+
+@dataclass(frozen=True)
+class Scene:
+    landscape: str
+    description: str = ""
+    gravity: float = 9.81
+    ball: Ball = field(default_factory=Ball)
+    start: Start = field(default_factory=Start)
+    integrator: Integrator = field(default_factory=Integrator)
+    duration: float = 10.0
+    view: View = field(default_factory=View)
+
+    def __post_init__(self):
+        _check(self, "")
+        if self.view.min >= self.view.max:
+            raise SceneError("view.min: must be less than view.max")
+
+    # -- dictionaries and files -------------------------------------------------------
+
+    def to_dict(self) -> dict:
+        return {"format": FORMAT, "version": VERSION, **dataclasses.asdict(self)}
+
+    @classmethod
+    def from_dict(cls, data) -> "Scene":
+        if not isinstance(data, dict):
+            raise SceneError(f"scene: must be a JSON object, not {_kind(data)}")
+        if "format" not in data:
+            raise SceneError(f"format: missing (a RollBall scene has \"format\": \"{FORMAT}\")")
+        if data["format"] != FORMAT:
+            raise SceneError(f"format: must be \"{FORMAT}\"")
+        if "version" not in data:
+            raise SceneError("version: missing")
+        version = data["version"]
+        if type(version) is not int or version < 1:
+            raise SceneError("version: must be a positive whole number")
+        if version > VERSION:
+            raise SceneError(f"version: {version} is newer than this program understands ({VERSION})")
+        if "landscape" not in data:
+            raise SceneError("landscape: missing")
+        body = {k: v for k, v in data.items() if k not in ("format", "version")}
+        return _build(cls, body, "")
+
+    @classmethod
+    def loads(cls, text: str) -> "Scene":
+        try:
+            data = json.loads(text, parse_constant=_refuse_constant, object_pairs_hook=_no_duplicates)
+        except SceneError:
+            raise
+        except RecursionError:
+            raise SceneError("scene: nested too deeply") from None
+        except ValueError as e:
+            raise SceneError(f"scene: not valid JSON ({e})") from None
+        return cls.from_dict(data)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "Scene":
+        """Read a scene file; raises ``SceneError`` (or ``OSError`` if it cannot be read)."""
+        with open(path, "rb") as stream:
+            raw = stream.read(MAX_FILE_SIZE + 1)
+        if len(raw) > MAX_FILE_SIZE:
+            raise SceneError(f"scene: file is larger than {MAX_FILE_SIZE} bytes")
+        try:
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            raise SceneError("scene: not a UTF-8 text file") from None
+        return cls.loads(text)
+
+    def dumps(self) -> str:
+        return json.dumps(self.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the scene atomically: an existing file is replaced whole or not at all."""
+        atomic_write_text(Path(path), self.dumps())
+
+
+def _kind(value) -> str:
+    return {dict: "an object", list: "an array", str: "text", bool: "true/false",
+            type(None): "null"}.get(type(value), "a number")
+
+
+def _refuse_constant(name):
+    raise SceneError(f"scene: {name} is not a number JSON allows")
+
+
+def _no_duplicates(pairs):
+    data = {}
+    for key, value in pairs:
+        if key in data:
+            raise SceneError(f"{key}: appears twice")
+        data[key] = value
+    return data
+
+
+def _build(cls, data: dict, prefix: str):
+    hints = typing.get_type_hints(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    for key in data:
+        if key not in names:
+            raise SceneError(f"{prefix}{key}: unknown key")
+    values = {}
+    for key, value in data.items():
+        kind = hints[key]
+        if dataclasses.is_dataclass(kind):
+            if not isinstance(value, dict):
+                raise SceneError(f"{prefix}{key}: must be an object, not {_kind(value)}")
+            value = _build(kind, value, f"{prefix}{key}.")
+        values[key] = value
+    try:
+        return cls(**values)
+    except TypeError:  # a required key is missing
+        missing = [f.name for f in dataclasses.fields(cls) if f.name not in values]
+        raise SceneError(f"{prefix}{missing[0]}: missing") from None
+
+
+def _check(obj, prefix: str) -> None:
+    """Check types and constraints of a (nested) scene dataclass, in field order."""
+    hints = typing.get_type_hints(type(obj))
+    for f in dataclasses.fields(obj):
+        key, value, kind = prefix + f.name, getattr(obj, f.name), hints[f.name]
+        if dataclasses.is_dataclass(kind):
+            if not isinstance(value, kind):
+                raise SceneError(f"{key}: must be an object")
+            _check(value, key + ".")
+            continue
+        if kind is float:
+            if type(value) not in (int, float):
+                raise SceneError(f"{key}: must be a number, not {_kind(value)}")
+            try:
+                number = float(value)
+            except OverflowError:
+                raise SceneError(f"{key}: number is too large") from None
+            if not math.isfinite(number):
+                raise SceneError(f"{key}: must be a finite number")
+            if type(value) is int:
+                object.__setattr__(obj, f.name, number)
+            value = number
+        elif kind is bool and type(value) is not bool:
+            raise SceneError(f"{key}: must be true or false, not {_kind(value)}")
+        elif kind is str and type(value) is not str:
+            raise SceneError(f"{key}: must be text, not {_kind(value)}")
+        problem = CONSTRAINTS.get(key, lambda v: None)(value)
+        if problem:
+            raise SceneError(f"{key}: {problem} (got {value!r})" if kind is float else f"{key}: {problem}")

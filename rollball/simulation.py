@@ -1,0 +1,193 @@
+"""Running a scene: initial state, the compiled kernel in chunks, and the trajectory."""
+
+from __future__ import annotations
+
+import math
+import operator
+
+import numpy as np
+
+from . import __version__, kernel
+from .landscape import Landscape, landscape_for
+from .scene import Scene
+from .tableaus import get_tableau
+from .trajectory import Status, Trajectory
+
+MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
+CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
+
+_STATUS = {kernel.OK: Status.OK, kernel.DOES_NOT_FIT: Status.DOES_NOT_FIT,
+           kernel.NONFINITE: Status.NONFINITE}
+
+
+def step_count(dt: float, t_end: float) -> int:
+    """Steps of size dt to reach t_end; the last one is shortened when dt does not divide t_end."""
+    q = t_end / dt
+    n = round(q)
+    if n >= 1 and abs(q - n) <= 1e-9 * q:
+        return n
+    return max(1, math.ceil(q))
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{name} must be a number, not {value!r}")
+    value = float(value)
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be a finite number greater than 0, not {value!r}")
+    return value
+
+
+def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Contact point and angular momentum about it, from the scene's start values."""
+    s, r, m = scene.start, scene.ball.radius, scene.ball.mass
+    _, fx, fy = landscape.evaluate(s.x, s.y)[:3]
+    N = np.array([-fx, -fy, 1.0]) / math.sqrt(1.0 + fx * fx + fy * fy)
+    cdot = np.array([s.vx, s.vy, fx * s.vx + fy * s.vy])
+    omega = np.cross(N, cdot) / r + s.spin * N
+    v = m * r * r * (1.4 * omega - N * (N @ omega))
+    return np.array([s.x, s.y]), v
+
+
+class Simulation:
+    """One run of a scene, advanced in chunks: ``advance`` until ``done``, then ``trajectory``.
+
+    Keyword arguments override the scene's integrator settings and duration.
+    """
+
+    def __init__(self, scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
+                 dt: float | None = None, t_end: float | None = None, record_every: int = 1):
+        self.scene = scene
+        self.tableau = get_tableau(scene.integrator.method if method is None else method)
+        mk = scene.integrator.munthe_kaas if munthe_kaas is None else munthe_kaas
+        if not isinstance(mk, bool):
+            raise ValueError(f"munthe_kaas must be True or False, not {mk!r}")
+        self.munthe_kaas = mk
+        self.dt = _positive("dt", scene.integrator.dt if dt is None else dt)
+        self.t_end = _positive("t_end", scene.duration if t_end is None else t_end)
+        try:
+            every = operator.index(record_every)
+        except TypeError:
+            raise ValueError(f"record_every must be a whole number, not {record_every!r}") from None
+        if isinstance(record_every, bool) or every < 1:
+            raise ValueError(f"record_every must be 1 or more, not {record_every!r}")
+        self.record_every = every
+        self.n_steps = step_count(self.dt, self.t_end)
+        n_rows = 1 + self.n_steps // every + (1 if self.n_steps % every else 0)
+        if n_rows > MAX_ROWS:
+            raise ValueError(f"this run would record {n_rows:,} rows (at most {MAX_ROWS:,}): "
+                             f"record every N-th step with a larger N")
+
+        self.landscape = landscape_for(scene.landscape)
+        self._fn = self.landscape.compiled
+        self._A, self._b, _ = self.tableau.arrays()
+        self._p = np.array([scene.ball.radius, scene.ball.mass, scene.gravity])
+        n = kernel.state_size(mk)
+        self._z = np.zeros(n)
+        self._R = np.eye(3)
+        alpha, v = initial_state(self.landscape, scene)
+        self._z[:2], self._z[2:5] = alpha, v
+        if not mk:
+            self._z[5:] = self._R.ravel()
+        self._K = np.zeros((self.tableau.stages, n))
+        self._probe = np.zeros(kernel.PROBE_SIZE)
+        self._rows = np.empty((n_rows, kernel.ROW_SIZE))
+        self._ints = np.zeros(4, dtype=np.int64)
+        self._info = np.full(6, np.nan)
+        self.status: Status | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.status is not None
+
+    @property
+    def steps(self) -> int:
+        return int(self._ints[kernel.I_STEPS])
+
+    @property
+    def time(self) -> float:
+        """Simulated time reached so far."""
+        k = self.steps
+        return self.t_end if k == self.n_steps else k * self.dt
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The rows recorded so far (a view: copy what you keep)."""
+        return self._rows[: self._ints[kernel.I_ROWS]]
+
+    def advance(self, max_steps: int | None = None) -> np.ndarray:
+        """Run up to ``max_steps`` more steps (all remaining if None); return the new rows."""
+        if self.done:
+            return self._rows[:0]
+        first = int(self._ints[kernel.I_ROWS])
+        remaining = self.n_steps - self.steps if max_steps is None else max_steps
+        while remaining > 0 or self._ints[kernel.I_ROWS] == 0:
+            chunk = min(remaining, CHUNK)
+            kernel.advance(self._fn, self._A, self._b, self.munthe_kaas, self._p, self.dt, self.t_end,
+                           self.n_steps, self.record_every, chunk, self._z, self._R, self._K,
+                           self._probe, self._rows, self._ints, self._info)
+            remaining -= chunk
+            code = int(self._ints[kernel.I_STATUS])
+            if code != kernel.RUNNING:
+                self.status = _STATUS[code]
+                break
+        return self._rows[first: self._ints[kernel.I_ROWS]].copy()
+
+    def cancel(self) -> None:
+        """Stop the run where it is (status ``aborted``); the rows so far are kept."""
+        if not self.done:
+            self.status = Status.ABORTED
+
+    @property
+    def liftoff_time(self) -> float | None:
+        t = self._info[kernel.F_LIFTOFF]
+        return None if math.isnan(t) else float(t)
+
+    def message(self) -> str:
+        t, x, y = self._info[kernel.F_FAIL_T], self._info[kernel.F_FAIL_X], self._info[kernel.F_FAIL_Y]
+        where = f"t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g})"
+        if self.status is Status.OK:
+            return f"reached t = {self.t_end:g} s in {self.steps} steps"
+        if self.status is Status.DOES_NOT_FIT:
+            return (f"the ball (r = {self.scene.ball.radius:g} m) does not fit the surface at {where}: "
+                    f"r·κ = {self._info[kernel.F_FAIL_VALUE]:.4g} ≥ 1 for a principal curvature κ, "
+                    f"so the model cannot go on")
+        if self.status is Status.NONFINITE:
+            if self.steps == 0 and t == 0:
+                return (f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
+                        if len(self.rows) == 0 else f"the state became non-finite at {where}")
+            return (f"the state became non-finite at {where}: the landscape cannot be evaluated "
+                    f"there (outside its domain or at a pole) or the step is too large")
+        if self.status is Status.ABORTED:
+            return f"stopped at t = {self.time:.6g} s after {self.steps} steps"
+        return f"running: t = {self.time:.6g} s"
+
+    def trajectory(self) -> Trajectory:
+        scene, s = self.scene, self.scene.start
+        provenance = {
+            "program": f"rollball {__version__}",
+            "landscape": scene.landscape,
+            "ball": f"radius {scene.ball.radius!r} m, mass {scene.ball.mass!r} kg",
+            "gravity": f"{scene.gravity!r} m/s^2",
+            "start": f"x {s.x!r}, y {s.y!r}, vx {s.vx!r}, vy {s.vy!r}, spin {s.spin!r}",
+            "method": f"{self.tableau.name}, {'Munthe-Kaas' if self.munthe_kaas else 'classic'}, "
+                      f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}",
+            "status": f"{self.status}: {self.message()}",
+        }
+        return Trajectory(self.rows.copy(), status=self.status or Status.ABORTED, message=self.message(),
+                          liftoff_time=self.liftoff_time, steps=self.steps, mass=scene.ball.mass,
+                          radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)
+
+
+def simulate(scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
+             dt: float | None = None, t_end: float | None = None, record_every: int = 1) -> Trajectory:
+    """Run a scene to its end (or until the physics stops it) and return the trajectory.
+
+    Keyword arguments override the scene's values: ``method`` (euler, rk4, lawson5),
+    ``munthe_kaas``, ``dt`` (s), ``t_end`` (s); ``record_every`` keeps every N-th step
+    (row 0 is the initial state and the last row the end of the run).
+    """
+    run = Simulation(scene, method=method, munthe_kaas=munthe_kaas, dt=dt, t_end=t_end,
+                     record_every=record_every)
+    run.advance()
+    return run.trajectory()

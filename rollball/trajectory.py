@@ -1,0 +1,114 @@
+"""A recorded run: one row per recorded step, the CSV columns of DESIGN §5, and how it ended."""
+
+from __future__ import annotations
+
+import enum
+import io
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .files import atomic_write
+
+COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
+           "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
+           "energy", "normal_force")
+HEADER = ",".join(COLUMNS)
+
+
+class Status(str, enum.Enum):
+    """How a run ended."""
+
+    OK = "ok"                      # reached its end time
+    DOES_NOT_FIT = "does_not_fit"  # the ball no longer fits a valley: the model breaks down
+    NONFINITE = "nonfinite"        # the landscape or the state could not be evaluated
+    ABORTED = "aborted"            # the caller cancelled
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass
+class Trajectory:
+    """Recorded rows (shape (n, 23)) and the facts of the run that produced them."""
+
+    data: np.ndarray
+    status: Status = Status.OK
+    message: str = ""
+    liftoff_time: float | None = None
+    steps: int = 0
+    mass: float = 1.0
+    radius: float = 0.1
+    gravity: float = 9.81
+    provenance: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.data)
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.data[:, 0]
+
+    @property
+    def contact(self) -> np.ndarray:
+        return self.data[:, 1:3]
+
+    @property
+    def center(self) -> np.ndarray:
+        return self.data[:, 3:6]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return self.data[:, 6:9]
+
+    @property
+    def omega(self) -> np.ndarray:
+        return self.data[:, 9:12]
+
+    @property
+    def R(self) -> np.ndarray:
+        return self.data[:, 12:21].reshape(-1, 3, 3)
+
+    @property
+    def energy(self) -> np.ndarray:
+        return self.data[:, 21]
+
+    @property
+    def normal_force(self) -> np.ndarray:
+        return self.data[:, 22]
+
+    @property
+    def energy_drift(self) -> float:
+        """max |E(t) - E(0)| relative to |E(0)|, or to m g r where |E(0)| is smaller."""
+        if len(self) == 0:
+            return 0.0
+        scale = max(abs(self.energy[0]), self.mass * self.gravity * self.radius, np.finfo(float).tiny)
+        return float(np.max(np.abs(self.energy - self.energy[0])) / scale)
+
+    def orthogonality_error(self) -> np.ndarray:
+        """||R^T R - I|| (Frobenius) for every row."""
+        R = self.R
+        return np.linalg.norm(np.swapaxes(R, 1, 2) @ R - np.eye(3), axis=(1, 2))
+
+    def to_csv(self, path: str | os.PathLike) -> None:
+        """Write the CSV of DESIGN §5 atomically, numbers at full precision."""
+        atomic_write(path, self.write_csv)
+
+    def write_csv(self, stream) -> None:
+        for key, value in self.provenance.items():
+            stream.write(f"# {key}: {value}\n")
+        stream.write(HEADER + "\n")
+        np.savetxt(stream, self.data, fmt="%.17g", delimiter=",")
+
+
+def read_csv(path: str | os.PathLike) -> np.ndarray:
+    """Read a trajectory CSV back as an (n, 23) array (provenance lines are skipped)."""
+    with open(path, encoding="utf-8") as stream:
+        lines = [line for line in stream if not line.startswith("#")]
+    if not lines or lines[0].strip() != HEADER:
+        raise ValueError(f"{path}: not a RollBall trajectory (header must be {HEADER})")
+    body = "".join(lines[1:])
+    if not body.strip():
+        return np.empty((0, len(COLUMNS)))
+    return np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2)
