@@ -1,0 +1,131 @@
+"""The ``rollball`` command line.
+
+Exit status: 0 when a run reached its end (a lift-off is a warning), 1 when the physics
+stopped it early (the trajectory up to there is still written), 2 for bad input or usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from . import __version__
+from .examples import example_scenes
+from .scene import SceneError
+from .formula import FormulaError
+from .tableaus import TABLEAUS
+
+EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # usage errors: one line, exit 2
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number greater than 0: {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be 1 or more: {text!r}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="rollball",
+        description="Simulate a solid ball rolling without slipping over a landscape z = f(x, y).",
+        epilog="Example: rollball simulate resources/examples/hills.json --csv hills.csv",
+    )
+    parser.add_argument("--version", action="version", version=f"rollball {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    sim = commands.add_parser(
+        "simulate", help="run a scene file and print a one-line summary",
+        description="Run a scene file (JSON) and print a one-line summary: steps, status, "
+                    "relative energy drift and the first lift-off time. Options override the scene.")
+    sim.add_argument("scene", metavar="SCENE.json", help="scene file to run")
+    sim.add_argument("--method", choices=list(TABLEAUS), help="Runge-Kutta tableau")
+    mk = sim.add_mutually_exclusive_group()
+    mk.add_argument("--munthe-kaas", dest="munthe_kaas", action="store_true", default=None,
+                    help="advance the orientation on SO(3) (Runge-Kutta-Munthe-Kaas)")
+    mk.add_argument("--classic", dest="munthe_kaas", action="store_false",
+                    help="integrate the orientation as a plain 3x3 matrix, as in 2011")
+    sim.add_argument("--dt", type=_positive_float, metavar="H", help="step size (s)")
+    sim.add_argument("--t-end", type=_positive_float, metavar="T", help="end time (s)")
+    sim.add_argument("--every", type=_positive_int, default=1, metavar="N",
+                     help="record every N-th step (default 1)")
+    sim.add_argument("--csv", metavar="OUT.csv", help="write the trajectory as CSV")
+
+    commands.add_parser("examples", help="list the example scenes",
+                        description="List the example scenes shipped with RollBall.")
+    return parser
+
+
+def _simulate(args) -> int:
+    from .scene import Scene
+    from .simulation import simulate
+    from .trajectory import Status
+
+    try:
+        scene = Scene.load(args.scene)
+    except (SceneError, OSError) as e:
+        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    try:
+        traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
+                        t_end=args.t_end, record_every=args.every)
+    except (ValueError, FormulaError) as e:
+        return _fail(str(e))
+    liftoff = ("no lift-off" if traj.liftoff_time is None
+               else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
+    print(f"{args.scene}: {traj.steps} steps, status {traj.status} ({traj.message}), "
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}")
+    if args.csv:
+        try:
+            traj.to_csv(args.csv)
+        except OSError as e:
+            return _fail(f"cannot write {args.csv}: {e.strerror or e}")
+    return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
+
+
+def _examples() -> int:
+    for path, scene in example_scenes():
+        try:
+            path = path.relative_to(Path.cwd())
+        except ValueError:
+            pass
+        print(f"{path}: {scene.description}")
+    return EXIT_OK
+
+
+def _fail(message: str) -> int:
+    print(f"rollball: error: {message}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command == "simulate":
+        try:
+            return _simulate(args)
+        except KeyboardInterrupt:
+            print("rollball: interrupted", file=sys.stderr)
+            return 130
+    if args.command == "examples":
+        return _examples()
+    parser.print_help()
+    return EXIT_BAD_INPUT

@@ -1,0 +1,15 @@
+import pytest
+
+from rollball.scene import Ball, Integrator, Scene, Start
+
+
+def make_scene(landscape, *, radius=0.1, mass=1.0, gravity=9.81, x=0.0, y=0.0, vx=0.0, vy=0.0,
+               spin=0.0, method="rk4", munthe_kaas=True, dt=1e-3, duration=1.0):
+    return Scene(landscape=landscape, gravity=gravity, ball=Ball(radius, mass),
+                 start=Start(x, y, vx, vy, spin), integrator=Integrator(method, munthe_kaas, dt),
+                 duration=duration)
+
+
+@pytest.fixture
+def scene_factory():
+    return make_scene

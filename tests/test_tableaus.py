@@ -1,0 +1,92 @@
+"""The Butcher tableaus satisfy their own order conditions, exactly (rational arithmetic)."""
+
+from fractions import Fraction
+from itertools import combinations_with_replacement
+
+import pytest
+
+from rollball.tableaus import LAWSON5, RK4, TABLEAUS, Tableau, get_tableau
+
+
+def rooted_trees(order):
+    """All rooted trees with ``order`` nodes, each a sorted tuple of its subtrees."""
+    if order == 1:
+        return [()]
+    trees = set()
+    # a tree is a multiset of subtrees whose sizes add up to order - 1
+    def partitions(n, largest):
+        if n == 0:
+            yield []
+            return
+        for k in range(min(n, largest), 0, -1):
+            for rest in partitions(n - k, k):
+                yield [k] + rest
+    for sizes in partitions(order - 1, order - 1):
+        groups = [rooted_trees(k) for k in sizes]
+        def build(i, chosen):
+            if i == len(sizes):
+                trees.add(tuple(sorted(chosen)))
+                return
+            for t in groups[i]:
+                build(i + 1, chosen + [t])
+        build(0, [])
+    return sorted(trees)
+
+
+def size(tree):
+    return 1 + sum(size(t) for t in tree)
+
+
+def density(tree):
+    result = size(tree)
+    for t in tree:
+        result *= density(t)
+    return result
+
+
+def stage_weights(tab: Tableau, tree):
+    """The vector Phi_i(tree) over the stages: product over children of (A Phi(child))_i."""
+    s = tab.stages
+    A = [[Fraction(0)] * s for _ in range(s)]
+    for i, row in enumerate(tab.a, start=1):
+        A[i][:i] = row
+    g = [Fraction(1)] * s
+    for child in tree:
+        h = stage_weights(tab, child)
+        Ah = [sum(A[i][j] * h[j] for j in range(s)) for i in range(s)]
+        g = [g[i] * Ah[i] for i in range(s)]
+    return g
+
+
+def satisfies(tab, tree):
+    phi = sum(b * g for b, g in zip(tab.b, stage_weights(tab, tree)))
+    return phi == Fraction(1, density(tree))
+
+
+def test_tree_counts():
+    assert [len(rooted_trees(p)) for p in range(1, 7)] == [1, 1, 2, 4, 9, 20]
+
+
+@pytest.mark.parametrize("tab", TABLEAUS.values(), ids=list(TABLEAUS))
+def test_declared_order_is_exact(tab):
+    for p in range(1, tab.order + 1):
+        for tree in rooted_trees(p):
+            assert satisfies(tab, tree), (tab.name, p, tree)
+    # and not one order more
+    assert not all(satisfies(tab, tree) for tree in rooted_trees(tab.order + 1))
+
+
+def test_registry():
+    assert list(TABLEAUS) == ["euler", "rk4", "lawson5"]
+    assert get_tableau("lawson5") is LAWSON5
+    with pytest.raises(ValueError, match="euler, rk4, lawson5"):
+        get_tableau("rk45")
+
+
+def test_tableau_checks_itself():
+    with pytest.raises(ValueError, match="sum to c"):
+        Tableau("bad", "Bad", 2, (Fraction(0), Fraction(1, 2)), ((Fraction(1),),), (Fraction(0), Fraction(1)))
+    with pytest.raises(ValueError, match="sum to 1"):
+        Tableau("bad", "Bad", 1, (Fraction(0),), (), (Fraction(1, 2),))
+    A, b, c = RK4.arrays()
+    assert A.shape == (4, 4) and (A[0] == 0).all() and A[3, 2] == 1 and b.sum() == pytest.approx(1, abs=1e-15) and c[1] == 0.5
