@@ -1,0 +1,68 @@
+"""Landscape derivatives: compiled code, numpy evaluation and sympy agree."""
+
+import ctypes
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from rollball.formula import X, Y
+from rollball.landscape import Landscape, landscape_for
+
+
+def compiled_values(landscape, x, y):
+    out = np.zeros(6)
+    landscape.compiled.ctypes(x, y, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+    return out
+
+
+@pytest.mark.parametrize("text", [
+    "0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "x^3*y - 2*x*y^2 + 7", "atan2(y + 3, x + 5)",
+    "log(2 + x^2 + y^2) + sqrt(3 + x) + tanh(x*y) + hypot(x, 1 + y)", "abs(x)*y^2 + max(x, y) + min(x^2, 1)",
+    "cosh(x/3)/(1 + y^2)", "pi*e^(x/4)", "0", "3.5",
+])
+def test_compiled_numpy_and_sympy_agree(text):
+    landscape = Landscape(text)
+    exact = [sp.lambdify((X, Y), d, "mpmath") for d in landscape.derivatives]
+    for x, y in [(0.3, -0.7), (-1.1, 0.45), (0.9, 1.3)]:
+        expected = np.array([float(f(x, y)) for f in exact])
+        np.testing.assert_allclose(compiled_values(landscape, x, y), expected, rtol=1e-12, atol=1e-13)
+        np.testing.assert_allclose(landscape.evaluate(x, y), expected, rtol=1e-12, atol=1e-13)
+
+
+def test_derivatives_against_finite_differences():
+    landscape = Landscape("0.5*sin(x)*cos(y) + 0.1*x^2*y")
+    x, y, h = 0.4, -0.3, 1e-5
+    f = lambda a, b: landscape.evaluate(a, b)
+    values = f(x, y)
+    np.testing.assert_allclose(values[1], (f(x + h, y)[0] - f(x - h, y)[0]) / (2 * h), rtol=1e-8)
+    np.testing.assert_allclose(values[2], (f(x, y + h)[0] - f(x, y - h)[0]) / (2 * h), rtol=1e-8)
+    np.testing.assert_allclose(values[3], (f(x + h, y)[1] - f(x - h, y)[1]) / (2 * h), rtol=1e-8)
+    np.testing.assert_allclose(values[4], (f(x, y + h)[1] - f(x, y - h)[1]) / (2 * h), rtol=1e-8)
+    np.testing.assert_allclose(values[5], (f(x, y + h)[2] - f(x, y - h)[2]) / (2 * h), rtol=1e-8)
+
+
+def test_constant_landscapes_give_arrays_of_the_grid_shape():
+    for text in ("0", "2.5", "x - x + 1", "sin(0.3)"):
+        X_, Y_ = np.meshgrid(np.linspace(-1, 1, 4), np.linspace(-1, 1, 5), indexing="ij")
+        values = Landscape(text).evaluate(X_, Y_)
+        assert values.shape == (6, 4, 5)
+        assert np.isfinite(values).all()
+        assert (values[1:] == 0).all()
+
+
+def test_outside_the_domain_is_nan_not_an_exception():
+    values = Landscape("sqrt(x) + log(y)").evaluate(np.array([-1.0, 1.0]), np.array([1.0, -1.0]))
+    assert np.isnan(values[0]).all()
+    assert np.isnan(compiled_values(Landscape("sqrt(x)"), -1.0, 0.0)[0])
+
+
+def test_generated_source_uses_only_known_names():
+    source = Landscape("abs(x) + max(x, y^2) + atan2(y, x) + log10(2 + x)").source
+    assert source.startswith("def landscape(x, y, out):")
+    assert "import" not in source and "__" not in source
+
+
+def test_the_same_formula_is_compiled_once():
+    assert landscape_for("x*y + 1") is landscape_for("x*y + 1")
+    assert Landscape("x*y + 2").compiled is Landscape("x*y + 2").compiled

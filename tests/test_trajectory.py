@@ -1,0 +1,113 @@
+"""Recording rules, chunked runs, the API's argument checks, and the CSV."""
+
+import numpy as np
+import pytest
+
+from rollball import COLUMNS, Simulation, Status, read_csv, simulate
+from rollball.simulation import step_count
+
+
+def test_step_count():
+    assert step_count(1e-3, 10.0) == 10000
+    assert step_count(0.1, 0.3) == 3
+    assert step_count(0.003, 0.01) == 4
+    assert step_count(1.0, 0.25) == 1
+
+
+def test_last_row_is_exactly_t_end_with_a_shortened_step(scene_factory):
+    traj = simulate(scene_factory("0.1*x*y", x=0.2, vx=0.5), dt=0.003, t_end=0.01, record_every=3)
+    assert traj.steps == 4
+    assert traj.t[0] == 0.0 and traj.t[1] == pytest.approx(0.009, rel=1e-15) and traj.t[2] == 0.01
+
+
+def test_record_every(scene_factory):
+    traj = simulate(scene_factory("0.1*x*y", x=0.2, vx=0.5), dt=1e-3, t_end=1.0, record_every=10)
+    assert len(traj) == 101
+    assert traj.t[0] == 0 and traj.t[-1] == 1.0
+    np.testing.assert_allclose(np.diff(traj.t), 0.01, rtol=1e-9)
+    every_step = simulate(scene_factory("0.1*x*y", x=0.2, vx=0.5), dt=1e-3, t_end=1.0)
+    assert np.array_equal(every_step.data[::10], traj.data)
+
+
+def test_arrays_have_the_documented_shapes(scene_factory):
+    traj = simulate(scene_factory("0.5*sin(x)*cos(y)"), t_end=0.1)
+    n = len(traj)
+    assert traj.t.shape == (n,) and traj.contact.shape == (n, 2)
+    for name in ("center", "velocity", "omega"):
+        assert getattr(traj, name).shape == (n, 3)
+    assert traj.R.shape == (n, 3, 3)
+    assert traj.energy.shape == traj.normal_force.shape == (n,)
+    assert traj.status == "ok" and traj.liftoff_time is None
+
+
+def test_chunked_run_equals_one_run_and_can_be_cancelled(scene_factory):
+    scene = scene_factory("0.5*sin(x)*cos(y)", x=0.3, vx=1.0)
+    whole = simulate(scene, t_end=1.0, record_every=7)
+    run = Simulation(scene, t_end=1.0, record_every=7)
+    chunks = []
+    while not run.done:
+        chunks.append(run.advance(33))
+    assert np.array_equal(np.concatenate(chunks), whole.data)
+    assert run.trajectory().status is Status.OK
+
+    run = Simulation(scene, t_end=1.0)
+    run.advance(100)
+    run.cancel()
+    traj = run.trajectory()
+    assert traj.status is Status.ABORTED and traj.steps == 100 and len(traj) == 101
+    assert "stopped" in traj.message
+    assert len(run.advance(10)) == 0
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(dt=0), "dt"), (dict(dt=-1e-3), "dt"), (dict(dt=float("nan")), "dt"), (dict(dt="1e-3"), "dt"),
+    (dict(t_end=float("inf")), "t_end"), (dict(t_end=0), "t_end"),
+    (dict(record_every=0), "record_every"), (dict(record_every=1.5), "record_every"),
+    (dict(record_every=True), "record_every"),
+    (dict(method="rk45"), "valid methods"), (dict(munthe_kaas="yes"), "munthe_kaas"),
+    (dict(dt=1e-9, t_end=10.0), "rows"),
+])
+def test_bad_arguments_are_refused(scene_factory, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        simulate(scene_factory("x"), **kwargs)
+
+
+def test_csv_round_trip_at_full_precision(scene_factory, tmp_path):
+    traj = simulate(scene_factory("0.5*sin(x)*cos(y)", x=0.3, vx=1.0, spin=1 / 3), t_end=0.5)
+    path = tmp_path / "out.csv"
+    traj.to_csv(path)
+    lines = path.read_text().splitlines()
+    header = [line for line in lines if not line.startswith("#")][0]
+    assert header == ",".join(COLUMNS) and " " not in header
+    assert any(line.startswith("# landscape: 0.5*sin(x)*cos(y)") for line in lines)
+    back = read_csv(path)
+    assert back.shape == (len(traj), 23)
+    assert np.array_equal(back, traj.data)  # bit for bit
+
+
+def test_csv_of_an_empty_trajectory_has_the_header(scene_factory, tmp_path):
+    traj = simulate(scene_factory("sqrt(x)", x=-1.0))
+    assert len(traj) == 0
+    path = tmp_path / "empty.csv"
+    traj.to_csv(path)
+    assert [line for line in path.read_text().splitlines() if not line.startswith("#")] == [",".join(COLUMNS)]
+    assert read_csv(path).shape == (0, 23)
+
+
+def test_columns_are_consistent(scene_factory):
+    scene = scene_factory("0.5*sin(x)*cos(y)", x=0.3, vx=1.0, spin=2.0)
+    traj = simulate(scene, t_end=0.5)
+    landscape = scene.landscape
+    from rollball.landscape import landscape_for
+
+    f, fx, fy = landscape_for(landscape).evaluate(traj.contact[:, 0], traj.contact[:, 1])[:3]
+    N = np.stack([-fx, -fy, np.ones_like(fx)], axis=1) / np.sqrt(1 + fx**2 + fy**2)[:, None]
+    r = scene.ball.radius
+    np.testing.assert_allclose(traj.center, np.column_stack([traj.contact, f]) + r * N, atol=1e-14)
+    np.testing.assert_allclose(traj.velocity, r * np.cross(traj.omega, N), atol=1e-13)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", traj.velocity, N), 0, atol=1e-13)
+    kinetic = 0.5 * np.sum(traj.velocity**2, 1) + 0.5 * 0.4 * r**2 * np.sum(traj.omega**2, 1)
+    np.testing.assert_allclose(traj.energy, kinetic + 9.81 * traj.center[:, 2], rtol=1e-13)
+    # the centre velocity column is the time derivative of the centre column
+    dc = np.gradient(traj.center, traj.t, axis=0)[1:-1]
+    np.testing.assert_allclose(dc, traj.velocity[1:-1], atol=1e-5)
