@@ -124,19 +124,15 @@ def rodrigues(u, R, out):
         b = 2.0 * h * h
     u1, u2, u3 = u[0], u[1], u[2]
     # Q = I + a A + b A^2, A^2 = u u^T - |u|^2 I
-    Q = np.empty((3, 3))
-    Q[0, 0] = 1.0 + b * (u1 * u1 - th2)
-    Q[1, 1] = 1.0 + b * (u2 * u2 - th2)
-    Q[2, 2] = 1.0 + b * (u3 * u3 - th2)
-    Q[0, 1] = -a * u3 + b * u1 * u2
-    Q[1, 0] = a * u3 + b * u1 * u2
-    Q[0, 2] = a * u2 + b * u1 * u3
-    Q[2, 0] = -a * u2 + b * u1 * u3
-    Q[1, 2] = -a * u1 + b * u2 * u3
-    Q[2, 1] = a * u1 + b * u2 * u3
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = Q[i, 0] * R[0, j] + Q[i, 1] * R[1, j] + Q[i, 2] * R[2, j]
+    q11, q22, q33 = 1.0 + b * (u1 * u1 - th2), 1.0 + b * (u2 * u2 - th2), 1.0 + b * (u3 * u3 - th2)
+    q12, q21 = -a * u3 + b * u1 * u2, a * u3 + b * u1 * u2
+    q13, q31 = a * u2 + b * u1 * u3, -a * u2 + b * u1 * u3
+    q23, q32 = -a * u1 + b * u2 * u3, a * u1 + b * u2 * u3
+    for j in range(3):
+        r1, r2, r3 = R[0, j], R[1, j], R[2, j]
+        out[0, j] = q11 * r1 + q12 * r2 + q13 * r3
+        out[1, j] = q21 * r1 + q22 * r2 + q23 * r3
+        out[2, j] = q31 * r1 + q32 * r2 + q33 * r3
 
 
 @njit(cache=True)
