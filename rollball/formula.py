@@ -226,7 +226,10 @@ class _Parser:
         if arity is not None and len(args) != arity:
             plural = "argument" if arity == 1 else "arguments"
             raise FormulaError(f"{tok.text} takes {arity} {plural}, not {len(args)}", tok.position)
-        return func(*args)
+        try:
+            return func(*args)
+        except (ValueError, TypeError, ArithmeticError) as e:  # e.g. min of a complex constant
+            raise FormulaError(f"{tok.text} cannot be applied here ({e})", tok.position) from None
 
 
 def parse_formula(text: str) -> sp.Expr:
@@ -247,6 +250,13 @@ def check_constants(expr: sp.Expr) -> None:
     """Refuse expressions holding numbers a double cannot represent (or complex ones)."""
     if expr.has(sp.zoo, sp.oo, sp.nan, sp.I):
         raise FormulaError("formula is undefined or not real")
+    if expr.is_number:
+        try:
+            value = complex(expr)
+        except (TypeError, ValueError, OverflowError):
+            value = complex("nan")
+        if value.imag != 0 or not math.isfinite(value.real):
+            raise FormulaError("formula is undefined or not real")
     for number in expr.atoms(sp.Number):
         try:
             too_large = abs(float(number)) > LARGEST_CONSTANT

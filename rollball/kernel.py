@@ -41,7 +41,7 @@ def state_size(munthe_kaas: bool) -> int:
     return 8 if munthe_kaas else 14
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def dynamics(fn, d, p, z, mk, dz, probe, full):
     """dz = z'(z); with ``full`` also fill ``probe`` (normal, omega, F.N, r*kappa, height)."""
     r, m, g0 = p[0], p[1], p[2]
@@ -110,7 +110,7 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
         probe[8] = d[0]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rodrigues(u, R, out):
     """out = exp(A(u)) R, exact at any angle, with a series for small |u|."""
     th2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]
@@ -135,7 +135,7 @@ def rodrigues(u, R, out):
         out[2, j] = q31 * r1 + q32 * r2 + q33 * r3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def record(rows, i, t, z, R, probe, p):
     """Write one trajectory row (the CSV columns of DESIGN §5)."""
     r, m, g0 = p[0], p[1], p[2]
@@ -159,7 +159,7 @@ def record(rows, i, t, z, R, probe, p):
     row[22] = probe[6]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _finite(a):
     for x in a.flat:
         if not math.isfinite(x):
@@ -167,7 +167,7 @@ def _finite(a):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def advance(fn, A, b, mk, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info):
     """Run up to ``max_steps`` further steps; all run state lives in the arrays passed in.
 

@@ -36,6 +36,14 @@ def _without_delta(expr: sp.Expr) -> sp.Expr:
     return expr.replace(lambda a: isinstance(a, sp.DiracDelta), lambda a: sp.S.Zero)
 
 
+def _real(value) -> np.ndarray:
+    """Real values as floats; a complex result (a negative base to a fractional power) is NaN."""
+    value = np.asarray(value)
+    if np.iscomplexobj(value):
+        return np.where(value.imag == 0, value.real, np.nan)
+    return value.astype(float)
+
+
 class Landscape:
     """A parsed, differentiated landscape formula. Raises ``FormulaError`` for bad text."""
 
@@ -43,9 +51,12 @@ class Landscape:
         self.text = text
         self.expr = parse_formula(text)
         f = self.expr
-        fx, fy = sp.diff(f, X), sp.diff(f, Y)
-        exprs = (f, fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
-        self.derivatives = tuple(_without_delta(e) for e in exprs)
+        try:
+            fx, fy = sp.diff(f, X), sp.diff(f, Y)
+            exprs = (f, fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
+            self.derivatives = tuple(_without_delta(e) for e in exprs)
+        except (ValueError, TypeError, ArithmeticError) as e:
+            raise FormulaError(f"cannot differentiate the formula ({e})") from None
         for e in self.derivatives:
             check_constants(e)
 
@@ -94,7 +105,7 @@ class Landscape:
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         with np.errstate(all="ignore"):
             values = self._numpy(x, y)
-        return np.stack([np.broadcast_to(np.asarray(v, dtype=float), x.shape) for v in values])
+        return np.stack([np.broadcast_to(_real(v), x.shape) for v in values])
 
     def height(self, x, y) -> np.ndarray:
         return self.evaluate(x, y)[0]
