@@ -29,6 +29,35 @@ LARGEST_CONSTANT = 1e300
 
 CONSTANTS = {"x": X, "y": Y, "pi": sp.pi, "e": sp.E}
 
+
+class RealSign(sp.Function):
+    """sign(u) of a real u; its derivative is zero away from the jump."""
+
+    nargs = 1
+
+    @classmethod
+    def eval(cls, arg):
+        if arg.is_number:
+            return sp.sign(arg)
+
+    def fdiff(self, argindex=1):
+        return sp.S.Zero
+
+
+class RealAbs(sp.Function):
+    """|u| of a real u, differentiated as sign(u) u' (sympy's Abs assumes complex u)."""
+
+    nargs = 1
+
+    @classmethod
+    def eval(cls, arg):
+        if arg.is_number:
+            return sp.Abs(arg)
+
+    def fdiff(self, argindex=1):
+        return RealSign(self.args[0])
+
+
 # name: (sympy callable, number of arguments; None for two or more)
 FUNCTIONS = {
     "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1),
@@ -36,7 +65,7 @@ FUNCTIONS = {
     "sinh": (sp.sinh, 1), "cosh": (sp.cosh, 1), "tanh": (sp.tanh, 1),
     "asinh": (sp.asinh, 1), "acosh": (sp.acosh, 1), "atanh": (sp.atanh, 1),
     "exp": (sp.exp, 1), "log": (sp.log, 1), "log10": (lambda a: sp.log(a, 10), 1),
-    "sqrt": (sp.sqrt, 1), "abs": (sp.Abs, 1), "hypot": (lambda a, b: sp.sqrt(a**2 + b**2), 2),
+    "sqrt": (sp.sqrt, 1), "abs": (RealAbs, 1), "hypot": (lambda a, b: sp.sqrt(a**2 + b**2), 2),
     "min": (sp.Min, None), "max": (sp.Max, None),
 }
 

@@ -17,14 +17,26 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from .formula import X, Y, FormulaError, check_constants, parse_formula
+from .formula import X, Y, FormulaError, RealAbs, RealSign, check_constants, parse_formula
 
 QUANTITIES = ("f", "fx", "fy", "fxx", "fxy", "fyy")
 
 # Compiled callbacks by generated source: the same formula is compiled once per process.
 _COMPILED: dict[str, object] = {}
 
-_PRINTER = PythonCodePrinter({"standard": "python3", "strict": True})
+
+
+class _Printer(PythonCodePrinter):
+    def _print_RealAbs(self, expr):
+        return f"abs({self._print(expr.args[0])})"
+
+    def _print_RealSign(self, expr):
+        u = self._print(expr.args[0])
+        return f"(0.0 if ({u}) == 0 else math.copysign(1.0, {u}))"
+
+
+_PRINTER = _Printer({"standard": "python3", "strict": True})
+_NUMPY_NAMES = {"RealAbs": np.abs, "RealSign": np.sign}
 _GENERATED_NAMES = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 _SAFE_NAMES = {"def", "landscape", "x", "y", "out", "d", "carray", "math", "abs", "min", "max",
                "if", "else", "float"} | {n for n in dir(math) if not n.startswith("_")}
@@ -57,21 +69,24 @@ class Landscape:
             self.derivatives = tuple(_without_delta(e) for e in exprs)
         except (ValueError, TypeError, ArithmeticError) as e:
             raise FormulaError(f"cannot differentiate the formula ({e})") from None
+        self.source = self._generate_source()
         for e in self.derivatives:
             check_constants(e)
 
     def __repr__(self) -> str:
         return f"Landscape({self.text!r})"
 
-    @cached_property
-    def source(self) -> str:
+    def _generate_source(self) -> str:
         """Python source of ``landscape(x, y, out)`` filling out[0:6] with f and its derivatives."""
         replacements, reduced = sp.cse(list(self.derivatives), symbols=sp.numbered_symbols("t"))
         lines = ["def landscape(x, y, out):", "    d = carray(out, (6,))"]
-        for sym, value in replacements:
-            lines.append(f"    {sym} = {_PRINTER.doprint(value)}")
-        for i, value in enumerate(reduced):
-            lines.append(f"    d[{i}] = float({_PRINTER.doprint(value)})")
+        try:
+            for sym, value in replacements:
+                lines.append(f"    {sym} = {_PRINTER.doprint(value)}")
+            for i, value in enumerate(reduced):
+                lines.append(f"    d[{i}] = float({_PRINTER.doprint(value)})")
+        except (ValueError, TypeError, NotImplementedError) as e:
+            raise FormulaError(f"cannot compile the formula ({e})") from None
         source = "\n".join(lines) + "\n"
         unknown = {n for n in _GENERATED_NAMES.findall(source)
                    if n not in _SAFE_NAMES and not re.fullmatch(r"t\d+|e\d*", n)}
@@ -95,7 +110,7 @@ class Landscape:
 
     @cached_property
     def _numpy(self):
-        return sp.lambdify((X, Y), list(self.derivatives), modules="numpy")
+        return sp.lambdify((X, Y), list(self.derivatives), modules=[_NUMPY_NAMES, "numpy"])
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y): an array of shape (6,) + broadcast shape.

@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .files import atomic_write_text
-from .formula import FormulaError, parse_formula
+from .formula import FormulaError
+from .landscape import landscape_for
 from .tableaus import TABLEAUS
 
 FORMAT = "rollball-scene"
@@ -71,7 +72,7 @@ def _known_method(v):
 
 def _formula(v):
     try:
-        parse_formula(v)
+        landscape_for(v)  # parsed, differentiated and printed: ready to compile
     except FormulaError as e:
         return str(e)
     return None

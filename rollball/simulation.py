@@ -143,27 +143,32 @@ class Simulation:
         t = self._info[kernel.F_LIFTOFF]
         return None if math.isnan(t) else float(t)
 
-    def message(self) -> str:
+    def message(self, status: Status | None = None) -> str:
+        """How the run ended (or stands), in words."""
+        status = status or self.status
         t, x, y = self._info[kernel.F_FAIL_T], self._info[kernel.F_FAIL_X], self._info[kernel.F_FAIL_Y]
         where = f"t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g})"
-        if self.status is Status.OK:
+        if status is Status.OK:
             return f"reached t = {self.t_end:g} s in {self.steps} steps"
-        if self.status is Status.DOES_NOT_FIT:
+        if status is Status.DOES_NOT_FIT:
             return (f"the ball (r = {self.scene.ball.radius:g} m) does not fit the surface at {where}: "
                     f"r·κ = {self._info[kernel.F_FAIL_VALUE]:.4g} ≥ 1 for a principal curvature κ, "
                     f"so the model cannot go on")
-        if self.status is Status.NONFINITE:
+        if status is Status.NONFINITE:
             if self.steps == 0 and t == 0:
                 return (f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
                         if len(self.rows) == 0 else f"the state became non-finite at {where}")
             return (f"the state became non-finite at {where}: the landscape cannot be evaluated "
                     f"there (outside its domain or at a pole) or the step is too large")
-        if self.status is Status.ABORTED:
+        if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"
         return f"running: t = {self.time:.6g} s"
 
     def trajectory(self) -> Trajectory:
+        """The rows so far and how the run ended (a run not yet done counts as aborted)."""
         scene, s = self.scene, self.scene.start
+        status = self.status or Status.ABORTED
+        message = self.message(status)
         provenance = {
             "program": f"rollball {__version__}",
             "landscape": scene.landscape,
@@ -172,9 +177,9 @@ class Simulation:
             "start": f"x {s.x!r}, y {s.y!r}, vx {s.vx!r}, vy {s.vy!r}, spin {s.spin!r}",
             "method": f"{self.tableau.name}, {'Munthe-Kaas' if self.munthe_kaas else 'classic'}, "
                       f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}",
-            "status": f"{self.status}: {self.message()}",
+            "status": f"{status}: {message}",
         }
-        return Trajectory(self.rows.copy(), status=self.status or Status.ABORTED, message=self.message(),
+        return Trajectory(self.rows.copy(), status=status, message=message,
                           liftoff_time=self.liftoff_time, steps=self.steps, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)
 

@@ -6,7 +6,7 @@ import time
 import pytest
 import sympy as sp
 
-from rollball.formula import MAX_DEPTH, MAX_LENGTH, X, Y, FormulaError, parse_formula
+from rollball.formula import MAX_DEPTH, MAX_LENGTH, X, Y, FormulaError, RealAbs, parse_formula
 
 
 @pytest.mark.parametrize("text, expected", [
@@ -21,7 +21,7 @@ from rollball.formula import MAX_DEPTH, MAX_LENGTH, X, Y, FormulaError, parse_fo
     ("exp(-(x^2 + y^2))", sp.exp(-X**2 - Y**2)),
     ("atan2(y, x) + hypot(x, y)", sp.atan2(Y, X) + sp.sqrt(X**2 + Y**2)),
     ("min(x, y, 1) + max(x, 0)", sp.Min(X, Y, 1) + sp.Max(X, 0)),
-    ("abs(x) + sqrt(1 + x^2) + log(2 + y) + log10(3 + x)", sp.Abs(X) + sp.sqrt(1 + X**2) + sp.log(2 + Y) + sp.log(3 + X, 10)),
+    ("abs(x) + sqrt(1 + x^2) + log(2 + y) + log10(3 + x)", RealAbs(X) + sp.sqrt(1 + X**2) + sp.log(2 + Y) + sp.log(3 + X, 10)),
     ("tan(x) + asin(x/9) + acos(y/9) + atan(x) + sinh(x) + cosh(y) + tanh(x)",
      sp.tan(X) + sp.asin(X / 9) + sp.acos(Y / 9) + sp.atan(X) + sp.sinh(X) + sp.cosh(Y) + sp.tanh(X)),
     ("1.5e-1 * x", 3 * X / 20),
