@@ -111,6 +111,16 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
 
 
 @njit(cache=True, nogil=True)
+def evaluate_points(fn, xs, ys, out):
+    """out[:, i] = f, f_x, f_y, f_xx, f_xy, f_yy at (xs[i], ys[i])."""
+    d = np.empty(6)
+    for i in range(xs.shape[0]):
+        fn(xs[i], ys[i], d.ctypes)
+        for k in range(6):
+            out[k, i] = d[k]
+
+
+@njit(cache=True, nogil=True)
 def rodrigues(u, R, out):
     """out = exp(A(u)) R, exact at any angle, with a series for small |u|."""
     th2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]

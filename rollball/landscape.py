@@ -4,20 +4,21 @@ sympy derives f_x, f_y, f_xx, f_xy, f_yy once; common subexpressions are shared 
 printed as a small scalar function, compiled by numba as a C callback (``cfunc``) that the
 one cached stepping kernel calls. A new formula therefore costs a small compile, not a
 recompile of the integrator. ``evaluate`` gives the same six quantities as numpy arrays
-for grids (drawing) and for the reference solver.
+for grids (drawing) and for the reference solver, from the same compiled code.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from functools import cached_property, lru_cache
+from functools import lru_cache
 
 import numpy as np
 import sympy as sp
+from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
-from .formula import X, Y, FormulaError, RealAbs, RealSign, check_constants, parse_formula
+from .formula import X, Y, FormulaError, check_constants, parse_formula
 
 QUANTITIES = ("f", "fx", "fy", "fxx", "fxy", "fyy")
 
@@ -27,6 +28,13 @@ _COMPILED: dict[str, object] = {}
 
 
 class _Printer(PythonCodePrinter):
+    def _print_Pow(self, expr, rational=False):
+        # numba raises ZeroDivisionError for 0.0 ** -n with an integer n; 1/0.0 is inf
+        if expr.exp.is_Integer and expr.exp < -1:
+            base = self.parenthesize(expr.base, PRECEDENCE["Pow"])
+            return f"(1.0/{base}**{-expr.exp})"
+        return super()._print_Pow(expr, rational=rational)
+
     def _print_RealAbs(self, expr):
         return f"abs({self._print(expr.args[0])})"
 
@@ -36,7 +44,6 @@ class _Printer(PythonCodePrinter):
 
 
 _PRINTER = _Printer({"standard": "python3", "strict": True})
-_NUMPY_NAMES = {"RealAbs": np.abs, "RealSign": np.sign}
 _GENERATED_NAMES = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 _SAFE_NAMES = {"def", "landscape", "x", "y", "out", "d", "carray", "math", "abs", "min", "max",
                "if", "else", "float"} | {n for n in dir(math) if not n.startswith("_")}
@@ -46,14 +53,6 @@ def _without_delta(expr: sp.Expr) -> sp.Expr:
     # The second derivative of a kink (abs, min, max) is a Dirac delta: zero away from the
     # kink, which is where a double can be evaluated.
     return expr.replace(lambda a: isinstance(a, sp.DiracDelta), lambda a: sp.S.Zero)
-
-
-def _real(value) -> np.ndarray:
-    """Real values as floats; a complex result (a negative base to a fractional power) is NaN."""
-    value = np.asarray(value)
-    if np.iscomplexobj(value):
-        return np.where(value.imag == 0, value.real, np.nan)
-    return value.astype(float)
 
 
 class Landscape:
@@ -79,7 +78,7 @@ class Landscape:
     def _generate_source(self) -> str:
         """Python source of ``landscape(x, y, out)`` filling out[0:6] with f and its derivatives."""
         replacements, reduced = sp.cse(list(self.derivatives), symbols=sp.numbered_symbols("t"))
-        lines = ["def landscape(x, y, out):", "    d = carray(out, (6,))"]
+        lines = ["def landscape(x, y, out):", "    d = carray(out, (6,))", "    d[:] = math.nan"]
         try:
             for sym, value in replacements:
                 lines.append(f"    {sym} = {_PRINTER.doprint(value)}")
@@ -108,19 +107,17 @@ class Landscape:
             _COMPILED[source] = cfunc(LANDSCAPE_SIGNATURE, error_model="numpy")(namespace["landscape"])
         return _COMPILED[source]
 
-    @cached_property
-    def _numpy(self):
-        return sp.lambdify((X, Y), list(self.derivatives), modules=[_NUMPY_NAMES, "numpy"])
-
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y): an array of shape (6,) + broadcast shape.
 
-        Points outside the formula's domain give NaN, not warnings or exceptions.
+        The compiled code the integrator uses; points outside the formula's domain give NaN.
         """
+        from .kernel import evaluate_points
+
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
-        with np.errstate(all="ignore"):
-            values = self._numpy(x, y)
-        return np.stack([np.broadcast_to(_real(v), x.shape) for v in values])
+        out = np.empty((6, x.size))
+        evaluate_points(self.compiled, np.ascontiguousarray(x).ravel(), np.ascontiguousarray(y).ravel(), out)
+        return out.reshape((6,) + x.shape)
 
     def height(self, x, y) -> np.ndarray:
         return self.evaluate(x, y)[0]

@@ -25,7 +25,7 @@ def _combine(children):
 FORMULAS = st.recursive(ATOMS, _combine, max_leaves=8)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=100, deadline=None)
 @given(FORMULAS)
 def test_grammar_formulas_parse_or_are_refused_cleanly(text):
     try:

@@ -67,3 +67,11 @@ def test_generated_source_uses_only_known_names():
 def test_the_same_formula_is_compiled_once():
     assert landscape_for("x*y + 1") is landscape_for("x*y + 1")
     assert Landscape("x*y + 2").compiled is Landscape("x*y + 2").compiled
+
+
+@pytest.mark.parametrize("text", ["x^-2", "(x*y)^-3", "min(x, y)^-1", "1/x", "(x^2)^-3 + y"])
+def test_poles_give_inf_or_nan_never_stale_values(text, capfd):
+    values = Landscape(text).evaluate(np.array([0.0, 1.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    assert not np.isfinite(values[0, 0]) and not np.isfinite(values[0, 2])
+    assert np.isfinite(values[:, 1]).all()
+    assert "Exception" not in capfd.readouterr().err
