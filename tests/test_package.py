@@ -1,0 +1,23 @@
+"""The core stays a plain library: no Qt, no app, importable on a machine without a display."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import rollball
+
+
+def test_core_imports_no_gui():
+    code = ("import sys, rollball, rollball.cli, rollball.reference; "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('PySide6', 'PyQt5', 'PyQt6', 'pyqtgraph', "
+            "'superqt', 'app')]; print(bad); sys.exit(1 if bad else 0)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_core_sources_do_not_mention_gui_modules():
+    for path in Path(rollball.__file__).parent.glob("*.py"):
+        for line in path.read_text(encoding="utf-8").splitlines():
+            words = line.split()
+            if words[:1] in (["import"], ["from"]):
+                assert words[1].split(".")[0] not in ("PySide6", "pyqtgraph", "superqt", "app"), (path, line)
