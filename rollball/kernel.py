@@ -240,13 +240,17 @@ def advance(fn, A, b, mk, p, dt, t_end, n_steps, every, max_steps, z, R, K, prob
             for a in range(3):
                 for c in range(3):
                     Rn[a, c] = zn[5 + 3 * a + c]
-        ok = _finite(zn) and _finite(Rn)
-        if ok:
+        motion_ok = _finite(zn[:5])
+        rotation_ok = _finite(zn[5:]) and _finite(Rn)
+        if motion_ok and rotation_ok:
             dynamics(fn, d, p, zn, mk, Kn, pn, True)
-            ok = _finite(Kn) and _finite(pn)
+            motion_ok = _finite(Kn[:5]) and _finite(pn)
+            rotation_ok = _finite(Kn[5:])
+        ok = motion_ok and rotation_ok
         if not ok:
             ints[I_STATUS] = NONFINITE
             info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t, z[0], z[1]
+            info[F_FAIL_VALUE] = 1.0 if motion_ok and not rotation_ok else 0.0
         elif pn[PROBE_FIT] >= 1.0:
             ints[I_STATUS] = DOES_NOT_FIT
             info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t, zn[0], zn[1]

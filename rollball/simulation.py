@@ -158,6 +158,9 @@ class Simulation:
             if self.steps == 0 and t == 0:
                 return (f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
                         if len(self.rows) == 0 else f"the state became non-finite at {where}")
+            if self._info[kernel.F_FAIL_VALUE] == 1.0:
+                return (f"the orientation R overflowed at {where}: the classic matrix update has "
+                        f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
             return (f"the state became non-finite at {where}: the landscape cannot be evaluated "
                     f"there (outside its domain or at a pole) or the step is too large")
         if status is Status.ABORTED:

@@ -149,3 +149,12 @@ def test_start_outside_the_domain(scene_factory):
     assert traj.status is Status.NONFINITE
     assert len(traj) == 0
     assert "start point" in traj.message
+
+
+def test_classic_euler_orientation_overflow_is_named(scene_factory):
+    scene = scene_factory("0", vx=10.0, method="euler", dt=0.1)  # |omega| h = 10 rad per step
+    classic = simulate(scene, munthe_kaas=False, t_end=200.0)
+    assert classic.status is Status.NONFINITE
+    assert "orientation R overflowed" in classic.message
+    assert np.isfinite(classic.data).all()
+    assert simulate(scene, munthe_kaas=True, t_end=200.0).status is Status.OK
