@@ -121,7 +121,7 @@ class Simulation:
             return self._rows[:0]
         first = int(self._ints[kernel.I_ROWS])
         remaining = self.n_steps - self.steps if max_steps is None else max_steps
-        while remaining > 0 or self._ints[kernel.I_ROWS] == 0:
+        while (remaining > 0 or self._ints[kernel.I_ROWS] == 0) and not self.done:
             chunk = min(remaining, CHUNK)
             kernel.advance(self._fn, self._A, self._b, self.munthe_kaas, self._p, self.dt, self.t_end,
                            self.n_steps, self.record_every, chunk, self._z, self._R, self._K,
@@ -134,7 +134,10 @@ class Simulation:
         return self._rows[first: self._ints[kernel.I_ROWS]].copy()
 
     def cancel(self) -> None:
-        """Stop the run where it is (status ``aborted``); the rows so far are kept."""
+        """Stop the run where it is (status ``aborted``); the rows so far are kept.
+
+        Safe to call from another thread: a running ``advance`` returns after its current chunk.
+        """
         if not self.done:
             self.status = Status.ABORTED
 

@@ -111,3 +111,20 @@ def test_columns_are_consistent(scene_factory):
     # the centre velocity column is the time derivative of the centre column
     dc = np.gradient(traj.center, traj.t, axis=0)[1:-1]
     np.testing.assert_allclose(dc, traj.velocity[1:-1], atol=1e-5)
+
+
+def test_cancel_from_another_thread_stops_a_long_advance(scene_factory):
+    import threading
+    import time
+
+    run = Simulation(scene_factory("0.5*sin(x)*cos(y)", x=0.3), dt=1e-5, t_end=1e4, record_every=10**5)
+    run.advance(1)  # compiled and started
+    worker = threading.Thread(target=run.advance)
+    worker.start()
+    time.sleep(0.2)
+    start = time.perf_counter()
+    run.cancel()
+    worker.join(timeout=30)
+    assert not worker.is_alive()
+    assert time.perf_counter() - start < 10
+    assert run.status is Status.ABORTED and 0 < run.steps < run.n_steps
