@@ -13,7 +13,6 @@ from pathlib import Path
 from . import __version__
 from .examples import example_scenes
 from .scene import SceneError
-from .formula import FormulaError
 from .tableaus import TABLEAUS
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
@@ -87,7 +86,7 @@ def _simulate(args) -> int:
     try:
         traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
                         t_end=args.t_end, record_every=args.every)
-    except (ValueError, FormulaError) as e:
+    except ValueError as e:  # includes FormulaError
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")

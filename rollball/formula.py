@@ -30,29 +30,31 @@ LARGEST_CONSTANT = 1e300
 CONSTANTS = {"x": X, "y": Y, "pi": sp.pi, "e": sp.E}
 
 
-class RealSign(sp.Function):
-    """sign(u) of a real u; its derivative is zero away from the jump."""
+class _RealFunction(sp.Function):
+    """A function of one real argument; on a constant it is sympy's own ``constant``."""
 
     nargs = 1
+    constant = None
 
     @classmethod
     def eval(cls, arg):
         if arg.is_number:
-            return sp.sign(arg)
+            return cls.constant(arg)
+
+
+class RealSign(_RealFunction):
+    """sign(u) of a real u; its derivative is zero away from the jump."""
+
+    constant = sp.sign
 
     def fdiff(self, argindex=1):
         return sp.S.Zero
 
 
-class RealAbs(sp.Function):
+class RealAbs(_RealFunction):
     """|u| of a real u, differentiated as sign(u) u' (sympy's Abs assumes complex u)."""
 
-    nargs = 1
-
-    @classmethod
-    def eval(cls, arg):
-        if arg.is_number:
-            return sp.Abs(arg)
+    constant = sp.Abs
 
     def fdiff(self, argindex=1):
         return RealSign(self.args[0])

@@ -47,8 +47,8 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
     r, m, g0 = p[0], p[1], p[2]
     fn(z[0], z[1], d.ctypes)
     fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
-    w2 = 1.0 + fx * fx + fy * fy
-    W = math.sqrt(w2)
+    W2 = 1.0 + fx * fx + fy * fy
+    W = math.sqrt(W2)
     n1, n2, n3 = -fx / W, -fy / W, 1.0 / W
     v1, v2, v3 = z[2], z[3], z[4]
     # omega = T^-1 v, T^-1 = 5/(7 m r^2) (I + 5/2 N N^T)
@@ -68,9 +68,9 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
     E22 = Cy1 * Cy1 + Cy2 * Cy2 + Cy3 * Cy3
     det = E11 * E22 - E12 * E12
     # alpha' = r E^-1 C'^T (omega x N)
-    w1, w2_, w3 = o2 * n3 - o3 * n2, o3 * n1 - o1 * n3, o1 * n2 - o2 * n1
-    b1 = r * (Cx1 * w1 + Cx2 * w2_ + Cx3 * w3)
-    b2 = r * (Cy1 * w1 + Cy2 * w2_ + Cy3 * w3)
+    w1, w2, w3 = o2 * n3 - o3 * n2, o3 * n1 - o1 * n3, o1 * n2 - o2 * n1
+    b1 = r * (Cx1 * w1 + Cx2 * w2 + Cx3 * w3)
+    b2 = r * (Cy1 * w1 + Cy2 * w2 + Cy3 * w3)
     a1 = (E22 * b1 - E12 * b2) / det
     a2 = (E11 * b2 - E12 * b1) / det
     # N' alpha', then v' = m r (N x g) - m r^2 (N' alpha') x (N x omega), with N x omega = -w
@@ -78,9 +78,9 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
     mr, mr2 = m * r, m * r * r
     dz[0] = a1
     dz[1] = a2
-    dz[2] = -mr * g0 * n2 + mr2 * (d2 * w3 - d3 * w2_)
+    dz[2] = -mr * g0 * n2 + mr2 * (d2 * w3 - d3 * w2)
     dz[3] = mr * g0 * n1 + mr2 * (d3 * w1 - d1 * w3)
-    dz[4] = mr2 * (d1 * w2_ - d2 * w1)
+    dz[4] = mr2 * (d1 * w2 - d2 * w1)
     if mk:
         # u' = dexp_u^-1(omega) = omega - 1/2 u x omega + 1/12 u x (u x omega)
         u1, u2, u3 = z[5], z[6], z[7]
@@ -104,8 +104,8 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
         # principal curvatures: roots of det(II - kappa G) = 0, G first, II second form
         G11, G12, G22 = 1.0 + fx * fx, fx * fy, 1.0 + fy * fy
         h11, h12, h22 = fxx / W, fxy / W, fyy / W
-        mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) / w2
-        gauss = (h11 * h22 - h12 * h12) / w2
+        mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) / W2
+        gauss = (h11 * h22 - h12 * h12) / W2
         probe[7] = r * (mean + math.sqrt(max(mean * mean - gauss, 0.0)))
         probe[8] = d[0]
 

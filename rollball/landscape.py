@@ -20,11 +20,8 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from .formula import X, Y, FormulaError, check_constants, parse_formula
 
-QUANTITIES = ("f", "fx", "fy", "fxx", "fxy", "fyy")
-
 # Compiled callbacks by generated source: the same formula is compiled once per process.
 _COMPILED: dict[str, object] = {}
-
 
 
 class _Printer(PythonCodePrinter):
@@ -68,9 +65,9 @@ class Landscape:
             self.derivatives = tuple(_without_delta(e) for e in exprs)
         except (ValueError, TypeError, ArithmeticError) as e:
             raise FormulaError(f"cannot differentiate the formula ({e})") from None
-        self.source = self._generate_source()
         for e in self.derivatives:
             check_constants(e)
+        self.source = self._generate_source()
 
     def __repr__(self) -> str:
         return f"Landscape({self.text!r})"

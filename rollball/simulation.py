@@ -158,9 +158,8 @@ class Simulation:
                     f"r·κ = {self._info[kernel.F_FAIL_VALUE]:.4g} ≥ 1 for a principal curvature κ, "
                     f"so the model cannot go on")
         if status is Status.NONFINITE:
-            if self.steps == 0 and t == 0:
-                return (f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
-                        if len(self.rows) == 0 else f"the state became non-finite at {where}")
+            if len(self.rows) == 0:  # the initial state itself is not finite
+                return f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
             if self._info[kernel.F_FAIL_VALUE] == 1.0:
                 return (f"the orientation R overflowed at {where}: the classic matrix update has "
                         f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
