@@ -79,12 +79,19 @@ class Trajectory:
         return self.data[:, 22]
 
     @property
+    def energy_scale(self) -> float:
+        """What energy errors are relative to: |E(0)|, or m g r where |E(0)| is smaller."""
+        e0 = abs(self.energy[0]) if len(self) else 0.0
+        return max(e0, self.mass * self.gravity * self.radius, np.finfo(float).tiny)
+
+    def energy_error(self) -> np.ndarray:
+        """(E(t) - E(0)) / energy_scale for every row."""
+        return (self.energy - self.energy[0]) / self.energy_scale if len(self) else self.energy.copy()
+
+    @property
     def energy_drift(self) -> float:
         """max |E(t) - E(0)| relative to |E(0)|, or to m g r where |E(0)| is smaller."""
-        if len(self) == 0:
-            return 0.0
-        scale = max(abs(self.energy[0]), self.mass * self.gravity * self.radius, np.finfo(float).tiny)
-        return float(np.max(np.abs(self.energy - self.energy[0])) / scale)
+        return float(np.max(np.abs(self.energy_error()))) if len(self) else 0.0
 
     def orthogonality_error(self) -> np.ndarray:
         """||R^T R - I|| (Frobenius) for every row."""

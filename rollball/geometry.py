@@ -1,0 +1,35 @@
+"""Where the ball fits: the unit normal and r·κ_max of a landscape, on arrays of points.
+
+Both take the derivative array ``d`` = (f, f_x, f_y, f_xx, f_xy, f_yy) of
+``Landscape.evaluate`` (shape (6,) + grid shape) and work elementwise; they are the
+same formulas the kernel evaluates at every step (DESIGN §1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def unit_normal(d: np.ndarray) -> np.ndarray:
+    """N = (-f_x, -f_y, 1) / sqrt(1 + f_x² + f_y²), shape (3,) + grid shape."""
+    fx, fy = d[1], d[2]
+    W = np.sqrt(1.0 + fx * fx + fy * fy)
+    return np.stack([-fx / W, -fy / W, 1.0 / W])
+
+
+def fit_ratio(d: np.ndarray, radius: float) -> np.ndarray:
+    """r · κ_max: the ball of this radius fits where this is below 1.
+
+    κ_max is the larger principal curvature, positive where the surface bends up towards
+    the ball (a valley); NaN where the landscape cannot be evaluated. Near umbilic points
+    (equal curvatures) the square root costs about half the digits, as in the kernel: the
+    value serves a threshold at 1.
+    """
+    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
+    W2 = 1.0 + fx * fx + fy * fy
+    W = np.sqrt(W2)
+    h11, h12, h22 = fxx / W, fxy / W, fyy / W
+    mean = 0.5 * ((1.0 + fx * fx) * h22 + (1.0 + fy * fy) * h11 - 2.0 * fx * fy * h12) / W2
+    gauss = (h11 * h22 - h12 * h12) / W2
+    ratio = radius * (mean + np.sqrt(np.maximum(mean * mean - gauss, 0.0)))
+    return np.where(np.isnan(d).any(axis=0), np.nan, ratio)
