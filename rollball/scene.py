@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import numbers
 import os
 import typing
 from dataclasses import dataclass, field
@@ -215,7 +216,7 @@ def _check(obj, prefix: str) -> None:
             _check(value, key + ".")
             continue
         if kind is float:
-            if type(value) not in (int, float):
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
                 raise SceneError(f"{key}: must be a number, not {_kind(value)}")
             try:
                 number = float(value)
@@ -223,7 +224,7 @@ def _check(obj, prefix: str) -> None:
                 raise SceneError(f"{key}: number is too large") from None
             if not math.isfinite(number):
                 raise SceneError(f"{key}: must be a finite number")
-            if type(value) is int:
+            if type(value) is not float:  # int, numpy numbers: stored as a plain float
                 object.__setattr__(obj, f.name, number)
             value = number
         elif kind is bool and type(value) is not bool:

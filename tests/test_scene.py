@@ -33,6 +33,16 @@ def test_integers_are_numbers():
     assert scene.ball.radius == 1.0 and isinstance(scene.ball.radius, float)
 
 
+def test_numpy_numbers_are_numbers():
+    import numpy as np
+
+    scene = Scene(landscape="x", ball=Ball(np.float64(0.25), np.int64(2)))
+    assert (scene.ball.radius, scene.ball.mass) == (0.25, 2.0)
+    assert type(scene.ball.radius) is float and type(scene.ball.mass) is float
+    with pytest.raises(SceneError, match="^ball.radius: must be a number"):
+        Scene(landscape="x", ball=Ball(np.bool_(True)))
+
+
 def test_every_example_loads_and_has_a_description():
     examples = example_scenes()
     names = {path.stem for path, _ in examples}
