@@ -166,6 +166,10 @@ class Scene:
         atomic_write_text(Path(path), self.dumps())
 
 
+# Field types, resolved once: loading a scene evaluates nothing.
+_HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View)}
+
+
 def _kind(value) -> str:
     return {dict: "an object", list: "an array", str: "text", bool: "true/false",
             type(None): "null"}.get(type(value), "a number")
@@ -185,7 +189,7 @@ def _no_duplicates(pairs):
 
 
 def _build(cls, data: dict, prefix: str):
-    hints = typing.get_type_hints(cls)
+    hints = _HINTS[cls]
     names = {f.name for f in dataclasses.fields(cls)}
     for key in data:
         if key not in names:
@@ -207,7 +211,7 @@ def _build(cls, data: dict, prefix: str):
 
 def _check(obj, prefix: str) -> None:
     """Check types and constraints of a (nested) scene dataclass, in field order."""
-    hints = typing.get_type_hints(type(obj))
+    hints = _HINTS[type(obj)]
     for f in dataclasses.fields(obj):
         key, value, kind = prefix + f.name, getattr(obj, f.name), hints[f.name]
         if dataclasses.is_dataclass(kind):
