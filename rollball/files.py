@@ -16,7 +16,10 @@ def atomic_write(path: str | os.PathLike, write: Callable[[TextIO], None]) -> No
     """Create or replace the text file ``path`` with what ``write(stream)`` writes."""
     target = Path(path)
     mode = target.stat().st_mode & 0o777 if target.exists() else 0o644
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    except OSError as e:  # name the file the user asked for, not the temporary one
+        raise type(e)(e.errno, e.strerror, str(target)) from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as stream:
             write(stream)

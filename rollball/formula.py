@@ -258,9 +258,19 @@ class _Parser:
             plural = "argument" if arity == 1 else "arguments"
             raise FormulaError(f"{tok.text} takes {arity} {plural}, not {len(args)}", tok.position)
         try:
-            return func(*args)
+            result = func(*args)
         except (ValueError, TypeError, ArithmeticError) as e:  # e.g. min of a complex constant
             raise FormulaError(f"{tok.text} cannot be applied here ({e})", tok.position) from None
+        if result.is_number:
+            # refuse an overflowing constant here, before an enclosing call makes sympy
+            # evaluate it to unbounded precision (exp(exp(exp(100))))
+            try:
+                value = complex(result)
+            except (TypeError, ValueError, OverflowError):
+                value = complex(math.inf)
+            if not math.isfinite(abs(value)) or abs(value) > LARGEST_CONSTANT:
+                raise FormulaError(f"constant value of {tok.text} is too large", tok.position)
+        return result
 
 
 def parse_formula(text: str) -> sp.Expr:

@@ -101,13 +101,22 @@ def dynamics(fn, d, p, z, mk, dz, probe, full):
         # F.N = m (c'' - g).N with c''.N = r (omega x N').N
         probe[6] = m * r * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2
                             + (o1 * d2 - o2 * d1) * n3) + m * g0 * n3
-        # principal curvatures: roots of det(II - kappa G) = 0, G first, II second form
-        G11, G12, G22 = 1.0 + fx * fx, fx * fy, 1.0 + fy * fy
-        h11, h12, h22 = fxx / W, fxy / W, fyy / W
-        mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) / W2
-        gauss = (h11 * h22 - h12 * h12) / W2
-        probe[7] = r * (mean + math.sqrt(max(mean * mean - gauss, 0.0)))
+        probe[7] = r * largest_curvature(d)
         probe[8] = d[0]
+
+
+@njit(cache=True, nogil=True)
+def largest_curvature(d):
+    """The largest principal curvature (> 0 bending up) from d = f, f_x, f_y, f_xx, f_xy, f_yy."""
+    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
+    # roots of det(II - kappa G) = 0, G first, II second fundamental form
+    W2 = 1.0 + fx * fx + fy * fy
+    W = math.sqrt(W2)
+    G11, G12, G22 = 1.0 + fx * fx, fx * fy, 1.0 + fy * fy
+    h11, h12, h22 = fxx / W, fxy / W, fyy / W
+    mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) / W2
+    gauss = (h11 * h22 - h12 * h12) / W2
+    return mean + math.sqrt(max(mean * mean - gauss, 0.0))
 
 
 @njit(cache=True, nogil=True)
@@ -175,6 +184,32 @@ def _finite(a):
         if not math.isfinite(x):
             return False
     return True
+
+
+SEGMENT_SAMPLES = 8  # fit checks between the ends of a step whose contact point raced
+
+
+@njit(cache=True, nogil=True)
+def _fit_along_segment(fn, d, r, z, zn, h, speed0, speed1):
+    """r * kappa inside the step, if the contact point moved farther than its end speeds explain.
+
+    Near the no-fit boundary the contact point speeds up without bound, so a fixed step can
+    jump across a thin no-fit region with both ends fitting. Such a step moves the contact
+    point much farther than h times its speed at either end; then the fit is sampled along
+    the straight segment between the two contact points. Returns (largest r*kappa, x, y).
+    """
+    dx, dy = zn[0] - z[0], zn[1] - z[1]
+    if math.sqrt(dx * dx + dy * dy) <= 2.0 * h * max(speed0, speed1):
+        return 0.0, 0.0, 0.0
+    worst, wx, wy = 0.0, 0.0, 0.0
+    for j in range(1, SEGMENT_SAMPLES + 1):
+        s = j / (SEGMENT_SAMPLES + 1.0)
+        x, y = z[0] + s * dx, z[1] + s * dy
+        fn(x, y, d.ctypes)
+        fit = r * largest_curvature(d)
+        if fit > worst:
+            worst, wx, wy = fit, x, y
+    return worst, wx, wy
 
 
 @njit(cache=True, nogil=True)
@@ -255,6 +290,13 @@ def advance(fn, A, b, mk, p, dt, t_end, n_steps, every, max_steps, z, R, K, prob
             ints[I_STATUS] = DOES_NOT_FIT
             info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t, zn[0], zn[1]
             info[F_FAIL_VALUE] = pn[PROBE_FIT]
+        else:
+            fit, fx, fy = _fit_along_segment(fn, d, p[0], z, zn, h, math.hypot(K[0, 0], K[0, 1]),
+                                             math.hypot(Kn[0], Kn[1]))
+            if fit >= 1.0:
+                ints[I_STATUS] = DOES_NOT_FIT
+                info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t, fx, fy
+                info[F_FAIL_VALUE] = fit
         if ints[I_STATUS] != RUNNING:
             # keep the last valid state as the last row
             if ints[I_LAST_RECORDED] != k - 1:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import numbers
 import os
 import typing
 from dataclasses import dataclass, field
@@ -165,6 +166,10 @@ class Scene:
         atomic_write_text(Path(path), self.dumps())
 
 
+# Field types, resolved once: loading a scene evaluates nothing.
+_HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View)}
+
+
 def _kind(value) -> str:
     return {dict: "an object", list: "an array", str: "text", bool: "true/false",
             type(None): "null"}.get(type(value), "a number")
@@ -184,7 +189,7 @@ def _no_duplicates(pairs):
 
 
 def _build(cls, data: dict, prefix: str):
-    hints = typing.get_type_hints(cls)
+    hints = _HINTS[cls]
     names = {f.name for f in dataclasses.fields(cls)}
     for key in data:
         if key not in names:
@@ -206,7 +211,7 @@ def _build(cls, data: dict, prefix: str):
 
 def _check(obj, prefix: str) -> None:
     """Check types and constraints of a (nested) scene dataclass, in field order."""
-    hints = typing.get_type_hints(type(obj))
+    hints = _HINTS[type(obj)]
     for f in dataclasses.fields(obj):
         key, value, kind = prefix + f.name, getattr(obj, f.name), hints[f.name]
         if dataclasses.is_dataclass(kind):
@@ -215,7 +220,7 @@ def _check(obj, prefix: str) -> None:
             _check(value, key + ".")
             continue
         if kind is float:
-            if type(value) not in (int, float):
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
                 raise SceneError(f"{key}: must be a number, not {_kind(value)}")
             try:
                 number = float(value)
@@ -223,7 +228,7 @@ def _check(obj, prefix: str) -> None:
                 raise SceneError(f"{key}: number is too large") from None
             if not math.isfinite(number):
                 raise SceneError(f"{key}: must be a finite number")
-            if type(value) is int:
+            if type(value) is not float:  # int, numpy numbers: stored as a plain float
                 object.__setattr__(obj, f.name, number)
             value = number
         elif kind is bool and type(value) is not bool:

@@ -1,5 +1,6 @@
 """Property-based: any text is either parsed or refused with a FormulaError, nothing else;
-random formulas from the grammar parse, differentiate and evaluate with the right shapes."""
+random formulas from the grammar parse, differentiate and evaluate with the right shapes;
+random valid scenes survive dumps and loads unchanged."""
 
 import numpy as np
 from hypothesis import given, settings
@@ -7,6 +8,8 @@ from hypothesis import strategies as st
 
 from rollball.formula import FUNCTIONS, FormulaError, parse_formula
 from rollball.landscape import Landscape
+from rollball.scene import Ball, Integrator, Scene, Start, View
+from rollball.tableaus import TABLEAUS
 
 ATOMS = st.sampled_from(["x", "y", "pi", "e", "0", "1", "2.5", "0.1", "3e-2"])
 UNARY = sorted(name for name, (_, arity) in FUNCTIONS.items() if arity == 1)
@@ -47,3 +50,24 @@ def test_any_text_is_parsed_or_refused(text):
         parse_formula(text)
     except FormulaError as e:
         assert str(e) and "\n" not in str(e)
+
+
+FINITE = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False)
+POSITIVE = st.floats(min_value=1e-6, max_value=1e6)
+SCENES = st.builds(
+    Scene,
+    landscape=st.sampled_from(["0", "x*y", "0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "abs(x) + y^2"]),
+    description=st.text(max_size=40),
+    gravity=st.floats(min_value=0, max_value=1e3),
+    ball=st.builds(Ball, POSITIVE, POSITIVE),
+    start=st.builds(Start, FINITE, FINITE, FINITE, FINITE, FINITE),
+    integrator=st.builds(Integrator, st.sampled_from(sorted(TABLEAUS)), st.booleans(), POSITIVE),
+    duration=POSITIVE,
+    view=st.tuples(FINITE, FINITE, POSITIVE).filter(lambda v: v[0] < v[1]).map(lambda v: View(*v)),
+)
+
+
+@settings(max_examples=100, deadline=None)
+@given(SCENES)
+def test_scene_round_trip(scene):
+    assert Scene.loads(scene.dumps()) == scene

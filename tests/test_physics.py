@@ -15,8 +15,8 @@ COMBOS = [(m, mk) for m in ("euler", "rk4", "lawson5") for mk in (True, False)]
 
 @pytest.mark.parametrize("method", ["rk4", "lawson5"])
 @pytest.mark.parametrize("munthe_kaas", [True, False])
-def test_incline_accelerates_at_five_sevenths_g_sin_theta(scene_factory, method, munthe_kaas):
-    s = 0.5  # z = -s x: slope angle theta with tan(theta) = s
+@pytest.mark.parametrize("s", [0.5, 50.0])  # z = -s x: slope angle theta with tan(theta) = s
+def test_incline_accelerates_at_five_sevenths_g_sin_theta(scene_factory, method, munthe_kaas, s):
     scene = scene_factory(f"-{s}*x", x=-1.0, y=0.5, vx=0.3, vy=0.4, radius=0.2, mass=2.0,
                           method=method, munthe_kaas=munthe_kaas, dt=0.01)
     traj = simulate(scene, t_end=1.0)
