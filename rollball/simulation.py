@@ -111,6 +111,11 @@ class Simulation:
         return self.t_end if k == self.n_steps else k * self.dt
 
     @property
+    def max_rows(self) -> int:
+        """The most rows this run can record."""
+        return len(self._rows)
+
+    @property
     def rows(self) -> np.ndarray:
         """The rows recorded so far (a view: copy what you keep)."""
         return self._rows[: self._ints[kernel.I_ROWS]]

@@ -1,0 +1,248 @@
+"""The input panel: every scene value as a field with its unit, validated as you type.
+
+The fields are declared once (``NUMBER_FIELDS``); the panel turns them into a ``Scene`` through
+the core's own validation, so the app accepts exactly what a scene file accepts. A field
+that does not make a valid scene is marked and explained in place, and the last valid scene
+stays current.
+"""
+
+from __future__ import annotations
+
+import math
+
+from PySide6 import QtCore, QtWidgets
+
+from rollball import FormulaError, Scene, SceneError
+from rollball.landscape import landscape_for
+from rollball.tableaus import TABLEAUS
+
+# (dotted scene key, label, unit, tooltip), by group
+NUMBER_FIELDS = {
+    "Ball": (
+        ("ball.radius", "Radius", "m", "Radius r of the ball"),
+        ("ball.mass", "Mass", "kg", "Mass m of the ball (homogeneous, inertia 2/5 m r²)"),
+        ("gravity", "Gravity", "m/s²", "Gravitational acceleration g₀ (0 for none)"),
+    ),
+    "Start": (
+        ("start.x", "x", "m", "Start contact point, x"),
+        ("start.y", "y", "m", "Start contact point, y"),
+        ("start.vx", "vx", "m/s", "Horizontal velocity of the centre, x component"),
+        ("start.vy", "vy", "m/s", "Horizontal velocity of the centre, y component"),
+        ("start.spin", "Spin", "rad/s", "Angular velocity about the surface normal"),
+    ),
+    "Integrator": (
+        ("integrator.dt", "Step size", "s", "Time step h"),
+        ("duration", "Duration", "s", "Simulated time to run"),
+    ),
+    "Grid": (
+        ("view.min", "Min", "m", "The landscape is drawn on [min, max]² (smin)"),
+        ("view.max", "Max", "m", "The landscape is drawn on [min, max]² (smax)"),
+        ("view.step", "Spacing", "m", "Distance between grid lines"),
+    ),
+}
+MAX_GRID_POINTS = 401          # per side of the drawn landscape
+DEBOUNCE_MS = 250              # typing pause before a change is applied
+
+
+def _get(d: dict, key: str):
+    for part in key.split("."):
+        d = d[part]
+    return d
+
+
+def _set(d: dict, key: str, value) -> None:
+    *path, last = key.split(".")
+    for part in path:
+        d = d[part]
+    d[last] = value
+
+
+def format_number(value: float) -> str:
+    return repr(float(value))  # shortest text that reads back as the same number
+
+
+class ScenePanel(QtWidgets.QWidget):
+    """Fields for a scene. ``sceneChanged`` carries each new valid scene (after a typing pause)."""
+
+    sceneChanged = QtCore.Signal(object)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self._scene: Scene | None = None
+        self._filling = False
+        self.numbers: dict[str, QtWidgets.QLineEdit] = {}
+        self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
+        self._timer.timeout.connect(self.apply)
+
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.setContentsMargins(6, 6, 6, 6)
+        layout.addWidget(self._landscape_group())
+        for title, fields in NUMBER_FIELDS.items():
+            group = QtWidgets.QGroupBox(title)
+            form = QtWidgets.QFormLayout(group)
+            form.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+            if title == "Integrator":
+                self._method_rows(form)
+            for key, label, unit, tip in fields:
+                form.addRow(label, self._number_field(key, unit, tip))
+            if title == "Integrator":
+                form.addRow("Record", self._record_field())
+            layout.addWidget(group)
+        self.error = QtWidgets.QLabel(wordWrap=True, objectName="fieldError")
+        self.error.setStyleSheet("color: #c0392b;")
+        self.error.hide()
+        layout.addWidget(self.error)
+        layout.addStretch(1)
+
+    # -- building ---------------------------------------------------------------------
+
+    def _landscape_group(self) -> QtWidgets.QGroupBox:
+        group = QtWidgets.QGroupBox("Landscape  z = f(x, y)  [m]")
+        box = QtWidgets.QVBoxLayout(group)
+        self.formula = QtWidgets.QLineEdit(objectName="formula", clearButtonEnabled=True)
+        self.formula.setToolTip("x, y, pi, e, numbers, + - * / ^ and sin cos tan asin acos atan atan2 "
+                                "sinh cosh tanh exp log sqrt abs min max …")
+        self.formula.setPlaceholderText("e.g. 0.5*sin(x)*cos(y)")
+        self.formula.textEdited.connect(self._edited)
+        self.formula_error = QtWidgets.QLabel(wordWrap=True, objectName="formulaError")
+        self.formula_error.setStyleSheet("color: #c0392b;")
+        self.formula_error.hide()
+        self.description = QtWidgets.QLineEdit(objectName="description")
+        self.description.setPlaceholderText("Description (shown in the Examples menu)")
+        self.description.textEdited.connect(self._edited)
+        box.addWidget(self.formula)
+        box.addWidget(self.formula_error)
+        box.addWidget(self.description)
+        return group
+
+    def _number_field(self, key: str, unit: str, tip: str) -> QtWidgets.QWidget:
+        edit = QtWidgets.QLineEdit(objectName=key)
+        edit.setToolTip(tip)
+        edit.textEdited.connect(self._edited)
+        self.numbers[key] = edit
+        row = QtWidgets.QWidget()
+        h = QtWidgets.QHBoxLayout(row)
+        h.setContentsMargins(0, 0, 0, 0)
+        h.addWidget(edit, 1)
+        units = QtWidgets.QLabel(unit)
+        units.setMinimumWidth(42)
+        h.addWidget(units)
+        return row
+
+    def _method_rows(self, form: QtWidgets.QFormLayout) -> None:
+        self.methods = QtWidgets.QButtonGroup(self)
+        row = QtWidgets.QWidget()
+        h = QtWidgets.QHBoxLayout(row)
+        h.setContentsMargins(0, 0, 0, 0)
+        for name, tableau in TABLEAUS.items():
+            button = QtWidgets.QRadioButton(tableau.label, objectName=f"method.{name}")
+            button.setToolTip(f"{tableau.label}: explicit Runge–Kutta of order {tableau.order}")
+            button.setProperty("method", name)
+            self.methods.addButton(button)
+            h.addWidget(button)
+        h.addStretch(1)
+        self.methods.buttonClicked.connect(self._edited)
+        form.addRow("Method", row)
+        self.munthe_kaas = QtWidgets.QCheckBox("Munthe-Kaas (R stays a rotation)", objectName="munthe_kaas")
+        self.munthe_kaas.setToolTip("Lie-group integration of the orientation. Off: R is integrated as a plain "
+                                    "matrix, as in 2011, and the drawn ball deforms.")
+        self.munthe_kaas.clicked.connect(self._edited)
+        form.addRow("", self.munthe_kaas)
+
+    def _record_field(self) -> QtWidgets.QSpinBox:
+        self.record_every = QtWidgets.QSpinBox(objectName="record_every", minimum=0, maximum=1_000_000)
+        self.record_every.setSpecialValueText("auto")
+        self.record_every.setPrefix("every ")
+        self.record_every.setSuffix(" steps")
+        self.record_every.setToolTip("Keep every N-th step for playback, plots and export "
+                                     "(auto: every step up to 200,000 rows)")
+        return self.record_every
+
+    # -- scene <-> fields ------------------------------------------------------------
+
+    def scene(self) -> Scene | None:
+        """The last valid scene."""
+        return self._scene
+
+    def method(self) -> str:
+        return self.methods.checkedButton().property("method")
+
+    def set_scene(self, scene: Scene) -> None:
+        """Show a scene in the fields (no ``sceneChanged``)."""
+        self._timer.stop()
+        self._scene = scene
+        data = scene.to_dict()
+        self._filling = True
+        try:
+            self.formula.setText(scene.landscape)
+            self.description.setText(scene.description)
+            for key, edit in self.numbers.items():
+                edit.setText(format_number(_get(data, key)))
+            for button in self.methods.buttons():
+                button.setChecked(button.property("method") == scene.integrator.method)
+            self.munthe_kaas.setChecked(scene.integrator.munthe_kaas)
+        finally:
+            self._filling = False
+        self._show_errors(None, None)
+
+    def _edited(self, *_):
+        if not self._filling:
+            self._timer.start()
+
+    def apply(self) -> Scene | None:
+        """Validate the fields now; emit ``sceneChanged`` if they make a new valid scene."""
+        self._timer.stop()
+        scene, key, message = self.read()
+        self._show_errors(key, message)
+        if scene is not None and scene != self._scene:
+            self._scene = scene
+            self.sceneChanged.emit(scene)
+        return scene
+
+    def read(self) -> tuple[Scene | None, str | None, str | None]:
+        """(scene, None, None) from the fields, or (None, offending key, message)."""
+        text = self.formula.text()
+        try:
+            landscape_for(text)
+        except FormulaError as error:
+            return None, "landscape", str(error)
+        data = (self._scene or Scene(landscape="0")).to_dict()
+        data["landscape"] = text
+        data["description"] = self.description.text()
+        for key, edit in self.numbers.items():
+            try:
+                value = float(edit.text().strip())
+            except ValueError:
+                return None, key, "not a number" if edit.text().strip() else "missing"
+            _set(data, key, value)
+        data["integrator"]["method"] = self.method()
+        data["integrator"]["munthe_kaas"] = self.munthe_kaas.isChecked()
+        try:
+            scene = Scene.from_dict(data)
+        except SceneError as error:
+            key, _, message = str(error).partition(": ")
+            return None, key, message
+        points = (scene.view.max - scene.view.min) / scene.view.step + 1
+        if points > MAX_GRID_POINTS:
+            return None, "view.step", f"{math.ceil(points):,} grid points per side; at most {MAX_GRID_POINTS}"
+        return scene, None, None
+
+    def _show_errors(self, key: str | None, message: str | None) -> None:
+        for name, edit in self.numbers.items():
+            edit.setStyleSheet("border: 1px solid #c0392b;" if name == key else "")
+        self.formula.setStyleSheet("border: 1px solid #c0392b;" if key == "landscape" else "")
+        self.formula_error.setVisible(key == "landscape")
+        self.error.setVisible(key is not None and key != "landscape")
+        if key == "landscape":
+            self.formula_error.setText(f"{message} — the last valid landscape is still shown")
+        elif key is not None:
+            label = next((f[1] for fields in NUMBER_FIELDS.values() for f in fields if f[0] == key), key)
+            self.error.setText(f"{label}: {message}")
+
+    @property
+    def error_text(self) -> str:
+        """The message currently shown (empty when the fields are valid)."""
+        for label in (self.formula_error, self.error):
+            if not label.isHidden():
+                return label.text()
+        return ""

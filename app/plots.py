@@ -1,0 +1,48 @@
+"""Small live plots against time: relative energy error and ‖RᵀR − I‖ (log scale), normal force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6 import QtCore, QtWidgets
+
+FLOOR = 1e-17       # log plots show exact zeros at this level
+MAX_POINTS = 2000   # per curve; longer runs are thinned for drawing
+
+
+class LivePlots(QtWidgets.QWidget):
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        layout = QtWidgets.QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.curves = {}
+        for name, title, units, log in (
+            ("energy", "|E − E₀| / E₀", "", True),
+            ("orthogonality", "‖RᵀR − I‖", "", True),
+            ("force", "Normal force F·N", "N", False),
+        ):
+            plot = pg.PlotWidget(background="w")
+            plot.setObjectName(f"plot.{name}")
+            plot.setTitle(title, size="9pt", color="#333")
+            plot.setLabel("bottom", "t", units="s")
+            plot.setLogMode(y=log)
+            plot.showGrid(x=True, y=True, alpha=0.25)
+            plot.setMouseEnabled(x=False, y=False)
+            plot.setMinimumHeight(150)
+            if name == "force":
+                plot.addItem(pg.InfiniteLine(pos=0.0, angle=0, pen=pg.mkPen("#c0392b", style=QtCore.Qt.PenStyle.DashLine)))
+            self.curves[name] = plot.plot(pen=pg.mkPen("#1f5fa8", width=1.5), skipFiniteCheck=True)
+            layout.addWidget(plot)
+
+    def show_run(self, buffer, index: int) -> None:
+        """Plot rows 0..index of a ``RunBuffer`` (None or empty: clear)."""
+        if buffer is None or len(buffer) == 0:
+            for curve in self.curves.values():
+                curve.setData([], [])
+            return
+        stride = max(1, -(-(index + 1) // MAX_POINTS))
+        picked = np.r_[np.arange(0, index + 1, stride), index]
+        t = buffer.t[picked]
+        self.curves["energy"].setData(t, np.maximum(np.abs(buffer.energy_error[picked]), FLOOR))
+        self.curves["orthogonality"].setData(t, np.maximum(buffer.orthogonality_error[picked], FLOOR))
+        self.curves["force"].setData(t, buffer.rows[picked, 22])

@@ -1,0 +1,63 @@
+"""Fixtures for driving the real window under Xvfb (pytest-xvfb starts it, with GLX)."""
+
+import pytest
+from PySide6 import QtCore, QtWidgets
+
+from app.main import prepare_qt
+from app.preferences import Preferences
+from app.window import FINISHED, MainWindow
+from rollball.examples import EXAMPLES_DIR
+
+prepare_qt()  # before pytest-qt creates the QApplication
+
+FASTEST = len(__import__("app.window", fromlist=["SPEEDS"]).SPEEDS) - 1
+
+
+@pytest.fixture
+def dialogs(monkeypatch):
+    """Message boxes are recorded instead of shown: (kind, title, text)."""
+    shown = []
+
+    def record(kind, answer):
+        def box(parent, title, text, *args, **kwargs):
+            shown.append((kind, title, text))
+            return answer
+        return box
+
+    buttons = QtWidgets.QMessageBox.StandardButton
+    monkeypatch.setattr(QtWidgets.QMessageBox, "warning", record("warning", buttons.Ok))
+    monkeypatch.setattr(QtWidgets.QMessageBox, "information", record("information", buttons.Ok))
+    monkeypatch.setattr(QtWidgets.QMessageBox, "question", record("question", buttons.Discard))
+    return shown
+
+
+@pytest.fixture
+def preferences(tmp_path):
+    return Preferences(QtCore.QSettings(str(tmp_path / "preferences.ini"), QtCore.QSettings.Format.IniFormat))
+
+
+@pytest.fixture
+def window(qtbot, dialogs, preferences):
+    """The main window on the hills example, shown."""
+    w = MainWindow(preferences)
+    qtbot.addWidget(w)
+    w.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
+    w.show()
+    qtbot.waitExposed(w)
+    yield w
+    w.stop_worker()
+
+
+def run_to_end(qtbot, window, timeout=30_000):
+    """Start (at the fastest playback) and wait until the run has played to its end."""
+    window.speed.setCurrentIndex(FASTEST)
+    window.start()
+    qtbot.waitUntil(lambda: window.state == FINISHED, timeout=timeout)
+
+
+def set_field(qtbot, window, key, text):
+    """Type into a scene field as a user would and let the typing pause pass."""
+    edit = window.panel.formula if key == "landscape" else window.panel.numbers[key]
+    edit.selectAll()
+    qtbot.keyClicks(edit, text)
+    window.panel.apply()

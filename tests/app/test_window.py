@@ -1,0 +1,314 @@
+"""The desktop app, driven as a user drives it: fields, methods, run controls, files, the GL view."""
+
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from PySide6 import QtCore, QtWidgets
+
+from app.window import FINISHED, PAUSED, READY, RUNNING, STOPPED, MainWindow
+from rollball import Scene, read_csv
+from rollball.examples import EXAMPLES_DIR, example_scenes
+
+from .conftest import FASTEST, run_to_end, set_field
+
+
+def test_opens_on_the_example_ready_to_start(window):
+    assert window.state == READY
+    assert window.panel.formula.text() == "0.5*sin(x)*cos(y)"
+    assert window.scene == Scene.load(EXAMPLES_DIR / "hills.json")
+    assert "hills" in window.windowTitle()
+    assert window.start_action.isEnabled() and not window.stop_action.isEnabled()
+    assert window.view.surface is not None
+
+
+def test_typing_a_formula_redraws_the_landscape(qtbot, window):
+    before = window.view.surface
+    set_field(qtbot, window, "landscape", "0.2*(x^2 + y^2)")
+    assert window.scene.landscape == "0.2*(x^2 + y^2)"
+    assert window.view.surface is not before
+    assert window.panel.error_text == ""
+    assert window.isWindowModified()
+
+
+def test_a_bad_formula_is_explained_and_the_last_landscape_stays(qtbot, window):
+    before, scene = window.view.surface, window.scene
+    set_field(qtbot, window, "landscape", "0.5*sin(x)*cos(z")
+    assert "unknown name 'z'" in window.panel.error_text
+    assert "last valid landscape" in window.panel.error_text
+    assert window.scene == scene and window.view.surface is before
+    set_field(qtbot, window, "landscape", "0.5*sin(x")
+    assert "parenthesis" in window.panel.error_text
+    set_field(qtbot, window, "landscape", "0.5*sin(x)")  # fixed: the message goes
+    assert window.panel.error_text == "" and window.scene.landscape == "0.5*sin(x)"
+
+
+@pytest.mark.parametrize("key, text, message", [
+    ("ball.radius", "-0.1", "Radius: must be greater than 0"),
+    ("ball.mass", "heavy", "Mass: not a number"),
+    ("integrator.dt", "0", "Step size: must be greater than 0"),
+    ("view.max", "-5", "Min: must be less than view.max"),
+    ("view.step", "0.0001", "grid points per side"),
+    ("start.x", "nan", "x: must be a finite number"),
+])
+def test_bad_numbers_are_explained_in_place_and_change_nothing(qtbot, window, key, text, message):
+    scene = window.scene
+    set_field(qtbot, window, key, text)
+    assert message in window.panel.error_text
+    assert window.scene == scene
+
+
+def test_method_radio_and_munthe_kaas_reach_the_run(qtbot, window):
+    qtbot.mouseClick(window.panel.findChild(QtWidgets.QRadioButton, "method.lawson5"),
+                     QtCore.Qt.MouseButton.LeftButton)
+    qtbot.mouseClick(window.panel.munthe_kaas, QtCore.Qt.MouseButton.LeftButton)
+    window.panel.apply()
+    assert window.scene.integrator.method == "lawson5" and not window.scene.integrator.munthe_kaas
+    window.start()
+    assert window.simulation.tableau.name == "lawson5" and not window.simulation.munthe_kaas
+
+
+def test_start_pause_step_stop_reset(qtbot, window):
+    window.start()
+    assert window.state == RUNNING
+    qtbot.waitUntil(lambda: window.play_time > 0.05, timeout=5000)
+    window.toggle_pause()
+    assert window.state == PAUSED
+    paused_at = window.play_time
+    qtbot.wait(150)
+    assert window.play_time == paused_at                       # playback holds
+    window.step_frame()
+    assert window.play_time == pytest.approx(paused_at + 0.016)  # one frame at real time
+    assert window.readouts["t"].text() != "—"
+    window.toggle_pause()
+    assert window.state == RUNNING
+    qtbot.waitUntil(lambda: window.play_time > paused_at + 0.1, timeout=5000)
+    window.stop()
+    assert window.state == STOPPED and window.thread is None
+    assert window.export_action.isEnabled()
+    window.reset()
+    assert window.state == READY and window.buffer is None and window.play_time == 0.0
+    assert window.readouts["t"].text() == "0 s"
+
+
+def test_step_from_ready_starts_paused(qtbot, window):
+    window.step_frame()
+    assert window.state == PAUSED
+    qtbot.waitUntil(lambda: window.buffer is not None and len(window.buffer) > 1, timeout=5000)
+    window.step_frame()
+    assert window.play_time > 0
+
+
+def test_playback_speed_sets_simulated_seconds_per_second(qtbot, window):
+    window.speed.setCurrentIndex(window.speed.findText("2×"))
+    window.start()
+    qtbot.waitUntil(lambda: window.computed, timeout=10_000)
+    t0, w0 = window.play_time, time.perf_counter()
+    qtbot.wait(1000)
+    rate = (window.play_time - t0) / (time.perf_counter() - w0)
+    assert 1.6 < rate < 2.4   # a frame of slack at either end of the measurement
+
+
+def test_a_run_plays_to_its_end_and_exports_its_rows(qtbot, window, tmp_path):
+    set_field(qtbot, window, "duration", "0.5")
+    run_to_end(qtbot, window)
+    assert window.message.text().startswith("Finished: reached t = 0.5 s in 500 steps")
+    assert window.progress.value() == 1000
+    out = tmp_path / "run.csv"
+    assert window.export_csv(out)
+    data = read_csv(out)
+    assert data.shape == (501, 23)
+    assert data[0, 0] == 0.0 and data[-1, 0] == 0.5
+    assert np.array_equal(data, window.simulation.rows)
+    assert "Exported 501 rows" in window.message.text()
+
+
+def test_save_and_open_give_the_same_scene(qtbot, window, tmp_path, preferences):
+    set_field(qtbot, window, "ball.radius", "0.25")
+    set_field(qtbot, window, "start.spin", "3.5")
+    qtbot.mouseClick(window.panel.findChild(QtWidgets.QRadioButton, "method.euler"), QtCore.Qt.MouseButton.LeftButton)
+    window.panel.apply()
+    path = tmp_path / "mine.json"
+    assert window.save_to(path)
+    assert not window.isWindowModified() and "mine.json" in window.windowTitle()
+    saved = Scene.load(path)
+    assert saved == window.scene
+    assert saved.ball.radius == 0.25 and saved.start.spin == 3.5 and saved.integrator.method == "euler"
+    other = MainWindow(preferences)
+    qtbot.addWidget(other)
+    assert other.open_scene(path)
+    assert other.scene == saved
+    assert other.panel.numbers["ball.radius"].text() == "0.25"
+    assert str(path.resolve()) == preferences.recent_files()[0]
+
+
+def test_every_example_opens(qtbot, window, dialogs):
+    for path, scene in example_scenes():
+        assert window.open_scene(path, remember=False)
+        assert window.scene == scene
+        assert f"{path.stem} (example)" in window.windowTitle()
+    assert dialogs == []
+    titles = [a.text() for a in window.examples_menu.actions()]
+    assert len(titles) == len(example_scenes()) and any(t.startswith("hills — ") for t in titles)
+
+
+def test_a_broken_scene_file_is_refused_and_the_scene_stays(qtbot, window, dialogs, tmp_path):
+    scene = window.scene
+    bad = tmp_path / "bad.json"
+    data = Scene.load(EXAMPLES_DIR / "hills.json").to_dict()
+    data["ball"]["radius"] = -1
+    bad.write_text(json.dumps(data))
+    assert not window.open_scene(bad)
+    assert dialogs and "ball.radius" in dialogs[-1][2]
+    assert window.scene == scene
+
+
+def test_save_failure_is_reported_and_the_old_file_stays(qtbot, window, dialogs, tmp_path, monkeypatch):
+    path = tmp_path / "keep.json"
+    path.write_text("precious")
+
+    def refuse(*args):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr(os, "replace", refuse)
+    assert not window.save_to(path)
+    assert path.read_text() == "precious"
+    assert dialogs[-1][0] == "warning" and "Permission denied" in dialogs[-1][2]
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_changing_the_scene_during_a_run_resets_it(qtbot, window):
+    window.start()
+    qtbot.waitUntil(lambda: window.play_time > 0.02, timeout=5000)
+    set_field(qtbot, window, "start.x", "0.5")
+    assert window.state == READY and window.thread is None
+    assert "reset" in window.message.text()
+    window.start()
+    assert window.simulation.scene.start.x == 0.5
+
+
+def test_view_only_changes_keep_the_run(qtbot, window):
+    window.start()
+    qtbot.waitUntil(lambda: window.play_time > 0.02, timeout=5000)
+    set_field(qtbot, window, "view.step", "0.2")
+    assert window.state == RUNNING
+
+
+def test_liftoff_is_marked_and_said(qtbot, window):
+    window.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
+    run_to_end(qtbot, window)
+    assert window.view.liftoff.visible()
+    assert "lift-off at t =" in window.message.text()
+
+
+def test_a_run_that_stops_early_says_why(qtbot, window):
+    window.open_scene(EXAMPLES_DIR / "too_big.json", remember=False)
+    assert "red: the ball does not fit" in window.message.text().lower()
+    run_to_end(qtbot, window)
+    text = window.message.text()
+    assert text.startswith("Stopped early (does not fit)") and "t = " in text and "(x, y)" in text
+
+
+def test_classic_euler_shows_r_leaving_so3(qtbot, window):
+    qtbot.mouseClick(window.panel.findChild(QtWidgets.QRadioButton, "method.euler"), QtCore.Qt.MouseButton.LeftButton)
+    qtbot.mouseClick(window.panel.munthe_kaas, QtCore.Qt.MouseButton.LeftButton)
+    set_field(qtbot, window, "integrator.dt", "0.01")
+    set_field(qtbot, window, "duration", "3")
+    run_to_end(qtbot, window)
+    assert window.buffer.orthogonality_error[-1] > 1e-3
+    assert float(window.readouts["orth"].text()) > 1e-3
+
+
+def ball_pixels(window, qtbot):
+    """Where the ball is on screen: the pixels that change when it is hidden."""
+    qtbot.wait(50)
+    with_ball = window.view.image().astype(int)
+    window.view.ball.setVisible(False)
+    without = window.view.image().astype(int)
+    window.view.ball.setVisible(True)
+    changed = np.argwhere(np.abs(with_ball - without).sum(axis=2) > 30)
+    return changed
+
+
+def test_the_gl_view_shows_the_ball_moving(qtbot, window):
+    window.follow_action.setChecked(False)
+    window.view.reset_camera()
+    window.start()
+    qtbot.waitUntil(lambda: window.play_time > 0.3, timeout=5000)
+    window.toggle_pause()
+    first = ball_pixels(window, qtbot)
+    window.toggle_pause()
+    qtbot.waitUntil(lambda: window.play_time > 1.2, timeout=5000)
+    window.toggle_pause()
+    second = ball_pixels(window, qtbot)
+    assert len(first) > 20 and len(second) > 20          # the ball is visible
+    moved = np.linalg.norm(first.mean(axis=0) - second.mean(axis=0))
+    assert moved > 5                                    # and moved on screen (pixels)
+    image = window.view.image()
+    assert image.std() > 10                             # a drawn landscape, not a blank frame
+
+
+def test_closing_during_a_run_ends_the_worker(qtbot, window):
+    set_field(qtbot, window, "integrator.dt", "0.0001")
+    set_field(qtbot, window, "duration", "1000")
+    window.start()
+    thread = window.thread
+    qtbot.waitUntil(lambda: window.buffer is not None and len(window.buffer) > 10, timeout=5000)
+    started = time.perf_counter()
+    assert window.close()
+    assert time.perf_counter() - started < 2.0
+    assert thread.isFinished() and window.thread is None
+
+
+def test_the_event_loop_keeps_serving_during_a_million_step_run(qtbot, window):
+    """A timer ticks every 5 ms on the GUI thread while 10⁶ steps are computed."""
+    set_field(qtbot, window, "integrator.dt", "0.0001")
+    set_field(qtbot, window, "duration", "100")
+    ticks = []
+    timer = QtCore.QTimer(interval=5)
+    timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
+    timer.start()
+    qtbot.wait(50)
+    window.start()
+    assert window.simulation.n_steps == 1_000_000
+    qtbot.waitUntil(lambda: window.computed, timeout=60_000)
+    timer.stop()
+    gaps = np.diff(ticks)
+    print(f"\n10^6 steps: {len(gaps)} ticks, longest gap {1000 * gaps.max():.1f} ms, "
+          f"median {1000 * np.median(gaps):.1f} ms")
+    assert gaps.max() < 0.1
+
+
+def test_preferences_remember_geometry_and_recent_files(qtbot, window, preferences, tmp_path):
+    path = tmp_path / "a.json"
+    window.save_to(path)
+    window.resize(900, 700)
+    window.close()
+    again = MainWindow(preferences)
+    qtbot.addWidget(again)
+    assert again.size().width() == 900
+    again.recent_menu.aboutToShow.emit()
+    assert [a.text() for a in again.recent_menu.actions()][0] == "a.json"
+
+
+def test_the_entry_point_starts_the_window(tmp_path):
+    env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), HOME=str(tmp_path))
+    process = subprocess.Popen([sys.executable, "-m", "app"], env=env, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(6)
+        assert process.poll() is None, process.communicate()[1]
+    finally:
+        process.terminate()
+        _, err = process.communicate(timeout=10)
+    assert "Traceback" not in err
+
+
+def test_the_installed_command_answers_help():
+    script = os.path.join(os.path.dirname(sys.executable), "rollball-app")
+    result = subprocess.run([script, "--help"], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0 and "scene" in result.stdout
