@@ -80,7 +80,7 @@ class Simulation:
 
         self.landscape = landscape_for(scene.landscape)
         self._fn = self.landscape.compiled
-        self._A, self._b, _ = self.tableau.arrays()
+        self._W = self.tableau.matrix()
         self._p = np.array([scene.ball.radius, scene.ball.mass, scene.gravity])
         n = kernel.state_size(mk)
         self._z = np.zeros(n)
@@ -89,11 +89,12 @@ class Simulation:
         self._z[:2], self._z[2:5] = alpha, v
         if not mk:
             self._z[5:] = self._R.ravel()
-        self._K = np.zeros((self.tableau.stages, n))
+        self._K = np.zeros((self.tableau.stages + 1, n))
         self._probe = np.zeros(kernel.PROBE_SIZE)
         self._rows = np.empty((n_rows, kernel.ROW_SIZE))
-        self._ints = np.zeros(4, dtype=np.int64)
-        self._info = np.full(6, np.nan)
+        self._ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)
+        self._info = np.full(kernel.INFO_SIZE, np.nan)
+        self._work = np.empty(kernel.work_size(n))
         self.status: Status | None = None
 
     @property
@@ -123,9 +124,9 @@ class Simulation:
         remaining = self.n_steps - self.steps if max_steps is None else max_steps
         while (remaining > 0 or self._ints[kernel.I_ROWS] == 0) and not self.done:
             chunk = min(remaining, CHUNK)
-            kernel.advance(self._fn, self._A, self._b, self.munthe_kaas, self._p, self.dt, self.t_end,
+            kernel.advance(self._fn, self._W, self.munthe_kaas, self._p, self.dt, self.t_end,
                            self.n_steps, self.record_every, chunk, self._z, self._R, self._K,
-                           self._probe, self._rows, self._ints, self._info)
+                           self._probe, self._rows, self._ints, self._info, self._work)
             remaining -= chunk
             code = int(self._ints[kernel.I_STATUS])
             if code != kernel.RUNNING:

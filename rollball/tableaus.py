@@ -58,6 +58,11 @@ class Tableau:
             A[i, :i] = [float(v) for v in row]
         return A, np.array([float(v) for v in self.b]), np.array([float(v) for v in self.c])
 
+    def matrix(self) -> np.ndarray:
+        """A with the weights b as one more row: the (s + 1) x s array the kernel reads."""
+        A, b, _ = self.arrays()
+        return np.vstack([A, b])
+
 
 def tableau(name: str, label: str, order: int, c, a, b) -> Tableau:
     return Tableau(name, label, order, _fractions(c), tuple(_fractions(r) for r in a), _fractions(b))
