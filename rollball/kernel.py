@@ -49,14 +49,20 @@ PROBE_HEIGHT = 8   # f(x, y)
 PROBE_SIZE = 9
 
 # Integer run counters (``ints``) and float run facts (``info``).
-I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED = 0, 1, 2, 3, 4
+I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE = 0, 1, 2, 3, 4, 5
 F_LIFTOFF, F_PREV_FORCE, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(8)
-INTS_SIZE, INFO_SIZE = 5, 8
+INTS_SIZE, INFO_SIZE = 6, 8
 
 # Status codes (see simulation.Status).
 RUNNING, OK, DOES_NOT_FIT, NONFINITE = 0, 1, 2, 3
 
 ROW_SIZE = 23  # t, x, y, c(3), c'(3), omega(3), R(9), energy, normal force
+
+MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below t = 1) stop the run
+# An adaptive step that turns the state non-finite is retried 5 times smaller; after this
+# many such steps in a run the ball is pressing against the end of the landscape, and the
+# run stops as a fixed-step run would at the first.
+NONFINITE_TRIES = 50
 
 
 def state_size(munthe_kaas: bool) -> int:
@@ -189,6 +195,15 @@ def record(rows, i, t, z, R, probe, p):
             rows[i, 12 + 3 * a + b] = R[a, b]
     rows[i, 21] = 0.5 * (o1 * z[2] + o2 * z[3] + o3 * z[4]) + m * g0 * cz
     rows[i, 22] = probe[6]
+
+
+@JIT
+def record_last(rows, ints, t, z, R, probe, p):
+    """A run stopped by the physics: its last valid state (the current one) is the last row."""
+    if ints[I_LAST_RECORDED] != ints[I_STEPS]:
+        record(rows, ints[I_ROWS], t, z, R, probe, p)
+        ints[I_ROWS] += 1
+        ints[I_LAST_RECORDED] = ints[I_STEPS]
 
 
 @JIT
@@ -355,11 +370,7 @@ def advance(fn, W, mk, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, 
         elif pn[PROBE_FIT] >= 1.0:
             _fail(ints, info, DOES_NOT_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
         if ints[I_STATUS] != RUNNING:
-            # keep the last valid state as the last row
-            if ints[I_LAST_RECORDED] != k - 1:
-                record(rows, ints[I_ROWS], (k - 1) * dt, z, R, probe, p)
-                ints[I_ROWS] += 1
-                ints[I_LAST_RECORDED] = k - 1
+            record_last(rows, ints, (k - 1) * dt, z, R, probe, p)
             return
         accept(mk, t, h, z, R, K, s, probe, zn, Rn, pn, info)
         ints[I_STEPS] = k
@@ -369,3 +380,85 @@ def advance(fn, W, mk, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, 
             ints[I_LAST_RECORDED] = k
     if ints[I_STEPS] == n_steps:
         ints[I_STATUS] = OK
+
+
+@JIT
+def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K, probe, rows, ints,
+                     info, work):
+    """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
+    (Munthe-Kaas only); info[F_TIME] is the time reached and info[F_H] the next step to try.
+
+    W holds the pair: rows 0 .. s-1 the stage coefficients, row s the weights b (last one
+    zero: the last stage is the evaluation at the new state, "first same as last") and
+    row s+1 the error weights b - b_hat. The error of a step is measured in alpha and v
+    relative to rtol |value| + atol, and in u against rtol + atol (R's entries are of size 1).
+    Rows land exactly on the multiples of record_dt and on t_end (steps are shortened to
+    reach them), or on every accepted step when record_dt is 0. Returns early, still
+    running, when ``rows`` is full: the caller grows it and calls again.
+    """
+    n = z.shape[0]
+    s = W.shape[1]
+    d, Y, zn, pn, Rn = scratch(work, n)
+    if ints[I_ROWS] == 0:
+        start(fn, d, p, True, z, R, K, probe, rows, ints, info)
+        info[F_TIME] = 0.0
+        if ints[I_STATUS] != RUNNING:
+            return
+    t, h = info[F_TIME], info[F_H]
+    retry = False  # right after a rejection the step may shrink but not grow (Hairer's rule)
+    for _ in range(max_steps):
+        if ints[I_ROWS] >= rows.shape[0] - 1:  # keep one row for the last valid state
+            break
+        t_out = t_end
+        if record_dt > 0.0:
+            t_out = min(ints[I_ROWS] * record_dt, t_end)
+            if t_end - t_out < 1e-9 * record_dt:
+                t_out = t_end
+        land = t + 1.1 * h >= t_out  # stretch a little rather than leave a sliver
+        hs = t_out - t if land else h
+        bad = trial_step(fn, d, p, W, s, True, hs, z, R, K, s - 1, Y, zn, Rn, pn)
+        err = math.inf
+        if not bad:
+            acc = 0.0
+            for q in range(n):
+                e = 0.0
+                for i in range(s):
+                    e += W[s + 1, i] * K[i, q]
+                scale = atol + rtol * (max(abs(z[q]), abs(zn[q])) if q < 5 else 1.0)
+                acc += (hs * e / scale) ** 2
+            err = math.sqrt(acc / n)
+        if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
+            ints[I_REJECTED] += 1
+            retry = True
+            h = hs * max(0.2, 0.9 * err ** -0.2) if err < math.inf else 0.2 * hs
+            ints[I_NONFINITE] += 1 if bad else 0
+            if ints[I_NONFINITE] >= NONFINITE_TRIES:
+                _fail(ints, info, NONFINITE, t, z[0], z[1], 1.0 if bad == 2 else 0.0)
+            elif h <= MIN_STEP * max(1.0, abs(t)):
+                _fail(ints, info, NONFINITE, t, z[0], z[1], 2.0)
+            else:
+                continue
+        elif pn[PROBE_FIT] >= 1.0:
+            _fail(ints, info, DOES_NOT_FIT, t + hs, zn[0], zn[1], pn[PROBE_FIT])
+        if ints[I_STATUS] != RUNNING:
+            record_last(rows, ints, t, z, R, probe, p)
+            break
+        t = t_out if land else t + hs
+        accept(True, t, hs, z, R, K, s - 1, probe, zn, Rn, pn, info)
+        ints[I_STEPS] += 1
+        grown = hs * min(1.0 if retry else 5.0, 0.9 * err ** -0.2 if err > 0.0 else 5.0)
+        h = max(h, grown) if land else grown
+        retry = False
+        if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
+            _fail(ints, info, NONFINITE, t, z[0], z[1], 2.0)
+        if land or record_dt == 0.0:
+            record(rows, ints[I_ROWS], t, z, R, probe, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = ints[I_STEPS]
+        if ints[I_STATUS] != RUNNING:
+            record_last(rows, ints, t, z, R, probe, p)
+            break
+        if t == t_end:
+            ints[I_STATUS] = OK
+            break
+    info[F_TIME], info[F_H] = t, h
