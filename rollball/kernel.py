@@ -69,53 +69,58 @@ def state_size(munthe_kaas: bool) -> int:
     return 8 if munthe_kaas else 14
 
 
+def parameters(radius: float, mass: float, gravity: float) -> np.ndarray:
+    """The ball and gravity as the kernel reads them, with the constants it would otherwise
+    recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0."""
+    r, m, g0 = radius, mass, gravity
+    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0])
+
+
 @JIT
 def dynamics(fn, d, p, z, mk, K, row, probe, full):
     """K[row] = z'(z); with ``full`` also fill ``probe`` (normal, omega, F.N, r*kappa, height)."""
-    r, m, g0 = p[0], p[1], p[2]
+    r, k, mr, mr2, mg = p[0], p[3], p[4], p[5], p[6]
     fn(z[0], z[1], data_pointer(d))
     fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
     W2 = 1.0 + fx * fx + fy * fy
-    W = math.sqrt(W2)
-    n1, n2, n3 = -fx / W, -fy / W, 1.0 / W
+    iW = 1.0 / math.sqrt(W2)  # one division, then products
+    n1, n2, n3 = -fx * iW, -fy * iW, iW
     v1, v2, v3 = z[2], z[3], z[4]
     # omega = T^-1 v, T^-1 = 5/(7 m r^2) (I + 5/2 N N^T)
-    k = 5.0 / (7.0 * m * r * r)
     nv = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
     o1, o2, o3 = k * (v1 + nv * n1), k * (v2 + nv * n2), k * (v3 + nv * n3)
     # N' columns: dN/dx = (n_x - N (N . n_x)) / W with n = (-f_x, -f_y, 1)
     s = n1 * fxx + n2 * fxy
-    Nx1, Nx2, Nx3 = (n1 * s - fxx) / W, (n2 * s - fxy) / W, n3 * s / W
+    Nx1, Nx2, Nx3 = (n1 * s - fxx) * iW, (n2 * s - fxy) * iW, n3 * s * iW
     s = n1 * fxy + n2 * fyy
-    Ny1, Ny2, Ny3 = (n1 * s - fxy) / W, (n2 * s - fyy) / W, n3 * s / W
+    Ny1, Ny2, Ny3 = (n1 * s - fxy) * iW, (n2 * s - fyy) * iW, n3 * s * iW
     # C' = phi' + r N', E = C'^T C'
     Cx1, Cx2, Cx3 = 1.0 + r * Nx1, r * Nx2, fx + r * Nx3
     Cy1, Cy2, Cy3 = r * Ny1, 1.0 + r * Ny2, fy + r * Ny3
     E11 = Cx1 * Cx1 + Cx2 * Cx2 + Cx3 * Cx3
     E12 = Cx1 * Cy1 + Cx2 * Cy2 + Cx3 * Cy3
     E22 = Cy1 * Cy1 + Cy2 * Cy2 + Cy3 * Cy3
-    det = E11 * E22 - E12 * E12
+    idet = 1.0 / (E11 * E22 - E12 * E12)
     # alpha' = r E^-1 C'^T (omega x N)
     w1, w2, w3 = o2 * n3 - o3 * n2, o3 * n1 - o1 * n3, o1 * n2 - o2 * n1
     b1 = r * (Cx1 * w1 + Cx2 * w2 + Cx3 * w3)
     b2 = r * (Cy1 * w1 + Cy2 * w2 + Cy3 * w3)
-    a1 = (E22 * b1 - E12 * b2) / det
-    a2 = (E11 * b2 - E12 * b1) / det
+    a1 = (E22 * b1 - E12 * b2) * idet
+    a2 = (E11 * b2 - E12 * b1) * idet
     # N' alpha', then v' = m r (N x g) - m r^2 (N' alpha') x (N x omega), with N x omega = -w
     d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
-    mr, mr2 = m * r, m * r * r
     K[row, 0] = a1
     K[row, 1] = a2
-    K[row, 2] = -mr * g0 * n2 + mr2 * (d2 * w3 - d3 * w2)
-    K[row, 3] = mr * g0 * n1 + mr2 * (d3 * w1 - d1 * w3)
+    K[row, 2] = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
+    K[row, 3] = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
     if mk:
         # u' = dexp_u^-1(omega) = omega - 1/2 u x omega + 1/12 u x (u x omega)
         u1, u2, u3 = z[5], z[6], z[7]
         c1, c2, c3 = u2 * o3 - u3 * o2, u3 * o1 - u1 * o3, u1 * o2 - u2 * o1
-        K[row, 5] = o1 - 0.5 * c1 + (u2 * c3 - u3 * c2) / 12.0
-        K[row, 6] = o2 - 0.5 * c2 + (u3 * c1 - u1 * c3) / 12.0
-        K[row, 7] = o3 - 0.5 * c3 + (u1 * c2 - u2 * c1) / 12.0
+        K[row, 5] = o1 - 0.5 * c1 + (u2 * c3 - u3 * c2) * (1.0 / 12.0)
+        K[row, 6] = o2 - 0.5 * c2 + (u3 * c1 - u1 * c3) * (1.0 / 12.0)
+        K[row, 7] = o3 - 0.5 * c3 + (u1 * c2 - u2 * c1) * (1.0 / 12.0)
     else:
         # R' = A(omega) R, column by column
         for j in range(3):
@@ -127,13 +132,14 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
         probe[0], probe[1], probe[2] = n1, n2, n3
         probe[3], probe[4], probe[5] = o1, o2, o3
         # F.N = m (c'' - g).N with c''.N = r (omega x N').N
-        probe[6] = m * r * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2
-                            + (o1 * d2 - o2 * d1) * n3) + m * g0 * n3
+        probe[6] = mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2
+                         + (o1 * d2 - o2 * d1) * n3) + mg * n3
         # principal curvatures: roots of det(II - kappa G) = 0, G first, II second form
         G11, G12, G22 = 1.0 + fx * fx, fx * fy, 1.0 + fy * fy
-        h11, h12, h22 = fxx / W, fxy / W, fyy / W
-        mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) / W2
-        gauss = (h11 * h22 - h12 * h12) / W2
+        h11, h12, h22 = fxx * iW, fxy * iW, fyy * iW
+        iW2 = iW * iW
+        mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) * iW2
+        gauss = (h11 * h22 - h12 * h12) * iW2
         probe[7] = r * (mean + math.sqrt(max(mean * mean - gauss, 0.0)))
         probe[8] = d[0]
 

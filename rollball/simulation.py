@@ -104,7 +104,7 @@ class Simulation:
         self.landscape = landscape_for(scene.landscape)
         self._fn = self.landscape.compiled
         self._W = self.tableau.matrix()
-        self._p = np.array([scene.ball.radius, scene.ball.mass, scene.gravity])
+        self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity)
         n = kernel.state_size(mk)
         self._z = np.zeros(n)
         self._R = np.eye(3)
