@@ -79,6 +79,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
+
+    bench = commands.add_parser(
+        "bench", help="measure speed against error (work-precision report)",
+        description="Measure the speed targets (kernel step against C, real-time factor, "
+                    "new-formula latency, cold start, memory) and the error against wall time "
+                    "and steps of every method on example scenes, with scipy's DOP853 as the "
+                    "baseline. Writes bench.md, bench.png and bench.json.")
+    bench.add_argument("--quick", action="store_true", help="a smaller run (under a minute)")
+    bench.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
     return parser
 
 
@@ -119,6 +128,21 @@ def _examples() -> int:
     return EXIT_OK
 
 
+def _bench(args) -> int:
+    try:
+        import scipy  # noqa: F401
+    except ImportError:
+        return _fail("the benchmark needs scipy: pip install 'rollball[bench]'")
+    from . import bench
+
+    log = lambda text: print(text, file=sys.stderr)  # noqa: E731
+    try:
+        print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
+    except OSError as e:
+        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+    return EXIT_OK
+
+
 def _fail(message: str) -> int:
     print(f"rollball: error: {message}", file=sys.stderr)
     return EXIT_BAD_INPUT
@@ -135,5 +159,7 @@ def main(argv: list[str] | None = None) -> int:
             return 130
     if args.command == "examples":
         return _examples()
+    if args.command == "bench":
+        return _bench(args)
     parser.print_help()
     return EXIT_BAD_INPUT
