@@ -214,28 +214,28 @@ def record_last(rows, ints, t, z, R, probe, p):
 
 @JIT
 def _finite(a, lo, hi):
-    """a[lo:hi] all finite (x * 0 is nan exactly for inf and nan), without a branch per entry."""
-    acc = 0.0
+    """a[lo:hi] all finite: a chain of cheap ands, no early exit and no floating-point chain."""
+    ok = True
     for q in range(lo, hi):
-        acc += a[q] * 0.0
-    return acc == 0.0
+        ok &= math.isfinite(a[q])
+    return ok
 
 
 @JIT
 def _finite_row(K, row, lo, hi):
-    acc = 0.0
+    ok = True
     for q in range(lo, hi):
-        acc += K[row, q] * 0.0
-    return acc == 0.0
+        ok &= math.isfinite(K[row, q])
+    return ok
 
 
 @JIT
 def _finite_matrix(R):
-    acc = 0.0
+    ok = True
     for a in range(3):
         for c in range(3):
-            acc += R[a, c] * 0.0
-    return acc == 0.0
+            ok &= math.isfinite(R[a, c])
+    return ok
 
 
 @JIT
