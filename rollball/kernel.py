@@ -65,8 +65,11 @@ MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below 
 NONFINITE_TRIES = 50
 
 
+MK_SIZE, CLASSIC_SIZE = 8, 14
+
+
 def state_size(munthe_kaas: bool) -> int:
-    return 8 if munthe_kaas else 14
+    return MK_SIZE if munthe_kaas else CLASSIC_SIZE
 
 
 def parameters(radius: float, mass: float, gravity: float) -> np.ndarray:
@@ -245,9 +248,8 @@ def _fail(ints, info, status, t, x, y, value):
 
 
 @JIT
-def start(fn, d, p, mk, z, R, K, probe, rows, ints, info):
+def start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info):
     """Check and record the initial state; K[0] and probe describe it afterwards."""
-    n = z.shape[0]
     if not _finite(z, 0, n):
         _fail(ints, info, NONFINITE, 0.0, z[0], z[1], 0.0)
         return
@@ -265,9 +267,8 @@ def start(fn, d, p, mk, z, R, K, probe, rows, ints, info):
 
 
 @JIT
-def combine(z, h, W, row, K, s, out):
+def combine(n, z, h, W, row, K, s, out):
     """out = z + h sum_{i<s} W[row, i] K_i, skipping zero weights (row by row: it vectorises)."""
-    n = z.shape[0]
     for q in range(n):
         out[q] = z[q]
     for i in range(s):
@@ -278,7 +279,7 @@ def combine(z, h, W, row, K, s, out):
 
 
 @JIT
-def trial_step(fn, d, p, W, s, mk, h, z, R, K, last, Y, zn, Rn, pn):
+def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn):
     """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
 
     W holds the tableau: rows 0 .. s-1 the stage coefficients A, row s the weights b.
@@ -286,11 +287,10 @@ def trial_step(fn, d, p, W, s, mk, h, z, R, K, last, Y, zn, Rn, pn):
     evaluation at zn (before u is reset) goes to K[last] and pn. Returns whether the new
     state is finite: 0 = yes, 1 = the motion is not, 2 = only the orientation is not.
     """
-    n = z.shape[0]
     for i in range(1, last):
-        combine(z, h, W, i, K, i, Y)
+        combine(n, z, h, W, i, K, i, Y)
         dynamics(fn, d, p, Y, mk, K, i, pn, False)
-    combine(z, h, W, s, K, last, zn)
+    combine(n, z, h, W, s, K, last, zn)
     if mk:
         rodrigues(zn, R, Rn)
     else:
@@ -310,14 +310,13 @@ def trial_step(fn, d, p, W, s, mk, h, z, R, K, last, Y, zn, Rn, pn):
 
 
 @JIT
-def accept(mk, t, h, z, R, K, last, probe, zn, Rn, pn, info):
+def accept(mk, n, t, h, z, R, K, last, probe, zn, Rn, pn, info):
     """Make the trial state the current one; K[0] becomes its derivative (u-part = omega)."""
     force = pn[PROBE_FORCE]
     if force <= 0.0 and info[F_PREV_FORCE] > 0.0 and math.isnan(info[F_LIFTOFF]):
         prev = info[F_PREV_FORCE]
         info[F_LIFTOFF] = t - h + h * prev / (prev - force)
     info[F_PREV_FORCE] = force
-    n = z.shape[0]
     for q in range(n):
         z[q] = zn[q]
         K[0, q] = K[last, q]
@@ -346,46 +345,56 @@ def scratch(work, n):
             work[i + PROBE_SIZE:i + PROBE_SIZE + 9].reshape((3, 3)))
 
 
-@JIT
-def advance(fn, W, mk, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
-    """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
+def _fixed_steps(mk: bool):
+    """The fixed-step loop for one orientation scheme: with mk and the state size n
+    constants of the compiled code, the stage loops unroll as in hand-written C."""
+    n = state_size(mk)
 
-    K has one row more than the tableau has stages (the evaluation at the new state). On the
-    first call (no rows yet) the initial state is checked and recorded. The run stops early,
-    with ints[I_STATUS] set, where the state turns non-finite or the ball no longer fits;
-    the last valid state is then the last row.
-    """
-    n = z.shape[0]
-    s = W.shape[1]
-    d, Y, zn, pn, Rn = scratch(work, n)
+    @JIT
+    def advance(fn, W, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
+        """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
-    if ints[I_ROWS] == 0:
-        start(fn, d, p, mk, z, R, K, probe, rows, ints, info)
-        if ints[I_STATUS] != RUNNING:
-            return
+        K has one row more than the tableau has stages (the evaluation at the new state). On the
+        first call (no rows yet) the initial state is checked and recorded. The run stops early,
+        with ints[I_STATUS] set, where the state turns non-finite or the ball no longer fits;
+        the last valid state is then the last row.
+        """
+        s = W.shape[1]
+        d, Y, zn, pn, Rn = scratch(work, n)
 
-    k0 = ints[I_STEPS]
-    k_stop = min(n_steps, k0 + max_steps)
-    for k in range(k0 + 1, k_stop + 1):
-        last = k == n_steps
-        h = t_end - (k - 1) * dt if last else dt
-        t = t_end if last else k * dt
-        bad = trial_step(fn, d, p, W, s, mk, h, z, R, K, s, Y, zn, Rn, pn)
-        if bad:
-            _fail(ints, info, NONFINITE, t, z[0], z[1], 1.0 if bad == 2 else 0.0)
-        elif pn[PROBE_FIT] >= 1.0:
-            _fail(ints, info, DOES_NOT_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
-        if ints[I_STATUS] != RUNNING:
-            record_last(rows, ints, (k - 1) * dt, z, R, probe, p)
-            return
-        accept(mk, t, h, z, R, K, s, probe, zn, Rn, pn, info)
-        ints[I_STEPS] = k
-        if k - ints[I_LAST_RECORDED] == every or last:  # (no division in the loop)
-            record(rows, ints[I_ROWS], t, z, R, probe, p)
-            ints[I_ROWS] += 1
-            ints[I_LAST_RECORDED] = k
-    if ints[I_STEPS] == n_steps:
-        ints[I_STATUS] = OK
+        if ints[I_ROWS] == 0:
+            start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info)
+            if ints[I_STATUS] != RUNNING:
+                return
+
+        k0 = ints[I_STEPS]
+        k_stop = min(n_steps, k0 + max_steps)
+        for k in range(k0 + 1, k_stop + 1):
+            last = k == n_steps
+            h = t_end - (k - 1) * dt if last else dt
+            t = t_end if last else k * dt
+            bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, s, Y, zn, Rn, pn)
+            if bad:
+                _fail(ints, info, NONFINITE, t, z[0], z[1], 1.0 if bad == 2 else 0.0)
+            elif pn[PROBE_FIT] >= 1.0:
+                _fail(ints, info, DOES_NOT_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
+            if ints[I_STATUS] != RUNNING:
+                record_last(rows, ints, (k - 1) * dt, z, R, probe, p)
+                return
+            accept(mk, n, t, h, z, R, K, s, probe, zn, Rn, pn, info)
+            ints[I_STEPS] = k
+            if k - ints[I_LAST_RECORDED] == every or last:  # (no division in the loop)
+                record(rows, ints[I_ROWS], t, z, R, probe, p)
+                ints[I_ROWS] += 1
+                ints[I_LAST_RECORDED] = k
+        if ints[I_STEPS] == n_steps:
+            ints[I_STATUS] = OK
+
+    return advance
+
+
+# advance(fn, W, p, ...) by scheme: ADVANCE[munthe_kaas]
+ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
 
 
 @JIT
@@ -402,11 +411,11 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
     reach them), or on every accepted step when record_dt is 0. Returns early, still
     running, when ``rows`` is full: the caller grows it and calls again.
     """
-    n = z.shape[0]
+    n = MK_SIZE
     s = W.shape[1]
     d, Y, zn, pn, Rn = scratch(work, n)
     if ints[I_ROWS] == 0:
-        start(fn, d, p, True, z, R, K, probe, rows, ints, info)
+        start(fn, d, p, True, n, z, R, K, probe, rows, ints, info)
         info[F_TIME] = 0.0
         if ints[I_STATUS] != RUNNING:
             return
@@ -422,7 +431,7 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
                 t_out = t_end
         land = t + 1.1 * h >= t_out  # stretch a little rather than leave a sliver
         hs = t_out - t if land else h
-        bad = trial_step(fn, d, p, W, s, True, hs, z, R, K, s - 1, Y, zn, Rn, pn)
+        bad = trial_step(fn, d, p, W, s, True, n, hs, z, R, K, s - 1, Y, zn, Rn, pn)
         err = math.inf
         if not bad:
             acc = 0.0
@@ -450,7 +459,7 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
             record_last(rows, ints, t, z, R, probe, p)
             break
         t = t_out if land else t + hs
-        accept(True, t, hs, z, R, K, s - 1, probe, zn, Rn, pn, info)
+        accept(True, n, t, hs, z, R, K, s - 1, probe, zn, Rn, pn, info)
         ints[I_STEPS] += 1
         grown = hs * min(1.0 if retry else 5.0, 0.9 * err ** -0.2 if err > 0.0 else 5.0)
         h = max(h, grown) if land else grown

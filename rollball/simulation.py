@@ -177,9 +177,10 @@ class Simulation:
                     self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
-                kernel.advance(self._fn, self._W, self.munthe_kaas, self._p, self.dt, self.t_end,
-                               self.n_steps, self.record_every, chunk, self._z, self._R, self._K,
-                               self._probe, self._rows, self._ints, self._info, self._work)
+                kernel.ADVANCE[self.munthe_kaas](
+                    self._fn, self._W, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
+                    chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
+                    self._work)
             remaining -= chunk
             code = int(self._ints[kernel.I_STATUS])
             if code != kernel.RUNNING:
