@@ -27,8 +27,8 @@ LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(ty
 # call them (numba's own inlining), which keeps the step as cheap as hand-written C.
 # Nothing in it allocates, so it runs without numba's reference counting (_nrt=False): the
 # counting of arrays handed between the inlined helpers would cost as much as a stage.
-JIT = njit(cache=True, nogil=True, error_model="numpy", inline="always", fastmath={"contract"}, _nrt=False)
-
+JIT = njit(cache=True, nogil=True, error_model="numpy", inline="always", fastmath={"contract"},
+           _nrt=False)
 
 
 @intrinsic
@@ -51,6 +51,8 @@ PROBE_SIZE = 9
 # Integer run counters (``ints``) and float run facts (``info``).
 I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE = 0, 1, 2, 3, 4, 5
 F_LIFTOFF, F_PREV_FORCE, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(8)
+# F_FAIL_VALUE: r*kappa for DOES_NOT_FIT; for NONFINITE 0 (the motion), 1 (only the classic
+# orientation) or 2 (the adaptive step size fell below round-off)
 INTS_SIZE, INFO_SIZE = 6, 8
 
 # Status codes (see simulation.Status).
@@ -63,7 +65,6 @@ MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below 
 # many such steps in a run the ball is pressing against the end of the landscape, and the
 # run stops as a fixed-step run would at the first.
 NONFINITE_TRIES = 50
-
 
 MK_SIZE, CLASSIC_SIZE = 8, 14
 
