@@ -13,7 +13,7 @@ from pathlib import Path
 from . import __version__
 from .examples import example_scenes
 from .scene import SceneError
-from .tableaus import TABLEAUS
+from .tableaus import METHODS
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -57,20 +57,37 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a scene file (JSON) and print a one-line summary: steps, status, "
                     "relative energy drift and the first lift-off time. Options override the scene.")
     sim.add_argument("scene", metavar="SCENE.json", help="scene file to run")
-    sim.add_argument("--method", choices=list(TABLEAUS), help="Runge-Kutta tableau")
+    sim.add_argument("--method", choices=list(METHODS),
+                     help="Runge-Kutta method; adaptive: Dormand-Prince 5(4) steps that keep to "
+                          "--rtol/--atol, always Munthe-Kaas")
     mk = sim.add_mutually_exclusive_group()
     mk.add_argument("--munthe-kaas", dest="munthe_kaas", action="store_true", default=None,
                     help="advance the orientation on SO(3) (Runge-Kutta-Munthe-Kaas)")
     mk.add_argument("--classic", dest="munthe_kaas", action="store_false",
                     help="integrate the orientation as a plain 3x3 matrix, as in 2011")
-    sim.add_argument("--dt", type=_positive_float, metavar="H", help="step size (s)")
+    sim.add_argument("--dt", type=_positive_float, metavar="H",
+                     help="step size (s); for adaptive the first step tried")
     sim.add_argument("--t-end", type=_positive_float, metavar="T", help="end time (s)")
     sim.add_argument("--every", type=_positive_int, default=1, metavar="N",
-                     help="record every N-th step (default 1)")
+                     help="record every N-th step (default 1; fixed steps)")
+    sim.add_argument("--rtol", type=_positive_float, metavar="R", help="relative tolerance (adaptive)")
+    sim.add_argument("--atol", type=_positive_float, metavar="A", help="absolute tolerance (adaptive)")
+    sim.add_argument("--record-dt", type=_positive_float, metavar="T",
+                     help="record at multiples of T seconds and at the end (adaptive; "
+                          "default: every accepted step)")
     sim.add_argument("--csv", metavar="OUT.csv", help="write the trajectory as CSV")
 
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
+
+    bench = commands.add_parser(
+        "bench", help="measure speed against error (work-precision report)",
+        description="Measure the speed targets (kernel step against C, real-time factor, "
+                    "new-formula latency, cold start, memory) and the error against wall time "
+                    "and steps of every method on example scenes, with scipy's DOP853 as the "
+                    "baseline. Writes bench.md, bench.png and bench.json.")
+    bench.add_argument("--quick", action="store_true", help="a smaller run (under a minute)")
+    bench.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
     return parser
 
 
@@ -85,7 +102,8 @@ def _simulate(args) -> int:
         return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
     try:
         traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
-                        t_end=args.t_end, record_every=args.every)
+                        t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
+                        record_dt=args.record_dt)
     except ValueError as e:  # includes FormulaError
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
@@ -110,6 +128,21 @@ def _examples() -> int:
     return EXIT_OK
 
 
+def _bench(args) -> int:
+    try:
+        import scipy  # noqa: F401
+    except ImportError:
+        return _fail("the benchmark needs scipy: pip install 'rollball[bench]'")
+    from . import bench
+
+    log = lambda text: print(text, file=sys.stderr)  # noqa: E731
+    try:
+        print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
+    except OSError as e:
+        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+    return EXIT_OK
+
+
 def _fail(message: str) -> int:
     print(f"rollball: error: {message}", file=sys.stderr)
     return EXIT_BAD_INPUT
@@ -126,5 +159,7 @@ def main(argv: list[str] | None = None) -> int:
             return 130
     if args.command == "examples":
         return _examples()
+    if args.command == "bench":
+        return _bench(args)
     parser.print_help()
     return EXIT_BAD_INPUT

@@ -19,7 +19,7 @@ from pathlib import Path
 from .files import atomic_write_text
 from .formula import FormulaError
 from .landscape import landscape_for
-from .tableaus import TABLEAUS
+from .tableaus import METHODS
 
 FORMAT = "rollball-scene"
 VERSION = 1
@@ -50,6 +50,8 @@ class Integrator:
     method: str = "rk4"
     munthe_kaas: bool = True
     dt: float = 0.001
+    rtol: float = 1e-6
+    atol: float = 1e-9
 
 
 @dataclass(frozen=True)
@@ -68,7 +70,7 @@ def _not_negative(v):
 
 
 def _known_method(v):
-    return None if v in TABLEAUS else f"unknown method; valid methods: {', '.join(TABLEAUS)}"
+    return None if v in METHODS else f"unknown method; valid methods: {', '.join(METHODS)}"
 
 
 def _formula(v):
@@ -87,6 +89,8 @@ CONSTRAINTS = {
     "ball.mass": _positive,
     "integrator.method": _known_method,
     "integrator.dt": _positive,
+    "integrator.rtol": _positive,
+    "integrator.atol": _positive,
     "duration": _positive,
     "view.step": _positive,
 }
@@ -107,6 +111,9 @@ class Scene:
         _check(self, "")
         if self.view.min >= self.view.max:
             raise SceneError("view.min: must be less than view.max")
+        if METHODS[self.integrator.method].adaptive and not self.integrator.munthe_kaas:
+            raise SceneError("integrator.munthe_kaas: the adaptive method always uses Munthe-Kaas "
+                             "(must be true)")
 
     # -- dictionaries and files -------------------------------------------------------
 

@@ -15,6 +15,7 @@ from .trajectory import Status, Trajectory
 
 MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
+FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
 
 _STATUS = {kernel.OK: Status.OK, kernel.DOES_NOT_FIT: Status.DOES_NOT_FIT,
            kernel.NONFINITE: Status.NONFINITE}
@@ -52,36 +53,58 @@ def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.nd
 class Simulation:
     """One run of a scene, advanced in chunks: ``advance`` until ``done``, then ``trajectory``.
 
-    Keyword arguments override the scene's integrator settings and duration.
+    Keyword arguments override the scene's integrator settings and duration. With the
+    method ``adaptive`` the step size follows the tolerances ``rtol``/``atol`` (``dt`` is the
+    first step tried, the orientation always Munthe-Kaas); rows are recorded at multiples
+    of ``record_dt`` and at ``t_end``, or at every accepted step when ``record_dt`` is None.
+    Fixed-step methods record every ``record_every``-th step instead.
     """
 
     def __init__(self, scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
-                 dt: float | None = None, t_end: float | None = None, record_every: int = 1):
+                 dt: float | None = None, t_end: float | None = None, record_every: int = 1,
+                 rtol: float | None = None, atol: float | None = None, record_dt: float | None = None):
         self.scene = scene
         self.tableau = get_tableau(scene.integrator.method if method is None else method)
-        mk = scene.integrator.munthe_kaas if munthe_kaas is None else munthe_kaas
+        self.adaptive = self.tableau.adaptive
+        mk = (scene.integrator.munthe_kaas or self.adaptive) if munthe_kaas is None else munthe_kaas
         if not isinstance(mk, bool):
             raise ValueError(f"munthe_kaas must be True or False, not {mk!r}")
+        if self.adaptive and not mk:
+            raise ValueError("the adaptive method always advances the orientation by Munthe-Kaas; "
+                             "munthe_kaas cannot be False")
         self.munthe_kaas = mk
         self.dt = _positive("dt", scene.integrator.dt if dt is None else dt)
         self.t_end = _positive("t_end", scene.duration if t_end is None else t_end)
+        self.rtol = _positive("rtol", scene.integrator.rtol if rtol is None else rtol)
+        self.atol = _positive("atol", scene.integrator.atol if atol is None else atol)
         try:
             every = operator.index(record_every)
         except TypeError:
             raise ValueError(f"record_every must be a whole number, not {record_every!r}") from None
         if isinstance(record_every, bool) or every < 1:
             raise ValueError(f"record_every must be 1 or more, not {record_every!r}")
+        if self.adaptive and every != 1:
+            raise ValueError("record_every counts fixed steps; with the adaptive method use record_dt")
+        if record_dt is not None and not self.adaptive:
+            raise ValueError("record_dt is for the adaptive method; fixed steps use record_every")
         self.record_every = every
-        self.n_steps = step_count(self.dt, self.t_end)
-        n_rows = 1 + self.n_steps // every + (1 if self.n_steps % every else 0)
+        self.record_dt = None if record_dt is None else _positive("record_dt", record_dt)
+        if self.adaptive:
+            self.n_steps = None  # not known in advance: see ``progress``
+            n_rows = (FIRST_ROWS if self.record_dt is None
+                      else 2 + math.ceil(self.t_end / self.record_dt * (1 + 1e-12)))
+        else:
+            self.n_steps = step_count(self.dt, self.t_end)
+            n_rows = 1 + self.n_steps // every + (1 if self.n_steps % every else 0)
         if n_rows > MAX_ROWS:
             raise ValueError(f"this run would record {n_rows:,} rows (at most {MAX_ROWS:,}): "
-                             f"record every N-th step with a larger N")
+                             + ("use a larger record_dt" if self.adaptive
+                                else "record every N-th step with a larger N"))
 
         self.landscape = landscape_for(scene.landscape)
         self._fn = self.landscape.compiled
-        self._A, self._b, _ = self.tableau.arrays()
-        self._p = np.array([scene.ball.radius, scene.ball.mass, scene.gravity])
+        self._W = self.tableau.matrix()
+        self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity)
         n = kernel.state_size(mk)
         self._z = np.zeros(n)
         self._R = np.eye(3)
@@ -89,11 +112,13 @@ class Simulation:
         self._z[:2], self._z[2:5] = alpha, v
         if not mk:
             self._z[5:] = self._R.ravel()
-        self._K = np.zeros((self.tableau.stages, n))
+        self._K = np.zeros((self.tableau.stages + 1, n))
         self._probe = np.zeros(kernel.PROBE_SIZE)
         self._rows = np.empty((n_rows, kernel.ROW_SIZE))
-        self._ints = np.zeros(4, dtype=np.int64)
-        self._info = np.full(6, np.nan)
+        self._ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)
+        self._info = np.full(kernel.INFO_SIZE, np.nan)
+        self._info[kernel.F_H] = self.dt
+        self._work = np.empty(kernel.work_size(n))
         self.status: Status | None = None
 
     @property
@@ -105,14 +130,27 @@ class Simulation:
         return int(self._ints[kernel.I_STEPS])
 
     @property
+    def rejected(self) -> int:
+        """Steps tried and rejected by the adaptive method's error control (0 for fixed steps)."""
+        return int(self._ints[kernel.I_REJECTED])
+
+    @property
     def time(self) -> float:
         """Simulated time reached so far."""
+        if self.adaptive:
+            t = self._info[kernel.F_TIME]
+            return 0.0 if math.isnan(t) else float(t)
         k = self.steps
         return self.t_end if k == self.n_steps else k * self.dt
 
     @property
-    def max_rows(self) -> int:
-        """The most rows this run can record."""
+    def progress(self) -> float:
+        """Fraction of the run done, 0 to 1 (``time / t_end``), for every method."""
+        return self.time / self.t_end
+
+    @property
+    def row_capacity(self) -> int:
+        """Rows reserved so far: all a fixed-step run will record; an adaptive run grows as needed."""
         return len(self._rows)
 
     @property
@@ -125,12 +163,29 @@ class Simulation:
         if self.done:
             return self._rows[:0]
         first = int(self._ints[kernel.I_ROWS])
-        remaining = self.n_steps - self.steps if max_steps is None else max_steps
+        if max_steps is not None:
+            remaining = max_steps
+        else:
+            remaining = math.inf if self.adaptive else self.n_steps - self.steps
         while (remaining > 0 or self._ints[kernel.I_ROWS] == 0) and not self.done:
-            chunk = min(remaining, CHUNK)
-            kernel.advance(self._fn, self._A, self._b, self.munthe_kaas, self._p, self.dt, self.t_end,
-                           self.n_steps, self.record_every, chunk, self._z, self._R, self._K,
-                           self._probe, self._rows, self._ints, self._info)
+            chunk = int(min(remaining, CHUNK))
+            if self.adaptive:
+                if self._ints[kernel.I_ROWS] >= len(self._rows) - 1:
+                    if len(self._rows) >= MAX_ROWS:  # give up rather than fill the memory
+                        self.status = Status.ABORTED
+                        break
+                    self._rows = np.concatenate([self._rows, np.empty_like(self._rows)])
+                before = self.steps + self.rejected
+                kernel.advance_adaptive(
+                    self._fn, self._W, self._p, self.t_end, self.record_dt or 0.0, self.rtol,
+                    self.atol, chunk, self._z, self._R, self._K, self._probe, self._rows,
+                    self._ints, self._info, self._work)
+                chunk = self.steps + self.rejected - before
+            else:
+                kernel.ADVANCE[self.munthe_kaas](
+                    self._fn, self._W, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
+                    chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
+                    self._work)
             remaining -= chunk
             code = int(self._ints[kernel.I_STATUS])
             if code != kernel.RUNNING:
@@ -157,7 +212,8 @@ class Simulation:
         t, x, y = self._info[kernel.F_FAIL_T], self._info[kernel.F_FAIL_X], self._info[kernel.F_FAIL_Y]
         where = f"t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g})"
         if status is Status.OK:
-            return f"reached t = {self.t_end:g} s in {self.steps} steps"
+            rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
+            return f"reached t = {self.t_end:g} s in {self.steps} steps{rejected}"
         if status is Status.DOES_NOT_FIT:
             return (f"the ball (r = {self.scene.ball.radius:g} m) does not fit the surface at {where}: "
                     f"r·κ = {self._info[kernel.F_FAIL_VALUE]:.4g} ≥ 1 for a principal curvature κ, "
@@ -165,6 +221,9 @@ class Simulation:
         if status is Status.NONFINITE:
             if len(self.rows) == 0:  # the initial state itself is not finite
                 return f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
+            if self._info[kernel.F_FAIL_VALUE] == 2.0:
+                return (f"the adaptive step size fell below round-off at {where}: the equations "
+                        f"are (nearly) singular there")
             if self._info[kernel.F_FAIL_VALUE] == 1.0:
                 return (f"the orientation R overflowed at {where}: the classic matrix update has "
                         f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
@@ -185,8 +244,10 @@ class Simulation:
             "ball": f"radius {scene.ball.radius!r} m, mass {scene.ball.mass!r} kg",
             "gravity": f"{scene.gravity!r} m/s^2",
             "start": f"x {s.x!r}, y {s.y!r}, vx {s.vx!r}, vy {s.vy!r}, spin {s.spin!r}",
-            "method": f"{self.tableau.name}, {'Munthe-Kaas' if self.munthe_kaas else 'classic'}, "
-                      f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}",
+            "method": (f"{self.tableau.name}, Munthe-Kaas, rtol {self.rtol!r}, atol {self.atol!r}, "
+                       f"t_end {self.t_end!r} s, record_dt {self.record_dt!r}" if self.adaptive else
+                       f"{self.tableau.name}, {'Munthe-Kaas' if self.munthe_kaas else 'classic'}, "
+                       f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}"),
             "status": f"{status}: {message}",
         }
         return Trajectory(self.rows.copy(), status=status, message=message,
@@ -195,14 +256,18 @@ class Simulation:
 
 
 def simulate(scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
-             dt: float | None = None, t_end: float | None = None, record_every: int = 1) -> Trajectory:
+             dt: float | None = None, t_end: float | None = None, record_every: int = 1,
+             rtol: float | None = None, atol: float | None = None,
+             record_dt: float | None = None) -> Trajectory:
     """Run a scene to its end (or until the physics stops it) and return the trajectory.
 
-    Keyword arguments override the scene's values: ``method`` (euler, rk4, lawson5),
-    ``munthe_kaas``, ``dt`` (s), ``t_end`` (s); ``record_every`` keeps every N-th step
-    (row 0 is the initial state and the last row the end of the run).
+    Keyword arguments override the scene's values: ``method`` (a name in ``METHODS``:
+    euler, rk4, lawson5, adaptive), ``munthe_kaas``, ``dt`` (s; for adaptive the first
+    step tried), ``t_end`` (s), ``rtol``/``atol`` (adaptive). Fixed steps: ``record_every``
+    keeps every N-th step; adaptive: rows at multiples of ``record_dt`` (s) or, if None,
+    at every accepted step. Row 0 is the initial state and the last row the end of the run.
     """
     run = Simulation(scene, method=method, munthe_kaas=munthe_kaas, dt=dt, t_end=t_end,
-                     record_every=record_every)
+                     record_every=record_every, rtol=rtol, atol=atol, record_dt=record_dt)
     run.advance()
     return run.trajectory()

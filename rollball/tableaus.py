@@ -1,13 +1,14 @@
 """Explicit Runge–Kutta methods, declared as Butcher tableaus.
 
 A tableau is data: exact fractions that check themselves when built. The registry
-``TABLEAUS`` maps the names used in scene files, on the command line and in the app
-to the tableaus; ``get_tableau`` turns an unknown name into a clear ``ValueError``.
+``METHODS`` maps every method name used in scene files, on the command line and in the
+app to its tableau: the fixed-step ones (``TABLEAUS``) and ``adaptive``, an embedded pair
+with step-size control. ``get_tableau`` turns an unknown name into a clear ``ValueError``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 
 import numpy as np
@@ -22,7 +23,10 @@ class Tableau:
     """An explicit Runge–Kutta method: nodes ``c``, stage rows ``a`` and weights ``b``.
 
     ``a`` lists the strictly-lower-triangular rows, one per stage after the first,
-    so stage i (counting from 0) has i coefficients.
+    so stage i (counting from 0) has i coefficients. An embedded pair also has weights
+    ``b_hat`` of a lower order ``order_hat``: their difference estimates the error of a
+    step. The pairs here are "first same as last": the last row of ``a`` is ``b``, so the
+    last stage is the derivative at the new state.
     """
 
     name: str
@@ -31,6 +35,8 @@ class Tableau:
     c: tuple[Fraction, ...]
     a: tuple[tuple[Fraction, ...], ...]
     b: tuple[Fraction, ...]
+    b_hat: tuple[Fraction, ...] | None = None
+    order_hat: int | None = None
 
     def __post_init__(self):
         s = len(self.b)
@@ -45,6 +51,22 @@ class Tableau:
                 raise ValueError(f"{self.name}: row {i} of a does not sum to c[{i}]")
         if sum(self.b) != 1:
             raise ValueError(f"{self.name}: the weights b do not sum to 1")
+        if self.b_hat is not None:
+            if len(self.b_hat) != s or sum(self.b_hat) != 1 or self.order_hat is None:
+                raise ValueError(f"{self.name}: b_hat must have {s} weights summing to 1, with order_hat")
+            if self.a[-1] + (0,) != self.b:
+                raise ValueError(f"{self.name}: the last row of a must be b (first same as last)")
+
+    @property
+    def adaptive(self) -> bool:
+        return self.b_hat is not None
+
+    def weights(self, embedded: bool = False) -> "Tableau":
+        """The method with the pair's main weights b (or, embedded, b_hat) as a plain
+        fixed-step tableau: for measuring the pair's two orders."""
+        b, order = (self.b_hat, self.order_hat) if embedded else (self.b, self.order)
+        suffix = "-embedded" if embedded else "-main"
+        return replace(self, name=self.name + suffix, b=b, order=order, b_hat=None, order_hat=None)
 
     @property
     def stages(self) -> int:
@@ -58,9 +80,19 @@ class Tableau:
             A[i, :i] = [float(v) for v in row]
         return A, np.array([float(v) for v in self.b]), np.array([float(v) for v in self.c])
 
+    def matrix(self) -> np.ndarray:
+        """A with the weights b as one more row (and for a pair the error weights b - b_hat
+        as another): the (s + 1) x s or (s + 2) x s array the kernel reads."""
+        A, b, _ = self.arrays()
+        rows = [A, b]
+        if self.adaptive:
+            rows.append(b - np.array([float(v) for v in self.b_hat]))
+        return np.vstack(rows)
 
-def tableau(name: str, label: str, order: int, c, a, b) -> Tableau:
-    return Tableau(name, label, order, _fractions(c), tuple(_fractions(r) for r in a), _fractions(b))
+
+def tableau(name: str, label: str, order: int, c, a, b, b_hat=None, order_hat=None) -> Tableau:
+    return Tableau(name, label, order, _fractions(c), tuple(_fractions(r) for r in a), _fractions(b),
+                   None if b_hat is None else _fractions(b_hat), order_hat)
 
 
 EULER = tableau("euler", "Euler", 1, c=[0], a=[], b=[1])
@@ -87,12 +119,36 @@ LAWSON5 = tableau(
     b=["7/90", 0, "16/45", "2/15", "16/45", "7/90"],
 )
 
-TABLEAUS: dict[str, Tableau] = {t.name: t for t in (EULER, RK4, LAWSON5)}
+# J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae",
+# J. Comput. Appl. Math. 6(1), 1980: orders 5 and 4, first same as last.
+DOPRI5 = tableau(
+    "adaptive", "Adaptive (Dormand–Prince 5(4))", 5,
+    c=[0, "1/5", "3/10", "4/5", "8/9", 1, 1],
+    a=[
+        ["1/5"],
+        ["3/40", "9/40"],
+        ["44/45", "-56/15", "32/9"],
+        ["19372/6561", "-25360/2187", "64448/6561", "-212/729"],
+        ["9017/3168", "-355/33", "46732/5247", "49/176", "-5103/18656"],
+        ["35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84"],
+    ],
+    b=["35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84", 0],
+    b_hat=["5179/57600", 0, "7571/16695", "393/640", "-92097/339200", "187/2100", "1/40"],
+    order_hat=4,
+)
+
+# Every method by the name scene files, the command line and the app use.
+METHODS: dict[str, Tableau] = {t.name: t for t in (EULER, RK4, LAWSON5, DOPRI5)}
+# The fixed-step ones (each also runs classic or Munthe-Kaas; adaptive is Munthe-Kaas only).
+TABLEAUS: dict[str, Tableau] = {name: t for name, t in METHODS.items() if not t.adaptive}
 
 
-def get_tableau(name: str) -> Tableau:
+def get_tableau(name) -> Tableau:
+    """The method of a name in ``METHODS`` (a ``Tableau`` is passed through)."""
+    if isinstance(name, Tableau):
+        return name
     try:
-        return TABLEAUS[name]
+        return METHODS[name]
     except (KeyError, TypeError):
-        valid = ", ".join(TABLEAUS)
+        valid = ", ".join(METHODS)
         raise ValueError(f"unknown method {name!r}; valid methods: {valid}") from None

@@ -1,4 +1,10 @@
+import os
+import tempfile
+
 import pytest
+
+# compiled landscapes go to a cache of the test run's own, not the user's
+os.environ["ROLLBALL_CACHE_DIR"] = tempfile.mkdtemp(prefix="rollball-test-cache-")
 
 from rollball.scene import Ball, Integrator, Scene, Start
 

@@ -90,3 +90,17 @@ def test_installed_entry_point_runs(tmp_path):
     result = subprocess.run([sys.executable, "-m", "rollball", "--help"], capture_output=True, text=True,
                             timeout=60)
     assert result.returncode == 0 and "simulate" in result.stdout and "examples" in result.stdout
+
+
+def test_adaptive_from_the_command_line(tmp_path, capsys):
+    out = tmp_path / "a.csv"
+    assert main(["simulate", HILLS, "--method", "adaptive", "--rtol", "1e-8", "--atol", "1e-11",
+                 "--t-end", "1", "--record-dt", "0.25", "--csv", str(out)]) == 0
+    assert "status ok" in capsys.readouterr().out
+    assert np.array_equal(read_csv(out)[:, 0], [0, 0.25, 0.5, 0.75, 1.0])
+    assert "adaptive, Munthe-Kaas, rtol 1e-08" in out.read_text()
+    assert main(["simulate", HILLS, "--method", "adaptive", "--classic"]) == 2
+    assert "Munthe-Kaas" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:
+        main(["simulate", HILLS, "--rtol", "0"])
+    assert stop.value.code == 2

@@ -5,7 +5,7 @@ from itertools import combinations_with_replacement
 
 import pytest
 
-from rollball.tableaus import LAWSON5, RK4, TABLEAUS, Tableau, get_tableau
+from rollball.tableaus import DOPRI5, LAWSON5, METHODS, RK4, TABLEAUS, Tableau, get_tableau
 
 
 def rooted_trees(order):
@@ -67,7 +67,10 @@ def test_tree_counts():
     assert [len(rooted_trees(p)) for p in range(1, 7)] == [1, 1, 2, 4, 9, 20]
 
 
-@pytest.mark.parametrize("tab", TABLEAUS.values(), ids=list(TABLEAUS))
+ALL = {**METHODS, "adaptive-embedded": DOPRI5.weights(embedded=True)}
+
+
+@pytest.mark.parametrize("tab", ALL.values(), ids=list(ALL))
 def test_declared_order_is_exact(tab):
     for p in range(1, tab.order + 1):
         for tree in rooted_trees(p):
@@ -78,9 +81,26 @@ def test_declared_order_is_exact(tab):
 
 def test_registry():
     assert list(TABLEAUS) == ["euler", "rk4", "lawson5"]
-    assert get_tableau("lawson5") is LAWSON5
-    with pytest.raises(ValueError, match="euler, rk4, lawson5"):
+    assert list(METHODS) == ["euler", "rk4", "lawson5", "adaptive"]
+    assert get_tableau("lawson5") is LAWSON5 and get_tableau("adaptive") is DOPRI5
+    assert DOPRI5.adaptive and not any(t.adaptive for t in TABLEAUS.values())
+    with pytest.raises(ValueError, match="euler, rk4, lawson5, adaptive"):
         get_tableau("rk45")
+
+
+def test_the_pair():
+    assert (DOPRI5.order, DOPRI5.order_hat) == (5, 4)
+    assert DOPRI5.weights().b == DOPRI5.b and DOPRI5.weights(embedded=True).b == DOPRI5.b_hat
+    W = DOPRI5.matrix()
+    assert W.shape == (9, 7)
+    assert (W[7] == W[6]).all()  # first same as last: the last stage row is b
+    assert W[8].sum() == pytest.approx(0, abs=1e-16)  # b - b_hat
+    with pytest.raises(ValueError, match="b_hat"):
+        Tableau("bad", "Bad", 1, (Fraction(0), Fraction(1)), ((Fraction(1),),),
+                (Fraction(1), Fraction(0)), (Fraction(1, 2), Fraction(1, 3)), 1)
+    with pytest.raises(ValueError, match="first same as last"):
+        Tableau("bad", "Bad", 1, (Fraction(0), Fraction(1)), ((Fraction(1),),),
+                (Fraction(1, 2), Fraction(1, 2)), (Fraction(1), Fraction(0)), 1)
 
 
 def test_tableau_checks_itself():

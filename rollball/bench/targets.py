@@ -1,0 +1,158 @@
+"""The speed targets: kernel step against C, real-time factor, new-formula latency,
+cold start and memory. Times are medians of repeated runs; the C comparison alternates
+the two in one run, so both see the same load on a shared machine."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from ..examples import EXAMPLES_DIR
+from ..scene import Scene
+from ..simulation import Simulation
+from ..tableaus import TABLEAUS
+from .cstep import CStep
+
+HILLS = EXAMPLES_DIR / "hills.json"
+
+
+def _ns_per_step(scene: Scene, **options) -> float:
+    run = Simulation(scene, **options)
+    start = time.perf_counter()
+    run.advance()
+    return (time.perf_counter() - start) / run.steps * 1e9
+
+
+def c_ratio(repeats: int, steps: int) -> dict:
+    """RK4 Munthe-Kaas, h = 1e-3, on the hills, recording every 100th step, against C."""
+    scene = Scene.load(HILLS)
+    s, b = scene.start, scene.ball
+    assert s.vx == s.vy == s.spin == 0, "the C step starts at rest"
+    options = dict(method="rk4", munthe_kaas=True, dt=1e-3, record_every=100)
+    c = CStep.build()
+    _ns_per_step(scene, t_end=0.01, **options)  # compiled
+    if c is None:
+        ours = [_ns_per_step(scene, t_end=steps * 1e-3, **options) for _ in range(repeats)]
+        return {"ns_ours": float(np.median(ours)), "ns_c": None, "ratio": None, "same_step": None}
+    # the same step: after 1000 steps both agree to round-off
+    short = Simulation(scene, t_end=1.0, **options)
+    short.advance()
+    _, x, y = c.run(b.radius, b.mass, scene.gravity, s.x, s.y, 1e-3, 1000)
+    same = float(np.abs(short.rows[-1, 1:3] - [x, y]).max())
+    ours, theirs = [], []
+    for _ in range(repeats):
+        ours.append(_ns_per_step(scene, t_end=steps * 1e-3, **options))
+        theirs.append(c.run(b.radius, b.mass, scene.gravity, s.x, s.y, 1e-3, steps)[0])
+    return {"ns_ours": float(np.median(ours)), "ns_c": float(np.median(theirs)),
+            "ratio": float(np.median(np.array(ours) / np.array(theirs))), "same_step": same}
+
+
+def step_costs(repeats: int, steps: int) -> dict:
+    """ns per step of every method on the hills (h = 1e-3; adaptive at rtol 1e-8)."""
+    scene = Scene.load(HILLS)
+    costs = {}
+    for name in TABLEAUS:
+        for mk in (True, False):
+            options = dict(method=name, munthe_kaas=mk, dt=1e-3, t_end=steps * 1e-3, record_every=100)
+            _ns_per_step(scene, **{**options, "t_end": 0.01})
+            label = f"{name} {'MK' if mk else 'classic'}"
+            costs[label] = float(np.median([_ns_per_step(scene, **options) for _ in range(repeats)]))
+    options = dict(method="adaptive", rtol=1e-8, atol=1e-11, t_end=200.0, record_dt=1.0)
+    _ns_per_step(scene, **{**options, "t_end": 0.01})
+    costs["adaptive (rtol 1e-8)"] = float(np.median([_ns_per_step(scene, **options) for _ in range(repeats)]))
+    return costs
+
+
+def real_time_factor(repeats: int, t_end: float) -> float:
+    """Simulated seconds per wall-clock second, RK4 Munthe-Kaas at h = 1e-4 on the hills."""
+    scene = Scene.load(HILLS)
+    ns = [_ns_per_step(scene, method="rk4", munthe_kaas=True, dt=1e-4, t_end=t_end, record_every=100)
+          for _ in range(repeats)]
+    return 1e-4 / (float(np.median(ns)) * 1e-9)
+
+
+def new_formula_latency(count: int) -> float:
+    """Median seconds from a formula never seen before to a finished short run, in a warm
+    process: parse, differentiate, generate, compile, validate the scene and step."""
+    from ..simulation import simulate
+
+    simulate(Scene.load(HILLS), t_end=0.01)  # warm
+    rng = random.Random()
+    times = []
+    for _ in range(count):
+        a, b, c = (round(rng.uniform(0.1, 0.9), 6) for _ in range(3))
+        formula = f"{a}*sin({b}*x)*cos(y) + {c}*x*y^2"
+        start = time.perf_counter()
+        simulate(Scene(landscape=formula), t_end=0.01)
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+_COLD = """
+import time
+start = time.perf_counter()
+import rollball
+imported = time.perf_counter()
+from rollball import Scene, simulate
+simulate(Scene.load({hills!r}), t_end=0.01)
+simulated = time.perf_counter()
+simulate(Scene(landscape="0.3*cos(x)*sin(2*y) + 0.01*x^3"), t_end=0.01)
+formula = time.perf_counter()
+print(imported - start, simulated - imported, formula - simulated)
+"""
+
+_MEMORY = """
+import resource
+from rollball import Scene, simulate
+traj = simulate(Scene.load({hills!r}), method="rk4", dt=1e-3, t_end={steps} * 1e-3, record_every=100)
+assert traj.steps == {steps}, traj.message
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+"""
+
+
+def _python(code: str, env: dict | None = None) -> tuple[list[float], float]:
+    start = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
+                         env={**os.environ, **(env or {})}).stdout
+    return [float(v) for v in out.split()], time.perf_counter() - start
+
+
+def cold_start() -> dict:
+    """A fresh process: with empty numba and landscape caches, then again with them filled."""
+    with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
+        env = {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours}
+        code = _COLD.format(hills=str(HILLS))
+        (imp, first, formula), wall = _python(code, env)
+        (imp2, first2, formula2), wall2 = _python(code, env)
+    return {"import": imp, "first_simulate_cold_cache": first, "new_formula_cold_cache": formula,
+            "process_cold_cache": wall, "first_simulate_disk_cache": first2,
+            "known_formula_disk_cache": formula2, "process_disk_cache": wall2}
+
+
+def peak_memory(steps: int) -> float:
+    """Peak resident memory (bytes) of a process running ``steps`` steps, every 100th recorded."""
+    (rss,), _ = _python(_MEMORY.format(hills=str(HILLS), steps=steps))
+    return rss
+
+
+def measure(quick: bool) -> dict:
+    repeats = 3 if quick else 7
+    return {
+        "c": c_ratio(repeats, 100_000 if quick else 300_000),
+        "costs": step_costs(repeats, 50_000 if quick else 200_000),
+        "real_time": real_time_factor(repeats, 5.0 if quick else 20.0),
+        "latency": new_formula_latency(5 if quick else 15),
+        "cold": cold_start(),
+        "memory": peak_memory(10_000_000),
+    }
+
+
+def to_json(results: dict) -> str:
+    return json.dumps(results, indent=2)
