@@ -14,7 +14,7 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
 from rollball.landscape import landscape_for
-from rollball.tableaus import TABLEAUS
+from rollball import METHODS
 
 # (dotted scene key, label, unit, tooltip), by group
 NUMBER_FIELDS = {
@@ -31,7 +31,9 @@ NUMBER_FIELDS = {
         ("start.spin", "Spin", "rad/s", "Angular velocity about the surface normal"),
     ),
     "Integrator": (
-        ("integrator.dt", "Step size", "s", "Time step h"),
+        ("integrator.dt", "Step size", "s", "Time step h (adaptive: the first step tried)"),
+        ("integrator.rtol", "Rel. tolerance", "", "Adaptive only: relative error allowed per step"),
+        ("integrator.atol", "Abs. tolerance", "", "Adaptive only: absolute error allowed per step"),
         ("duration", "Duration", "s", "Simulated time to run"),
     ),
     "Grid": (
@@ -134,14 +136,16 @@ class ScenePanel(QtWidgets.QWidget):
         row = QtWidgets.QWidget()
         h = QtWidgets.QHBoxLayout(row)
         h.setContentsMargins(0, 0, 0, 0)
-        for name, tableau in TABLEAUS.items():
-            button = QtWidgets.QRadioButton(tableau.label, objectName=f"method.{name}")
-            button.setToolTip(f"{tableau.label}: explicit Runge–Kutta of order {tableau.order}")
+        for name, tableau in METHODS.items():
+            label = "Adaptive" if tableau.adaptive else tableau.label
+            button = QtWidgets.QRadioButton(label, objectName=f"method.{name}")
+            button.setToolTip(f"{tableau.label}: explicit Runge–Kutta of order {tableau.order}"
+                              + (", step size chosen for the tolerances" if tableau.adaptive else ""))
             button.setProperty("method", name)
             self.methods.addButton(button)
             h.addWidget(button)
         h.addStretch(1)
-        self.methods.buttonClicked.connect(self._edited)
+        self.methods.buttonClicked.connect(self._method_clicked)
         form.addRow("Method", row)
         self.munthe_kaas = QtWidgets.QCheckBox("Munthe-Kaas (R stays a rotation)", objectName="munthe_kaas")
         self.munthe_kaas.setToolTip("Lie-group integration of the orientation. Off: R is integrated as a plain "
@@ -149,13 +153,27 @@ class ScenePanel(QtWidgets.QWidget):
         self.munthe_kaas.clicked.connect(self._edited)
         form.addRow("", self.munthe_kaas)
 
+    def _method_clicked(self, *_):
+        self._method_state()
+        self._edited()
+
+    def _method_state(self) -> None:
+        """Adaptive: Munthe-Kaas always, tolerances instead of a recording stride."""
+        adaptive = METHODS[self.method()].adaptive
+        if adaptive:
+            self.munthe_kaas.setChecked(True)
+        self.munthe_kaas.setEnabled(not adaptive)
+        for key in ("integrator.rtol", "integrator.atol"):
+            self.numbers[key].setEnabled(adaptive)
+        self.record_every.setEnabled(not adaptive)
+
     def _record_field(self) -> QtWidgets.QSpinBox:
         self.record_every = QtWidgets.QSpinBox(objectName="record_every", minimum=0, maximum=1_000_000)
         self.record_every.setSpecialValueText("auto")
         self.record_every.setPrefix("every ")
         self.record_every.setSuffix(" steps")
-        self.record_every.setToolTip("Keep every N-th step for playback, plots and export "
-                                     "(auto: every step up to 200,000 rows)")
+        self.record_every.setToolTip("Keep every N-th step for playback, plots and export (auto: every "
+                                     "step up to 200,000 rows; adaptive runs keep 10,000 evenly spaced rows)")
         return self.record_every
 
     # -- scene <-> fields ------------------------------------------------------------
@@ -181,6 +199,7 @@ class ScenePanel(QtWidgets.QWidget):
             for button in self.methods.buttons():
                 button.setChecked(button.property("method") == scene.integrator.method)
             self.munthe_kaas.setChecked(scene.integrator.munthe_kaas)
+            self._method_state()
         finally:
             self._filling = False
         self._show_errors(None, None)

@@ -16,6 +16,7 @@ class LivePlots(QtWidgets.QWidget):
         layout = QtWidgets.QHBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         self.curves = {}
+        self.plots = []
         for name, title, units, log in (
             ("energy", "|E − E₀| / E₀", "", True),
             ("orthogonality", "‖RᵀR − I‖", "", True),
@@ -31,8 +32,14 @@ class LivePlots(QtWidgets.QWidget):
             plot.setMinimumHeight(150)
             if name == "force":
                 plot.addItem(pg.InfiniteLine(pos=0.0, angle=0, pen=pg.mkPen("#c0392b", style=QtCore.Qt.PenStyle.DashLine)))
-            self.curves[name] = plot.plot(pen=pg.mkPen("#1f5fa8", width=1.5), skipFiniteCheck=True)
+            self.plots.append(plot)
+            self.curves[name] = plot.plot(pen=pg.mkPen("#1f5fa8", width=1), skipFiniteCheck=True)
             layout.addWidget(plot)
+
+    def set_duration(self, t_end: float) -> None:
+        """Fix the time axis to the run: it is not re-laid out at every update."""
+        for plot in self.plots:
+            plot.setXRange(0.0, t_end, padding=0.02)
 
     def show_run(self, buffer, index: int) -> None:
         """Plot rows 0..index of a ``RunBuffer`` (None or empty: clear)."""

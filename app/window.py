@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import Scene, SceneError, Simulation, Status, __version__
+from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
 from rollball.landscape import landscape_for
 from rollball.simulation import step_count
@@ -22,8 +22,9 @@ from .view3d import SceneView
 from .worker import SimulationThread
 
 FRAME_MS = 16                  # redraw at most ~60 Hz
-PLOT_EVERY = 6                 # plots every 6th frame (~10 Hz)
+PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
 AUTO_ROWS = 200_000            # "record: auto" keeps at most about this many rows
+ADAPTIVE_ROWS = 10_000         # an adaptive run records this many evenly spaced rows
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
@@ -62,7 +63,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.computed = False               # the worker has finished the run
         self.liftoff_announced = False
         self.frames = 0
-        self._last_tick = time.perf_counter()
+        self._last_tick = self._frame_started = time.perf_counter()
 
         self.panel = ScenePanel()
         self.panel.sceneChanged.connect(self._scene_edited)
@@ -267,32 +268,35 @@ class MainWindow(QtWidgets.QMainWindow):
             self.preferences.set_last_folder(path)
         self.panel.set_scene(scene)
         self.saved_scene = scene
-        self._use_scene(scene, redraw_camera=True)
-        self.show_message(f"Opened {path.name}" + (f": {scene.description}" if scene.description else ""))
+        notes = self._use_scene(scene, redraw_camera=True)
+        self.show_message(f"Opened {path.name}" + (f": {scene.description}" if scene.description else "")
+                          + "".join(f" ({note})" for note in notes))
         return True
 
     def _scene_edited(self, scene: Scene) -> None:
         self._use_scene(scene)
 
-    def _use_scene(self, scene: Scene, redraw_camera: bool = False) -> None:
+    def _use_scene(self, scene: Scene, redraw_camera: bool = False) -> list[str]:
+        """Show a valid scene; a change to what a run depends on resets the run. Returns notes
+        on what the drawn landscape shows (no-fit and undefined regions)."""
         old = self.shown_scene
         landscape = landscape_for(scene.landscape)
         try:
             landscape.compiled  # noqa: B018 - compile now, so a run starts at once
         except Exception as error:  # numba refused generated code: keep what is shown
             self._warn("Cannot use this landscape", str(error))
-            return
+            return []
+        notes = []
         surface_changed = (old is None or old.landscape != scene.landscape or old.view != scene.view
                            or old.ball.radius != scene.ball.radius)
         if surface_changed:
             self.landscape = landscape
             facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius)
-            notes = []
             if facts["no_fit"]:
                 notes.append("red: the ball does not fit there")
             if facts["undefined"]:
                 notes.append("grey: the landscape is undefined there")
-            self.show_message("; ".join(notes).capitalize() if notes else "")
+            self.show_message("; ".join(notes).capitalize())
         if redraw_camera:
             self.view.reset_camera()
         run_changed = old is None or _physics(old) != _physics(scene)
@@ -302,6 +306,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.reset()
         self.shown_scene = scene
         self._update_title()
+        return notes
 
     def _update_title(self) -> None:
         name = self.path.name if self.path else (f"{self.example} (example)" if self.example else "untitled")
@@ -416,14 +421,20 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.reset()
         try:
-            steps = step_count(scene.integrator.dt, scene.duration)
-            every = self.panel.record_every.value() or max(1, math.ceil(steps / AUTO_ROWS))
-            self.simulation = Simulation(scene, record_every=every)
+            if METHODS[scene.integrator.method].adaptive:
+                self.simulation = Simulation(scene, record_dt=scene.duration / ADAPTIVE_ROWS)
+                note = f"Running adaptive steps to t = {scene.duration:g} s"
+            else:
+                steps = step_count(scene.integrator.dt, scene.duration)
+                every = self.panel.record_every.value() or max(1, math.ceil(steps / AUTO_ROWS))
+                self.simulation = Simulation(scene, record_every=every)
+                note = f"Running {steps:,} steps" + (f" (recording every {every}th step)" if every > 1 else "")
         except ValueError as error:
             self._warn("Cannot start", str(error))
             return
+        self.plots.set_duration(scene.duration)
         self.buffer = RunBuffer(self.landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
-                                capacity=self.simulation.max_rows)
+                                capacity=self.simulation.row_capacity)
         self.computed = False
         self.thread = SimulationThread(self.simulation, self.buffer.derive, self)
         self.thread.rowsReady.connect(self._rows_ready)
@@ -433,8 +444,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._last_tick = time.perf_counter()
         self.thread.start()
         self.timer.start()
-        note = f" (recording every {every}th step)" if every > 1 else ""
-        self.show_message(f"Running {self.simulation.n_steps:,} steps{note}")
+        self.show_message(note)
         self._update_controls()
 
     def toggle_pause(self) -> None:
@@ -510,6 +520,8 @@ class MainWindow(QtWidgets.QMainWindow):
     def _tick(self) -> None:
         now = time.perf_counter()
         elapsed, self._last_tick = now - self._last_tick, now
+        self._frame_started = now
+        QtCore.QTimer.singleShot(0, self._frame_done)  # runs once this frame is painted
         if self.buffer is None:
             return
         if self.state == RUNNING:
@@ -521,16 +533,22 @@ class MainWindow(QtWidgets.QMainWindow):
                 self._finish()
         self._draw()
 
+    def _frame_done(self) -> None:
+        """Pace the frames: wait at least as long as the last one took to draw and show, so the
+        event loop keeps half its time for input even where OpenGL is rendered in software."""
+        cost = time.perf_counter() - self._frame_started
+        self.timer.setInterval(max(FRAME_MS, round(1000 * cost)))
+
     def _finish(self) -> None:
         self.state = FINISHED
         self.timer.stop()
+        self._draw(force_plots=True)
         status = self.simulation.status
         text = self.simulation.message()
         if status is Status.OK:
             self.show_message(f"Finished: {text}" + self._liftoff_note())
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
-        self._draw(force_plots=True)
         self._update_controls()
 
     def _liftoff_note(self) -> str:
