@@ -235,7 +235,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _build_status(self) -> None:
         self.state_label = QtWidgets.QLabel(objectName="state")
-        self.state_label.setMinimumWidth(90)
+        self.state_label.setFixedWidth(150)  # text changes must not re-lay out the window
         self.message = QtWidgets.QLabel(objectName="message")
         self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
         self.statusBar().addWidget(self.message, 1)

@@ -25,11 +25,12 @@ def fit_ratio(d: np.ndarray, radius: float) -> np.ndarray:
     (equal curvatures) the square root costs about half the digits, as in the kernel: the
     value serves a threshold at 1.
     """
-    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
-    W2 = 1.0 + fx * fx + fy * fy
-    W = np.sqrt(W2)
-    h11, h12, h22 = fxx / W, fxy / W, fyy / W
-    mean = 0.5 * ((1.0 + fx * fx) * h22 + (1.0 + fy * fy) * h11 - 2.0 * fx * fy * h12) / W2
-    gauss = (h11 * h22 - h12 * h12) / W2
-    ratio = radius * (mean + np.sqrt(np.maximum(mean * mean - gauss, 0.0)))
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):  # NaN marks those points
+        fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
+        W2 = 1.0 + fx * fx + fy * fy
+        W = np.sqrt(W2)
+        h11, h12, h22 = fxx / W, fxy / W, fyy / W
+        mean = 0.5 * ((1.0 + fx * fx) * h22 + (1.0 + fy * fy) * h11 - 2.0 * fx * fy * h12) / W2
+        gauss = (h11 * h22 - h12 * h12) / W2
+        ratio = radius * (mean + np.sqrt(np.maximum(mean * mean - gauss, 0.0)))
     return np.where(np.isnan(d).any(axis=0), np.nan, ratio)

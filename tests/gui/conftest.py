@@ -5,12 +5,10 @@ from PySide6 import QtCore, QtWidgets
 
 from app.main import prepare_qt
 from app.preferences import Preferences
-from app.window import FINISHED, MainWindow
+from app.window import MainWindow
 from rollball.examples import EXAMPLES_DIR
 
 prepare_qt()  # before pytest-qt creates the QApplication
-
-FASTEST = len(__import__("app.window", fromlist=["SPEEDS"]).SPEEDS) - 1
 
 
 @pytest.fixture
@@ -46,18 +44,3 @@ def window(qtbot, dialogs, preferences):
     qtbot.waitExposed(w)
     yield w
     w.stop_worker()
-
-
-def run_to_end(qtbot, window, timeout=30_000):
-    """Start (at the fastest playback) and wait until the run has played to its end."""
-    window.speed.setCurrentIndex(FASTEST)
-    window.start()
-    qtbot.waitUntil(lambda: window.state == FINISHED, timeout=timeout)
-
-
-def set_field(qtbot, window, key, text):
-    """Type into a scene field as a user would and let the typing pause pass."""
-    edit = window.panel.formula if key == "landscape" else window.panel.numbers[key]
-    edit.selectAll()
-    qtbot.keyClicks(edit, text)
-    window.panel.apply()

@@ -1,0 +1,20 @@
+"""Steps a user takes, shared by the GUI tests."""
+
+from app.window import FINISHED, SPEEDS
+
+FASTEST = len(SPEEDS) - 1
+
+
+def run_to_end(qtbot, window, timeout=30_000):
+    """Start (at the fastest playback) and wait until the run has played to its end."""
+    window.speed.setCurrentIndex(FASTEST)
+    window.start()
+    qtbot.waitUntil(lambda: window.state == FINISHED, timeout=timeout)
+
+
+def set_field(qtbot, window, key, text):
+    """Type into a scene field as a user would and let the typing pause pass."""
+    edit = window.panel.formula if key == "landscape" else window.panel.numbers[key]
+    edit.selectAll()
+    qtbot.keyClicks(edit, text)
+    window.panel.apply()

@@ -1,0 +1,134 @@
+"""The app at the edges: many runs, scenes changed under a run, hostile text pasted or opened."""
+
+import gc
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from app.window import PAUSED, READY, RUNNING
+from app.worker import SimulationThread
+from guitools import run_to_end, set_field
+from hostile_corpus import FORMULAS, SCENE_BYTES, SCENE_TEXTS
+from rollball import Scene
+from rollball.examples import EXAMPLES_DIR
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * 4096 / 2**20
+
+
+def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
+    def cycles(n):
+        for i in range(n):
+            window.start()
+            if i % 2:
+                qtbot.waitUntil(lambda: window.buffer is not None and len(window.buffer) > 0, timeout=5000)
+            window.stop() if i % 3 else window.reset()
+        qtbot.wait(50)  # deleteLater of the finished threads
+        gc.collect()
+
+    cycles(10)
+    threads, memory = threading.active_count(), rss_mb()
+    cycles(100)
+    assert threading.active_count() <= threads
+    assert len(window.findChildren(SimulationThread)) == 0
+    assert rss_mb() - memory < 40, f"{rss_mb() - memory:.1f} MB more after 100 runs"
+    run_to_end(qtbot, window)  # and it still works
+    assert window.message.text().startswith("Finished")
+
+
+def test_opening_a_scene_during_a_run_replaces_it(qtbot, window):
+    window.start()
+    qtbot.waitUntil(lambda: window.play_time > 0.02, timeout=5000)
+    assert window.open_scene(EXAMPLES_DIR / "bowl.json", remember=False)
+    assert window.state == READY and window.thread is None
+    assert window.scene == Scene.load(EXAMPLES_DIR / "bowl.json")
+    run_to_end(qtbot, window)
+    assert window.simulation.scene.landscape == window.scene.landscape
+
+
+@pytest.mark.parametrize("text, key", [(t, k) for group in SCENE_TEXTS.values() for t, k in group][::4])
+def test_a_hostile_scene_file_opened_during_a_run_changes_nothing(qtbot, window, dialogs, tmp_path, text, key):
+    window.toggle_pause() if window.state == RUNNING else window.start()
+    scene, state = window.scene, window.state
+    path = tmp_path / "hostile.json"
+    path.write_text(text, encoding="utf-8")
+    assert not window.open_scene(path)
+    assert dialogs[-1][0] == "warning" and f"hostile.json: {key}" in dialogs[-1][2]
+    assert window.scene == scene and window.state == state and window.thread is not None or window.computed
+
+
+@pytest.mark.parametrize("data", SCENE_BYTES, ids=range(len(SCENE_BYTES)))
+def test_binary_scene_files_are_refused(window, dialogs, tmp_path, data):
+    payload = data[0] if isinstance(data, tuple) else data
+    path = tmp_path / "binary.json"
+    path.write_bytes(payload)
+    scene = window.scene
+    assert not window.open_scene(path)
+    assert dialogs and "binary.json" in dialogs[-1][2]
+    assert window.scene == scene
+
+
+def test_pasting_hostile_formulas_shows_the_refusal_and_keeps_the_landscape(qtbot, window, tmp_path):
+    scene, surface = window.scene, window.view.surface
+    marker = Path("/tmp/rollball-pwned")
+    field = window.panel.formula
+    entries = [entry for group in FORMULAS.values() for entry in group]
+    for text, fragment in entries:
+        QtGui.QGuiApplication.clipboard().setText(text)
+        field.clear()
+        field.setFocus()
+        qtbot.keySequence(field, QtGui.QKeySequence.StandardKey.Paste)
+        window.panel.apply()
+        if field.text() != text:  # a line edit drops what it cannot hold (newlines)
+            continue
+        assert fragment in window.panel.error_text, text
+        assert window.scene == scene and window.view.surface is surface
+    assert not marker.exists()
+    assert len(entries) > 100
+
+
+def test_fields_left_invalid_do_not_stop_a_start(qtbot, window):
+    set_field(qtbot, window, "ball.radius", "-1")
+    window.start()
+    assert window.simulation.scene.ball.radius == 0.1      # the last valid scene runs
+    assert "Radius: must be greater than 0" in window.panel.error_text
+
+
+def test_a_start_point_outside_the_domain_says_so(qtbot, window):
+    set_field(qtbot, window, "landscape", "log(x)")
+    set_field(qtbot, window, "start.x", "-1")
+    assert "cannot be evaluated at the start point" in window.message.text()
+    run_to_end(qtbot, window)
+    assert "Stopped early (nonfinite)" in window.message.text()
+
+
+def test_the_adaptive_method_runs_with_tolerances_and_exact_row_times(qtbot, window):
+    button = window.panel.findChild(QtWidgets.QRadioButton, "method.adaptive")
+    qtbot.mouseClick(window.panel.munthe_kaas, QtCore.Qt.MouseButton.LeftButton)  # off: classic
+    qtbot.mouseClick(button, QtCore.Qt.MouseButton.LeftButton)
+    assert window.panel.munthe_kaas.isChecked() and not window.panel.munthe_kaas.isEnabled()
+    assert window.panel.numbers["integrator.rtol"].isEnabled()
+    set_field(qtbot, window, "integrator.rtol", "1e-9")
+    set_field(qtbot, window, "duration", "2")
+    assert window.scene.integrator.method == "adaptive" and window.scene.integrator.rtol == 1e-9
+    run_to_end(qtbot, window)
+    t = window.buffer.t
+    assert len(t) == 10_001 and t[-1] == 2.0
+    np.testing.assert_allclose(t, np.linspace(0, 2, 10_001), rtol=0, atol=1e-14)
+    assert abs(window.buffer.energy_error).max() < 1e-8
+    qtbot.mouseClick(window.panel.findChild(QtWidgets.QRadioButton, "method.rk4"), QtCore.Qt.MouseButton.LeftButton)
+    assert window.panel.munthe_kaas.isEnabled() and not window.panel.numbers["integrator.rtol"].isEnabled()
+
+
+def test_pause_survives_a_finished_computation(qtbot, window):
+    window.start()
+    window.toggle_pause()
+    qtbot.waitUntil(lambda: window.computed, timeout=10_000)
+    assert window.state == PAUSED and window.export_action.isEnabled()
+    window.toggle_pause()
+    assert window.state == RUNNING
