@@ -115,7 +115,7 @@ class SceneView(gl.GLViewWidget):
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any())}
 
     def reset_camera(self) -> None:
-        self.setCameraPosition(distance=1.5 * self.extent, elevation=32, azimuth=-60)
+        self.setCameraPosition(distance=1.25 * self.extent, elevation=30, azimuth=-60)
         c = self.ball_center if self.follow else np.zeros(3)
         self.opts["center"] = QtGui.QVector3D(*map(float, c))
         self.update()
@@ -123,8 +123,10 @@ class SceneView(gl.GLViewWidget):
     # -- ball, trail, markers ---------------------------------------------------------
 
     def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float) -> None:
+        """Place the ball; a matrix R that is no rotation deforms it (one that grows is drawn no
+        larger than the ball, so its shape stays visible)."""
         m = np.eye(4)
-        m[:3, :3] = R * radius
+        m[:3, :3] = R * (radius / max(1.0, float(np.linalg.norm(R, 2))))
         m[:3, 3] = center
         self.ball.setTransform(pg.Transform3D(*m.ravel()))
         self.ball_center = np.asarray(center, dtype=float)

@@ -24,7 +24,9 @@ from .worker import SimulationThread
 FRAME_MS = 16                  # redraw at most ~60 Hz
 PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
 AUTO_ROWS = 200_000            # "record: auto" keeps at most about this many rows
-ADAPTIVE_ROWS = 10_000         # an adaptive run records this many evenly spaced rows
+ADAPTIVE_ROWS = 10_000
+ENERGY_WARNING = 1e-2          # a finished run whose energy error exceeds this gets a warning
+ORTHOGONALITY_WARNING = 1e-3   # likewise for ||R^T R - I|| at the end         # an adaptive run records this many evenly spaced rows
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
@@ -546,10 +548,23 @@ class MainWindow(QtWidgets.QMainWindow):
         status = self.simulation.status
         text = self.simulation.message()
         if status is Status.OK:
-            self.show_message(f"Finished: {text}" + self._liftoff_note())
+            warnings = self._accuracy_warnings()
+            self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
         self._update_controls()
+
+    def _accuracy_warnings(self) -> str:
+        """What a finished run's numbers say about the method and step (empty when all is well)."""
+        notes = []
+        drift = float(np.max(np.abs(self.buffer.energy_error)))
+        if drift > ENERGY_WARNING:
+            notes.append(f"energy changed by {drift:.2g} of its scale: the step is too large for this method")
+        orth = float(self.buffer.orthogonality_error[-1])
+        if orth > ORTHOGONALITY_WARNING:
+            notes.append(f"‖RᵀR − I‖ = {orth:.2g}: R is no longer a rotation (classic update; "
+                         f"Munthe-Kaas keeps it one)")
+        return "".join(f"; {note}" for note in notes)
 
     def _liftoff_note(self) -> str:
         t = self.simulation.liftoff_time if self.simulation else None
@@ -630,6 +645,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def show_message(self, text: str, warning: bool = False) -> None:
         self.message.setText(text)
+        self.message.setToolTip(text)  # long messages are cut at the window's edge
         self.message.setStyleSheet("color: #b03a00; font-weight: bold;" if warning else "")
 
     def _warn(self, title: str, text: str) -> None:

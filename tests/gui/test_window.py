@@ -117,7 +117,7 @@ def test_playback_speed_sets_simulated_seconds_per_second(qtbot, window):
 def test_a_run_plays_to_its_end_and_exports_its_rows(qtbot, window, tmp_path):
     set_field(qtbot, window, "duration", "0.5")
     run_to_end(qtbot, window)
-    assert window.message.text().startswith("Finished: reached t = 0.5 s in 500 steps")
+    assert window.message.text() == "Finished: reached t = 0.5 s in 500 steps"
     assert window.progress.value() == 1000
     out = tmp_path / "run.csv"
     assert window.export_csv(out)
@@ -222,6 +222,8 @@ def test_classic_euler_shows_r_leaving_so3(qtbot, window):
     run_to_end(qtbot, window)
     assert window.buffer.orthogonality_error[-1] > 1e-3
     assert float(window.readouts["orth"].text()) > 1e-3
+    text = window.message.text()
+    assert "R is no longer a rotation" in text and "energy changed by" in text
 
 
 def ball_pixels(window, qtbot):
