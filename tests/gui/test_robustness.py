@@ -10,7 +10,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.window import PAUSED, READY, RUNNING
 from app.worker import SimulationThread
-from guitools import run_to_end, set_field
+from .guitools import run_to_end, set_field
 from hostile_corpus import FORMULAS, SCENE_BYTES, SCENE_TEXTS
 from rollball import Scene
 from rollball.examples import EXAMPLES_DIR
@@ -34,6 +34,8 @@ def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
     cycles(10)
     threads, memory = threading.active_count(), rss_mb()
     cycles(100)
+    print(f"\n100 start/stop cycles: threads {threads} -> {threading.active_count()}, "
+          f"memory {rss_mb() - memory:+.1f} MB")
     assert threading.active_count() <= threads
     assert len(window.findChildren(SimulationThread)) == 0
     assert rss_mb() - memory < 40, f"{rss_mb() - memory:.1f} MB more after 100 runs"

@@ -15,7 +15,7 @@ from app.window import FINISHED, PAUSED, READY, RUNNING, STOPPED, MainWindow
 from rollball import Scene, read_csv
 from rollball.examples import EXAMPLES_DIR, example_scenes
 
-from guitools import run_to_end, set_field
+from .guitools import run_to_end, set_field
 
 
 def test_opens_on_the_example_ready_to_start(window):
