@@ -666,9 +666,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if not self._may_discard():
             event.ignore()
             return
-        self.stop_worker()
-        self.timer.stop()
         self.preferences.save(self)
+        self.reset()  # stops the worker and lets go of the run's arrays
         event.accept()
 
 

@@ -113,7 +113,11 @@ import resource
 from rollball import Scene, simulate
 traj = simulate(Scene.load({hills!r}), method="rk4", dt=1e-3, t_end={steps} * 1e-3, record_every=100)
 assert traj.steps == {steps}, traj.message
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+try:  # this program's own high-water mark (ru_maxrss would include the parent's, from the fork)
+    status = open("/proc/self/status").read().split("VmHWM:")[1]
+    print(int(status.split()[0]) * 1024)
+except (OSError, IndexError):
+    print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
 """
 
 

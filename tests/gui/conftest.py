@@ -6,9 +6,16 @@ from PySide6 import QtCore, QtWidgets
 from app.main import prepare_qt
 from app.preferences import Preferences
 from app.window import MainWindow
+from rollball import Scene, simulate
 from rollball.examples import EXAMPLES_DIR
 
 prepare_qt()  # before pytest-qt creates the QApplication
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compiled_kernel():
+    """Compile (or load) the kernel once, before anything in a window is timed."""
+    simulate(Scene.load(EXAMPLES_DIR / "hills.json"), t_end=0.01)
 
 
 @pytest.fixture
@@ -43,4 +50,5 @@ def window(qtbot, dialogs, preferences):
     w.show()
     qtbot.waitExposed(w)
     yield w
-    w.stop_worker()
+    w.saved_scene = w.scene  # nothing to ask about when the test closes it
+    w.close()
