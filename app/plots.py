@@ -26,6 +26,8 @@ class LivePlots(QtWidgets.QWidget):
             plot.setObjectName(f"plot.{name}")
             plot.setTitle(title, size="9pt", color="#333")
             plot.setLabel("bottom", "t", units="s")
+            if units:
+                plot.setLabel("left", units=units)
             plot.setLogMode(y=log)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)

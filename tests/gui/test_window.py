@@ -4,14 +4,13 @@ import json
 import os
 import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from app.window import FINISHED, PAUSED, READY, RUNNING, STOPPED, MainWindow
+from app.window import PAUSED, READY, RUNNING, STOPPED, MainWindow
 from rollball import Scene, read_csv
 from rollball.examples import EXAMPLES_DIR, example_scenes
 
