@@ -251,6 +251,35 @@ def _fit_along_segment(fn, d, r, z, zn, h, speed0_sq, speed1_sq):
 
 
 @JIT
+def check_step(fn, d, r, t, h, z, zn, probe, pn, K, last, ints, info, segment):
+    """Whether the ball still fits over a finished step; otherwise stop with DOES_NOT_FIT.
+
+    Three looks, cheapest first: r*kappa at the step's end; the secant curvature between the
+    two contact points, -(N1 - N0).(phi1 - phi0) / |phi1 - phi0|^2, which is the normal
+    curvature along the step for a smooth surface and grows like 1/step across a kink or cusp
+    of a valley (abs, min, max, sqrt(abs)), whose second derivative the model cannot see;
+    and, with ``segment``, samples along a step whose contact point raced. Returns True
+    while the run may go on.
+    """
+    if pn[PROBE_FIT] >= 1.0:
+        _fail(ints, info, DOES_NOT_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
+        return False
+    dx, dy, df = zn[0] - z[0], zn[1] - z[1], pn[PROBE_HEIGHT] - probe[PROBE_HEIGHT]
+    bend = -((pn[0] - probe[0]) * dx + (pn[1] - probe[1]) * dy + (pn[2] - probe[2]) * df)
+    chord2 = dx * dx + dy * dy + df * df
+    if r * bend >= chord2 and chord2 > 0.0:  # r * (secant curvature) >= 1, without a division
+        _fail(ints, info, DOES_NOT_FIT, t, z[0] + 0.5 * dx, z[1] + 0.5 * dy, r * bend / chord2)
+        return False
+    if segment:
+        fit, fx, fy = _fit_along_segment(fn, d, r, z, zn, h, K[0, 0] ** 2 + K[0, 1] ** 2,
+                                         K[last, 0] ** 2 + K[last, 1] ** 2)
+        if fit >= 1.0:
+            _fail(ints, info, DOES_NOT_FIT, t, fx, fy, fit)
+            return False
+    return True
+
+
+@JIT
 def _finite(a, lo, hi):
     """a[lo:hi] all finite: a chain of cheap ands, no early exit and no floating-point chain."""
     ok = True
@@ -411,13 +440,8 @@ def _fixed_steps(mk: bool):
             bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, s, Y, zn, Rn, pn)
             if bad:
                 _fail(ints, info, NONFINITE, t, z[0], z[1], 1.0 if bad == 2 else 0.0)
-            elif pn[PROBE_FIT] >= 1.0:
-                _fail(ints, info, DOES_NOT_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
             else:
-                fit, fx, fy = _fit_along_segment(fn, d, p[0], z, zn, h, K[0, 0] ** 2 + K[0, 1] ** 2,
-                                                 K[s, 0] ** 2 + K[s, 1] ** 2)
-                if fit >= 1.0:
-                    _fail(ints, info, DOES_NOT_FIT, t, fx, fy, fit)
+                check_step(fn, d, p[0], t, h, z, zn, probe, pn, K, s, ints, info, True)
             if ints[I_STATUS] != RUNNING:
                 record_last(rows, ints, (k - 1) * dt, z, R, probe, p)
                 return
@@ -493,8 +517,8 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
                 _fail(ints, info, NONFINITE, t, z[0], z[1], 2.0)
             else:
                 continue
-        elif pn[PROBE_FIT] >= 1.0:
-            _fail(ints, info, DOES_NOT_FIT, t + hs, zn[0], zn[1], pn[PROBE_FIT])
+        else:  # error control keeps adaptive steps short where the contact point races
+            check_step(fn, d, p[0], t + hs, hs, z, zn, probe, pn, K, s - 1, ints, info, False)
         if ints[I_STATUS] != RUNNING:
             record_last(rows, ints, t, z, R, probe, p)
             break
