@@ -98,8 +98,10 @@ class SceneView(gl.GLViewWidget):
         z = d[0]
         fit = np.nan_to_num(fit_ratio(d, radius), nan=0.0)
         self.extent = float(axis[-1] - axis[0])
-        shown = np.clip(np.where(np.isfinite(z), z, np.nan), -2 * self.extent, 2 * self.extent)
-        shown = np.where(np.isfinite(shown), shown, np.nanmin(shown) if np.isfinite(shown).any() else 0.0)
+        finite = np.isfinite(z)
+        lowest = z[finite].min() if finite.any() else 0.0
+        # undefined points sit at the lowest height (drawn grey); walls are cut at twice the grid
+        shown = np.clip(np.where(finite, z, lowest), -2 * self.extent, 2 * self.extent)
         colors = surface_colors(z, fit)
         if self.surface is not None:
             self.removeItem(self.surface)

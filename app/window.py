@@ -11,6 +11,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
+from rollball.geometry import unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import step_count
 
@@ -64,6 +65,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.play_time = 0.0
         self.computed = False               # the worker has finished the run
         self.liftoff_announced = False
+        self.drawn_index = -1                # the row the view shows
         self.frames = 0
         self._last_tick = self._frame_started = time.perf_counter()
 
@@ -459,19 +461,19 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def step_frame(self) -> None:
         """Advance the playback by one frame (starting the run paused if needed)."""
-        if self.state in (READY, STOPPED, FINISHED):
-            if self.state != READY or self.simulation is not None:
-                return
+        if self.state == READY:
             self.start()
             self.state = PAUSED
             self._update_controls()
+            return
+        if self.state not in (RUNNING, PAUSED):
             return
         if self.state == RUNNING:
             self.state = PAUSED
         speed = self.speed.currentData()
         frame = FRAME_MS / 1000 * (speed if math.isfinite(speed) else 10.0)
         self.play_time = min(self.play_time + frame, self.buffer.end_time if self.buffer else 0.0)
-        self._draw(force_plots=True)
+        self._draw(force=True)
         self._update_controls()
 
     def stop(self) -> None:
@@ -481,7 +483,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.stop_worker()
         self.state = STOPPED
         self.timer.stop()
-        self._draw(force_plots=True)
+        self._draw(force=True)
         self.show_message(f"Stopped at t = {self.play_time:.4g} s")
         self._update_controls()
 
@@ -490,7 +492,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.stop_worker()
         self.timer.stop()
         self.simulation, self.buffer, self.computed = None, None, False
-        self.state, self.play_time, self.liftoff_announced = READY, 0.0, False
+        self.state, self.play_time, self.liftoff_announced, self.drawn_index = READY, 0.0, False, -1
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
@@ -524,16 +526,16 @@ class MainWindow(QtWidgets.QMainWindow):
         elapsed, self._last_tick = now - self._last_tick, now
         self._frame_started = now
         QtCore.QTimer.singleShot(0, self._frame_done)  # runs once this frame is painted
-        if self.buffer is None:
-            return
-        if self.state == RUNNING:
-            speed = self.speed.currentData()
-            end = self.buffer.end_time
-            self.play_time = end if math.isinf(speed) else min(self.play_time + elapsed * speed, end)
-            if self.computed and self.play_time >= end:
-                self.play_time = end
-                self._finish()
-        self._draw()
+        if self.buffer is None or self.state != RUNNING:
+            return  # paused: nothing moves (Step draws its own frame)
+        speed = self.speed.currentData()
+        end = self.buffer.end_time
+        self.play_time = end if math.isinf(speed) else min(self.play_time + elapsed * speed, end)
+        if self.computed and self.play_time >= end:
+            self.play_time = end
+            self._finish()  # draws the last frame
+        else:
+            self._draw()
 
     def _frame_done(self) -> None:
         """Pace the frames: wait at least as long as the last one took to draw and show, so the
@@ -544,7 +546,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _finish(self) -> None:
         self.state = FINISHED
         self.timer.stop()
-        self._draw(force_plots=True)
+        self._draw(force=True)
         status = self.simulation.status
         text = self.simulation.message()
         if status is Status.OK:
@@ -580,35 +582,34 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_message(f"The landscape cannot be evaluated at the start point ({s.x:g}, {s.y:g})",
                               warning=True)
             return
-        n = np.array([-d[1], -d[2], 1.0]) / math.sqrt(1 + d[1] ** 2 + d[2] ** 2)
-        center = np.array([s.x, s.y, d[0]]) + r * n
+        center = np.array([s.x, s.y, d[0]]) + r * unit_normal(d)
         self.view.set_ball(center, np.eye(3), r)
         self._show_readouts(None)
 
-    def _draw(self, force_plots: bool = False) -> None:
+    def _draw(self, force: bool = False) -> None:
         buffer = self.buffer
         if buffer is None or len(buffer) == 0:
             return
         i = buffer.index_at(self.play_time)
+        if i == self.drawn_index and not force:
+            return  # the same row as the last frame
+        self.drawn_index = i
         row = buffer.rows[i]
         scene = self.simulation.scene
         self.view.set_ball(row[3:6], row[12:21].reshape(3, 3), scene.ball.radius)
         self.view.set_trail(buffer.trail(i, lift=0.004 * self.view.extent))
         self._show_readouts(i)
         self.frames += 1
-        if force_plots or self.frames % PLOT_EVERY == 0:
+        if force or self.frames % PLOT_EVERY == 0:
             self.plots.show_run(buffer, i)
         t_end = self.simulation.t_end
         self.progress.setValue(int(round(1000 * min(1.0, row[0] / t_end))))
-        liftoff = self.simulation.liftoff_time if self.computed or self.simulation.done else None
-        if liftoff is None and buffer.rows[i, 22] <= 0:
-            liftoff = row[0]
-        if liftoff is not None and row[0] >= liftoff:
+        liftoff = self.simulation.liftoff_time  # set by the kernel as soon as it happens
+        if liftoff is not None and row[0] >= liftoff and not self.liftoff_announced:
+            self.liftoff_announced = True
             self.view.set_liftoff(buffer.point_at(liftoff))
-            if not self.liftoff_announced:
-                self.liftoff_announced = True
-                self.show_message(f"Lift-off at t = {liftoff:.4g} s: the real ball would leave the surface "
-                                  f"here; the model keeps it on, so what follows is not physical", warning=True)
+            self.show_message(f"Lift-off at t = {liftoff:.4g} s: the real ball would leave the surface "
+                              f"here; the model keeps it on, so what follows is not physical", warning=True)
 
     def _show_readouts(self, i: int | None) -> None:
         if i is None:
@@ -632,7 +633,7 @@ class MainWindow(QtWidgets.QMainWindow):
                                                                    else "Start"))
         self.pause_action.setEnabled(state in (RUNNING, PAUSED))
         self.pause_action.setText("Resume" if state == PAUSED else "Pause")
-        self.step_action.setEnabled(state in (PAUSED, RUNNING) or (state == READY and self.simulation is None))
+        self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
         self.export_action.setEnabled(self.computed and self.simulation is not None)

@@ -8,6 +8,7 @@ import operator
 import numpy as np
 
 from . import __version__, kernel
+from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
 from .scene import Scene
 from .tableaus import get_tableau
@@ -42,8 +43,9 @@ def _positive(name: str, value) -> float:
 def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Contact point and angular momentum about it, from the scene's start values."""
     s, r, m = scene.start, scene.ball.radius, scene.ball.mass
-    _, fx, fy = landscape.evaluate(s.x, s.y)[:3]
-    N = np.array([-fx, -fy, 1.0]) / math.sqrt(1.0 + fx * fx + fy * fy)
+    d = landscape.evaluate(s.x, s.y)
+    fx, fy = d[1], d[2]
+    N = unit_normal(d)
     cdot = np.array([s.vx, s.vy, fx * s.vx + fy * s.vy])
     omega = np.cross(N, cdot) / r + s.spin * N
     v = m * r * r * (1.4 * omega - N * (N @ omega))
