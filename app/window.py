@@ -11,6 +11,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
+from rollball.files import atomic_write_bytes
 from rollball.geometry import unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import step_count
@@ -406,11 +407,22 @@ class MainWindow(QtWidgets.QMainWindow):
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save image", str(Path(self.preferences.last_folder())
                                                         / "rollball.png"), "PNG images (*.png)")
         if path:
-            image = self.view.grabFramebuffer()
-            if image.save(path, "PNG"):
-                self.show_message(f"Saved {Path(path).name}")
-            else:
-                self._warn("Cannot save image", f"{path}: could not be written")
+            self.save_image(Path(path))
+
+    def save_image(self, path: Path) -> bool:
+        """The 3-D view as a PNG, written atomically."""
+        data = QtCore.QByteArray()
+        buffer = QtCore.QBuffer(data)
+        buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
+        self.view.grabFramebuffer().save(buffer, "PNG")
+        try:
+            atomic_write_bytes(path, bytes(data))
+        except OSError as error:
+            self._warn("Cannot save image", f"{path}: {error.strerror or error}. Nothing was changed.")
+            return False
+        self.preferences.set_last_folder(path)
+        self.show_message(f"Saved {path.name}")
+        return True
 
     # -- running ---------------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-"""Saving a scene and exporting a CSV are atomic: a failing write leaves any existing file intact,
+"""Saving a scene, exporting a CSV and writing bytes (the app's images) are atomic: a failing write leaves any existing file intact,
 leaves no temporary file behind and raises an OSError naming the file."""
 
 import os
@@ -7,6 +7,7 @@ import pytest
 from conftest import make_scene
 
 from rollball import simulate
+from rollball.files import atomic_write_bytes
 from rollball.scene import Scene
 
 
@@ -18,7 +19,11 @@ def csv_writer(path):
     simulate(make_scene("x*y"), t_end=0.01).to_csv(path)
 
 
-WRITERS = [scene_writer, csv_writer]
+def bytes_writer(path):  # the app's image export
+    atomic_write_bytes(path, b"\x89PNG\r\n\x1a\n")
+
+
+WRITERS = [scene_writer, csv_writer, bytes_writer]
 
 
 @pytest.fixture
@@ -77,6 +82,6 @@ def test_read_only_folder_keeps_the_old_file(write, existing):
 def test_success_replaces_the_file_and_keeps_its_mode(write, existing):
     os.chmod(existing, 0o600)
     write(existing)
-    assert existing.read_text() != "precious\n"
+    assert existing.read_bytes() != b"precious\n"
     assert existing.stat().st_mode & 0o777 == 0o600
     assert os.listdir(existing.parent) == ["out.txt"]

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 import pytest
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.window import PAUSED, READY, RUNNING, STOPPED, MainWindow
 from rollball import Scene, read_csv
@@ -178,6 +178,17 @@ def test_save_failure_is_reported_and_the_old_file_stays(qtbot, window, dialogs,
     assert path.read_text() == "precious"
     assert dialogs[-1][0] == "warning" and "Permission denied" in dialogs[-1][2]
     assert list(tmp_path.iterdir()) == [path]
+
+
+def test_save_image_writes_a_png_atomically(qtbot, window, dialogs, tmp_path, monkeypatch):
+    path = tmp_path / "view.png"
+    assert window.save_image(path)
+    image = QtGui.QImage(str(path))
+    assert image.width() == window.view.width() and image.height() == window.view.height()
+    monkeypatch.setattr(os, "replace", lambda *args: (_ for _ in ()).throw(OSError(28, "No space left")))
+    assert not window.save_image(path)
+    assert QtGui.QImage(str(path)).width() == image.width()      # the old image stays
+    assert "No space left" in dialogs[-1][2] and list(tmp_path.iterdir()) == [path]
 
 
 def test_changing_the_scene_during_a_run_resets_it(qtbot, window):
