@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rollball import Simulation, Status, simulate
+from rollball import Status, simulate
 from rollball.reference import reference_solution
 
 STEPS = {

@@ -1,7 +1,6 @@
 """The Butcher tableaus satisfy their own order conditions, exactly (rational arithmetic)."""
 
 from fractions import Fraction
-from itertools import combinations_with_replacement
 
 import pytest
 
