@@ -10,6 +10,7 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from ..files import atomic_write_text
 from . import report, targets, workprecision
 
 
@@ -40,7 +41,7 @@ def run(out: Path, config: Config = FULL, log=print) -> str:
         text += "\n![work-precision](bench.png)\n"
     else:
         text += "\n(no figure: matplotlib is not installed; `pip install rollball[bench]`)\n"
-    (out / "bench.md").write_text(text, encoding="utf-8")
-    (out / "bench.json").write_text(json.dumps({"targets": measured, "points": [asdict(p) for p in points]},
-                                               indent=1), encoding="utf-8")
+    atomic_write_text(out / "bench.md", text)
+    atomic_write_text(out / "bench.json", json.dumps({"targets": measured,
+                                                      "points": [asdict(p) for p in points]}, indent=1))
     return text
