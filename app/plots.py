@@ -28,6 +28,7 @@ class LivePlots(QtWidgets.QWidget):
             plot.setLabel("bottom", "t", units="s")
             if units:
                 plot.setLabel("left", units=units)
+                plot.getAxis("left").enableAutoSIPrefix(False)  # newtons, not mN or kN
             plot.setLogMode(y=log)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)
@@ -37,6 +38,7 @@ class LivePlots(QtWidgets.QWidget):
             self.plots.append(plot)
             self.curves[name] = plot.plot(pen=pg.mkPen("#1f5fa8", width=1), skipFiniteCheck=True)
             layout.addWidget(plot)
+        self.show_run(None, 0)
 
     def set_duration(self, t_end: float) -> None:
         """Fix the time axis to the run: it is not re-laid out at every update."""
@@ -48,7 +50,14 @@ class LivePlots(QtWidgets.QWidget):
         if buffer is None or len(buffer) == 0:
             for curve in self.curves.values():
                 curve.setData([], [])
+            for plot in self.plots[:2]:  # empty: show the range errors live in (log10 units)
+                plot.setYRange(np.log10(FLOOR), 0.0, padding=0.0)
+            self.autoscaled = False
             return
+        if not self.autoscaled:  # data: the y axes follow it
+            for plot in self.plots:
+                plot.enableAutoRange(axis="y")
+            self.autoscaled = True
         stride = max(1, -(-(index + 1) // MAX_POINTS))
         picked = np.r_[np.arange(0, index + 1, stride), index]
         t = buffer.t[picked]

@@ -304,6 +304,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_message("; ".join(notes).capitalize())
         if redraw_camera:
             self.view.reset_camera()
+        self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
         if run_changed:
             if self.state in (RUNNING, PAUSED):
