@@ -372,16 +372,22 @@ class MainWindow(QtWidgets.QMainWindow):
         scene = self.panel.apply() or self.scene
         if self.panel.error_text:
             self.show_message(f"Saving the last valid scene ({self.panel.error_text})")
-        try:
-            scene.save(path)
-        except OSError as error:
-            self._warn("Cannot save scene", f"{path}: {error.strerror or error}. Nothing was changed.")
+        if not self._write("save scene", path, scene.save):
             return False
         self.path, self.example, self.saved_scene = Path(path), None, scene
         self.preferences.add_recent(path)
-        self.preferences.set_last_folder(path)
         self._update_title()
         self.show_message(f"Saved {Path(path).name}")
+        return True
+
+    def _write(self, what: str, path: Path, write) -> bool:
+        """``write(path)`` (atomic); a failure is reported and leaves any old file as it was."""
+        try:
+            write(path)
+        except OSError as error:
+            self._warn(f"Cannot {what}", f"{path}: {error.strerror or error}. Nothing was changed.")
+            return False
+        self.preferences.set_last_folder(path)
         return True
 
     def export_dialog(self) -> None:
@@ -395,12 +401,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.simulation is None or not self.computed:
             return False
         trajectory = self.simulation.trajectory()
-        try:
-            trajectory.to_csv(path)
-        except OSError as error:
-            self._warn("Cannot export trajectory", f"{path}: {error.strerror or error}. Nothing was changed.")
+        if not self._write("export trajectory", path, trajectory.to_csv):
             return False
-        self.preferences.set_last_folder(path)
         self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
         return True
 
@@ -416,12 +418,8 @@ class MainWindow(QtWidgets.QMainWindow):
         buffer = QtCore.QBuffer(data)
         buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
         self.view.grabFramebuffer().save(buffer, "PNG")
-        try:
-            atomic_write_bytes(path, bytes(data))
-        except OSError as error:
-            self._warn("Cannot save image", f"{path}: {error.strerror or error}. Nothing was changed.")
+        if not self._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data))):
             return False
-        self.preferences.set_last_folder(path)
         self.show_message(f"Saved {path.name}")
         return True
 
