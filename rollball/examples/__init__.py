@@ -26,11 +26,11 @@ def example_scenes() -> list[tuple[Path, Scene]]:
 
 
 def scene_path(text: str) -> Path:
-    """The scene file ``text`` names: an existing file, else the example of that name (with or
-    without ``.json``). Raises ``FileNotFoundError`` with a one-line message listing the
-    examples when it is neither."""
+    """The scene file ``text`` names: what exists at that path (reading it says what is wrong
+    with it), else the example of that name (with or without ``.json``). Raises
+    ``FileNotFoundError`` with a one-line message listing the examples when it is neither."""
     path = Path(text)
-    if path.is_file():
+    if path.exists():
         return path
     name = path.name[:-5] if path.name.endswith(".json") else path.name
     if path.parent == Path(".") and name in example_names():
