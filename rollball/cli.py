@@ -95,6 +95,7 @@ def _simulate(args) -> int:
     from .scene import Scene
     from .simulation import simulate
     from .trajectory import Status
+    from .warmup import compile_notice
 
     try:
         scene = Scene.load(scene_path(args.scene))
@@ -103,9 +104,11 @@ def _simulate(args) -> int:
     except (SceneError, OSError) as e:
         return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
     try:
-        traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
-                        t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
-                        record_dt=args.record_dt)
+        with compile_notice(lambda: print("rollball: compiling the integrator, first run only ...",
+                                          file=sys.stderr, flush=True)):
+            traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
+                            t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
+                            record_dt=args.record_dt)
     except ValueError as e:  # includes FormulaError
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
