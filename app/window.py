@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -76,8 +77,7 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- layout ----------------------------------------------------------------------
 
     def _build_layout(self) -> None:
-        self.setWindowIcon(QtGui.QIcon(str(Path(__file__).resolve().parent.parent / "resources" / "icons"
-                                           / "rollball.svg")))
+        self.setWindowIcon(QtGui.QIcon(str(resources.files("app") / "icons" / "rollball.svg")))
         scroll = QtWidgets.QScrollArea(widgetResizable=True)
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)
