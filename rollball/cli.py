@@ -7,12 +7,14 @@ stopped it early (the trajectory up to there is still written), 2 for bad input 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from . import __version__
 from .examples import example_scenes
 from .scene import SceneError
+from .sweeps.grid import KEYS as SWEEP_KEYS
 from .tableaus import METHODS
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
@@ -77,6 +79,29 @@ def build_parser() -> argparse.ArgumentParser:
                           "default: every accepted step)")
     sim.add_argument("--csv", metavar="OUT.csv", help="write the trajectory as CSV")
 
+    sweep = commands.add_parser(
+        "sweep", help="run a scene over a grid of values: one row of outcomes per run",
+        description="Run a scene once for every combination of the varied values (the last "
+                    "--vary varies fastest) and write sweep.csv (one row per run: the varied "
+                    "values, status, t_reached, liftoff_time, x_end, y_end, energy_drift, "
+                    "min_normal_force, max_speed, path_length), sweep.json and sweep.png. "
+                    "Local on every core by default; --scheduler sends the runs to a Dask "
+                    "cluster. Ctrl-C stops and writes the runs finished so far.")
+    sweep.add_argument("scene", metavar="SCENE.json", help="scene file (a fixed-step method)")
+    sweep.add_argument("--vary", action="append", required=True, metavar="KEY=START:STOP:N",
+                       help=f"N evenly spaced values from START to STOP (both included); "
+                            f"repeat for a grid. KEY: {', '.join(SWEEP_KEYS)}")
+    sweep.add_argument("--color", default="liftoff_time", metavar="OUTCOME",
+                       help="the outcome the map of two varied keys is coloured by "
+                            "(default liftoff_time)")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, metavar="N",
+                       help="local threads (default: every core)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+                            "(needs pip install 'rollball[dask]')")
+    sweep.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
+
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
 
@@ -118,6 +143,74 @@ def _simulate(args) -> int:
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
 
 
+def _sweep(args) -> int:
+    import signal
+    import threading
+
+    from tqdm import tqdm
+
+    from .scene import Scene
+    from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+
+    try:
+        grid = Grid.of([parse_vary(text) for text in args.vary])
+    except ValueError as e:
+        return _fail(str(e))
+    if args.color not in OUTCOMES:
+        return _fail(f"--color {args.color}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
+    try:
+        scene = Scene.load(args.scene)
+    except (SceneError, OSError) as e:
+        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        return _fail(f"cannot write to {out}: {e.strerror or e}")
+    if not os.access(out, os.W_OK):
+        return _fail(f"cannot write to {out}: permission denied")
+
+    cancel = threading.Event()
+
+    def interrupted(signum, frame):
+        cancel.set()
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # a second Ctrl-C aborts at once
+        print("\nrollball: stopping after the batches under way (Ctrl-C again to abort)", file=sys.stderr)
+
+    bar = tqdm(total=grid.size, unit="run", file=sys.stderr, smoothing=0.1, dynamic_ncols=True)
+
+    def progress(done, total, text):
+        bar.update(done - bar.n)
+
+    previous = signal.signal(signal.SIGINT, interrupted)
+    try:
+        table = sweep(scene, dict(zip(grid.keys, grid.axes)), workers=args.workers,
+                      scheduler=args.scheduler, progress=progress, cancel=cancel)
+    except ValueError as e:
+        return _fail(str(e))
+    except KeyboardInterrupt:
+        print("rollball: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        bar.close()
+    try:
+        files = table.save(out, args.color)
+    except OSError as e:
+        return _fail(f"cannot write to {out}: {e.strerror or e}")
+    done = int(table.done.sum())
+    counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
+    where = f"Dask at {table.scheduler}" if table.scheduler else "local threads"
+    print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
+          f"({done / max(table.seconds, 1e-9):,.0f} runs/s, {table.workers} {where}): {counts}; "
+          f"wrote {', '.join(str(f) for f in files)}")
+    if table.partial:
+        print(f"rollball: stopped early; sweep.csv holds the {done:,} runs finished "
+              f"(sweep.json says partial)", file=sys.stderr)
+        return 130
+    return EXIT_OK
+
+
 def _examples() -> int:
     for path, scene in example_scenes():
         try:
@@ -157,6 +250,8 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("rollball: interrupted", file=sys.stderr)
             return 130
+    if args.command == "sweep":
+        return _sweep(args)
     if args.command == "examples":
         return _examples()
     if args.command == "bench":
