@@ -12,10 +12,10 @@ import sys
 from pathlib import Path
 
 from . import __version__
-from .examples import example_scenes
+from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .scene import SceneError
 from .sweeps.grid import KEYS as SWEEP_KEYS
-from .tableaus import METHODS
+from .tableaus import METHODS, MethodKind, get_method
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -45,11 +45,18 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _method(text: str) -> str:
+    try:
+        return get_method(text).name
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
         description="Simulate a solid ball rolling without slipping over a landscape z = f(x, y).",
-        epilog="Example: rollball simulate resources/examples/hills.json --csv hills.csv",
+        epilog="Example: rollball simulate hills --csv hills.csv (an example by name, or a scene file)",
     )
     parser.add_argument("--version", action="version", version=f"rollball {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -58,10 +65,11 @@ def build_parser() -> argparse.ArgumentParser:
         "simulate", help="run a scene file and print a one-line summary",
         description="Run a scene file (JSON) and print a one-line summary: steps, status, "
                     "relative energy drift and the first lift-off time. Options override the scene.")
-    sim.add_argument("scene", metavar="SCENE.json", help="scene file to run")
-    sim.add_argument("--method", choices=list(METHODS),
-                     help="Runge-Kutta method; adaptive: Dormand-Prince 5(4) steps that keep to "
-                          "--rtol/--atol, always Munthe-Kaas")
+    sim.add_argument("scene", metavar="SCENE", help="scene file to run, or an example's name (rollball examples)")
+    adaptive = ", ".join(m.name for m in METHODS.values() if m.kind is MethodKind.ADAPTIVE)
+    sim.add_argument("--method", type=_method, metavar="{" + ",".join(METHODS) + "}",
+                     help=f"Runge-Kutta method; adaptive ones ({adaptive}) choose their steps to keep "
+                          "to --rtol/--atol, always Munthe-Kaas")
     mk = sim.add_mutually_exclusive_group()
     mk.add_argument("--munthe-kaas", dest="munthe_kaas", action="store_true", default=None,
                     help="advance the orientation on SO(3) (Runge-Kutta-Munthe-Kaas)")
@@ -116,15 +124,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _load_scene(name: str):
+    """The scene of a file or an example's name, or (after a one-line message) exit status 2."""
+    from .scene import Scene
+
+    try:
+        return Scene.load(scene_path(name))
+    except FileNotFoundError as e:
+        return _fail(str(e))
+    except (SceneError, OSError) as e:
+        return _fail(f"{name}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+
+
 def _simulate(args) -> int:
     from .scene import Scene
     from .simulation import simulate
     from .trajectory import Status
 
-    try:
-        scene = Scene.load(args.scene)
-    except (SceneError, OSError) as e:
-        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
     try:
         traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
                         t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
@@ -133,8 +152,10 @@ def _simulate(args) -> int:
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
-    print(f"{args.scene}: {traj.steps} steps, status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}")
+    warnings = "".join(f", WARNING: {note}" for note in traj.warnings())
+    print(f"{args.scene}: {traj.steps} steps ({traj.rejected} rejected, {traj.evaluations} evaluations), "
+          f"status {traj.status} ({traj.message}), "
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}")
     if args.csv:
         try:
             traj.to_csv(args.csv)
@@ -158,10 +179,9 @@ def _sweep(args) -> int:
         return _fail(str(e))
     if args.color not in OUTCOMES:
         return _fail(f"--color {args.color}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
-    try:
-        scene = Scene.load(args.scene)
-    except (SceneError, OSError) as e:
-        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -212,12 +232,11 @@ def _sweep(args) -> int:
 
 
 def _examples() -> int:
-    for path, scene in example_scenes():
-        try:
-            path = path.relative_to(Path.cwd())
-        except ValueError:
-            pass
-        print(f"{path}: {scene.description}")
+    examples = example_scenes()
+    width = max(len(path.stem) for path, _ in examples)
+    for path, scene in examples:
+        print(f"{path.stem:<{width}}  {scene.description}")
+    print(f"\nRun one by name (rollball simulate hills); the files are in {EXAMPLES_DIR}")
     return EXIT_OK
 
 

@@ -104,7 +104,7 @@ def test_bad_grids_are_refused():
     with pytest.raises(ValueError, match="at least one key"):
         Grid.of({})
     with pytest.raises(ValueError, match="fixed-step methods"):
-        sweep(Scene(landscape="0", integrator=LIFTOFF.integrator.__class__(method="adaptive")),
+        sweep(Scene(landscape="0", integrator=LIFTOFF.integrator.__class__(method="dopri5")),
               {"start.vx": [1.0]})
     with pytest.raises(ValueError, match="not both"):
         sweep(LIFTOFF, {"start.vx": [1.0]}, workers=1, scheduler="tcp://127.0.0.1:1")
@@ -185,7 +185,7 @@ def test_cli_bad_input_exits_2_with_one_line(args, words, tmp_path, capsys):
 
 def test_cli_refuses_an_adaptive_scene(tmp_path, capsys):
     path = tmp_path / "a.json"
-    Scene(landscape="0", integrator=LIFTOFF.integrator.__class__(method="adaptive")).save(path)
+    Scene(landscape="0", integrator=LIFTOFF.integrator.__class__(method="dopri5")).save(path)
     assert main(["sweep", str(path), "--vary", "start.vx=0:1:2", "--out", str(tmp_path)]) == 2
     assert "fixed-step methods" in capsys.readouterr().err
 

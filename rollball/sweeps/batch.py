@@ -18,7 +18,7 @@ from .. import kernel
 from ..landscape import landscape_for
 from ..scene import Scene, SceneError
 from ..simulation import initial_momentum, step_count
-from ..tableaus import TABLEAUS, get_tableau
+from ..tableaus import METHODS, MethodKind, get_method
 from . import kernel as sweep_kernel
 from .grid import Grid, with_values
 
@@ -26,10 +26,11 @@ _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape o
 
 
 def sweep_method(scene: Scene):
-    """The scene's method if a sweep can run it (the fixed-step explicit ones), else ValueError."""
-    method = get_tableau(scene.integrator.method)
-    if method.name not in TABLEAUS:
-        raise ValueError(f"sweeps run the fixed-step methods ({', '.join(TABLEAUS)}); "
+    """The scene's method if a sweep can run it (the explicit fixed-step ones), else ValueError."""
+    method = get_method(scene.integrator.method)
+    if method.kind is not MethodKind.FIXED:
+        fixed = ", ".join(m.name for m in METHODS.values() if m.kind is MethodKind.FIXED)
+        raise ValueError(f"sweeps run the explicit fixed-step methods ({fixed}); "
                          f"this scene's integrator.method is {method.name}")
     return method
 

@@ -18,7 +18,7 @@ from .. import kernel
 # The narrow seam to the main kernel: these names and nothing else.
 from ..kernel import (F_LIFTOFF, I_ROWS, I_STATUS, JIT, MOTION_SIZE, NONFINITE, OK, RUNNING, accept,
                       check_step, record, scratch, start, trial_step)
-from ..trajectory import COLUMNS
+from ..trajectory import CENTER, ENERGY, NORMAL_FORCE, VELOCITY
 
 # One row of outcomes per run, in this order (the status is kept apart, as a code).
 OUTCOMES = ("t_reached", "liftoff_time", "x_end", "y_end", "energy_drift", "min_normal_force",
@@ -28,10 +28,8 @@ O_T, O_LIFTOFF, O_X, O_Y, O_DRIFT, O_MIN_FORCE, O_MAX_SPEED, O_PATH = range(len(
 # Status codes beyond the kernel's: a run whose varied scene was refused, and one not run yet.
 INVALID, NOT_RUN = 10, 11
 
-# Where the quantities sit in a trajectory row (DESIGN §5).
-_T, _X, _Y = COLUMNS.index("t"), COLUMNS.index("x"), COLUMNS.index("y")
-_CX, _VX = COLUMNS.index("cx"), COLUMNS.index("vx")
-_ENERGY, _FORCE = COLUMNS.index("energy"), COLUMNS.index("normal_force")
+# Where the quantities sit in a trajectory row (the core's row layout), as compile-time ints.
+_CX, _VX, _ENERGY, _FORCE = CENTER.start, VELOCITY.start, ENERGY, NORMAL_FORCE
 
 _TINY = float(np.finfo(float).tiny)
 
@@ -93,7 +91,7 @@ def run_batch(fn, W, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, R, 
             last = k == n_steps
             h = t_end - (k - 1) * dt if last else dt
             t = t_end if last else k * dt
-            bad = trial_step(fn, d, p, W, s, False, n, h, z, R, K, s, Y, zn, Rn, pn)
+            bad = trial_step(fn, d, p, W, s, False, n, h, z, R, K, s, Y, zn, Rn, pn, ints)
             if bad:
                 ints[I_STATUS] = NONFINITE
             else:
