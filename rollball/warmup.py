@@ -25,7 +25,7 @@ def variants() -> list[tuple[str, bool]]:
     """Every (method, munthe_kaas) the kernel runs: each method, and the classic update too
     where the method allows it. Methods sharing compiled code cost nothing after the first."""
     return [(name, mk) for name, method in METHODS.items()
-            for mk in ((True,) if method.adaptive else (True, False))]
+            for mk in ((True, False) if method.classic_allowed else (True,))]
 
 
 def warm_up(progress=None) -> None:
