@@ -137,19 +137,23 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
         controller = window.controller
         window.speed.setCurrentIndex(window.speed.count() - 1)   # as fast as computed
         window.start()
+        controller.pause()   # the worker computes on; the picture is taken at run_to
         started = time.monotonic()
-        while controller.state == RUNNING and controller.end_time < run_to and not problems:
+        while not (controller.computed or controller.end_time >= run_to or problems):
             app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
+            if controller.state == READY:
+                return problems[0] if problems else "the run did not start"
             if time.monotonic() - started > RUN_TIMEOUT:
                 return f"the run did not reach t = {run_to:g} s within {RUN_TIMEOUT:g} s"
-        if controller.state == RUNNING:   # computed past run_to: show the ball at run_to
-            controller.pause()
-            controller.play_time = run_to
-            window.stop()
         if problems:
             return problems[0]
-        if controller.state == READY:
-            return "the run did not start"
+        if controller.computed and run_to >= controller.end_time:   # the run ends first: its end
+            controller.toggle_pause()
+            while controller.state == RUNNING:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
+        else:
+            controller.play_time = run_to
+            window.stop()
     for _ in range(5):   # let the last frame be laid out and painted
         app.processEvents()
         time.sleep(0.02)
