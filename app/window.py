@@ -23,6 +23,7 @@ from .inputs import ScenePanel
 from .plots import LivePlots
 from .preferences import Preferences
 from .readouts import Readouts
+from .sweep_dialog import SweepDialog
 from .view3d import SceneView
 
 PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
@@ -137,6 +138,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.trail_action.setChecked(True)
         self.limits_action = self._action("Limits of the &Model", self.show_limits, None,
                                           "When the model stops being valid")
+        self.sweep_action = self._action("&Sweep…", self.open_sweep, None,
+                                         "Run the scene over a grid of start values or parameters")
         self.about_action = self._action("&About RollBall", self.show_about, None, "Version and licence")
         for action in (self.start_action, self.pause_action, self.step_action, self.stop_action,
                        self.reset_action):
@@ -170,6 +173,8 @@ class MainWindow(QtWidgets.QMainWindow):
                         self.reset_action])
         view = bar.addMenu("&View")
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
+        analysis = bar.addMenu("&Analysis")
+        analysis.addAction(self.sweep_action)
         helps = bar.addMenu("&Help")
         helps.addActions([self.limits_action, self.about_action])
 
@@ -523,6 +528,20 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _follow(self, on: bool) -> None:
         self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None)
+
+    def open_sweep(self) -> SweepDialog:
+        """Analysis → Sweep…: a sweep of the current scene; a clicked run's scene is loaded here."""
+        dialog = SweepDialog(self.scene, self)
+        dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
+        dialog.startChosen.connect(self.load_start)
+        dialog.show()
+        return dialog
+
+    def load_start(self, scene: Scene) -> None:
+        """Show a scene in the fields and the view, ready to run (not saved: the document is modified)."""
+        self.panel.set_scene(scene)
+        self._use_scene(scene)
+        self.show_message("Start loaded from the sweep: press Start to run it")
 
     def show_message(self, text: str, warning: bool = False) -> None:
         self.message.setText(text)
