@@ -110,8 +110,9 @@ def _simulate(args) -> int:
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
+    warnings = "".join(f", WARNING: {note}" for note in traj.warnings())
     print(f"{args.scene}: {traj.steps} steps, status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}")
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}")
     if args.csv:
         try:
             traj.to_csv(args.csv)

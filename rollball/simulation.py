@@ -17,6 +17,8 @@ from .trajectory import Status, Trajectory
 MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
+AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
+ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in time
 
 _STATUS = {kernel.OK: Status.OK, kernel.DOES_NOT_FIT: Status.DOES_NOT_FIT,
            kernel.NONFINITE: Status.NONFINITE}
@@ -29,6 +31,18 @@ def step_count(dt: float, t_end: float) -> int:
     if n >= 1 and abs(q - n) <= 1e-9 * q:
         return n
     return max(1, math.ceil(q))
+
+
+def recording(scene: Scene, *, method: str | None = None, dt: float | None = None,
+              t_end: float | None = None, record_every: int = 0) -> dict:
+    """How to record a run to look at it: the ``Simulation`` keyword arguments that keep it to
+    about ``AUTO_ROWS`` rows (every N-th fixed step), or ``ADAPTIVE_ROWS`` evenly spaced rows for
+    an adaptive method. A ``record_every`` above 0 is the user's choice and kept."""
+    t_end = scene.duration if t_end is None else t_end
+    if get_tableau(scene.integrator.method if method is None else method).adaptive:
+        return {"record_dt": t_end / ADAPTIVE_ROWS}
+    steps = step_count(scene.integrator.dt if dt is None else dt, t_end)
+    return {"record_every": record_every or max(1, math.ceil(steps / AUTO_ROWS))}
 
 
 def _positive(name: str, value) -> float:

@@ -33,6 +33,14 @@ def test_options_override_the_scene(tmp_path, capsys):
     assert "lawson5, classic" in out.read_text()
 
 
+def test_the_summary_warns_about_accuracy_as_the_app_does(capsys):
+    assert main(["simulate", HILLS, "--method", "euler", "--classic", "--dt", "0.01", "--t-end", "3"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert "\n" not in line
+    assert "WARNING: energy changed by" in line and "WARNING: ‖RᵀR − I‖ = " in line
+    assert "R is no longer a rotation" in line
+
+
 def test_liftoff_is_a_warning_not_a_failure(capsys):
     assert main(["simulate", str(EXAMPLES_DIR / "liftoff.json")]) == 0
     assert "lift-off at t = " in capsys.readouterr().out

@@ -19,6 +19,7 @@ from ..landscape import landscape_for
 from ..reference import reference_rhs, reference_solution
 from ..scene import Scene
 from ..simulation import Simulation, initial_state
+from .. import trajectory as row_layout
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,7 @@ def _ours(scene: Scene, sweep: Sweep, value: float, t_end: float):
     row = run.rows[-1]
     if run.time != t_end:
         raise RuntimeError(f"{sweep.label} at {sweep.setting} {value:g} stopped early: {run.message()}")
-    return seconds, run.steps, row[1:3], row[12:21].reshape(3, 3)
+    return seconds, run.steps, row[row_layout.CONTACT], row[row_layout.R].reshape(3, 3)
 
 
 def _scipy(scene: Scene, value: float, t_end: float):
