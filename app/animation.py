@@ -109,3 +109,19 @@ class AnimationWriter:
     def __exit__(self, kind, value, traceback):
         if kind is not None:
             self.abort()
+
+
+def record(path: str | os.PathLike, times: np.ndarray, fps: float, size: tuple[int, int], show, frame,
+           progress=None) -> bool:
+    """Write one frame per time: ``show(t)`` puts that moment in place, ``frame()`` returns it as
+    an RGB array of ``size``. ``progress(done, total)`` is called after every frame; when it
+    returns False the export is cancelled, nothing is written and False is returned."""
+    with AnimationWriter(path, size, fps) as writer:
+        for k, t in enumerate(times):
+            show(float(t))
+            writer.add(frame())
+            if progress is not None and progress(k + 1, len(times)) is False:
+                writer.abort()
+                return False
+        writer.finish()
+    return True

@@ -2,8 +2,8 @@
 of a classic R can be seen whatever the main camera's zoom.
 
 It draws its own fine patch of the landscape around the contact point (resampled as the ball
-moves, on grid lines fixed in the world so the ground visibly passes under the ball), the
-ball, and the trail; its camera looks from the main view's direction.
+moves, with darker lines fixed in the world one ball radius apart, so the ground visibly passes
+under the ball), the ball, and the trail; its camera looks from the main view's direction.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from .view3d import BACKGROUND, TRAIL_COLOR, ball_mesh, ball_transform, surface_
 PATCH_RADII = 5.0      # the patch reaches this many ball radii either side of the contact point
 PATCH_CELLS = 40       # grid cells per side of the patch
 DISTANCE_RADII = 9.0   # camera distance from the ball's centre
+LINE_EVERY = 5         # a darker grid line every this many cells (a ball radius apart)
 
 
 class CloseUp(gl.GLViewWidget):
@@ -29,12 +30,12 @@ class CloseUp(gl.GLViewWidget):
         self.landscape = None
         self.radius = 0.1
         self.z_span = (0.0, 1.0)
-        self.patch = gl.GLSurfacePlotItem(shader="shaded", smooth=True, drawEdges=True,
-                                          edgeColor=(0.0, 0.0, 0.0, 0.35), glOptions="opaque")
+        self.patch = gl.GLSurfacePlotItem(shader="shaded", smooth=True, glOptions="opaque")
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
         self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=4.0, antialias=True, mode="line_strip")
         for item in (self.patch, self.ball, self.trail):
             self.addItem(item)
+        self.patch.setVisible(False)   # until it has been sampled
         self._patch_origin = None
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)  # the main view keeps the mouse
 
@@ -71,5 +72,10 @@ class CloseUp(gl.GLViewWidget):
         d = self.landscape.evaluate(xs, ys)
         z = d[0]
         colors = surface_colors(z, np.nan_to_num(fit_ratio(d, self.radius), nan=0.0), self.z_span)
+        # darker lines fixed in the world, every LINE_EVERY cells: the ground visibly passes by
+        ix, iy = np.meshgrid(origin[0] + np.arange(PATCH_CELLS + 1), origin[1] + np.arange(PATCH_CELLS + 1),
+                             indexing="ij")
+        colors[(ix % LINE_EVERY == 0) | (iy % LINE_EVERY == 0), :3] *= 0.55
         finite = np.isfinite(z)
         self.patch.setData(x=x, y=y, z=np.where(finite, z, z[finite].min() if finite.any() else 0.0), colors=colors)
+        self.patch.setVisible(True)

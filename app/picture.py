@@ -25,6 +25,15 @@ def caption_text(scene: Scene, t: float) -> str:
     return f"z = {scene.landscape}   ·   {stepping}   ·   t = {t:.3f} s"
 
 
+def caption_pixels(width: int) -> int:
+    return max(11, round(CAPTION_FRACTION * width))
+
+
+def caption_height(width: int) -> int:
+    """The height of the caption bar under a picture ``width`` pixels wide."""
+    return 2 * caption_pixels(width)
+
+
 def render_view(view, size: tuple[int, int]) -> QtGui.QImage:
     """A GL view rendered off screen at ``size`` (width, height) with its current camera."""
     bgra = view.renderToArray((int(size[0]), int(size[1])))
@@ -39,8 +48,8 @@ def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
     corner; a caption bar under it; the plots widget rendered below at the same width."""
     width, height = map(int, size)
     picture = render_view(view, (width, height))
-    text_px = max(11, round(CAPTION_FRACTION * width))
-    caption_h = round(2.0 * text_px) if caption else 0
+    text_px = caption_pixels(width)
+    caption_h = caption_height(width) if caption else 0
     plots_h = round(plots.height() * width / max(1, plots.width())) if plots is not None else 0
     out = QtGui.QImage(width, height + caption_h + plots_h, QtGui.QImage.Format.Format_RGB888)
     out.fill(QtGui.QColor("white"))

@@ -96,12 +96,17 @@ class TimeSlider(QtWidgets.QWidget):
         self.slider = MarkedSlider()
         self.slider.setObjectName("timeSlider")
         self.slider.setToolTip("Drag to show any moment; ←/→ by frame, Home/End")
+        self.events = QtWidgets.QLabel(objectName="events")
+        self.events.setTextFormat(QtCore.Qt.TextFormat.RichText)
+        self.events.setToolTip("Click a time to show that moment")
+        self.events.linkActivated.connect(lambda href: self.seeked.emit(float(href)))
         self.label = QtWidgets.QLabel(objectName="timeLabel")
         self.label.setMinimumWidth(150)
         self.label.setAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
         layout = QtWidgets.QHBoxLayout(self)
         layout.setContentsMargins(6, 0, 6, 0)
         layout.addWidget(self.slider, 1)
+        layout.addWidget(self.events)
         layout.addWidget(self.label)
         self.t_end = 0.0
         self.slider.valueChanged.connect(self._moved)
@@ -112,7 +117,7 @@ class TimeSlider(QtWidgets.QWidget):
     def set_span(self, t_end: float) -> None:
         """The run's time span [0, t_end] (0: nothing to show; the slider is disabled)."""
         self.t_end = t_end
-        self.slider.markers = []
+        self.set_markers([])
         self.set_available(0.0)
         self.set_time(0.0)
 
@@ -126,8 +131,11 @@ class TimeSlider(QtWidgets.QWidget):
         self.slider.update()
 
     def set_markers(self, markers: list[Marker]) -> None:
+        """Events on the slider, and as links beside it."""
         self.slider.markers = [(self._position(m.time), m) for m in markers]
         self.slider.update()
+        self.events.setText("Go to: " + " · ".join(f'<a href="{m.time!r}">{m.text}</a>' for m in markers)
+                            if markers else "")
 
     def set_time(self, t: float) -> None:
         """Show time t (no ``seeked``)."""

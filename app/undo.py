@@ -45,13 +45,14 @@ def describe(old: Scene, new: Scene) -> str:
 
 
 class SceneChange(QtGui.QUndoCommand):
-    """From scene ``old`` to ``new`` through ``show(scene)``; pushed after the change was made,
-    so the first ``redo`` (which ``QUndoStack.push`` calls) does nothing."""
+    """From scene ``old`` to ``new`` through ``show(scene)``. ``applied``: the change was already
+    made (a field edit), so the first ``redo``, which ``QUndoStack.push`` calls, does nothing."""
 
-    def __init__(self, show: Callable[[Scene], None], old: Scene, new: Scene, text: str | None = None):
+    def __init__(self, show: Callable[[Scene], None], old: Scene, new: Scene, text: str | None = None,
+                 applied: bool = True):
         super().__init__(text or describe(old, new))
         self.show, self.old, self.new = show, old, new
-        self._done = True
+        self._done = applied
 
     def redo(self) -> None:
         if self._done:
