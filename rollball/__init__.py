@@ -8,6 +8,8 @@ from .scene import Scene, SceneError  # noqa: E402
 from .simulation import Simulation, simulate  # noqa: E402
 from .tableaus import METHODS, TABLEAUS, Tableau, get_tableau  # noqa: E402
 from .trajectory import COLUMNS, Status, Trajectory, read_csv  # noqa: E402
+from .comparison import Comparison, RunSpec, compare, parse_runs  # noqa: E402
 
-__all__ = ["COLUMNS", "FormulaError", "Landscape", "METHODS", "Scene", "SceneError", "Simulation",
-           "Status", "TABLEAUS", "Tableau", "Trajectory", "get_tableau", "parse_formula", "read_csv", "simulate"]
+__all__ = ["COLUMNS", "Comparison", "FormulaError", "Landscape", "METHODS", "RunSpec", "Scene", "SceneError",
+           "Simulation", "Status", "TABLEAUS", "Tableau", "Trajectory", "compare", "get_tableau", "parse_formula",
+           "parse_runs", "read_csv", "simulate"]
