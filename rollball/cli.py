@@ -105,17 +105,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _simulate(args) -> int:
+def _load_scene(text: str):
+    """(the scene that SCENE names, None), or (None, a one-line error)."""
     from .scene import Scene
+
+    try:
+        return Scene.load(scene_path(text)), None
+    except FileNotFoundError as e:
+        return None, str(e)
+    except (SceneError, OSError) as e:
+        return None, f"{text}: {e.strerror if isinstance(e, OSError) and e.strerror else e}"
+
+
+def _simulate(args) -> int:
     from .simulation import simulate
     from .trajectory import Status
 
-    try:
-        scene = Scene.load(scene_path(args.scene))
-    except FileNotFoundError as e:
-        return _fail(str(e))
-    except (SceneError, OSError) as e:
-        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    scene, error = _load_scene(args.scene)
+    if error:
+        return _fail(error)
     try:
         traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
                         t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
@@ -138,12 +146,10 @@ def _compare(args) -> int:
     from tqdm import tqdm
 
     from .comparison import NothingToCompare, compare, parse_runs
-    from .scene import Scene
 
-    try:
-        scene = Scene.load(args.scene)
-    except (SceneError, OSError) as e:
-        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    scene, error = _load_scene(args.scene)
+    if error:
+        return _fail(error)
     try:
         runs = None if args.runs is None else parse_runs(args.runs)
     except ValueError as e:

@@ -465,6 +465,7 @@ class Comparison:
     reference: Reference
     runs: list[RunResult] = field(default_factory=list)
     orders: list[Order] = field(default_factory=list)
+    reference_trajectory: Trajectory | None = field(default=None, repr=False)  # rows at the common times
 
     @property
     def specs(self) -> list[RunSpec]:
@@ -565,4 +566,4 @@ def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_e
         results += ladder(runner, spec, lambda text, n: report(first + min(n, effort.max_points - 1), text))
     report(total, "done")
     orders = [fit_order(spec, results, reference) for spec in specs if spec.fixed_step]
-    return Comparison(scene, float(t_end), record_dt, bool(quick), machine(), reference, results, orders)
+    return Comparison(scene, float(t_end), record_dt, bool(quick), machine(), reference, results, orders, ref_traj)

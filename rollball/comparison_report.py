@@ -9,7 +9,8 @@ import os
 import platform
 from pathlib import Path
 
-from .comparison import ERROR_UNITS, ERRORS, FLOOR_FACTOR, Comparison, RunResult, RunSpec, setting_text
+from .comparison import (ASYMPTOTIC, ERROR_UNITS, ERRORS, FLOOR_FACTOR, TARGETS, Comparison, RunResult, RunSpec,
+                         setting_text)
 from .files import atomic_write_bytes, atomic_write_text
 
 
@@ -33,8 +34,6 @@ def _number(value: float | None, fmt: str = ".2e") -> str:
 def _scene_lines(cmp: Comparison) -> list[str]:
     s = cmp.scene
     lines = [f"- landscape: `z = {s.landscape}`"]
-    if s.description:
-        lines.append(f"- {s.description}")
     lines += [f"- ball: radius {s.ball.radius:g} m, mass {s.ball.mass:g} kg; gravity {s.gravity:g} m/s²",
               f"- start: (x, y) = ({s.start.x:g}, {s.start.y:g}) m, (vx, vy) = ({s.start.vx:g}, "
               f"{s.start.vy:g}) m/s, spin {s.start.spin:g} rad/s",
@@ -59,12 +58,10 @@ def _table(cmp: Comparison, spec: RunSpec) -> list[str]:
     return lines
 
 
-def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
+def findings(cmp: Comparison, heading: str = "##") -> list[str]:
+    """The reference, the fastest runs and the fitted orders, as Markdown lines."""
     ref = cmp.reference
-    title = cmp.scene.description or cmp.scene.landscape
-    lines = [f"# Speed against error: {title}", "", *_scene_lines(cmp), "",
-             f"Machine: {cmp.machine}. Mode: {'quick' if cmp.quick else 'full'}.", "",
-             "## Reference", "",
+    lines = [f"{heading} Reference", "",
              f"{ref.method} at rtol = {ref.rtol:.0e}, atol = {ref.atol:.0e} ({ref.steps} steps, "
              f"{ref.seconds * 1e3:.3g} ms). Its own error, against a run at a 10× tighter tolerance: "
              + ", ".join(f"{k} {_number(ref.error_estimates[k], '.1e')}" for k in ERRORS) + ". "
@@ -72,20 +69,28 @@ def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
     if ref.status != "ok":
         lines += ["", f"The reference stopped early ({ref.message}): every run is compared up to "
                       f"t = {cmp.t_end:g} s."]
-    lines += ["", "## Fastest runs", "", f"Errors are maxima over the run; cost is compute time (median of "
-              f"repeats for short runs). Ranked by the larger of the contact-point and orientation errors.", "",
-              "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
-    for target in (1e-6, 1e-10):
+    lines += ["", f"{heading} Fastest runs", "",
+              "Errors are maxima over the run at the common times; cost is compute time (median of "
+              "repeats for short runs). Ranked by the larger of the contact-point (m) and orientation "
+              "errors.", "", "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
+    for target in TARGETS:
         best = cmp.best(target)
         lines.append(f"| {target:.0e} | none reached it | — | — |" if best is None else
                      f"| {target:.0e} | {setting_text(best)} | {best.seconds * 1e3:.3g} | {best.steps} |")
     if cmp.orders:
-        lines += ["", "## Orders", "",
-                  "Least-squares slope of log error against log dt, over the runs that ended ok above the "
-                  "reference's floor.", "",
-                  "| run | contact point | orientation | expected |", "|---|---:|---:|---:|"]
+        lines += ["", f"{heading} Orders", "",
+                  f"Least-squares slope of log error against log dt over the runs that ended ok above the "
+                  f"reference's floor (over those with errors below {ASYMPTOTIC:g} where there are three).",
+                  "", "| run | contact point | orientation | expected |", "|---|---:|---:|---:|"]
         lines += [f"| {o.spec.label} | {_number(o.contact, '.2f')} | {_number(o.orientation, '.2f')} | "
                   f"{o.expected} |" for o in cmp.orders]
+    return lines
+
+
+def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
+    title = cmp.scene.description or cmp.scene.landscape
+    lines = [f"# Speed against error: {title}", "", *_scene_lines(cmp), "",
+             f"Machine: {cmp.machine}. Mode: {'quick' if cmp.quick else 'full'}.", "", *findings(cmp)]
     if figure:
         lines += ["", f"![error against wall time and against step size]({figure})"]
     lines += ["", "## Runs"]
@@ -94,50 +99,69 @@ def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
     return "\n".join(lines) + "\n"
 
 
-def _style(spec: RunSpec, colors: dict) -> dict:
+def style(spec: RunSpec, colors: dict) -> dict:
+    """Line style of a run spec: a colour per method; solid Munthe-Kaas, dotted classic."""
     color = colors.setdefault(spec.method, f"C{len(colors) % 10}")
     if not spec.fixed_step:
         return dict(color=color, linestyle="-", marker="s")
     return dict(color=color, linestyle="-" if spec.munthe_kaas else ":", marker="o" if spec.munthe_kaas else "x")
 
 
-def figure(cmp: Comparison) -> bytes:
-    """The PNG: contact-point error against compute time (every run spec), and orientation
-    error against step size (fixed-step specs) with the fitted slopes written on the lines."""
+def new_figure(width: float, height: float):
+    """A matplotlib Figure drawn without a display (Agg)."""
     import matplotlib
 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(11, 4.8))
-    left, right = fig.subplots(1, 2)
-    colors: dict = {}
-    floor = {key: FLOOR_FACTOR * cmp.reference.error_estimates[key] for key in ("contact", "orientation")}
-    for spec in cmp.specs:
-        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["contact"] > 0]
-        style = _style(spec, colors)
-        left.loglog([r.seconds for r in runs], [r.error["contact"] for r in runs], label=spec.label,
-                    markersize=4, **style)
-        if spec.fixed_step:
-            runs = [r for r in runs if r.error["orientation"] > 0]
-            right.loglog([r.dt for r in runs], [r.error["orientation"] for r in runs], markersize=4, **style)
-            _slope_label(right, cmp, spec, runs, style["color"])
-    right.set_ylim(top=10.0)  # a classic R far off SO(3) would squash the rest (‖R − R_ref‖_F ≤ 2√2 on it)
-    left.axhline(floor["contact"], color="0.6", linewidth=0.8, linestyle="--")
-    right.axhline(floor["orientation"], color="0.6", linewidth=0.8, linestyle="--")
-    left.set(xlabel="compute time (s)", ylabel="contact-point error, max over the run (m)",
-             title="error against time")
-    right.set(xlabel="step size dt (s)", ylabel="orientation error ‖R − R_ref‖_F, max over the run",
-              title="error against step size (fitted slopes)")
-    for ax in (left, right):
-        ax.grid(True, which="major", alpha=0.3)
-    left.legend(fontsize=7, title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
-    fig.suptitle(f"{cmp.scene.description or cmp.scene.landscape} — to t = {cmp.t_end:g} s; dashed grey: "
-                 f"{FLOOR_FACTOR:g}× the reference's own error\n{cmp.machine}", fontsize=8)
+    return Figure(figsize=(width, height))
+
+
+def png(fig) -> bytes:
     fig.tight_layout()
     out = io.BytesIO()
     fig.savefig(out, format="png", dpi=110)
     return out.getvalue()
+
+
+def draw_work_precision(ax, cmp: Comparison, colors: dict) -> None:
+    """Contact-point error against compute time, a line per run spec, the floor dashed."""
+    for spec in cmp.specs:
+        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["contact"] > 0]
+        ax.loglog([r.seconds for r in runs], [r.error["contact"] for r in runs], label=spec.label,
+                  markersize=4, **style(spec, colors))
+    ax.axhline(cmp.reference.floor("contact"), color="0.6", linewidth=0.8, linestyle="--")
+    ax.set(xlabel="compute time (s)", ylabel="contact-point error, max over the run (m)")
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def draw_orders(ax, cmp: Comparison, colors: dict) -> None:
+    """Orientation error against step size for the fixed-step specs, with the fitted slopes."""
+    for spec in (s for s in cmp.specs if s.fixed_step):
+        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["orientation"] > 0]
+        line = style(spec, colors)
+        ax.loglog([r.dt for r in runs], [r.error["orientation"] for r in runs], markersize=4, **line)
+        _slope_label(ax, cmp, spec, runs, line["color"])
+    ax.set_ylim(top=10.0)  # a classic R far off SO(3) would squash the rest (‖R − R_ref‖_F ≤ 2√2 on it)
+    ax.axhline(cmp.reference.floor("orientation"), color="0.6", linewidth=0.8, linestyle="--")
+    ax.set(xlabel="step size dt (s)", ylabel="orientation error ‖R − R_ref‖_F, max over the run")
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def figure(cmp: Comparison) -> bytes:
+    """The PNG: contact-point error against compute time (every run spec), and orientation
+    error against step size (fixed-step specs) with the fitted slopes written on the lines."""
+    fig = new_figure(11, 4.8)
+    left, right = fig.subplots(1, 2)
+    colors: dict = {}
+    draw_work_precision(left, cmp, colors)
+    draw_orders(right, cmp, colors)
+    left.set_title("error against time")
+    right.set_title("error against step size (fitted slopes)")
+    left.legend(fontsize=7, title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
+    fig.suptitle(f"{cmp.scene.description or cmp.scene.landscape} — to t = {cmp.t_end:g} s; dashed grey: "
+                 f"{FLOOR_FACTOR:g}× the reference's own error\n{cmp.machine}", fontsize=8)
+    return png(fig)
 
 
 def _slope_label(ax, cmp: Comparison, spec: RunSpec, runs: list[RunResult], color: str) -> None:
@@ -153,8 +177,8 @@ def save(cmp: Comparison, directory: Path) -> None:
     """Render all three files, then write each atomically (no half-written set on an error)."""
     text = json.dumps(cmp.to_dict(), indent=1, allow_nan=False)
     report = markdown(cmp)
-    png = figure(cmp)
+    image = figure(cmp)
     directory.mkdir(parents=True, exist_ok=True)
     atomic_write_text(directory / "compare.json", text + "\n")
     atomic_write_text(directory / "compare.md", report)
-    atomic_write_bytes(directory / "compare.png", png)
+    atomic_write_bytes(directory / "compare.png", image)
