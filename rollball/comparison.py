@@ -54,14 +54,15 @@ class Effort:
     max_points: int         # ladder points per run spec
     decades: float          # error decades between ladder points (fixed steps)
     tolerances: tuple[float, ...]
-    repeats: int            # timed repeats of a short run; their median is its cost
-    short: float            # a run shorter than this (s) is repeated
+    repeats: int            # timed repeats of a short run (at least); their median is its cost
+    short: float            # a run shorter than this (s) is repeated, as often as fits in
+    spread: float           # this many seconds (very short runs are at the mercy of other work)
 
 
 FULL = Effort(budget=12.0, max_points=12, decades=1.0,
-              tolerances=tuple(10.0 ** -k for k in range(3, 13)), repeats=5, short=0.2)
+              tolerances=tuple(10.0 ** -k for k in range(3, 13)), repeats=5, short=0.2, spread=0.05)
 QUICK = Effort(budget=2.0, max_points=6, decades=2.0,
-               tolerances=(1e-3, 1e-6, 1e-9, 1e-12), repeats=3, short=0.05)
+               tolerances=(1e-3, 1e-6, 1e-9, 1e-12), repeats=3, short=0.05, spread=0.02)
 
 
 class Cancelled(Exception):
@@ -365,7 +366,8 @@ class _Runner:
         traj = run.trajectory()
         if seconds < self.effort.short and traj.status is Status.OK:
             times = []
-            for _ in range(self.effort.repeats):
+            repeats = max(self.effort.repeats, min(100, math.ceil(self.effort.spread / max(seconds, 1e-6))))
+            for _ in range(repeats):
                 again = Simulation(self.scene, t_end=self.t_end, **options)
                 times.append(_advance(again, self.cancel))
             seconds = float(np.median(times))

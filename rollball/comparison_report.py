@@ -169,8 +169,9 @@ def _slope_label(ax, cmp: Comparison, spec: RunSpec, runs: list[RunResult], colo
     if order is None or order.orientation is None or not runs:
         return
     middle = runs[len(runs) // 2]
-    ax.annotate(f"slope {order.orientation:.2f}", (middle.dt, middle.error["orientation"]), color=color,
-                fontsize=8, xytext=(4, -10 if spec.munthe_kaas else 4), textcoords="offset points")
+    ax.annotate(f"{order.orientation:.2f}", (middle.dt, middle.error["orientation"]), color=color,
+                fontsize=8, xytext=(6, -12) if spec.munthe_kaas else (-28, 6), textcoords="offset points",
+                bbox=dict(boxstyle="round,pad=0.15", facecolor="white", edgecolor="none", alpha=0.8))
 
 
 def save(cmp: Comparison, directory: Path) -> None:
