@@ -353,6 +353,12 @@ class _Runner:
             return dict(method=spec.method, munthe_kaas=spec.munthe_kaas, dt=dt, record_every=every)
         return dict(method=spec.method, rtol=setting, atol=setting * ATOL_PER_RTOL, record_dt=self.record_dt)
 
+    def cost(self, seconds: float) -> float:
+        """What measuring a run of this many seconds costs: the run, and timed repeats when short."""
+        if seconds >= self.effort.short:
+            return seconds
+        return seconds + max(self.effort.repeats * seconds, min(self.effort.spread, 100 * seconds))
+
     def warm_up(self, spec: RunSpec) -> None:
         """A short run, so that compiling is not timed."""
         setting = self.record_dt if spec.fixed_step else 1e-3
@@ -393,15 +399,14 @@ def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunRes
         report(f"{spec} dt {dt:.3g}", len(points))
         start = time.perf_counter()
         result = runner.run(spec, dt)
-        took = time.perf_counter() - start
-        spent += took
+        spent += time.perf_counter() - start
         contact = result.error["contact"]
         if not points and not (result.ok and contact <= CEILING):  # still searching
             shrink = 0.25
             if result.ok and contact > 0:
                 shrink = min(0.5, max(1e-3, 0.8 * (CEILING / contact) ** (1.0 / order)))
             smaller = runner.finer(dt, 1 / shrink)
-            if spent + took * dt / smaller > effort.budget or smaller < runner.t_end * 1e-9:
+            if spent + runner.cost(result.seconds * dt / smaller) > effort.budget or smaller < runner.t_end * 1e-9:
                 return [result]  # the ladder never started: show how the last try ended
             dt = smaller
             continue
@@ -409,7 +414,7 @@ def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunRes
         if not result.ok or result.below_reference_floor or len(points) >= effort.max_points:
             return points
         finer = runner.finer(dt, ratio)
-        if spent + took * dt / finer > effort.budget:
+        if spent + runner.cost(result.seconds * dt / finer) > effort.budget:
             return points
         dt = finer
 
@@ -422,11 +427,10 @@ def _tolerance_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[Ru
         report(f"{spec} rtol {rtol:.0e}", len(points))
         start = time.perf_counter()
         result = runner.run(spec, rtol)
-        took = time.perf_counter() - start
-        spent += took
+        spent += time.perf_counter() - start
         points.append(result)
         # the next tolerance is 10-1000x tighter: its cost grows by a few times at most
-        if not result.ok or result.below_reference_floor or spent + 4 * took > runner.effort.budget:
+        if not result.ok or result.below_reference_floor or spent + runner.cost(4 * result.seconds) > runner.effort.budget:
             break
     return points
 
