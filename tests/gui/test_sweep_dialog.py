@@ -46,6 +46,8 @@ def test_a_sweep_runs_in_the_dialog_and_a_click_loads_its_start(qtbot, window):
     assert window.scene.start.spin == -2.0
     assert window.panel.numbers["start.vx"].text() == "0.5"
     assert window.controller.state == READY and window.start_action.isEnabled()
+    window.undo_action.trigger()                                  # the loaded run is one undo step
+    assert window.scene.start.vx == 0.0
     dialog.close()
 
 
