@@ -1,8 +1,8 @@
 """Start the app: ``python -m app [SCENE]`` or the installed ``rollball-app``.
 
-With ``--screenshot PNG`` the app opens the scene, optionally runs it to ``--run-to T`` (as
-fast as computed), saves a picture of the window and exits: 0, or 2 with a one-line message
-when it cannot (DESIGN §9).
+Headless (DESIGN §9): with ``--screenshot PNG`` the app opens the scene, optionally runs it to
+``--run-to T`` (as fast as computed), saves a picture of the window and exits; with
+``--record VIDEO`` it records the playback. Exit 0, or non-zero with a one-line message.
 """
 
 from __future__ import annotations
@@ -32,34 +32,20 @@ def prepare_qt() -> None:
         QtGui.QSurfaceFormat.setDefaultFormat(fmt)
 
 
-def _size(text: str) -> tuple[int, int]:
-    try:
-        width, height = (int(part) for part in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a size like 1280x860: {text!r}") from None
-    if not (320 <= width <= 8192 and 240 <= height <= 8192):
-        raise argparse.ArgumentTypeError(f"width 320 to 8192 and height 240 to 8192 pixels: {text!r}")
-    return width, height
-
-
-def _time(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a finite time greater than 0: {text!r}")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
     parser.add_argument("--screenshot", metavar="PNG",
                         help="save a picture of the window to PNG and exit (needs a display, e.g. xvfb-run)")
-    parser.add_argument("--run-to", type=_time, metavar="T",
-                        help="with --screenshot: first run the scene to time T (as fast as computed)")
-    parser.add_argument("--size", type=_size, metavar="WxH", help="window size in pixels, e.g. 1280x860")
+    parser.add_argument("--run-to", type=_positive, metavar="T",
+                        help="with --screenshot: the picture at time T (run as fast as computed); "
+                             "with --record: record from 0 to T")
+    parser.add_argument("--record", metavar="VIDEO", help="record the playback from 0 to T as .mp4 or .gif "
+                        "and exit")
+    parser.add_argument("--fps", type=_positive, default=None, metavar="N",
+                        help="frames per simulated second of --record (default 30)")
+    parser.add_argument("--size", type=_size, metavar="WxH", help="the window's size for --screenshot "
+                        "(default 1280x860), the frames' for --record (default: the 3-D view's size)")
     return parser
 
 
@@ -67,8 +53,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     fail = lambda message: parser.exit(2, f"rollball-app: error: {message}\n")  # noqa: E731
-    if args.run_to is not None and not args.screenshot:
-        fail("--run-to needs --screenshot")
+    if args.screenshot and args.record:
+        fail("--screenshot or --record, not both")
+    if args.run_to is not None and not (args.screenshot or args.record):
+        fail("--run-to needs --screenshot or --record")
+    if args.record is not None:
+        from .animation import DEFAULT_FPS, MAX_FPS, format_of
+
+        try:
+            format_of(args.record)
+        except ValueError as error:
+            parser.error(str(error))
+        args.fps = args.fps or DEFAULT_FPS
+        if args.fps > MAX_FPS:
+            parser.error(f"--fps: at most {MAX_FPS}")
+    elif args.fps is not None:
+        parser.error("--fps needs --record")
 
     from rollball import Scene, SceneError
     from rollball.examples import DEFAULT_EXAMPLE, scene_path
@@ -82,9 +82,9 @@ def main(argv: list[str] | None = None) -> int:
             Scene.load(path)   # refuse a bad scene here, in one line, not in a dialog
         except (SceneError, OSError) as error:
             fail(f"{path}: {error.strerror if isinstance(error, OSError) and error.strerror else error}")
-    if args.screenshot and sys.platform.startswith("linux") and not (
-            os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.environ.get("QT_QPA_PLATFORM")):
-        fail("no display to draw on: run under xvfb-run, or set DISPLAY")
+        if sys.platform.startswith("linux") and not (
+                os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.environ.get("QT_QPA_PLATFORM")):
+            fail("no display to draw on: run under xvfb-run, or set DISPLAY")
 
     from PySide6 import QtCore, QtWidgets
 
@@ -96,23 +96,72 @@ def main(argv: list[str] | None = None) -> int:
     from .preferences import Preferences
     from .window import MainWindow
 
-    if not args.screenshot:
-        window = MainWindow()
-        if args.size:
-            window.resize(*args.size)
-        named_file = args.scene is not None and str(path) == args.scene   # not an example's name
-        window.open_scene(path, remember=named_file)
-        window.show()
-        return app.exec()
+    if args.screenshot:
+        with tempfile.TemporaryDirectory(prefix="rollball-app-") as folder:   # the user's preferences stay
+            settings = QtCore.QSettings(str(Path(folder) / "preferences.ini"), QtCore.QSettings.Format.IniFormat)
+            window = MainWindow(Preferences(settings))
+            error = screenshot(window, path, Path(args.screenshot), args.run_to, args.size or (1280, 860))
+            window.document.saved_scene = window.scene   # nothing to ask on closing
+            window.close()
+        if error:
+            fail(error)
+        return 0
 
-    with tempfile.TemporaryDirectory(prefix="rollball-app-") as folder:   # the user's preferences stay
-        settings = QtCore.QSettings(str(Path(folder) / "preferences.ini"), QtCore.QSettings.Format.IniFormat)
-        window = MainWindow(Preferences(settings))
-        error = screenshot(window, path, Path(args.screenshot), args.run_to, args.size or (1280, 860))
-        window.document.saved_scene = window.scene   # nothing to ask on closing
-        window.close()
-    if error:
-        fail(error)
+    window = MainWindow()
+    named_file = args.scene is not None and str(path) == args.scene   # not an example's name
+    window.open_scene(path, remember=named_file and args.record is None)
+    window.show()
+    if args.record is not None:
+        return record(app, window, args)
+    return app.exec()
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number, not {text!r}")
+    return value
+
+
+def _size(text: str) -> tuple[int, int]:
+    width, _, height = text.lower().partition("x")
+    if not (width.isdigit() and height.isdigit() and 16 <= int(width) <= 8192 and 16 <= int(height) <= 8192):
+        raise argparse.ArgumentTypeError(f"size as WIDTHxHEIGHT in pixels, 16 to 8192 each, not {text!r}")
+    return int(width), int(height)
+
+
+def wait_until(app, done) -> None:
+    """Serve events until ``done()`` holds."""
+    while not done():
+        app.processEvents()
+        time.sleep(0.005)
+
+
+def record(app, window, args) -> int:
+    """Headless: run the scene (to --run-to T), record its playback from 0 to T, exit."""
+    from dataclasses import replace
+
+    from .controller import FINISHED
+
+    scene = window.scene
+    if scene is None:
+        print("rollball-app: error: no scene to record", file=sys.stderr)
+        return 1
+    if args.run_to is not None and args.run_to != scene.duration:
+        window.show_scene(replace(scene, duration=args.run_to))
+    window.speed.setCurrentIndex(window.speed.count() - 1)   # as fast as computed
+    window.start()
+    wait_until(app, lambda: window.controller.state == FINISHED)
+    try:
+        window.export_animation(Path(args.record), fps=args.fps, size=args.size)
+    except (OSError, ValueError) as error:
+        print(f"rollball-app: error: {args.record}: {getattr(error, 'strerror', None) or error}", file=sys.stderr)
+        return 1
+    print(window.message.text())
+    window.document.saved_scene = window.scene   # nothing to ask on the way out
     return 0
 
 
@@ -149,8 +198,7 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
             return problems[0]
         if controller.computed and run_to >= controller.end_time:   # the run ends first: its end
             controller.toggle_pause()
-            while controller.state == RUNNING:
-                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
+            wait_until(app, lambda: controller.state != RUNNING)
         else:
             controller.play_time = run_to
             window.stop()

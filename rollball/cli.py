@@ -110,6 +110,20 @@ def build_parser() -> argparse.ArgumentParser:
                             "(needs pip install 'rollball[dask]')")
     sweep.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
 
+    cmp = commands.add_parser(
+        "compare", help="speed against error of every method on a scene",
+        description="Run every method (or the --runs given) over a ladder of step sizes or "
+                    "tolerances on a scene, measure each run's error against a tight reference and "
+                    "its compute time, fit the orders, and write compare.json, compare.md and "
+                    "compare.png. Ends with the fastest run for errors of 1e-6 and 1e-10.")
+    cmp.add_argument("scene", metavar="SCENE.json", help="scene file (or an example's name)")
+    cmp.add_argument("--runs", metavar="SPECS",
+                     help="comma-separated METHOD or METHOD/classic (default: every method, the "
+                          "fixed-step ones Munthe-Kaas and classic), e.g. euler/classic,rk4,dopri5")
+    cmp.add_argument("--t-end", type=_positive_float, metavar="T", help="end time (s; default: the scene's)")
+    cmp.add_argument("--quick", action="store_true", help="fewer, shorter ladders (under a minute)")
+    cmp.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
+
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
 
@@ -234,6 +248,43 @@ def _sweep(args) -> int:
     return EXIT_OK
 
 
+def _compare(args) -> int:
+    from tqdm import tqdm
+
+    from .comparison import NothingToCompare, compare, parse_runs
+    from .scene import Scene
+
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
+    try:
+        runs = None if args.runs is None else parse_runs(args.runs)
+    except ValueError as e:
+        return _fail(str(e))
+    with tqdm(total=1, file=sys.stderr, unit="run", dynamic_ncols=True, leave=False) as bar:
+        def progress(done: int, total: int, text: str) -> None:
+            bar.total = total
+            bar.n = done
+            bar.set_description_str(text, refresh=False)
+            bar.refresh()
+
+        try:
+            result = compare(scene, runs=runs, t_end=args.t_end, quick=args.quick, progress=progress)
+        except NothingToCompare as e:
+            print(f"rollball: {args.scene}: {e}", file=sys.stderr)
+            return EXIT_STOPPED
+        except ValueError as e:  # includes FormulaError
+            return _fail(str(e))
+    try:
+        result.save(args.out)
+    except OSError as e:
+        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+    stopped = sum(not r.ok for r in result.runs)
+    note = f"; {stopped} runs stopped early (see compare.md)" if stopped else ""
+    print(f"{args.scene}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
+    return EXIT_OK
+
+
 def _examples() -> int:
     examples = example_scenes()
     width = max(len(path.stem) for path, _ in examples)
@@ -271,6 +322,12 @@ def main(argv: list[str] | None = None) -> int:
             return _simulate(args)
         except KeyboardInterrupt:
             print("rollball: interrupted", file=sys.stderr)
+            return 130
+    if args.command == "compare":
+        try:
+            return _compare(args)
+        except KeyboardInterrupt:
+            print("rollball: interrupted (nothing written)", file=sys.stderr)
             return 130
     if args.command == "sweep":
         return _sweep(args)
