@@ -89,7 +89,7 @@ def test_the_command_line_runs_a_scene_and_saves_the_window(tmp_path):
 @pytest.mark.parametrize("args, words", [
     (["nowhere", "--screenshot", "x.png"], "no such scene file or example"),
     (["hills", "--screenshot", "/nonexistent-folder/x.png"], "cannot write"),
-    (["hills", "--size", "12"], "not a size"),
+    (["hills", "--size", "12"], "WIDTHxHEIGHT"),
     (["hills", "--run-to", "1"], "--run-to needs --screenshot"),
 ])
 def test_the_command_line_fails_in_one_line(tmp_path, args, words):
