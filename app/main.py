@@ -23,7 +23,20 @@ def prepare_qt() -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
+    parser.add_argument("--compare", metavar="SPECS",
+                        help="open in compare mode with these runs, e.g. euler/classic,rk4/classic,rk4")
     args = parser.parse_args(argv)
+    if args.compare is not None:
+        from rollball import parse_runs
+
+        from .compare_runs import MAX_RUNS
+
+        try:
+            specs = parse_runs(args.compare)
+        except ValueError as error:
+            parser.exit(2, f"rollball-app: error: --compare: {error}\n")
+        if len(specs) > MAX_RUNS:
+            parser.exit(2, f"rollball-app: error: --compare: at most {MAX_RUNS} runs, not {len(specs)}\n")
 
     from rollball.examples import DEFAULT_EXAMPLE, scene_path
 
@@ -44,5 +57,9 @@ def main(argv: list[str] | None = None) -> int:
     window = MainWindow()
     named_file = args.scene is not None and str(path) == args.scene   # not an example's name
     window.open_scene(path, remember=named_file)
+    if args.compare is not None:
+        from .compare_runs import CompareRun
+
+        window.enter_compare([CompareRun.of(spec, window.scene) for spec in specs])
     window.show()
     return app.exec()
