@@ -49,6 +49,34 @@ class Status(str, enum.Enum):
         return self.value
 
 
+class Reason(str, enum.Enum):
+    """Why the physics stopped a run (``Failure.reason``); ``Failure.value`` says how far."""
+
+    NO_FIT = "no_fit"                    # r·κ ≥ 1 for a principal curvature κ (value: r·κ)
+    KINK = "kink"                        # a kink or cusp of a valley, seen by the secant
+                                         # curvature of a step (value: r times it)
+    START_UNDEFINED = "start_undefined"  # the landscape cannot be evaluated at the start point
+    START_OVERFLOW = "start_overflow"    # the landscape can, but the initial state overflows
+    UNDEFINED = "undefined"              # the state became non-finite: the landscape cannot be
+                                         # evaluated there, or the step is too large
+    ORIENTATION_OVERFLOW = "orientation_overflow"  # only R overflowed (value: 1 classic, 0 Munthe-Kaas)
+    STEP_UNDERFLOW = "step_underflow"    # the adaptive step fell below round-off (value: the step)
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Where and why the physics stopped a run: the facts behind ``Trajectory.message``."""
+
+    reason: Reason
+    time: float   # s
+    x: float      # contact point (m)
+    y: float
+    value: float  # what crossed its limit (see Reason); nan where nothing is measured
+
+
 @dataclass
 class Trajectory:
     """Recorded rows (shape (n, 23)) and the facts of the run that produced them."""
@@ -57,7 +85,10 @@ class Trajectory:
     status: Status = Status.OK
     message: str = ""
     liftoff_time: float | None = None
-    steps: int = 0
+    steps: int = 0          # accepted steps
+    rejected: int = 0       # steps tried and rejected by the error control
+    evaluations: int = 0    # right-hand-side evaluations, rejected tries included
+    failure: Failure | None = None  # set when the physics stopped the run
     mass: float = 1.0
     radius: float = 0.1
     gravity: float = 9.81

@@ -65,7 +65,7 @@ def step_costs(repeats: int, steps: int) -> dict:
             _ns_per_step(scene, **{**options, "t_end": 0.01})
             label = f"{name} {'MK' if mk else 'classic'}"
             costs[label] = float(np.median([_ns_per_step(scene, **options) for _ in range(repeats)]))
-    options = dict(method="adaptive", rtol=1e-8, atol=1e-11, t_end=200.0, record_dt=1.0)
+    options = dict(method="dopri5", rtol=1e-8, atol=1e-11, t_end=200.0, record_dt=1.0)
     _ns_per_step(scene, **{**options, "t_end": 0.01})
     costs["adaptive (rtol 1e-8)"] = float(np.median([_ns_per_step(scene, **options) for _ in range(repeats)]))
     return costs

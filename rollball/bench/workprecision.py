@@ -54,7 +54,7 @@ def sweeps(quick: bool) -> list[Sweep]:
     result = [Sweep(f"{name} {'MK' if mk else 'classic'}", name, mk, "dt", values)
               for name, values in dts.items() for mk in (True, False)]
     tolerances = (1e-4, 1e-7, 1e-10) if quick else tuple(10.0 ** -k for k in range(3, 12))
-    result.append(Sweep("adaptive (DP5(4) MK)", "adaptive", True, "rtol", tolerances))
+    result.append(Sweep("adaptive (DP5(4) MK)", "dopri5", True, "rtol", tolerances))
     scipy_tolerances = (1e-4, 1e-7) if quick else tuple(10.0 ** -k for k in range(3, 11))
     result.append(Sweep("scipy DOP853", "scipy-dop853", False, "rtol", scipy_tolerances))
     return result

@@ -110,14 +110,14 @@ def test_a_start_point_outside_the_domain_says_so(qtbot, window):
 
 
 def test_the_adaptive_method_runs_with_tolerances_and_exact_row_times(qtbot, window):
-    button = window.panel.findChild(QtWidgets.QRadioButton, "method.adaptive")
+    button = window.panel.findChild(QtWidgets.QRadioButton, "method.dopri5")
     qtbot.mouseClick(window.panel.munthe_kaas, QtCore.Qt.MouseButton.LeftButton)  # off: classic
     qtbot.mouseClick(button, QtCore.Qt.MouseButton.LeftButton)
     assert window.panel.munthe_kaas.isChecked() and not window.panel.munthe_kaas.isEnabled()
     assert window.panel.numbers["integrator.rtol"].isEnabled()
     set_field(qtbot, window, "integrator.rtol", "1e-9")
     set_field(qtbot, window, "duration", "2")
-    assert window.scene.integrator.method == "adaptive" and window.scene.integrator.rtol == 1e-9
+    assert window.scene.integrator.method == "dopri5" and window.scene.integrator.rtol == 1e-9
     run_to_end(qtbot, window)
     t = window.controller.buffer.t
     assert len(t) == 10_001 and t[-1] == 2.0
