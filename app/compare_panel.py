@@ -20,7 +20,7 @@ class RunRow(QtWidgets.QWidget):
     shownChanged = QtCore.Signal(object, bool)
     settingWanted = QtCore.Signal(object)     # the method's kind changed: give it a default setting
 
-    def __init__(self, run: CompareRun, color: str, parent=None):
+    def __init__(self, run: CompareRun, color: str, number: int, parent=None):
         super().__init__(parent)
         layout = QtWidgets.QHBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
@@ -39,7 +39,7 @@ class RunRow(QtWidgets.QWidget):
         for widget in (self.swatch, self.method, self.munthe_kaas, self.setting, self.shown, remove):
             layout.addWidget(widget)
         layout.setStretch(1, 1)
-        self.set_color(color)
+        self.set_color(color, number)
         self.set_run(run)
         self.method.currentIndexChanged.connect(self._method_changed)
         self.munthe_kaas.toggled.connect(self.changed)
@@ -47,8 +47,9 @@ class RunRow(QtWidgets.QWidget):
         self.shown.toggled.connect(lambda on: self.shownChanged.emit(self, on))
         remove.clicked.connect(lambda: self.removed.emit(self))
 
-    def set_color(self, color: str) -> None:
-        self.swatch.setStyleSheet(f"color: {color}; font-size: 16pt;")
+    def set_color(self, color: str, number: int) -> None:
+        self.swatch.setText(f"{number} ●")
+        self.swatch.setStyleSheet(f"color: {color}; font-weight: bold;")
 
     def set_run(self, run: CompareRun) -> None:
         self.method.blockSignals(True)
@@ -135,7 +136,6 @@ class ComparePanel(QtWidgets.QWidget):
         self.compare_button = QtWidgets.QPushButton("Compare (F5)", objectName="compare")
         self.compare_button.clicked.connect(self.compareRequested)
         layout.addWidget(self.compare_button)
-        layout.addStretch(1)
 
     def set_scene(self, scene: Scene) -> None:
         """The scene whose step and tolerance new runs take."""
@@ -162,7 +162,7 @@ class ComparePanel(QtWidgets.QWidget):
             self._changed()
 
     def _add_row(self, run: CompareRun) -> None:
-        row = RunRow(run, COLORS[len(self.rows)])
+        row = RunRow(run, COLORS[len(self.rows)], len(self.rows) + 1)
         row.changed.connect(self._changed)
         row.removed.connect(self._remove)
         row.settingWanted.connect(self._default_setting)
@@ -179,7 +179,7 @@ class ComparePanel(QtWidgets.QWidget):
         self.row_box.removeWidget(row)
         row.deleteLater()
         for i, other in enumerate(self.rows):
-            other.set_color(COLORS[i])
+            other.set_color(COLORS[i], i + 1)
         self._changed()
 
     def _changed(self) -> None:

@@ -1,6 +1,6 @@
-"""Compare mode's plots and table: each run's true error against the reference over time
-(contact point in m, relative energy, ‖RᵀR − I‖; log scales), one legend naming the runs and
-the reference, and the summary of every run at the end.
+"""Compare mode's plots: each run's true error against the reference over time (contact point
+in m, relative energy; log scales) and its ‖RᵀR − I‖, with one legend naming the runs and the
+reference with its own error estimate.
 """
 
 from __future__ import annotations
@@ -13,8 +13,6 @@ from .plots import FLOOR, MAX_POINTS
 
 PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
           ("orthogonality", "‖RᵀR − I‖"))
-SUMMARY = ("Run", "Status", "Error at end (m)", "Max error (m)", "Max energy error", "Steps",
-           "Evaluations", "Compute time (s)")
 REFERENCE_PEN = pg.mkPen("#555", width=1, style=QtCore.Qt.PenStyle.DashLine)
 
 
@@ -31,27 +29,22 @@ class ErrorPlots(QtWidgets.QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         self.graphics = pg.GraphicsLayoutWidget()
         self.graphics.setBackground("w")
-        self.graphics.setMinimumHeight(170)
+        self.graphics.setMinimumHeight(190)
+        self.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#333", colCount=4, horSpacing=12,
+                                    verSpacing=-6)
+        self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
         self.plots: dict[str, pg.PlotItem] = {}
         for col, (key, title) in enumerate(PANELS):
-            plot = self.graphics.addPlot(row=0, col=col)
+            plot = self.graphics.addPlot(row=1, col=col)
             plot.setTitle(title, size="9pt", color="#333")
             plot.setLabel("bottom", "t", units="s")
             plot.setLogMode(y=True)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)
             self.plots[key] = plot
-        self.legend = pg.LegendItem(labelTextSize="8pt", verSpacing=-4)
-        self.graphics.addItem(self.legend, row=0, col=len(PANELS))
         self.reference_line = pg.InfiniteLine(angle=0, pen=REFERENCE_PEN)
         self.reference_label = ""
-        self.table = QtWidgets.QTableWidget(0, len(SUMMARY), objectName="summary")
-        self.table.setHorizontalHeaderLabels(SUMMARY)
-        self.table.verticalHeader().setVisible(False)
-        self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
-        self.table.horizontalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
-        layout.addWidget(self.graphics, 3)
-        layout.addWidget(self.table, 2)
+        layout.addWidget(self.graphics)
         self.curves: list[dict[str, pg.PlotDataItem]] = []
         self.runs = []
 
@@ -74,11 +67,6 @@ class ErrorPlots(QtWidgets.QWidget):
         self.reference_line.setVisible(False)
         self.reference_label = "Reference: computing…"
         self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
-        self.table.setRowCount(len(self.runs))
-        for r, run in enumerate(self.runs):
-            self._cell(r, 0, run.label, run.color)
-            for c in range(1, len(SUMMARY)):
-                self._cell(r, c, "…")
 
     def set_reference(self, method: str, estimate: float) -> None:
         """Name the reference and its own error; its error is drawn as a floor in the contact plot."""
@@ -105,26 +93,3 @@ class ErrorPlots(QtWidgets.QWidget):
                 values = run.errors[key][:n][picked] if n else np.zeros(0)
                 known = np.isfinite(values)
                 curves[key].setData(times[known], np.maximum(values[known], FLOOR))
-
-    def fill_summary(self) -> None:
-        """Each run's end status, errors and cost (errors once the reference is known)."""
-        for r, run in enumerate(self.runs):
-            sim = run.simulation
-            self._cell(r, 1, str(sim.status) if sim.status else "running")
-            self._cell(r, 5, f"{sim.steps:,}")
-            self._cell(r, 6, f"{sim.evaluations:,}")
-            self._cell(r, 7, f"{run.seconds:.3g}")
-            if run.errors is not None:
-                contact, energy = run.errors["contact"], run.errors["energy"]
-                known = np.isfinite(contact)
-                self._cell(r, 2, f"{contact[known][-1]:.2e}" if known.any() else "—")
-                self._cell(r, 3, f"{contact[known].max():.2e}" if known.any() else "—")
-                self._cell(r, 4, f"{np.nanmax(energy):.2e}" if np.isfinite(energy).any() else "—")
-
-    def _cell(self, row: int, col: int, text: str, color: str | None = None) -> None:
-        item = QtWidgets.QTableWidgetItem(text)
-        if color:
-            item.setForeground(pg.mkColor(color))
-        if col > 1:
-            item.setTextAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
-        self.table.setItem(row, col, item)

@@ -147,11 +147,13 @@ class SceneView(gl.GLViewWidget):
         self.balls, self.trails = [self.ball], [self.trail]
         self.ball.setMeshData(meshdata=ball_mesh() if colors is None else run_ball_mesh(colors[0]))
         self.trail.setData(color=TRAIL_COLOR if colors is None else pg.mkColor(colors[0]).getRgbF())
+        # one trail is added onto the surface; several keep their own colours where they cross
+        self.trail.setGLOptions("additive" if colors is None else "translucent")
         for color in (colors or [])[1:]:
             ball = gl.GLMeshItem(meshdata=run_ball_mesh(color), smooth=False, shader="shaded",
                                  glOptions="opaque")
             trail = gl.GLLinePlotItem(color=pg.mkColor(color).getRgbF(), width=3.0, antialias=True,
-                                      mode="line_strip")
+                                      mode="line_strip", glOptions="translucent")
             self.addItem(ball)
             self.addItem(trail)
             self.balls.append(ball)

@@ -26,6 +26,7 @@ from .inputs import ScenePanel
 from .plots import LivePlots
 from .preferences import Preferences
 from .readouts import Readouts
+from .summary import SummaryTable
 from .view3d import SceneView
 
 PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
@@ -75,6 +76,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.view = SceneView()
         self.plots = LivePlots()
         self.error_plots = ErrorPlots()
+        self.summary = SummaryTable()
         self.readouts = Readouts()
         self._build_layout()
         self._build_actions()
@@ -98,7 +100,13 @@ class MainWindow(QtWidgets.QMainWindow):
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, dock)
         self.compare_dock = QtWidgets.QDockWidget("Compare", self, objectName="compareDock")
-        self.compare_dock.setWidget(self.compare_panel)
+        compare = QtWidgets.QWidget()
+        box = QtWidgets.QVBoxLayout(compare)
+        box.setContentsMargins(0, 0, 0, 0)
+        box.addWidget(self.compare_panel)
+        box.addWidget(QtWidgets.QLabel(" Summary (hover the names for what they mean)"))
+        box.addWidget(self.summary, 1)
+        self.compare_dock.setWidget(compare)
         self.compare_dock.setFeatures(dock.features())
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, self.compare_dock)
         self.tabifyDockWidget(dock, self.compare_dock)
@@ -466,6 +474,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.view.set_runs(colors)
         self.readouts.set_runs([(run.label, run.color) for run in runs])
         self.error_plots.set_runs(runs, scene.duration)
+        self.summary.set_runs(runs)
         self.controller.start(runs, reference=(scene, scene.duration, spacing))
         for i, shown in enumerate(self.compare_panel.shown()):
             self._show_run(i, shown)
@@ -507,7 +516,7 @@ class MainWindow(QtWidgets.QMainWindow):
         _, estimate = self.controller.reference
         self.error_plots.set_reference(f"{METHODS[reference_method()].label} at rtol {REFERENCE_RTOL:g}", estimate)
         self.error_plots.show_time(self.controller.play_time)
-        self.error_plots.fill_summary()
+        self.summary.fill()
 
     def toggle_pause(self) -> None:
         self.controller.toggle_pause()
@@ -554,7 +563,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
 
     def _compare_finished(self) -> None:
-        self.error_plots.fill_summary()
+        self.summary.fill()
         early = [f"{run.label} stopped early ({run.simulation.status.value.replace('_', ' ')})"
                  for run in self.controller.runs if run.simulation.status is not Status.OK]
         waiting = "" if self.controller.reference else "; the reference is still being computed"
