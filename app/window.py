@@ -26,6 +26,7 @@ from .inputs import ScenePanel
 from .plots import LivePlots
 from .preferences import Preferences
 from .readouts import Readouts
+from .speed_window import SpeedWindow
 from .summary import SummaryTable
 from .view3d import SceneView
 
@@ -77,6 +78,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots = LivePlots()
         self.error_plots = ErrorPlots()
         self.summary = SummaryTable()
+        self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.readouts = Readouts()
         self._build_layout()
         self._build_actions()
@@ -162,6 +164,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.compare_action = self._action("&Compare Methods", self._set_compare_mode, "Ctrl+K",
                                            "Several methods side by side on this scene, with their true errors",
                                            checkable=True)
+        self.speed_error_action = self._action("&Speed against Error…", self.show_speed_against_error, None,
+                                               "Every method on this scene: error against compute time "
+                                               "and against step size")
         self.trail_action = self._action("Show &Trail", self.view.set_trails_visible, "T",
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
@@ -202,6 +207,8 @@ class MainWindow(QtWidgets.QMainWindow):
         run.addAction(self.compare_action)
         view = bar.addMenu("&View")
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
+        analysis = bar.addMenu("&Analysis")
+        analysis.addAction(self.speed_error_action)
         helps = bar.addMenu("&Help")
         helps.addActions([self.limits_action, self.about_action])
 
@@ -518,6 +525,32 @@ class MainWindow(QtWidgets.QMainWindow):
         self.error_plots.show_time(self.controller.play_time)
         self.summary.fill()
 
+    def show_speed_against_error(self) -> None:
+        """Compare every method on the current scene, in a window of its own."""
+        self.panel.apply()
+        if self.scene is None:
+            return
+        if self.speed_window is None:
+            self.speed_window = SpeedWindow(self)
+            self.speed_window.runChosen.connect(self.load_run)
+        self.speed_window.compute(self.scene)
+
+    def load_run(self, result) -> None:
+        """Run the scene with a comparison run's method and step (or tolerance)."""
+        data = self.scene.to_dict()
+        integrator = data["integrator"]
+        integrator.update(method=result.spec.method, munthe_kaas=result.spec.munthe_kaas)
+        if result.dt is not None:
+            integrator["dt"] = result.dt
+        else:
+            integrator.update(rtol=result.rtol, atol=result.atol)
+        scene = Scene.from_dict(data)
+        self.compare_action.setChecked(False)
+        self.panel.set_scene(scene)
+        self._use_scene(scene)
+        self.start()
+        self.activateWindow()
+
     def toggle_pause(self) -> None:
         self.controller.toggle_pause()
 
@@ -662,6 +695,8 @@ class MainWindow(QtWidgets.QMainWindow):
             event.ignore()
             return
         self.preferences.save(self)
+        if self.speed_window is not None:
+            self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
         event.accept()
