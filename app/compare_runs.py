@@ -72,3 +72,8 @@ def simulation(scene: Scene, run: CompareRun, spacing: float) -> Simulation:
         return Simulation(scene, **options, **recording(scene, method=run.spec.method, dt=run.setting))
     record_dt = spacing * max(1, math.ceil(scene.duration / ADAPTIVE_ROWS / spacing))
     return Simulation(scene, **options, record_dt=record_dt)
+
+
+def warm_up(scene: Scene, run: CompareRun) -> Simulation:
+    """A run of one step (or a millisecond) of the same method, to compile it untimed."""
+    return Simulation(scene, **run.options(), t_end=run.setting if run.spec.fixed_step else 1e-3)

@@ -106,16 +106,17 @@ class RunController(QtCore.QObject):
 
     # -- commands --------------------------------------------------------------------
 
-    def start(self, runs: list[Run], reference: tuple[Scene, float, float] | None = None) -> None:
+    def start(self, runs: list[Run], reference: tuple[Scene, float, float] | None = None,
+              warm_ups: list[Simulation] = ()) -> None:
         """Compute and play these runs from t = 0 (whatever ran before is dropped). With
         ``reference`` = (scene, t_end, record_dt) a reference run is computed alongside and
-        every run is measured against it."""
+        every run is measured against it; ``warm_ups`` run first, so compiling is not timed."""
         self.reset()
         self.runs = list(runs)
         if reference is not None:
             self._start_reference(*reference)
         self.thread = SimulationThread([run.simulation for run in self.runs],
-                                       [run.buffer.derive for run in self.runs], self)
+                                       [run.buffer.derive for run in self.runs], self, warm_ups)
         self.thread.rowsReady.connect(self._rows_ready)
         self.thread.failed.connect(self.failed)
         self.thread.finished.connect(self._computed)

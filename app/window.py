@@ -482,7 +482,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.readouts.set_runs([(run.label, run.color) for run in runs])
         self.error_plots.set_runs(runs, scene.duration)
         self.summary.set_runs(runs)
-        self.controller.start(runs, reference=(scene, scene.duration, spacing))
+        self.controller.start(runs, reference=(scene, scene.duration, spacing),
+                              warm_ups=[compare_runs.warm_up(scene, choice) for choice in choices])
         for i, shown in enumerate(self.compare_panel.shown()):
             self._show_run(i, shown)
         self._follow(self.follow_action.isChecked())

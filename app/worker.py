@@ -21,22 +21,27 @@ class SimulationThread(QtCore.QThread):
 
     ``rowsReady`` carries a run's index and its chunk's new rows passed through that run's
     ``derive`` (an owned array); ``failed`` a one-line message if the core raised (the GUI
-    stays up). ``seconds[i]`` is the time run i's ``advance`` took so far (its compute time).
+    stays up). ``seconds[i]`` is the time run i's ``advance`` took so far (its compute time);
+    the ``warm_ups`` (tiny runs of the same methods) are run first, untimed, so that loading or
+    compiling a method's kernel does not count.
     """
 
     rowsReady = QtCore.Signal(int, object)
     failed = QtCore.Signal(str)
 
-    def __init__(self, simulations, derives, parent=None):
+    def __init__(self, simulations, derives, parent=None, warm_ups=()):
         super().__init__(parent)
         self.simulations = list(simulations)
         self.derives = list(derives)
+        self.warm_ups = list(warm_ups)
         self.seconds = [0.0] * len(self.simulations)
 
     def run(self) -> None:
         sims = self.simulations
         steps = [4096] * len(sims)
         try:
+            for warm_up in self.warm_ups:
+                warm_up.advance()
             while not self.isInterruptionRequested():
                 pending = [i for i, sim in enumerate(sims) if not sim.done]
                 if not pending:
