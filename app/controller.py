@@ -130,19 +130,30 @@ class RunController(QtCore.QObject):
             self._set_state(PAUSED)
         elif self.state == PAUSED:
             self._last_tick = time.perf_counter()
+            self.timer.start()   # stopped if the run had played to its end before a seek
             self._set_state(RUNNING)
 
     def pause(self) -> None:
         if self.state == RUNNING:
             self._set_state(PAUSED)
 
-    def step(self) -> None:
-        """Pause and advance the clock by one frame at the playback speed."""
-        if self.state not in (RUNNING, PAUSED):
+    def step(self, frames: int = 1) -> None:
+        """Pause and move the clock by ``frames`` frames (back if negative) at the playback speed."""
+        if self.state not in (RUNNING, PAUSED, FINISHED):
             return
-        self.pause()
         speed = self.speed if math.isfinite(self.speed) else STEP_SPEED
-        self.play_time = min(self.play_time + FRAME_MS / 1000 * speed, self.end_time)
+        self.seek(self.play_time + frames * FRAME_MS / 1000 * speed)
+        self.pause()
+
+    def seek(self, t: float) -> None:
+        """Show time t (held within what is computed). A finished run pauses there, so Resume
+        plays on from that moment; a running one plays on from it."""
+        if not self.runs:
+            return
+        self.play_time = min(max(0.0, t), self.end_time)
+        self._last_tick = time.perf_counter()
+        if self.state == FINISHED:
+            self._set_state(PAUSED)
         self._frame(force=True)
 
     def stop(self) -> None:
