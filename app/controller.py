@@ -117,7 +117,10 @@ class RunController(QtCore.QObject):
             self._start_reference(*reference)
         self.thread = SimulationThread([run.simulation for run in self.runs],
                                        [run.buffer.derive for run in self.runs], self, warm_ups)
-        self.thread.rowsReady.connect(self._rows_ready)
+        runs = self.runs
+        # a chunk still queued when its thread was stopped belongs to runs since dropped
+        self.thread.rowsReady.connect(lambda index, block: runs is self.runs and self._rows_ready(index, block),
+                                      QtCore.Qt.ConnectionType.QueuedConnection)
         self.thread.failed.connect(self.failed)
         self.thread.finished.connect(self._computed)
         self._set_state(RUNNING)
@@ -184,7 +187,6 @@ class RunController(QtCore.QObject):
     def _stop_worker(self) -> None:
         if self.thread is not None:
             self._take_seconds()
-            self.thread.rowsReady.disconnect(self._rows_ready)
             self.thread.finished.disconnect(self._computed)
             self.thread.stop()
             self.thread.deleteLater()
