@@ -35,6 +35,8 @@ def prepare_qt() -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
+    parser.add_argument("--compare", metavar="SPECS",
+                        help="open in compare mode with these runs, e.g. euler/classic,rk4/classic,rk4")
     parser.add_argument("--screenshot", metavar="PNG",
                         help="save a picture of the window to PNG and exit (needs a display, e.g. xvfb-run)")
     parser.add_argument("--run-to", type=_positive, metavar="T",
@@ -69,6 +71,17 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--fps: at most {MAX_FPS}")
     elif args.fps is not None:
         parser.error("--fps needs --record")
+    if args.compare is not None:
+        from rollball import parse_runs
+
+        from .compare_runs import MAX_RUNS
+
+        try:
+            specs = parse_runs(args.compare)
+        except ValueError as error:
+            parser.exit(2, f"rollball-app: error: --compare: {error}\n")
+        if len(specs) > MAX_RUNS:
+            parser.exit(2, f"rollball-app: error: --compare: at most {MAX_RUNS} runs, not {len(specs)}\n")
 
     from rollball import Scene, SceneError
     from rollball.examples import DEFAULT_EXAMPLE, scene_path
@@ -100,7 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         with tempfile.TemporaryDirectory(prefix="rollball-app-") as folder:   # the user's preferences stay
             settings = QtCore.QSettings(str(Path(folder) / "preferences.ini"), QtCore.QSettings.Format.IniFormat)
             window = MainWindow(Preferences(settings))
-            error = screenshot(window, path, Path(args.screenshot), args.run_to, args.size or (1280, 860))
+            error = screenshot(window, path, Path(args.screenshot), args.run_to, args.size or (1280, 860),
+                               compare=specs if args.compare is not None else None)
             window.document.saved_scene = window.scene   # nothing to ask on closing
             window.close()
         if error:
@@ -110,6 +124,10 @@ def main(argv: list[str] | None = None) -> int:
     window = MainWindow()
     named_file = args.scene is not None and str(path) == args.scene   # not an example's name
     window.open_scene(path, remember=named_file and args.record is None)
+    if args.compare is not None:
+        from .compare_runs import CompareRun
+
+        window.enter_compare([CompareRun.of(spec, window.scene) for spec in specs])
     window.show()
     if args.record is not None:
         return record(app, window, args)
@@ -165,9 +183,10 @@ def record(app, window, args) -> int:
     return 0
 
 
-def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple[int, int]) -> str | None:
-    """Open ``scene`` in the window, run it to ``run_to`` if given, save a PNG of the window to
-    ``out`` atomically; returns None, or why it could not."""
+def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple[int, int],
+               compare=None) -> str | None:
+    """Open ``scene`` in the window (in compare mode with these run specs), run it to ``run_to``
+    if given, save a PNG of the window to ``out`` atomically; returns None, or why it could not."""
     from PySide6 import QtCore, QtGui, QtWidgets
 
     from rollball.files import atomic_write_bytes
@@ -180,6 +199,10 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
     window.resize(*size)
     if not window.open_scene(scene, remember=False):
         return problems[0] if problems else f"cannot open {scene}"
+    if compare is not None:
+        from .compare_runs import CompareRun
+
+        window.enter_compare([CompareRun.of(spec, window.scene) for spec in compare])
     window.show()
     window.view.reset_camera()   # framed for the final size of the view
     if run_to is not None:

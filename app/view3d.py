@@ -34,8 +34,9 @@ VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150,
               for elevation in (30, 45, 60, 75)] + [(90, -90)]
 
 
-def ball_mesh(rows: int = 24, cols: int = 48) -> gl.MeshData:
-    """A unit beach ball: six coloured segments around the body z axis, white caps.
+def ball_mesh(stripes: np.ndarray = BALL_STRIPES, cap=(0.97, 0.97, 0.97), rows: int = 24,
+              cols: int = 48) -> gl.MeshData:
+    """A unit beach ball: six coloured segments around the body z axis, caps of one colour.
 
     Its pattern makes every rotation visible, and a non-orthogonal R visibly deforms it.
     """
@@ -43,10 +44,18 @@ def ball_mesh(rows: int = 24, cols: int = 48) -> gl.MeshData:
     centres = mesh.vertexes(indexed="faces").mean(axis=1)
     segment = ((np.arctan2(centres[:, 1], centres[:, 0]) + np.pi) / (2 * np.pi) * 6).astype(int) % 6
     colors = np.ones((len(centres), 4))
-    colors[:, :3] = BALL_STRIPES[segment]
-    colors[np.abs(centres[:, 2]) > 0.88, :3] = 0.97
+    colors[:, :3] = np.asarray(stripes)[segment]
+    colors[np.abs(centres[:, 2]) > 0.88, :3] = cap
     mesh.setFaceColors(colors)
     return mesh
+
+
+def run_ball_mesh(color) -> gl.MeshData:
+    """A beach ball in one run's colour: its segments alternate the colour and a pale tint of
+    it, with dark caps, so rotation and deformation stay as visible as on the striped ball."""
+    c = np.asarray(pg.mkColor(color).getRgbF()[:3])
+    pale = 0.35 * c + 0.65
+    return ball_mesh(np.array([c, pale] * 3), cap=0.45 * c)
 
 
 def ball_transform(center: np.ndarray, R: np.ndarray, radius: float) -> pg.Transform3D:
@@ -204,8 +213,15 @@ class SceneView(gl.GLViewWidget):
         for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
-        self.ball_center = np.zeros(3)
         self.ball_radius = 0.1
+        self.balls, self.trails = [self.ball], [self.trail]   # one per run (compare mode: several)
+        self.centers = [np.zeros(3)]
+        self.followed = 0                                      # the run the camera follows
+        self.trails_shown = True
+
+    @property
+    def ball_center(self) -> np.ndarray:
+        return self.centers[self.followed]
 
     # -- landscape -------------------------------------------------------------------
 
@@ -246,7 +262,7 @@ class SceneView(gl.GLViewWidget):
         xs_kept, ys_kept = xs[near], ys[near]
         self.bounds = np.array([[xs_kept.min(), ys_kept.min(), float(shown.min())],
                                 [xs_kept.max(), ys_kept.max(), float(min(shown.max(), self.cap))]])
-        for item in (self.grid_lines, self.cut_edge, self.trail, self.liftoff):   # drawn after the surface
+        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff):   # drawn after the surface
             self.removeItem(item)
             self.addItem(item)
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
@@ -366,26 +382,71 @@ class SceneView(gl.GLViewWidget):
 
     # -- ball, trail, markers ---------------------------------------------------------
 
-    def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float) -> None:
-        """Place the ball (see ``ball_transform``)."""
-        self.ball.setTransform(ball_transform(center, R, radius))
-        self.ball_center = np.asarray(center, dtype=float)
+    def set_runs(self, colors: list | None) -> None:
+        """One ball and trail per colour (compare mode), or None: the single striped ball."""
+        for item in self.balls[1:] + self.trails[1:]:
+            self.removeItem(item)
+        self.balls, self.trails = [self.ball], [self.trail]
+        self.ball.setMeshData(meshdata=ball_mesh() if colors is None else run_ball_mesh(colors[0]))
+        self.trail.setData(color=TRAIL_COLOR if colors is None else pg.mkColor(colors[0]).getRgbF())
+        # one trail is added onto the surface; several keep their own colours where they cross
+        self.trail.setGLOptions("additive" if colors is None else "translucent")
+        for color in (colors or [])[1:]:
+            ball = gl.GLMeshItem(meshdata=run_ball_mesh(color), smooth=False, shader="shaded",
+                                 glOptions="opaque")
+            trail = gl.GLLinePlotItem(color=pg.mkColor(color).getRgbF(), width=3.0, antialias=True,
+                                      mode="line_strip", glOptions="translucent")
+            self.addItem(ball)
+            self.addItem(trail)
+            self.balls.append(ball)
+            self.trails.append(trail)
+        self.removeItem(self.liftoff)  # the marker stays on top
+        self.addItem(self.liftoff)
+        for ball, trail in zip(self.balls, self.trails):
+            ball.setVisible(True)
+            trail.setVisible(self.trails_shown)
+        self.centers = [self.centers[0]] * len(self.balls)
+        self.followed = 0
+
+    def set_run_visible(self, index: int, visible: bool) -> None:
+        self.balls[index].setVisible(visible)
+        self.trails[index].setVisible(visible and self.trails_shown)
+
+    def set_trails_visible(self, on: bool) -> None:
+        self.trails_shown = on
+        for ball, trail in zip(self.balls, self.trails):
+            trail.setVisible(on and ball.visible())
+
+    def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float, index: int = 0) -> None:
+        """Place a run's ball (see ``ball_transform``)."""
+        self.balls[index].setTransform(ball_transform(center, R, radius))
+        self.centers[index] = np.asarray(center, dtype=float)
         self.ball_radius = radius
-        if self.follow:
+        if self.follow and index == self.followed:
             self.opts["center"] = QtGui.QVector3D(*map(float, center))
         self.update()
 
-    def set_trail(self, points: np.ndarray) -> None:
-        self.trail.setData(pos=points if len(points) >= 2 else np.zeros((0, 3)))
+    def set_trail(self, points: np.ndarray, index: int = 0) -> None:
+        self.trails[index].setData(pos=points if len(points) >= 2 else np.zeros((0, 3)))
 
     def set_liftoff(self, point: np.ndarray | None) -> None:
+        """Mark the lift-off point; None hides the marker."""
         self.liftoff.setVisible(point is not None)
         if point is not None:
             self.liftoff.setData(pos=np.asarray(point, dtype=float).reshape(1, 3))
 
-    def set_follow(self, follow: bool, radius: float | None = None) -> None:
-        """Keep the ball in the centre of the view; zoom in to it when a radius is given."""
+    def add_liftoff(self, point: np.ndarray) -> None:
+        """One more lift-off point (one per run in compare mode)."""
+        shown = self.liftoff.pos if self.liftoff.visible() and self.liftoff.pos is not None else np.zeros((0, 3))
+        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]))
+        self.liftoff.setVisible(True)
+
+    def set_follow(self, follow: bool, radius: float | None = None, index: int | None = None) -> None:
+        """Keep a run's ball (``index``, or the one followed so far) in the centre of the view;
+        zoom in to it when a radius is given."""
         self.follow = follow
+        if index is not None:
+            self.followed = index
         if follow:
             self.opts["center"] = QtGui.QVector3D(*map(float, self.ball_center))
             if radius is not None:

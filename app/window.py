@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import Scene, SceneError, Simulation, Status, Trajectory, __version__
+from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
 from rollball.trajectory import CONTACT
@@ -18,18 +18,23 @@ from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.trajectory import CENTER, R, T
 
+from . import compare_runs
 from . import help as helps
 from .animation import DEFAULT_FPS, frame_times, record
 from .closeup import CloseUp
+from .compare_panel import ComparePanel
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
+from .error_plots import ErrorPlots
 from .inputs import ScenePanel
 from .picture import caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
 from .readouts import Readouts
+from .speed_window import SpeedWindow
+from .summary import SummaryTable
 from .sweep_dialog import SweepDialog
 from .timeline import Marker, TimeSlider
 from .undo import SceneChange
@@ -59,8 +64,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.event.connect(self._run_event)
         self.controller.finished.connect(self._finished)
         self.controller.failed.connect(lambda message: self._warn("The computation failed", message))
+        self.controller.measured.connect(self._measured)
         self.panel = ScenePanel()
         self.panel.sceneChanged.connect(self._scene_edited)
+        self.compare_panel = ComparePanel()
+        self.compare_panel.compareRequested.connect(self.start)
+        self.compare_panel.runsChanged.connect(self._compare_runs_edited)
+        self.compare_panel.shownChanged.connect(self._show_run)
+        self.compare_panel.followChanged.connect(lambda i: self._follow(self.follow_action.isChecked()))
         self.view = SceneView()
         self.closeup_frame = QtWidgets.QFrame(self.view, objectName="closeupFrame")
         self.closeup_frame.setStyleSheet("#closeupFrame { border: 2px solid #333; background: #333; }")
@@ -72,6 +83,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline = TimeSlider()
         self.timeline.seeked.connect(self.seek)
         self.plots = LivePlots()
+        self.error_plots = ErrorPlots()
+        self.summary = SummaryTable()
+        self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.readouts = Readouts()
         self.undo_stack = QtGui.QUndoStack(self)
         self.undo_stack.cleanChanged.connect(lambda _clean: self._update_controls())
@@ -102,6 +116,18 @@ class MainWindow(QtWidgets.QMainWindow):
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetMovable
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, dock)
+        self.compare_dock = QtWidgets.QDockWidget("Compare", self, objectName="compareDock")
+        compare = QtWidgets.QWidget()
+        box = QtWidgets.QVBoxLayout(compare)
+        box.setContentsMargins(0, 0, 0, 0)
+        box.addWidget(self.compare_panel)
+        box.addWidget(QtWidgets.QLabel(" Summary (hover the names for what they mean)"))
+        box.addWidget(self.summary, 1)
+        self.compare_dock.setWidget(compare)
+        self.compare_dock.setFeatures(dock.features())
+        self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, self.compare_dock)
+        self.tabifyDockWidget(dock, self.compare_dock)
+        self.compare_dock.hide()
 
         splitter = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical)
         top = QtWidgets.QWidget()
@@ -111,7 +137,10 @@ class MainWindow(QtWidgets.QMainWindow):
         v.addWidget(self.timeline)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
-        splitter.addWidget(self.plots)
+        self.bottom = QtWidgets.QStackedWidget()
+        self.bottom.addWidget(self.plots)
+        self.bottom.addWidget(self.error_plots)
+        splitter.addWidget(self.bottom)
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
         self.setCentralWidget(splitter)
@@ -180,7 +209,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.closeup_action = self._action("&Close-up", self._show_closeup, "Z",
                                            "A close-up following the ball in the corner of the view",
                                            checkable=True)
-        self.trail_action = self._action("Show &Trail", lambda on: self.view.trail.setVisible(on), "T",
+        self.compare_action = self._action("&Compare Methods", self._set_compare_mode, "Ctrl+K",
+                                           "Several methods side by side on this scene, with their true errors",
+                                           checkable=True)
+        self.speed_error_action = self._action("&Speed against Error…", self.show_speed_against_error, None,
+                                               "Every method on this scene: error against compute time "
+                                               "and against step size")
+        self.trail_action = self._action("Show &Trail", self.view.set_trails_visible, "T",
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
@@ -234,6 +269,8 @@ class MainWindow(QtWidgets.QMainWindow):
         run.addSeparator()
         run.addActions([self.back_action, self.forward_action, self.first_action, self.last_action,
                         self.liftoff_action])
+        run.addSeparator()
+        run.addAction(self.compare_action)
         view = bar.addMenu("&View")
         view.addActions([self.presentation_action, self.closeup_action])
         sizes = view.addMenu("Text &Size")
@@ -247,7 +284,7 @@ class MainWindow(QtWidgets.QMainWindow):
         view.addSeparator()
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
         analysis = bar.addMenu("&Analysis")
-        analysis.addAction(self.sweep_action)
+        analysis.addActions([self.speed_error_action, self.sweep_action])
         help_menu = bar.addMenu("&Help")
         help_menu.addActions([self.model_help_action, self.plots_help_action, self.keys_help_action,
                               self.context_help_action])
@@ -266,6 +303,8 @@ class MainWindow(QtWidgets.QMainWindow):
                              (self.reset_action, icons.SP_MediaSkipBackward)):
             action.setIcon(style.standardIcon(icon))
             bar.addAction(action)
+        bar.addSeparator()
+        bar.addAction(self.compare_action)
         bar.addSeparator()
         bar.addWidget(QtWidgets.QLabel(" Playback "))
         self.speed = QtWidgets.QComboBox(objectName="speed")
@@ -381,6 +420,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if redraw_camera or grid_changed:
             self.view.reset_camera()   # after reset(), so the ball stands at the start
         self.shown_scene = scene
+        self.compare_panel.set_scene(scene)
         self._update_title()
         return notes
 
@@ -576,6 +616,9 @@ class MainWindow(QtWidgets.QMainWindow):
         if scene is None:
             return
         self.reset()
+        if self.compare_mode:
+            self._start_compare(scene)
+            return
         try:
             simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
         except ValueError as error:
@@ -591,6 +634,95 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline.set_span(simulation.t_end)
         self.controller.start([Run(simulation, self.landscape)])
         self.show_message(note)
+
+    def _start_compare(self, scene: Scene) -> None:
+        """Every run of the compare panel, and the reference, computed together."""
+        try:
+            choices = self.compare_panel.runs()
+            if not choices:
+                raise ValueError("add a run to compare (or choose a preset)")
+            spacing = compare_runs.reference_spacing(choices, scene.duration)
+            simulations = [compare_runs.simulation(scene, choice, spacing) for choice in choices]
+        except ValueError as error:
+            self._warn("Cannot compare", str(error))
+            return
+        runs = [Run(sim, self.landscape, choice.label, color)
+                for sim, choice, color in zip(simulations, choices, compare_runs.COLORS)]
+        colors = [run.color for run in runs]
+        self.view.set_runs(colors)
+        self.readouts.set_runs([(run.label, run.color) for run in runs])
+        self.error_plots.set_runs(runs, scene.duration)
+        self.summary.set_runs(runs)
+        self.controller.start(runs, reference=(scene, scene.duration, spacing),
+                              warm_ups=[compare_runs.warm_up(scene, choice) for choice in choices])
+        for i, shown in enumerate(self.compare_panel.shown()):
+            self._show_run(i, shown)
+        self._follow(self.follow_action.isChecked())
+        self.show_message(f"Comparing {len(runs)} runs to t = {scene.duration:g} s, with a reference run")
+
+    @property
+    def compare_mode(self) -> bool:
+        return self.compare_action.isChecked()
+
+    def enter_compare(self, runs: list[compare_runs.CompareRun]) -> None:
+        """Compare mode with these runs (``--compare`` on the command line)."""
+        self.compare_panel.set_runs(runs)
+        self.compare_action.setChecked(True)
+
+    def _set_compare_mode(self, on: bool) -> None:
+        self.reset()
+        if on and not self.compare_panel.rows and self.scene is not None:
+            self.compare_panel.use_preset(next(iter(compare_runs.PRESETS)))
+        self.compare_dock.setVisible(on)
+        if on:
+            self.compare_dock.raise_()
+        self.bottom.setCurrentWidget(self.error_plots if on else self.plots)
+        self.show_message("Compare mode: set the runs, then Compare (F5)" if on else "")
+
+    def _compare_runs_edited(self) -> None:
+        if self.compare_mode and self.controller.runs:
+            self.reset()   # the runs shown no longer are the ones set
+
+    def _show_run(self, index: int, shown: bool) -> None:
+        if self.compare_mode and index < len(self.controller.runs):
+            self.view.set_run_visible(index, shown)
+            self.error_plots.set_visible(index, shown)
+
+    def _measured(self) -> None:
+        """The reference is known: name it, and plot and tabulate every run's true error."""
+        from rollball.comparison import REFERENCE_RTOL, reference_method
+
+        _, estimate = self.controller.reference
+        self.error_plots.set_reference(f"{METHODS[reference_method()].label} at rtol {REFERENCE_RTOL:g}", estimate)
+        self.error_plots.show_time(self.controller.play_time)
+        self.summary.fill()
+
+    def show_speed_against_error(self) -> None:
+        """Compare every method on the current scene, in a window of its own."""
+        self.panel.apply()
+        if self.scene is None:
+            return
+        if self.speed_window is None:
+            self.speed_window = SpeedWindow(self)
+            self.speed_window.runChosen.connect(self.load_run)
+        self.speed_window.compute(self.scene)
+
+    def load_run(self, result) -> None:
+        """Run the scene with a comparison run's method and step (or tolerance)."""
+        data = self.scene.to_dict()
+        integrator = data["integrator"]
+        integrator.update(method=result.spec.method, munthe_kaas=result.spec.munthe_kaas)
+        if result.dt is not None:
+            integrator["dt"] = result.dt
+        else:
+            integrator.update(rtol=result.rtol, atol=result.atol)
+        scene = Scene.from_dict(data)
+        self.compare_action.setChecked(False)
+        if scene != self.scene:
+            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Speed against Error",
+                                             applied=False))
+        self.start()
+        self.activateWindow()
 
     def toggle_pause(self) -> None:
         self.controller.toggle_pause()
@@ -614,6 +746,8 @@ class MainWindow(QtWidgets.QMainWindow):
         """Back to the start of the current scene; the computed run is dropped."""
         self.controller.reset()
         self.drawn_index = -1
+        self.view.set_runs(None)
+        self.readouts.set_runs([None])
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
@@ -625,19 +759,24 @@ class MainWindow(QtWidgets.QMainWindow):
         self.progress.setValue(0)
 
     def _finished(self) -> None:
+        if self.compare_mode:
+            self._compare_finished()
+            return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
         if status is Status.OK:
-            warnings = "".join(f"; {note}" for note in self._trajectory().warnings())
+            warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
             self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
 
-    def _trajectory(self) -> Trajectory:
-        """The received rows as a trajectory (no copy)."""
-        ball = self.controller.simulation.scene.ball
-        return Trajectory(self.controller.buffer.rows, mass=ball.mass, radius=ball.radius,
-                          gravity=self.controller.simulation.scene.gravity)
+    def _compare_finished(self) -> None:
+        self.summary.fill()
+        early = [f"{run.label} stopped early ({run.simulation.status.value.replace('_', ' ')})"
+                 for run in self.controller.runs if run.simulation.status is not Status.OK]
+        waiting = "" if self.controller.reference else "; the reference is still being computed"
+        self.show_message(f"Finished comparing {len(self.controller.runs)} runs" + "".join(f"; {e}" for e in early)
+                          + waiting, warning=bool(early))
 
     def _liftoff_note(self) -> str:
         t = self.controller.simulation.liftoff_time
@@ -645,8 +784,9 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _run_event(self, index: int, kind: str, t: float) -> None:
         if kind == "liftoff":
-            self.view.set_liftoff(self.controller.runs[index].buffer.point_at(t))
-            self.show_message(f"Lift-off at t = {t:.4g} s: the real ball would leave the surface "
+            self.view.add_liftoff(self.controller.runs[index].buffer.point_at(t))
+            who = f"{self.controller.runs[index].label}: " if self.compare_mode else ""
+            self.show_message(f"{who}Lift-off at t = {t:.4g} s: the real ball would leave the surface "
                               f"here; the model keeps it on, so what follows is not physical", warning=True)
 
     # -- drawing ---------------------------------------------------------------------
@@ -665,29 +805,38 @@ class MainWindow(QtWidgets.QMainWindow):
         self.readouts.clear()
 
     def _draw(self, force: bool = False) -> None:
-        buffer = self.controller.buffer
-        if buffer is None or len(buffer) == 0:
+        runs, t = self.controller.runs, self.controller.play_time
+        if not runs or all(len(run.buffer) == 0 for run in runs):
             return
-        i = buffer.index_at(self.controller.play_time)
-        if i == self.drawn_index and not force:
-            return  # the same row as the last frame
-        self.drawn_index = i
-        row = buffer.rows[i]
-        simulation = self.controller.simulation
-        self.view.set_ball(row[CENTER], row[R].reshape(3, 3), simulation.scene.ball.radius)
-        trail = buffer.trail(i, lift=0.004 * self.view.extent)
-        self.view.set_trail(trail)
-        self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
-        self.readouts.show_row(0, buffer, i)
-        self.timeline.set_time(self.controller.play_time)
+        indices = tuple(run.index_at(t) for run in runs)
+        if indices == self.drawn_index and not force:
+            return  # the same rows as the last frame
+        self.drawn_index = indices
+        radius = runs[0].simulation.scene.ball.radius
+        followed = self.view.followed
+        for k, (run, i) in enumerate(zip(runs, indices)):
+            if len(run.buffer):
+                row = run.buffer.rows[i]
+                trail = run.buffer.trail(i, lift=0.004 * self.view.extent)
+                self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
+                self.view.set_trail(trail, k)
+                if k == followed:
+                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
+                self.readouts.show_row(k, run.buffer, i)
+        self.timeline.set_time(t)
         self.frames += 1
         if force or self.frames % PLOT_EVERY == 0:
-            # while playing, the curves grow with the ball; otherwise they show all that is computed
-            self.plots.show_run(buffer, i if self.state == RUNNING else len(buffer) - 1)
-            self.plots.set_cursor(row[T])
+            if self.compare_mode:
+                self.error_plots.show_time(t)
+            else:
+                # while playing, the curves grow with the ball; otherwise they show all that is computed
+                buffer = runs[0].buffer
+                self.plots.show_run(buffer, indices[0] if self.state == RUNNING else len(buffer) - 1)
+                self.plots.set_cursor(buffer.t[indices[0]])
             self.timeline.set_available(self.controller.end_time)
             self._show_events()
-        self.progress.setValue(int(round(1000 * min(1.0, row[T] / simulation.t_end))))
+        shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
+        self.progress.setValue(int(round(1000 * min(1.0, shown / self.controller.t_end))))
 
     def _update_controls(self) -> None:
         state, computed = self.state, self.controller.computed
@@ -713,7 +862,8 @@ class MainWindow(QtWidgets.QMainWindow):
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
-        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None)
+        index = self.compare_panel.followed if self.controller.runs and self.compare_mode else 0
+        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=index)
 
     def open_sweep(self) -> SweepDialog:
         """Analysis → Sweep…: a sweep of the current scene; a clicked run's scene is loaded here."""
@@ -850,7 +1000,10 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.presentation_action.setChecked(False)   # the window's own layout is what is remembered
         self.preferences.save(self)
+        if self.speed_window is not None:
+            self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
+        self.controller.shutdown()
         event.accept()
 
 
