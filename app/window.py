@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from importlib import resources
 from pathlib import Path
 
@@ -57,6 +58,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.shown_scene: Scene | None = None   # what the view and the run belong to
         self.drawn_index = -1                # the row the view shows
         self.frames = 0
+        self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
+        self.start_waiting = False                        # Start was pressed meanwhile
 
         self.controller = RunController(self)
         self.controller.stateChanged.connect(lambda _state: self._update_controls())
@@ -606,10 +609,39 @@ class MainWindow(QtWidgets.QMainWindow):
     def state(self) -> str:
         return self.controller.state
 
+    def prepare_integrator(self, command: list[str] | None = None) -> None:
+        """Compile the integrator for every method in a process of its own, from launch (numba
+        keeps the result on disk, where a run finds it). A Start meanwhile waits, saying so with
+        a busy indicator, and the run starts by itself when the integrator is ready."""
+        command = command or [sys.executable, "-m", "rollball.warmup"]
+        process = QtCore.QProcess(self)
+        process.setProcessChannelMode(QtCore.QProcess.ProcessChannelMode.ForwardedErrorChannel)
+        process.finished.connect(self._prepared)
+        process.errorOccurred.connect(lambda _error: self._prepared())
+        self.preparing = process
+        process.start(command[0], command[1:])
+
+    def _prepared(self) -> None:
+        if self.preparing is None:
+            return
+        self.preparing.deleteLater()
+        self.preparing = None
+        self.progress.setRange(0, 1000)
+        if self.start_waiting:
+            self.start_waiting = False
+            self.start()
+
     def start(self) -> None:
         """Start from t = 0 (or resume when paused)."""
         if self.state == PAUSED:
             self.toggle_pause()
+            return
+        if self.preparing is not None:
+            self.start_waiting = True
+            self.progress.setRange(0, 0)   # busy
+            self.show_message("Preparing the integrator (first run only)… the run starts by itself "
+                              "when it is ready")
+            self._update_controls()
             return
         self.panel.apply()
         scene = self.scene
@@ -744,6 +776,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def reset(self) -> None:
         """Back to the start of the current scene; the computed run is dropped."""
+        self.start_waiting = False
+        self.progress.setRange(0, 1000)
         self.controller.reset()
         self.drawn_index = -1
         self.view.set_runs(None)
@@ -858,7 +892,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.timeline.set_available(self.controller.end_time)
             self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
-        self.state_label.setText(words[state] if computed or state in (READY, STOPPED, FINISHED)
+        self.state_label.setText("Preparing…" if self.start_waiting
+                                 else words[state] if computed or state in (READY, STOPPED, FINISHED)
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
@@ -1004,6 +1039,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
+        if self.preparing is not None:
+            self.preparing.kill()
+            self.preparing.waitForFinished(2000)
         event.accept()
 
 

@@ -97,3 +97,22 @@ def test_the_command_line_fails_in_one_line(tmp_path, args, words):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert words in lines[-1] and "Traceback" not in result.stderr
+
+
+def test_start_while_the_integrator_is_prepared_waits_visibly_then_runs(qtbot, window):
+    window.prepare_integrator([sys.executable, "-c", "import time; time.sleep(2)"])
+    window.start()
+    assert window.state == "ready" and "Preparing the integrator (first run only)" in window.message.text()
+    assert window.progress.maximum() == 0 and window.state_label.text() == "Preparing…"   # busy
+    qtbot.waitUntil(lambda: window.state != "ready", timeout=20_000)
+    assert window.state in ("running", "finished") and window.progress.maximum() == 1000
+    assert window.preparing is None
+
+
+def test_reset_while_waiting_for_the_integrator_cancels_the_start(qtbot, window):
+    window.prepare_integrator([sys.executable, "-c", "import time; time.sleep(1)"])
+    window.start()
+    window.reset()
+    qtbot.waitUntil(lambda: window.preparing is None, timeout=20_000)
+    qtbot.wait(100)
+    assert window.state == "ready"
