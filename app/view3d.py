@@ -102,6 +102,22 @@ def grid_lines(axis: np.ndarray, z: np.ndarray, lift: float, cap: float = np.inf
     return pairs.reshape(-1, 3)
 
 
+def too_coarse(landscape, axis: np.ndarray, z: np.ndarray) -> bool:
+    """Whether the grid is too coarse to show the landscape: in the middle of many cells (a
+    tenth of them) the landscape differs from what the drawing shows there by more than 5 % of
+    its height range (hills narrower than the spacing come out as noise; a few cells at a
+    singular edge do not count)."""
+    mid = (axis[:-1] + axis[1:]) / 2
+    xs, ys = np.meshgrid(mid, mid, indexing="ij")
+    between = landscape.evaluate(xs, ys)[0]
+    drawn = (z[:-1, :-1] + z[1:, :-1] + z[:-1, 1:] + z[1:, 1:]) / 4
+    with np.errstate(invalid="ignore"):
+        error = np.abs(between - drawn)
+    finite = np.isfinite(error) & np.isfinite(z[:-1, :-1])
+    span = np.ptp(z[np.isfinite(z)]) if np.isfinite(z).any() else 0.0
+    return bool(finite.any() and span > 0 and np.percentile(error[finite], 90) > 0.05 * span)
+
+
 def height_cap(lowest: float, reachable: float, radius: float) -> float:
     """Heights above this are not drawn: the ball's energy never takes it up there
     (``reachable``, E / (m g)); the margin keeps a little of every wall in sight."""
@@ -266,7 +282,7 @@ class SceneView(gl.GLViewWidget):
             self.removeItem(item)
             self.addItem(item)
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
-                "cut": bool(shown.max() > self.cap)}
+                "cut": bool(shown.max() > self.cap), "coarse": too_coarse(landscape, axis, z)}
 
     def height_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The drawn surface's height at points, interpolated bilinearly on the grid (-inf

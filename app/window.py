@@ -335,6 +335,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.state_label.setFixedWidth(150)  # text changes must not re-lay out the window
         self.message = QtWidgets.QLabel(objectName="message")
         self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+        self.message.setWordWrap(True)   # a long message takes a second line rather than being cut
         self.statusBar().addWidget(self.message, 1)
         self.statusBar().addPermanentWidget(self.state_label)
 
@@ -413,6 +414,9 @@ class MainWindow(QtWidgets.QMainWindow):
                 notes.append("grey: the landscape is undefined there")
             if facts["cut"]:
                 notes.append("cut level where the ball's energy cannot take it")
+            if facts["coarse"]:
+                notes.append("the grid spacing is too coarse for this landscape, the drawing is misleading: "
+                             "choose a smaller area or spacing")
             self.show_message("; ".join(notes).capitalize())
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
@@ -511,8 +515,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def export_csv(self, path: Path) -> bool:
         simulation = self.controller.simulation
-        if simulation is None or not self.controller.computed:
-            return False
+        if simulation is None or not (self.controller.computed or self.state == STOPPED):
+            return False   # what a stopped run computed is exported as it stands
         trajectory = simulation.trajectory()
         if not self._write("export trajectory", path, trajectory.to_csv):
             return False
@@ -772,7 +776,9 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.state not in (RUNNING, PAUSED):
             return
         self.controller.stop()
-        self.show_message(f"Stopped at t = {self.controller.play_time:.4g} s")
+        t, liftoff = self.controller.play_time, self.controller.simulation.liftoff_time
+        self.show_message(f"Stopped at t = {t:.4g} s" + (self._liftoff_note() if liftoff is not None and liftoff <= t
+                                                         else "") + " (what was computed can be exported)")
 
     def reset(self) -> None:
         """Back to the start of the current scene; the computed run is dropped."""
@@ -798,11 +804,12 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
+        liftoff = self._liftoff_note()   # every event of the run stays in its last word
         if status is Status.OK:
             warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
-            self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
+            self.show_message(f"Finished: {text}" + liftoff + warnings, warning=bool(warnings or liftoff))
         else:
-            self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
+            self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}" + liftoff, warning=True)
 
     def _compare_finished(self) -> None:
         self.summary.fill()
@@ -829,7 +836,9 @@ class MainWindow(QtWidgets.QMainWindow):
         """The ball at its start position, before any run."""
         s, r = scene.start, scene.ball.radius
         d = self.landscape.evaluate(s.x, s.y)
-        if not np.all(np.isfinite(d)):
+        valid = bool(np.all(np.isfinite(d)))
+        self.view.ball.setVisible(valid)   # no ball left hanging where the start was
+        if not valid:
             self.show_message(f"The landscape cannot be evaluated at the start point ({s.x:g}, {s.y:g})",
                               warning=True)
             return
@@ -851,7 +860,7 @@ class MainWindow(QtWidgets.QMainWindow):
         for k, (run, i) in enumerate(zip(runs, indices)):
             if len(run.buffer):
                 row = run.buffer.rows[i]
-                trail = run.buffer.trail(i, lift=0.004 * self.view.extent)
+                trail = run.buffer.trail(i, lift=0.3)   # 0.3 r above the contact point
                 self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
                 self.view.set_trail(trail, k)
                 if k == followed:
@@ -882,7 +891,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
-        self.export_action.setEnabled(computed and self.controller.simulation is not None)
+        self.export_action.setEnabled((computed or state == STOPPED) and self.controller.simulation is not None)
         self.animation_action.setEnabled(bool(self.controller.runs))
         self.revert_action.setEnabled(self.dirty)
         for action in (self.back_action, self.forward_action, self.first_action, self.last_action):
