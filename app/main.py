@@ -82,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.compare is not None:
         from .compare_runs import CompareRun
 
-        window.enter_compare([CompareRun.of(spec, window.scene) for spec in specs])
+        window.compare.enter([CompareRun.of(spec, window.scene) for spec in specs])
     window.show()
     if args.record is not None:
         return record(app, window, args)
