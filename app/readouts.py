@@ -17,7 +17,7 @@ QUANTITIES = (("t", "Time t"), ("energy", "Energy E"), ("drift", "(E − E₀)/E
 def _value_label(name: str) -> QtWidgets.QLabel:
     label = QtWidgets.QLabel("—", objectName=name)
     label.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-    label.setMinimumWidth(110)
+    label.setMinimumWidth(96)   # six of them fit a 1024-pixel window beside the scene fields
     font = label.font()
     font.setFamily("monospace")
     font.setStyleHint(QtGui.QFont.StyleHint.Monospace)

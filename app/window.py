@@ -13,7 +13,7 @@ from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
 from rollball.trajectory import CONTACT
-from rollball.geometry import unit_normal
+from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.trajectory import CENTER, R, T
@@ -374,25 +374,30 @@ class MainWindow(QtWidgets.QMainWindow):
             self._warn("Cannot use this landscape", str(error))
             return []
         notes = []
-        surface_changed = (old is None or old.landscape != scene.landscape or old.view != scene.view
-                           or old.ball.radius != scene.ball.radius)
+        grid_changed = old is None or old.landscape != scene.landscape or old.view != scene.view
+        surface_changed = (grid_changed or old.ball.radius != scene.ball.radius or old.start != scene.start
+                           or old.gravity != scene.gravity)   # the cut follows the ball's energy
         if surface_changed:
             self.landscape = landscape
-            facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius)
+            start = landscape.evaluate(scene.start.x, scene.start.y)
+            reachable = reachable_height(start, scene) if np.all(np.isfinite(start)) else np.inf
+            facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius, reachable)
             self.closeup.set_landscape(landscape, scene.ball.radius, self.view.z_span)
             if facts["no_fit"]:
                 notes.append("red: the ball does not fit there")
             if facts["undefined"]:
                 notes.append("grey: the landscape is undefined there")
+            if facts["cut"]:
+                notes.append("cut level where the ball's energy cannot take it")
             self.show_message("; ".join(notes).capitalize())
-        if redraw_camera:
-            self.view.reset_camera()
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
         if run_changed:
             if self.controller.state in (RUNNING, PAUSED):
                 self.show_message("Scene changed: the run was reset")
             self.reset()
+        if redraw_camera or grid_changed:
+            self.view.reset_camera()   # after reset(), so the ball stands at the start
         self.shown_scene = scene
         self.compare.scene_changed(scene)
         self._update_title()
