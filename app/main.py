@@ -202,7 +202,7 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
     if compare is not None:
         from .compare_runs import CompareRun
 
-        window.enter_compare([CompareRun.of(spec, window.scene) for spec in compare])
+        window.compare.enter([CompareRun.of(spec, window.scene) for spec in compare])
     window.show()
     window.view.reset_camera()   # framed for the final size of the view
     if run_to is not None:
@@ -225,6 +225,10 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
         else:
             controller.play_time = run_to
             window.stop()
+        if compare is not None:   # the true errors need the reference
+            started = time.monotonic()
+            while controller.reference is None and not problems and time.monotonic() - started < RUN_TIMEOUT:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
     for _ in range(5):   # let the last frame be laid out and painted
         app.processEvents()
         time.sleep(0.02)

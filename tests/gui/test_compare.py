@@ -49,7 +49,7 @@ def test_the_legend_names_every_run_and_the_reference(compared):
     labels = [label.text for _, label in compared.compare.error_plots.legend.items]
     assert labels[:3] == [run.label for run in compared.controller.runs]
     reference, estimate = compared.controller.reference
-    assert labels[3] == f"Reference: {METHODS[reference_method()].label} at rtol 1e-13, its error ≈ {estimate:.1g} m"
+    assert labels[3] == f"Reference: {METHODS[reference_method()].label} at rtol 1e-13, own error ≈ {estimate:.1g} m"
     assert 0 < estimate < 1e-9 and reference.t[-1] == 2.0
 
 
