@@ -167,6 +167,7 @@ class RunController(QtCore.QObject):
         self.timer.stop()
         self._set_state(STOPPED)
         self._frame(force=True)
+        self._measure()
 
     def reset(self) -> None:
         """Drop the runs: back to ready at t = 0."""
@@ -226,8 +227,9 @@ class RunController(QtCore.QObject):
         self._measure()
 
     def _measure(self) -> None:
-        """Every run's errors against the reference, once both are complete."""
-        if self.reference is None or not self.computed or not self.runs:
+        """Every run's errors against the reference, once both are complete (or the runs were
+        stopped: then up to where they got)."""
+        if self.reference is None or self.thread is not None or not self.runs:
             return
         from rollball.comparison import error_series
 

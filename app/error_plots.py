@@ -30,7 +30,7 @@ class ErrorPlots(QtWidgets.QWidget):
         self.graphics = pg.GraphicsLayoutWidget()
         self.graphics.setBackground("w")
         self.graphics.setMinimumHeight(190)
-        self.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#333", colCount=4, horSpacing=12,
+        self.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#333", colCount=3, horSpacing=12,
                                     verSpacing=-6)
         self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
         self.plots: dict[str, pg.PlotItem] = {}
@@ -71,7 +71,7 @@ class ErrorPlots(QtWidgets.QWidget):
     def set_reference(self, method: str, estimate: float) -> None:
         """Name the reference and its own error; its error is drawn as a floor in the contact plot."""
         self.legend.removeItem(self.reference_label)
-        self.reference_label = f"Reference: {method}, its error ≈ {estimate:.1g} m"
+        self.reference_label = f"Reference: {method}, own error ≈ {estimate:.1g} m"
         self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
         self.reference_line.setPos(np.log10(max(estimate, FLOOR)))
         self.reference_line.setVisible(True)

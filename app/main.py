@@ -129,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.compare is not None:
         from .compare_runs import CompareRun
 
-        window.enter_compare([CompareRun.of(spec, window.scene) for spec in specs])
+        window.compare.enter([CompareRun.of(spec, window.scene) for spec in specs])
     window.show()
     if args.record is not None:
         return record(app, window, args)
@@ -204,7 +204,7 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
     if compare is not None:
         from .compare_runs import CompareRun
 
-        window.enter_compare([CompareRun.of(spec, window.scene) for spec in compare])
+        window.compare.enter([CompareRun.of(spec, window.scene) for spec in compare])
     window.show()
     window.view.reset_camera()   # framed for the final size of the view
     if run_to is not None:
@@ -227,6 +227,10 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
         else:
             controller.play_time = run_to
             window.stop()
+        if compare is not None:   # the true errors need the reference
+            started = time.monotonic()
+            while controller.reference is None and not problems and time.monotonic() - started < RUN_TIMEOUT:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
     for _ in range(5):   # let the last frame be laid out and painted
         app.processEvents()
         time.sleep(0.02)

@@ -19,15 +19,13 @@ from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.trajectory import CENTER, R, T
 
-from . import compare_runs
 from . import help as helps
 from .animation import DEFAULT_FPS, frame_times, record
 from .closeup import CloseUp
-from .compare_panel import ComparePanel
+from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
-from .error_plots import ErrorPlots
 from .inputs import ScenePanel
 from .picture import caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
@@ -35,7 +33,6 @@ from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
 from .readouts import Readouts
 from .speed_window import SpeedWindow
-from .summary import SummaryTable
 from .sweep_dialog import SweepDialog
 from .timeline import Marker, TimeSlider
 from .undo import SceneChange
@@ -67,14 +64,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.event.connect(self._run_event)
         self.controller.finished.connect(self._finished)
         self.controller.failed.connect(lambda message: self._warn("The computation failed", message))
-        self.controller.measured.connect(self._measured)
         self.panel = ScenePanel()
         self.panel.sceneChanged.connect(self._scene_edited)
-        self.compare_panel = ComparePanel()
-        self.compare_panel.compareRequested.connect(self.start)
-        self.compare_panel.runsChanged.connect(self._compare_runs_edited)
-        self.compare_panel.shownChanged.connect(self._show_run)
-        self.compare_panel.followChanged.connect(lambda i: self._follow(self.follow_action.isChecked()))
         self.view = SceneView()
         self.closeup_frame = QtWidgets.QFrame(self.view, objectName="closeupFrame")
         self.closeup_frame.setStyleSheet("#closeupFrame { border: 2px solid #333; background: #333; }")
@@ -86,8 +77,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline = TimeSlider()
         self.timeline.seeked.connect(self.seek)
         self.plots = LivePlots()
-        self.error_plots = ErrorPlots()
-        self.summary = SummaryTable()
         self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.readouts = Readouts()
         self.undo_stack = QtGui.QUndoStack(self)
@@ -99,9 +88,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_menus()
         self._build_toolbar()
         self._build_status()
+        self.compare = CompareMode(self)
+        self.compare.panel.followChanged.connect(lambda _i: self._follow(self.follow_action.isChecked()))
         self.presentation = Presentation(self)
         self.presentation.bar.addActions([self.scene_panel_action, self.presentation_action])
         self.preferences.restore(self)
+        self.compare.dock.hide()   # compare mode starts off, whatever the last session showed
         self._set_text_size(self.preferences.font_scale())
         self._set_help_topics()
         self._update_controls()
@@ -119,18 +111,6 @@ class MainWindow(QtWidgets.QMainWindow):
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetMovable
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, dock)
-        self.compare_dock = QtWidgets.QDockWidget("Compare", self, objectName="compareDock")
-        compare = QtWidgets.QWidget()
-        box = QtWidgets.QVBoxLayout(compare)
-        box.setContentsMargins(0, 0, 0, 0)
-        box.addWidget(self.compare_panel)
-        box.addWidget(QtWidgets.QLabel(" Summary (hover the names for what they mean)"))
-        box.addWidget(self.summary, 1)
-        self.compare_dock.setWidget(compare)
-        self.compare_dock.setFeatures(dock.features())
-        self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, self.compare_dock)
-        self.tabifyDockWidget(dock, self.compare_dock)
-        self.compare_dock.hide()
 
         splitter = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical)
         top = QtWidgets.QWidget()
@@ -140,9 +120,8 @@ class MainWindow(QtWidgets.QMainWindow):
         v.addWidget(self.timeline)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
-        self.bottom = QtWidgets.QStackedWidget()
+        self.bottom = QtWidgets.QStackedWidget()   # the live plots, or compare mode's error plots
         self.bottom.addWidget(self.plots)
-        self.bottom.addWidget(self.error_plots)
         splitter.addWidget(self.bottom)
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
@@ -212,7 +191,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.closeup_action = self._action("&Close-up", self._show_closeup, "Z",
                                            "A close-up following the ball in the corner of the view",
                                            checkable=True)
-        self.compare_action = self._action("&Compare Methods", self._set_compare_mode, "Ctrl+K",
+        self.compare_action = self._action("&Compare Methods", lambda on: self.compare.set_active(on), "Ctrl+K",
                                            "Several methods side by side on this scene, with their true errors",
                                            checkable=True)
         self.speed_error_action = self._action("&Speed against Error…", self.show_speed_against_error, None,
@@ -427,7 +406,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if redraw_camera or grid_changed:
             self.view.reset_camera()   # after reset(), so the ball stands at the start
         self.shown_scene = scene
-        self.compare_panel.set_scene(scene)
+        self.compare.scene_changed(scene)
         self._update_title()
         return notes
 
@@ -652,8 +631,12 @@ class MainWindow(QtWidgets.QMainWindow):
         if scene is None:
             return
         self.reset()
-        if self.compare_mode:
-            self._start_compare(scene)
+        if self.compare.active:
+            try:
+                self.compare.start(scene)
+            except ValueError as error:
+                self._warn("Cannot compare", str(error))
+            self._follow(self.follow_action.isChecked())
             return
         try:
             simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
@@ -670,68 +653,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline.set_span(simulation.t_end)
         self.controller.start([Run(simulation, self.landscape)])
         self.show_message(note)
-
-    def _start_compare(self, scene: Scene) -> None:
-        """Every run of the compare panel, and the reference, computed together."""
-        try:
-            choices = self.compare_panel.runs()
-            if not choices:
-                raise ValueError("add a run to compare (or choose a preset)")
-            spacing = compare_runs.reference_spacing(choices, scene.duration)
-            simulations = [compare_runs.simulation(scene, choice, spacing) for choice in choices]
-        except ValueError as error:
-            self._warn("Cannot compare", str(error))
-            return
-        runs = [Run(sim, self.landscape, choice.label, color)
-                for sim, choice, color in zip(simulations, choices, compare_runs.COLORS)]
-        colors = [run.color for run in runs]
-        self.view.set_runs(colors)
-        self.readouts.set_runs([(run.label, run.color) for run in runs])
-        self.error_plots.set_runs(runs, scene.duration)
-        self.summary.set_runs(runs)
-        self.controller.start(runs, reference=(scene, scene.duration, spacing),
-                              warm_ups=[compare_runs.warm_up(scene, choice) for choice in choices])
-        for i, shown in enumerate(self.compare_panel.shown()):
-            self._show_run(i, shown)
-        self._follow(self.follow_action.isChecked())
-        self.show_message(f"Comparing {len(runs)} runs to t = {scene.duration:g} s, with a reference run")
-
-    @property
-    def compare_mode(self) -> bool:
-        return self.compare_action.isChecked()
-
-    def enter_compare(self, runs: list[compare_runs.CompareRun]) -> None:
-        """Compare mode with these runs (``--compare`` on the command line)."""
-        self.compare_panel.set_runs(runs)
-        self.compare_action.setChecked(True)
-
-    def _set_compare_mode(self, on: bool) -> None:
-        self.reset()
-        if on and not self.compare_panel.rows and self.scene is not None:
-            self.compare_panel.use_preset(next(iter(compare_runs.PRESETS)))
-        self.compare_dock.setVisible(on)
-        if on:
-            self.compare_dock.raise_()
-        self.bottom.setCurrentWidget(self.error_plots if on else self.plots)
-        self.show_message("Compare mode: set the runs, then Compare (F5)" if on else "")
-
-    def _compare_runs_edited(self) -> None:
-        if self.compare_mode and self.controller.runs:
-            self.reset()   # the runs shown no longer are the ones set
-
-    def _show_run(self, index: int, shown: bool) -> None:
-        if self.compare_mode and index < len(self.controller.runs):
-            self.view.set_run_visible(index, shown)
-            self.error_plots.set_visible(index, shown)
-
-    def _measured(self) -> None:
-        """The reference is known: name it, and plot and tabulate every run's true error."""
-        from rollball.comparison import REFERENCE_RTOL, reference_method
-
-        _, estimate = self.controller.reference
-        self.error_plots.set_reference(f"{METHODS[reference_method()].label} at rtol {REFERENCE_RTOL:g}", estimate)
-        self.error_plots.show_time(self.controller.play_time)
-        self.summary.fill()
 
     def show_speed_against_error(self) -> None:
         """Compare every method on the current scene, in a window of its own."""
@@ -799,8 +720,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.progress.setValue(0)
 
     def _finished(self) -> None:
-        if self.compare_mode:
-            self._compare_finished()
+        if self.compare.active:
+            self.compare.finished()
             return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
@@ -811,14 +732,6 @@ class MainWindow(QtWidgets.QMainWindow):
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}" + liftoff, warning=True)
 
-    def _compare_finished(self) -> None:
-        self.summary.fill()
-        early = [f"{run.label} stopped early ({run.simulation.status.value.replace('_', ' ')})"
-                 for run in self.controller.runs if run.simulation.status is not Status.OK]
-        waiting = "" if self.controller.reference else "; the reference is still being computed"
-        self.show_message(f"Finished comparing {len(self.controller.runs)} runs" + "".join(f"; {e}" for e in early)
-                          + waiting, warning=bool(early))
-
     def _liftoff_note(self) -> str:
         t = self.controller.simulation.liftoff_time
         return "" if t is None else f"; lift-off at t = {t:.4g} s (not physical from there on)"
@@ -826,7 +739,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _run_event(self, index: int, kind: str, t: float) -> None:
         if kind == "liftoff":
             self.view.add_liftoff(self.controller.runs[index].buffer.point_at(t))
-            who = f"{self.controller.runs[index].label}: " if self.compare_mode else ""
+            who = f"{self.controller.runs[index].label}: " if self.compare.active else ""
             self.show_message(f"{who}Lift-off at t = {t:.4g} s: the real ball would leave the surface "
                               f"here; the model keeps it on, so what follows is not physical", warning=True)
 
@@ -869,8 +782,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline.set_time(t)
         self.frames += 1
         if force or self.frames % PLOT_EVERY == 0:
-            if self.compare_mode:
-                self.error_plots.show_time(t)
+            if self.compare.active:
+                self.compare.error_plots.show_time(t)
             else:
                 # while playing, the curves grow with the ball; otherwise they show all that is computed
                 buffer = runs[0].buffer
@@ -906,8 +819,7 @@ class MainWindow(QtWidgets.QMainWindow):
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
-        index = self.compare_panel.followed if self.controller.runs and self.compare_mode else 0
-        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=index)
+        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=self.compare.followed)
 
     def open_sweep(self) -> SweepDialog:
         """Analysis → Sweep…: a sweep of the current scene; a clicked run's scene is loaded here."""

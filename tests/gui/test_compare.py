@@ -16,7 +16,7 @@ SPECS = "euler/classic,rk4,dopri5"
 
 
 def compare_to_end(qtbot, window, specs=SPECS, timeout=60_000):
-    window.enter_compare([CompareRun.of(spec, window.scene) for spec in parse_runs(specs)])
+    window.compare.enter([CompareRun.of(spec, window.scene) for spec in parse_runs(specs)])
     window.speed.setCurrentIndex(FASTEST)
     with qtbot.waitSignal(window.controller.measured, timeout=timeout):
         window.start()
@@ -46,15 +46,15 @@ def test_three_runs_play_to_the_end_each_in_its_colour(compared):
 
 
 def test_the_legend_names_every_run_and_the_reference(compared):
-    labels = [label.text for _, label in compared.error_plots.legend.items]
+    labels = [label.text for _, label in compared.compare.error_plots.legend.items]
     assert labels[:3] == [run.label for run in compared.controller.runs]
     reference, estimate = compared.controller.reference
-    assert labels[3] == f"Reference: {METHODS[reference_method()].label} at rtol 1e-13, its error ≈ {estimate:.1g} m"
+    assert labels[3] == f"Reference: {METHODS[reference_method()].label} at rtol 1e-13, own error ≈ {estimate:.1g} m"
     assert 0 < estimate < 1e-9 and reference.t[-1] == 2.0
 
 
 def test_error_plots_hold_data_for_every_run_and_euler_is_worst(compared):
-    for k, curves in enumerate(compared.error_plots.curves):
+    for k, curves in enumerate(compared.compare.error_plots.curves):
         for key, curve in curves.items():
             t, y = curve.xData, curve.yData
             assert len(t) > 50 and t[-1] == 2.0, (k, key)
@@ -68,7 +68,7 @@ def test_error_plots_hold_data_for_every_run_and_euler_is_worst(compared):
 
 
 def test_the_summary_compares_the_runs(compared):
-    table = compared.summary
+    table = compared.compare.summary
     assert [table.value("Status", k) for k in range(3)] == ["ok"] * 3
     assert table.value("Steps", 0) == table.value("Steps", 1) == "2,000"
     assert table.value("Evaluations", 1) == "8,001"
@@ -80,10 +80,10 @@ def test_the_summary_compares_the_runs(compared):
 
 def test_a_run_can_be_hidden_and_followed(qtbot, compared):
     w = compared
-    w.compare_panel.rows[1].shown.setChecked(False)
+    w.compare.panel.rows[1].shown.setChecked(False)
     assert not w.view.balls[1].visible() and not w.view.trails[1].visible()
-    assert not w.error_plots.curves[1]["contact"].isVisible()
-    w.compare_panel.follow.setCurrentIndex(2)
+    assert not w.compare.error_plots.curves[1]["contact"].isVisible()
+    w.compare.panel.follow.setCurrentIndex(2)
     w.follow_action.setChecked(True)
     assert w.view.followed == 2
     center = w.view.opts["center"]
@@ -92,8 +92,8 @@ def test_a_run_can_be_hidden_and_followed(qtbot, compared):
 
 def test_presets_and_the_panel_make_valid_runs(qtbot, window):
     window.compare_action.setChecked(True)
-    assert window.compare_dock.isVisible()
-    panel = window.compare_panel
+    assert window.compare.dock.isVisible()
+    panel = window.compare.panel
     assert [str(run.spec) for run in panel.runs()] == ["euler/classic", "rk4/classic", "rk4"]
     panel.use_preset("Classic against Munthe-Kaas")
     assert len(panel.rows) == 6 and not panel.add_button.isEnabled()
@@ -104,7 +104,7 @@ def test_presets_and_the_panel_make_valid_runs(qtbot, window):
     panel.rows[1].setting.editingFinished.emit()
     assert "step size must be a number greater than 0" in panel.error.text()
     window.compare_action.setChecked(False)
-    assert not window.compare_dock.isVisible() and window.bottom.currentWidget() is window.plots
+    assert not window.compare.dock.isVisible() and window.bottom.currentWidget() is window.plots
 
 
 def test_reference_rows_meet_every_run():

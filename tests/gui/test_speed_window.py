@@ -47,7 +47,7 @@ def test_a_quick_comparison_is_plotted_exported_and_loaded(qtbot, window, tmp_pa
     integrator = window.scene.integrator
     assert (integrator.method, integrator.munthe_kaas) == (result.spec.method, result.spec.munthe_kaas)
     assert (integrator.dt if result.dt is not None else integrator.rtol) == (result.dt or result.rtol)
-    assert window.controller.state == RUNNING and not window.compare_mode
+    assert window.controller.state == RUNNING and not window.compare.active
 
 
 def test_a_comparison_can_be_cancelled(qtbot, window):
