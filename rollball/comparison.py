@@ -14,11 +14,10 @@ a run is the maximum over those times, not only at the end.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable
 
@@ -567,7 +566,7 @@ def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_e
         reached = len(on_grid) if on_grid.all() else int(np.argmin(on_grid))
         if reached < 2:
             raise NothingToCompare(f"nothing to compare: the reference run stopped at once ({reference.message})")
-        ref_traj = dataclasses.replace(ref_traj, data=ref_traj.data[:reached])
+        ref_traj = replace(ref_traj, data=ref_traj.data[:reached])
         t_end = float(ref_traj.t[-1])
     runner = _Runner(scene, float(t_end), record_dt, ref_traj, reference, effort, cancel)
     results: list[RunResult] = []
