@@ -1,21 +1,29 @@
 """The ``rollball`` command line.
 
 Exit status: 0 when a run reached its end (a lift-off is a warning), 1 when the physics
-stopped it early (the trajectory up to there is still written), 2 for bad input or usage.
+stopped it early (the trajectory up to there is still written), 2 for bad input or usage,
+141 when the reader of the output went away (``rollball examples | head -1``), as for
+programs that SIGPIPE ends. Messages are one line on stderr; user-controlled text in them
+(file names, JSON keys) is escaped.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import warnings
 from pathlib import Path
 
 from . import __version__
 from .examples import example_scenes
+from .files import write_target
 from .scene import SceneError
 from .tableaus import METHODS
+from .text import shown
 
-EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT, EXIT_BROKEN_PIPE = 0, 1, 2, 141
+STDOUT = "-"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -34,6 +42,8 @@ def _positive_float(text: str) -> float:
 
 
 def _positive_int(text: str) -> int:
+    if len(text.strip()) > 30:
+        raise argparse.ArgumentTypeError(f"number too large ({len(text)} characters)")
     try:
         value = int(text)
     except ValueError:
@@ -41,6 +51,12 @@ def _positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be 1 or more: {text!r}")
     return value
+
+
+def _output_file(text: str) -> str:
+    if text == "":
+        raise argparse.ArgumentTypeError("empty file name (use - for standard output)")
+    return text
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -75,7 +91,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--record-dt", type=_positive_float, metavar="T",
                      help="record at multiples of T seconds and at the end (adaptive; "
                           "default: every accepted step)")
-    sim.add_argument("--csv", metavar="OUT.csv", help="write the trajectory as CSV")
+    sim.add_argument("--csv", metavar="OUT.csv", type=_output_file,
+                     help="write the trajectory as CSV (- for standard output; the summary then "
+                          "goes to standard error)")
 
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
@@ -96,10 +114,17 @@ def _simulate(args) -> int:
     from .simulation import simulate
     from .trajectory import Status
 
+    name = shown(args.scene)
     try:
         scene = Scene.load(args.scene)
     except (SceneError, OSError) as e:
-        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+        return _fail(f"{name}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    to_stdout = args.csv == STDOUT
+    if args.csv and not to_stdout:
+        try:  # before the run: a refused target must not cost the run
+            write_target(args.csv, keep=[args.scene])
+        except OSError as e:
+            return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     try:
         traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
                         t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
@@ -108,13 +133,16 @@ def _simulate(args) -> int:
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
-    print(f"{args.scene}: {traj.steps} steps, status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}")
-    if args.csv:
+    print(f"{name}: {traj.steps} steps, status {traj.status} ({traj.message}), "
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}",
+          file=sys.stderr if to_stdout else sys.stdout)
+    if to_stdout:
+        traj.write_csv(sys.stdout)
+    elif args.csv:
         try:
-            traj.to_csv(args.csv)
+            traj.to_csv(args.csv, keep=[args.scene])
         except OSError as e:
-            return _fail(f"cannot write {args.csv}: {e.strerror or e}")
+            return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
 
 
@@ -124,7 +152,7 @@ def _examples() -> int:
             path = path.relative_to(Path.cwd())
         except ValueError:
             pass
-        print(f"{path}: {scene.description}")
+        print(f"{shown(path)}: {shown(scene.description)}")
     return EXIT_OK
 
 
@@ -139,7 +167,7 @@ def _bench(args) -> int:
     try:
         print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
     except OSError as e:
-        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+        return _fail(f"cannot write to {shown(args.out)}: {e.strerror or e}")
     return EXIT_OK
 
 
@@ -148,18 +176,31 @@ def _fail(message: str) -> int:
     return EXIT_BAD_INPUT
 
 
+def _warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as one line of its own (the summary stays one line)."""
+    print(f"rollball: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+
+COMMANDS = {"simulate": _simulate, "examples": lambda args: _examples(), "bench": _bench}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command == "simulate":
+    if args.command not in COMMANDS:
+        parser.print_help()
+        return EXIT_BAD_INPUT
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning
+        # overflow or invalid values in derived columns are reported by the run's status
+        warnings.filterwarnings("ignore", category=RuntimeWarning)
         try:
-            return _simulate(args)
+            code = COMMANDS[args.command](args)
+            sys.stdout.flush()
         except KeyboardInterrupt:
             print("rollball: interrupted", file=sys.stderr)
             return 130
-    if args.command == "examples":
-        return _examples()
-    if args.command == "bench":
-        return _bench(args)
-    parser.print_help()
-    return EXIT_BAD_INPUT
+        except BrokenPipeError:  # the reader left (| head): stop quietly, as SIGPIPE would
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return EXIT_BROKEN_PIPE
+    return code

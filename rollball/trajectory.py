@@ -105,9 +105,10 @@ class Trajectory:
                 total += g * g if i == j else 2.0 * g * g
         return np.sqrt(total)
 
-    def to_csv(self, path: str | os.PathLike) -> None:
-        """Write the CSV of DESIGN §5 atomically, numbers at full precision."""
-        atomic_write(path, self.write_csv)
+    def to_csv(self, path: str | os.PathLike, keep=()) -> None:
+        """Write the CSV of DESIGN §5 atomically, numbers at full precision (``keep``: paths
+        that must not be overwritten, see ``rollball.files``)."""
+        atomic_write(path, self.write_csv, keep=keep)
 
     def write_csv(self, stream) -> None:
         for key, value in self.provenance.items():
