@@ -41,11 +41,27 @@ def ball_mesh(rows: int = 24, cols: int = 48) -> gl.MeshData:
     return mesh
 
 
-def surface_colors(z: np.ndarray, fit: np.ndarray) -> np.ndarray:
-    """Vertex colours: height by colour map, the no-fit region and undefined points apart."""
+def ball_transform(center: np.ndarray, R: np.ndarray, radius: float) -> pg.Transform3D:
+    """The unit ball mesh placed at ``center`` and turned by R; a matrix R that is no rotation
+    deforms it (one that grows is drawn no larger than the ball, so its shape stays visible)."""
+    m = np.eye(4)
+    m[:3, :3] = R * (radius / max(1.0, float(np.linalg.norm(R, 2))))
+    m[:3, 3] = center
+    return pg.Transform3D(*m.ravel())
+
+
+def height_span(z: np.ndarray) -> tuple[float, float]:
+    """The heights the colour map spans: those of the finite points."""
     finite = np.isfinite(z)
-    lo, hi = (np.min(z[finite]), np.max(z[finite])) if finite.any() else (0.0, 1.0)
-    level = (np.where(finite, z, lo) - lo) / (hi - lo) if hi > lo else np.full(z.shape, 0.5)
+    return (float(np.min(z[finite])), float(np.max(z[finite]))) if finite.any() else (0.0, 1.0)
+
+
+def surface_colors(z: np.ndarray, fit: np.ndarray, span: tuple[float, float] | None = None) -> np.ndarray:
+    """Vertex colours: height by colour map over ``span`` (default: z's own), the no-fit region
+    and undefined points apart."""
+    finite = np.isfinite(z)
+    lo, hi = span or height_span(z)
+    level = np.clip((np.where(finite, z, lo) - lo) / (hi - lo), 0.0, 1.0) if hi > lo else np.full(z.shape, 0.5)
     colors = HEIGHT_MAP.map(level.ravel(), mode="float").reshape(z.shape + (4,))
     colors[fit >= 1.0] = NO_FIT_COLOR
     colors[~finite] = UNDEFINED_COLOR
@@ -75,6 +91,7 @@ class SceneView(gl.GLViewWidget):
         self.follow = False
         self.surface: gl.GLSurfacePlotItem | None = None
         self.extent = 6.0
+        self.z_span = (0.0, 1.0)   # heights the colour map spans
         self.grid_lines = gl.GLLinePlotItem(color=GRID_COLOR, width=1.0, antialias=True, mode="lines")
         self.grid_lines.setGLOptions("translucent")
         self.addItem(self.grid_lines)
@@ -102,7 +119,8 @@ class SceneView(gl.GLViewWidget):
         lowest = z[finite].min() if finite.any() else 0.0
         # undefined points sit at the lowest height (drawn grey); walls are cut at twice the grid
         shown = np.clip(np.where(finite, z, lowest), -2 * self.extent, 2 * self.extent)
-        colors = surface_colors(z, fit)
+        self.z_span = height_span(z)
+        colors = surface_colors(z, fit, self.z_span)
         if self.surface is not None:
             self.removeItem(self.surface)
         self.surface = gl.GLSurfacePlotItem(x=axis, y=axis, z=shown, colors=colors, shader="shaded",
@@ -125,12 +143,8 @@ class SceneView(gl.GLViewWidget):
     # -- ball, trail, markers ---------------------------------------------------------
 
     def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float) -> None:
-        """Place the ball; a matrix R that is no rotation deforms it (one that grows is drawn no
-        larger than the ball, so its shape stays visible)."""
-        m = np.eye(4)
-        m[:3, :3] = R * (radius / max(1.0, float(np.linalg.norm(R, 2))))
-        m[:3, 3] = center
-        self.ball.setTransform(pg.Transform3D(*m.ravel()))
+        """Place the ball (see ``ball_transform``)."""
+        self.ball.setTransform(ball_transform(center, R, radius))
         self.ball_center = np.asarray(center, dtype=float)
         if self.follow:
             self.opts["center"] = QtGui.QVector3D(*map(float, center))

@@ -3,129 +3,112 @@
 from __future__ import annotations
 
 import math
-import time
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
+from rollball import Scene, SceneError, Simulation, Status, Trajectory, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
+from rollball.trajectory import CONTACT
 from rollball.geometry import unit_normal
 from rollball.landscape import landscape_for
-from rollball.simulation import step_count
+from rollball.simulation import recording
+from rollball.trajectory import CENTER, R, T
 
+from . import help as helps
+from .animation import DEFAULT_FPS, frame_times, record
+from .closeup import CloseUp
+from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
+from .dialogs import AnimationDialog, ImageDialog
+from .document import Document
 from .inputs import ScenePanel
-from .playback import RunBuffer
+from .picture import caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
+from .presentation import TEXT_SIZES, Presentation
+from .readouts import Readouts
+from .timeline import Marker, TimeSlider
+from .undo import SceneChange
 from .view3d import SceneView
-from .worker import SimulationThread
 
-FRAME_MS = 16                  # redraw at most ~60 Hz
 PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
-AUTO_ROWS = 200_000            # "record: auto" keeps at most about this many rows
-ADAPTIVE_ROWS = 10_000
-ENERGY_WARNING = 1e-2          # a finished run whose energy error exceeds this gets a warning
-ORTHOGONALITY_WARNING = 1e-3   # likewise for ||R^T R - I|| at the end         # an adaptive run records this many evenly spaced rows
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
 CSV_FILTER = "CSV files (*.csv);;All files (*)"
-
-READY, RUNNING, PAUSED, FINISHED, STOPPED = "ready", "running", "paused", "finished", "stopped"
-
-LIMITS_TEXT = """<p><b>What the model assumes.</b> A homogeneous solid ball rolls without slipping
-and always touches the surface in exactly one point.</p>
-<p><b>Lift-off.</b> Where the normal force F·N drops to zero the real ball would leave the
-surface (over a crest, at high speed). The model keeps it glued on, so from there on the
-motion is not physical. The app marks the first lift-off point in orange and says so in the
-status bar; the run goes on so you can see what the equations do.</p>
-<p><b>Does not fit.</b> Where the surface curves up more tightly than the ball (r·κ ≥ 1 for a
-principal curvature κ of a valley) the ball cannot touch in one point. These regions are
-drawn in red; a run that reaches one stops there with the time and position.</p>
-<p><b>Non-finite.</b> A landscape that cannot be evaluated where the ball is (log or sqrt
-outside its domain, a pole), or a step so large that the numbers overflow, stops the run with
-the time and position. Undefined regions are drawn in grey.</p>"""
+LIFTOFF_COLOR, STOP_COLOR = "#ff8c00", "#c0392b"   # markers on the time slider
 
 
 class MainWindow(QtWidgets.QMainWindow):
     def __init__(self, preferences: Preferences | None = None):
         super().__init__()
         self.preferences = preferences or Preferences()
-        self.path: Path | None = None       # the scene file (None: new or an example)
-        self.example: str | None = None     # name of the example the scene came from
-        self.saved_scene: Scene | None = None
+        self.document = Document()
         self.landscape = None
         self.shown_scene: Scene | None = None   # what the view and the run belong to
-        self.simulation: Simulation | None = None
-        self.thread: SimulationThread | None = None
-        self.buffer: RunBuffer | None = None
-        self.state = READY
-        self.play_time = 0.0
-        self.computed = False               # the worker has finished the run
-        self.liftoff_announced = False
         self.drawn_index = -1                # the row the view shows
         self.frames = 0
-        self._last_tick = self._frame_started = time.perf_counter()
 
+        self.controller = RunController(self)
+        self.controller.stateChanged.connect(lambda _state: self._update_controls())
+        self.controller.frameReady.connect(self._draw)
+        self.controller.event.connect(self._run_event)
+        self.controller.finished.connect(self._finished)
+        self.controller.failed.connect(lambda message: self._warn("The computation failed", message))
         self.panel = ScenePanel()
         self.panel.sceneChanged.connect(self._scene_edited)
         self.view = SceneView()
+        self.closeup_frame = QtWidgets.QFrame(self.view, objectName="closeupFrame")
+        self.closeup_frame.setStyleSheet("#closeupFrame { border: 2px solid #333; background: #333; }")
+        self.closeup = CloseUp()
+        frame_layout = QtWidgets.QVBoxLayout(self.closeup_frame)
+        frame_layout.setContentsMargins(2, 2, 2, 2)
+        frame_layout.addWidget(self.closeup)
+        self.closeup_frame.hide()
+        self.timeline = TimeSlider()
+        self.timeline.seeked.connect(self.seek)
         self.plots = LivePlots()
+        self.readouts = Readouts()
+        self.undo_stack = QtGui.QUndoStack(self)
+        self.undo_stack.cleanChanged.connect(lambda _clean: self._update_controls())
+        self.help_window: helps.HelpWindow | None = None
+        self.view.installEventFilter(self)   # keeps the close-up in the view's corner
         self._build_layout()
         self._build_actions()
         self._build_menus()
         self._build_toolbar()
         self._build_status()
+        self.presentation = Presentation(self)
+        self.presentation.bar.addActions([self.scene_panel_action, self.presentation_action])
         self.preferences.restore(self)
-
-        self.timer = QtCore.QTimer(self, interval=FRAME_MS, timerType=QtCore.Qt.TimerType.PreciseTimer)
-        self.timer.timeout.connect(self._tick)
+        self._set_text_size(self.preferences.font_scale())
+        self._set_help_topics()
         self._update_controls()
 
     # -- layout ----------------------------------------------------------------------
 
     def _build_layout(self) -> None:
-        self.setWindowIcon(QtGui.QIcon(str(Path(__file__).resolve().parent.parent / "resources" / "icons"
-                                           / "rollball.svg")))
+        self.setWindowIcon(QtGui.QIcon(str(resources.files("app") / "icons" / "rollball.svg")))
         scroll = QtWidgets.QScrollArea(widgetResizable=True)
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)
         scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        dock = QtWidgets.QDockWidget("Scene", self, objectName="sceneDock")
+        self.scene_dock = dock = QtWidgets.QDockWidget("Scene", self, objectName="sceneDock")
         dock.setWidget(scroll)
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetMovable
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, dock)
-
-        self.readouts = {}
-        grid = QtWidgets.QGridLayout()
-        for i, (key, label) in enumerate((("t", "Time t"), ("energy", "Energy E"),
-                                          ("drift", "(E − E₀)/E₀"), ("orth", "‖RᵀR − I‖"),
-                                          ("force", "Normal force F·N"), ("speed", "Speed |ċ|"))):
-            name = QtWidgets.QLabel(label)
-            name.setStyleSheet("color: #555;")
-            value = QtWidgets.QLabel("—", objectName=f"readout.{key}")
-            value.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-            value.setMinimumWidth(110)
-            font = value.font()
-            font.setFamily("monospace")
-            font.setStyleHint(QtGui.QFont.StyleHint.Monospace)
-            value.setFont(font)
-            grid.addWidget(name, 0, i)
-            grid.addWidget(value, 1, i)
-            self.readouts[key] = value
-        readouts = QtWidgets.QWidget()
-        readouts.setLayout(grid)
 
         splitter = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical)
         top = QtWidgets.QWidget()
         v = QtWidgets.QVBoxLayout(top)
         v.setContentsMargins(0, 0, 0, 0)
         v.addWidget(self.view, 1)
-        v.addWidget(readouts)
+        v.addWidget(self.timeline)
+        v.addWidget(self.readouts)
         splitter.addWidget(top)
         splitter.addWidget(self.plots)
         splitter.setStretchFactor(0, 4)
@@ -153,7 +136,17 @@ class MainWindow(QtWidgets.QMainWindow):
         self.export_action = self._action("&Export Trajectory CSV…", self.export_dialog, "Ctrl+E",
                                           "Write the computed trajectory as CSV")
         self.image_action = self._action("Save &Image…", self.save_image_dialog, "Ctrl+Shift+I",
-                                         "Save the 3-D view as a PNG image")
+                                         "Save the 3-D view as a PNG image (1×, 2×, 4×; caption; plots)")
+        self.animation_action = self._action("Export &Animation…", self.export_animation_dialog, "Ctrl+Shift+E",
+                                             "Write the run's playback as an MP4 video or a GIF")
+        self.revert_action = self._action("Re&vert Scene", self.revert, None,
+                                          "Back to the scene as it was opened or last saved")
+        self.undo_action = self.undo_stack.createUndoAction(self, "&Undo")
+        self.undo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Z")])
+        self.redo_action = self.undo_stack.createRedoAction(self, "&Redo")
+        self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
+        self.undo_action.setStatusTip("Undo the last change of the scene's fields")
+        self.redo_action.setStatusTip("Redo the change undone last")
         self.quit_action = self._action("&Quit", self.close, keys.Quit, "Quit RollBall")
         self.start_action = self._action("Start", self.start, "F5", "Start the run from t = 0")
         self.pause_action = self._action("Pause", self.toggle_pause, "Space", "Pause or resume playback",
@@ -163,18 +156,49 @@ class MainWindow(QtWidgets.QMainWindow):
         self.reset_action = self._action("Reset", self.reset, "Ctrl+R", "Back to t = 0")
         self.follow_action = self._action("&Follow Ball", self._follow, "F", "Camera follows the ball",
                                           checkable=True)
-        self.camera_action = self._action("Reset &Camera", self.view.reset_camera, "Home", "Default camera")
+        self.camera_action = self._action("Reset &Camera", self.view.reset_camera, "C", "Default camera")
+        self.back_action = self._action("Frame Back", lambda: self.controller.step(-1), "Left",
+                                        "Show the moment one frame earlier")
+        self.forward_action = self._action("Frame Forward", lambda: self.controller.step(1), "Right",
+                                           "Show the moment one frame later")
+        self.first_action = self._action("Go to Start", lambda: self.seek(0.0), "Home", "Show t = 0")
+        self.last_action = self._action("Go to End", lambda: self.seek(math.inf), "End",
+                                        "Show the last computed moment")
+        self.liftoff_action = self._action("Go to &Lift-off", self.go_to_liftoff, "L",
+                                           "Show the moment the real ball would leave the surface")
+        self.presentation_action = self._action("&Presentation", self.presentation_toggled, "F11",
+                                                "Full screen, large text, close-up of the ball (Esc leaves)",
+                                                checkable=True)
+        self.leave_action = self._action("Leave Presentation", lambda: self.presentation_action.setChecked(False),
+                                         "Esc", "Back from presentation mode")
+        self.scene_panel_action = self._action("Scene", lambda on: self.scene_dock.setVisible(on), None,
+                                               "Show or hide the scene panel", checkable=True,
+                                               name="scene_panel")
+        self.scene_dock.visibilityChanged.connect(self.scene_panel_action.setChecked)
+        self.leave_action.setEnabled(False)
+        self.closeup_action = self._action("&Close-up", self._show_closeup, "Z",
+                                           "A close-up following the ball in the corner of the view",
+                                           checkable=True)
         self.trail_action = self._action("Show &Trail", lambda on: self.view.trail.setVisible(on), "T",
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
-        self.limits_action = self._action("Limits of the &Model", self.show_limits, None,
-                                          "When the model stops being valid")
+        self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
+                                              "The equations of motion, lift-off, no-fit, Munthe-Kaas")
+        self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
+                                              "What the plots, readouts and colours say")
+        self.keys_help_action = self._action("&Keyboard Shortcuts", lambda: self.show_help("keys"), None,
+                                             "Every shortcut of the menus")
+        self.context_help_action = self._action("Help on This", self.context_help, "F1",
+                                                "Help on what the mouse points at")
+        self.limits_action = self._action("Limits of the Model", lambda: self.show_help("model.html#liftoff"),
+                                          None, "When the model stops being valid")
         self.about_action = self._action("&About RollBall", self.show_about, None, "Version and licence")
-        for action in (self.start_action, self.pause_action, self.step_action, self.stop_action,
-                       self.reset_action):
+        keyed = [self.start_action, self.pause_action, self.step_action, self.stop_action, self.reset_action,
+                 self.back_action, self.forward_action, self.first_action, self.last_action, self.leave_action,
+                 self.context_help_action]
+        for action in keyed:
             action.setShortcutContext(QtCore.Qt.ShortcutContext.WindowShortcut)
-        self.addActions([self.start_action, self.pause_action, self.step_action, self.stop_action,
-                         self.reset_action])
+        self.addActions(keyed)
 
     def _build_menus(self) -> None:
         bar = self.menuBar()
@@ -194,16 +218,36 @@ class MainWindow(QtWidgets.QMainWindow):
         files.addSeparator()
         files.addActions([self.save_action, self.save_as_action])
         files.addSeparator()
-        files.addActions([self.export_action, self.image_action])
+        files.addAction(self.revert_action)
+        files.addSeparator()
+        files.addActions([self.export_action, self.image_action, self.animation_action])
         files.addSeparator()
         files.addAction(self.quit_action)
+        edit = bar.addMenu("&Edit")
+        edit.addActions([self.undo_action, self.redo_action])
         run = bar.addMenu("&Run")
         run.addActions([self.start_action, self.pause_action, self.step_action, self.stop_action,
                         self.reset_action])
+        run.addSeparator()
+        run.addActions([self.back_action, self.forward_action, self.first_action, self.last_action,
+                        self.liftoff_action])
         view = bar.addMenu("&View")
+        view.addActions([self.presentation_action, self.closeup_action])
+        sizes = view.addMenu("Text &Size")
+        self.text_size_group = QtGui.QActionGroup(self)
+        for label, scale in TEXT_SIZES:
+            action = sizes.addAction(label)
+            action.setCheckable(True)
+            action.setData(scale)
+            action.triggered.connect(lambda _=False, k=scale: self._set_text_size(k, remember=True))
+            self.text_size_group.addAction(action)
+        view.addSeparator()
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
-        helps = bar.addMenu("&Help")
-        helps.addActions([self.limits_action, self.about_action])
+        help_menu = bar.addMenu("&Help")
+        help_menu.addActions([self.model_help_action, self.plots_help_action, self.keys_help_action,
+                              self.context_help_action])
+        help_menu.addSeparator()
+        help_menu.addActions([self.limits_action, self.about_action])
 
     def _build_toolbar(self) -> None:
         bar = self.addToolBar("Run")
@@ -222,6 +266,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.speed = QtWidgets.QComboBox(objectName="speed")
         for label, value in SPEEDS:
             self.speed.addItem(label, value)
+        self.speed.currentIndexChanged.connect(lambda: setattr(self.controller, "speed", self.speed.currentData()))
         self.speed.setCurrentIndex(3)
         self.speed.setToolTip("Simulated seconds per wall-clock second")
         bar.addWidget(self.speed)
@@ -264,22 +309,36 @@ class MainWindow(QtWidgets.QMainWindow):
             return False
         if not self._may_discard():
             return False
-        self.stop_worker()
-        is_example = not remember
-        self.path = None if is_example else path
-        self.example = path.stem if is_example else None
+        self.reset()
+        self.undo_stack.clear()
+        self.document.opened(path, scene, example=not remember)
         if remember:
             self.preferences.add_recent(path)
             self.preferences.set_last_folder(path)
         self.panel.set_scene(scene)
-        self.saved_scene = scene
         notes = self._use_scene(scene, redraw_camera=True)
         self.show_message(f"Opened {path.name}" + (f": {scene.description}" if scene.description else "")
                           + "".join(f" ({note})" for note in notes))
         return True
 
     def _scene_edited(self, scene: Scene) -> None:
+        old = self.shown_scene
         self._use_scene(scene)
+        if old is not None and old != scene:
+            self.undo_stack.push(SceneChange(self.show_scene, old, scene))
+
+    def show_scene(self, scene: Scene) -> None:
+        """Put a scene into the fields and the view (undo, redo, revert)."""
+        self.panel.set_scene(scene)
+        self._use_scene(scene)
+
+    def revert(self) -> None:
+        """Back to the scene as opened or last saved (itself undoable)."""
+        saved = self.document.saved_scene
+        if saved is None or not self.dirty:
+            return
+        self.undo_stack.push(SceneChange(self.show_scene, self.scene, saved, "Revert to saved", applied=False))
+        self.show_message(f"Reverted to {self.document.name}")
 
     def _use_scene(self, scene: Scene, redraw_camera: bool = False) -> list[str]:
         """Show a valid scene; a change to what a run depends on resets the run. Returns notes
@@ -297,6 +356,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if surface_changed:
             self.landscape = landscape
             facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius)
+            self.closeup.set_landscape(landscape, scene.ball.radius, self.view.z_span)
             if facts["no_fit"]:
                 notes.append("red: the ball does not fit there")
             if facts["undefined"]:
@@ -307,7 +367,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
         if run_changed:
-            if self.state in (RUNNING, PAUSED):
+            if self.controller.state in (RUNNING, PAUSED):
                 self.show_message("Scene changed: the run was reset")
             self.reset()
         self.shown_scene = scene
@@ -315,13 +375,13 @@ class MainWindow(QtWidgets.QMainWindow):
         return notes
 
     def _update_title(self) -> None:
-        name = self.path.name if self.path else (f"{self.example} (example)" if self.example else "untitled")
         self.setWindowModified(self.dirty)
-        self.setWindowTitle(f"{name}[*] — RollBall")
+        self.revert_action.setEnabled(self.dirty)
+        self.setWindowTitle(self.document.title())
 
     @property
     def dirty(self) -> bool:
-        return self.scene is not None and self.scene != self.saved_scene
+        return self.document.dirty(self.scene)
 
     def _may_discard(self) -> bool:
         """Ask before unsaved scene changes are lost; True to go on."""
@@ -359,12 +419,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu.addAction("Clear Recent", self.preferences.clear_recent).setEnabled(bool(files))
 
     def save(self) -> bool:
-        if self.path is None:
+        if self.document.path is None:
             return self.save_as()
-        return self.save_to(self.path)
+        return self.save_to(self.document.path)
 
     def save_as(self) -> bool:
-        suggestion = str(Path(self.preferences.last_folder()) / f"{self.path.stem if self.path else self.example or 'scene'}.json")
+        suggestion = str(Path(self.preferences.last_folder()) / f"{self.document.stem or 'scene'}.json")
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save scene", suggestion, SCENE_FILTER)
         return bool(path) and self.save_to(Path(path))
 
@@ -374,7 +434,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_message(f"Saving the last valid scene ({self.panel.error_text})")
         if not self._write("save scene", path, scene.save):
             return False
-        self.path, self.example, self.saved_scene = Path(path), None, scene
+        self.document.saved(path, scene)
         self.preferences.add_recent(path)
         self._update_title()
         self.show_message(f"Saved {Path(path).name}")
@@ -391,39 +451,110 @@ class MainWindow(QtWidgets.QMainWindow):
         return True
 
     def export_dialog(self) -> None:
-        stem = self.path.stem if self.path else self.example or "trajectory"
-        suggestion = str(Path(self.preferences.last_folder()) / f"{stem}.csv")
+        suggestion = str(Path(self.preferences.last_folder()) / f"{self.document.stem or 'trajectory'}.csv")
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export trajectory", suggestion, CSV_FILTER)
         if path:
             self.export_csv(Path(path))
 
     def export_csv(self, path: Path) -> bool:
-        if self.simulation is None or not self.computed:
+        simulation = self.controller.simulation
+        if simulation is None or not self.controller.computed:
             return False
-        trajectory = self.simulation.trajectory()
+        trajectory = simulation.trajectory()
         if not self._write("export trajectory", path, trajectory.to_csv):
             return False
         self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
         return True
 
-    def save_image_dialog(self) -> None:
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save image", str(Path(self.preferences.last_folder())
-                                                        / "rollball.png"), "PNG images (*.png)")
-        if path:
-            self.save_image(Path(path))
+    def _suggest(self, suffix: str) -> Path:
+        """A file name saying the scene and the time shown, in the last folder used."""
+        t = self.controller.play_time if self.controller.runs else 0.0
+        return Path(self.preferences.last_folder()) / f"{self.document.stem or 'rollball'}-t{t:.2f}s{suffix}"
 
-    def save_image(self, path: Path) -> bool:
-        """The 3-D view as a PNG, written atomically."""
+    def save_image_dialog(self) -> None:
+        dialog = ImageDialog(self._suggest(".png"), self)
+        if dialog.exec() == QtWidgets.QDialog.DialogCode.Accepted:
+            self.save_image(dialog.path, **dialog.options())
+
+    def picture(self, size: tuple[int, int], caption: bool = False, plots: bool = False) -> QtGui.QImage:
+        """The 3-D view at ``size`` as shown (with the close-up when it is on), optionally with a
+        caption and the plots."""
+        scene = self.controller.simulation.scene if self.controller.runs else self.scene
+        text = caption_text(scene, self.controller.play_time) if caption and scene else None
+        return compose(self.view, size, inset=self.closeup if self.closeup.isVisible() else None,
+                       caption=text, plots=self.plots if plots else None)
+
+    def save_image(self, path: Path, scale: int = 1, caption: bool = False, plots: bool = False) -> bool:
+        """The 3-D view as a PNG at ``scale`` times its size on screen, written atomically."""
+        image = self.picture((scale * self.view.width(), scale * self.view.height()), caption, plots)
         data = QtCore.QByteArray()
         buffer = QtCore.QBuffer(data)
         buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
-        self.view.grabFramebuffer().save(buffer, "PNG")
+        image.save(buffer, "PNG")
         if not self._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data))):
             return False
-        self.show_message(f"Saved {path.name}")
+        self.show_message(f"Saved {path.name} ({image.width()}×{image.height()})")
+        return True
+
+    def export_animation_dialog(self) -> None:
+        if not self.controller.runs:
+            return
+        size = (self.view.width() - self.view.width() % 2, self.view.height() - self.view.height() % 2)
+        dialog = AnimationDialog(self._suggest(".mp4").with_name(f"{self.document.stem or 'rollball'}.mp4"),
+                                 size, self.controller.end_time, self)
+        if dialog.exec() != QtWidgets.QDialog.DialogCode.Accepted:
+            return
+        options = dialog.options()
+        progress = QtWidgets.QProgressDialog("Exporting animation…", "Cancel", 0, 100, self)
+        progress.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
+        progress.setMinimumDuration(300)
+
+        def report(done: int, total: int) -> bool:
+            progress.setMaximum(total)
+            progress.setValue(done)
+            return not progress.wasCanceled()
+        try:
+            self.export_animation(dialog.path, progress=report, **options)
+        except (OSError, ValueError) as error:
+            self._warn("Cannot export animation", f"{dialog.path}: {getattr(error, 'strerror', None) or error}. "
+                                                  "Nothing was changed.")
+        finally:
+            progress.close()
+
+    def export_animation(self, path: Path, fps: float = DEFAULT_FPS, t0: float = 0.0, t1: float | None = None,
+                         size: tuple[int, int] | None = None, caption: bool = True, progress=None) -> bool:
+        """Play the computed run from t0 to t1 into an MP4 or GIF, ``fps`` frames per simulated
+        second, each frame the 3-D view at ``size`` (default: as on screen). False if there is
+        no run or it was cancelled; OSError or ValueError if it cannot be written. Either way a
+        file is written whole or not at all."""
+        if not self.controller.runs:
+            return False
+        end = self.controller.end_time
+        t1 = end if t1 is None else min(t1, end)
+        size = size or (self.view.width(), self.view.height())
+        times = frame_times(t0, t1, fps)
+        shown, started = self.controller.play_time, QtCore.QElapsedTimer()
+        started.start()
+        self.controller.pause()
+        try:
+            view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
+            done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
+                          progress)
+        finally:
+            self.seek(shown)
+        if not done:
+            self.show_message("Export cancelled; nothing was written")
+            return False
+        self.preferences.set_last_folder(path)
+        self.show_message(f"Exported {len(times)} frames ({times[-1] - times[0]:.3g} s at {fps:g} per second) "
+                          f"to {Path(path).name} in {started.elapsed() / 1000:.1f} s")
         return True
 
     # -- running ---------------------------------------------------------------------
+
+    @property
+    def state(self) -> str:
+        return self.controller.state
 
     def start(self) -> None:
         """Start from t = 0 (or resume when paused)."""
@@ -436,152 +567,77 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.reset()
         try:
-            if METHODS[scene.integrator.method].adaptive:
-                self.simulation = Simulation(scene, record_dt=scene.duration / ADAPTIVE_ROWS)
-                note = f"Running adaptive steps to t = {scene.duration:g} s"
-            else:
-                steps = step_count(scene.integrator.dt, scene.duration)
-                every = self.panel.record_every.value() or max(1, math.ceil(steps / AUTO_ROWS))
-                self.simulation = Simulation(scene, record_every=every)
-                note = f"Running {steps:,} steps" + (f" (recording every {every}th step)" if every > 1 else "")
+            simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
         except ValueError as error:
             self._warn("Cannot start", str(error))
             return
+        if simulation.adaptive:
+            note = f"Running adaptive steps to t = {scene.duration:g} s"
+        else:
+            every = simulation.record_every
+            note = (f"Running {simulation.n_steps:,} steps"
+                    + (f" (recording every {every}th step)" if every > 1 else ""))
         self.plots.set_duration(scene.duration)
-        self.buffer = RunBuffer(self.landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
-                                capacity=self.simulation.row_capacity)
-        self.computed = False
-        self.thread = SimulationThread(self.simulation, self.buffer.derive, self)
-        self.thread.rowsReady.connect(self._rows_ready)
-        self.thread.failed.connect(lambda message: self._warn("The computation failed", message))
-        self.thread.finished.connect(self._computed)
-        self.state = RUNNING
-        self._last_tick = time.perf_counter()
-        self.thread.start()
-        self.timer.start()
+        self.timeline.set_span(simulation.t_end)
+        self.controller.start([Run(simulation, self.landscape)])
         self.show_message(note)
-        self._update_controls()
 
     def toggle_pause(self) -> None:
-        if self.state == RUNNING:
-            self.state = PAUSED
-        elif self.state == PAUSED:
-            self.state = RUNNING
-            self._last_tick = time.perf_counter()
-        self._update_controls()
+        self.controller.toggle_pause()
 
     def step_frame(self) -> None:
         """Advance the playback by one frame (starting the run paused if needed)."""
         if self.state == READY:
             self.start()
-            self.state = PAUSED
-            self._update_controls()
+            self.controller.pause()
             return
-        if self.state not in (RUNNING, PAUSED):
-            return
-        if self.state == RUNNING:
-            self.state = PAUSED
-        speed = self.speed.currentData()
-        frame = FRAME_MS / 1000 * (speed if math.isfinite(speed) else 10.0)
-        self.play_time = min(self.play_time + frame, self.buffer.end_time if self.buffer else 0.0)
-        self._draw(force=True)
-        self._update_controls()
+        self.controller.step()
 
     def stop(self) -> None:
         """Stop computing and playing; what was computed stays (export it, or Reset)."""
         if self.state not in (RUNNING, PAUSED):
             return
-        self.stop_worker()
-        self.state = STOPPED
-        self.timer.stop()
-        self._draw(force=True)
-        self.show_message(f"Stopped at t = {self.play_time:.4g} s")
-        self._update_controls()
+        self.controller.stop()
+        self.show_message(f"Stopped at t = {self.controller.play_time:.4g} s")
 
     def reset(self) -> None:
         """Back to the start of the current scene; the computed run is dropped."""
-        self.stop_worker()
-        self.timer.stop()
-        self.simulation, self.buffer, self.computed = None, None, False
-        self.state, self.play_time, self.liftoff_announced, self.drawn_index = READY, 0.0, False, -1
+        self.controller.reset()
+        self.drawn_index = -1
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
         self.plots.show_run(None, 0)
+        self.plots.set_cursor(None)
+        self.timeline.set_span(0.0)
         self.view.set_liftoff(None)
         self.view.set_trail(np.zeros((0, 3)))
         self.progress.setValue(0)
-        self._update_controls()
 
-    def stop_worker(self) -> None:
-        if self.thread is not None:
-            self.thread.rowsReady.disconnect(self._rows_ready)
-            self.thread.finished.disconnect(self._computed)
-            self.thread.stop()
-            self.thread.deleteLater()
-            self.thread = None
-
-    def _rows_ready(self, block: np.ndarray) -> None:
-        if self.buffer is not None:
-            self.buffer.append(block)
-
-    def _computed(self) -> None:
-        self.computed = True
-        if self.thread is not None:
-            self.thread.deleteLater()
-            self.thread = None
-        self._update_controls()
-
-    def _tick(self) -> None:
-        now = time.perf_counter()
-        elapsed, self._last_tick = now - self._last_tick, now
-        self._frame_started = now
-        QtCore.QTimer.singleShot(0, self._frame_done)  # runs once this frame is painted
-        if self.buffer is None or self.state != RUNNING:
-            return  # paused: nothing moves (Step draws its own frame)
-        speed = self.speed.currentData()
-        end = self.buffer.end_time
-        self.play_time = end if math.isinf(speed) else min(self.play_time + elapsed * speed, end)
-        if self.computed and self.play_time >= end:
-            self.play_time = end
-            self._finish()  # draws the last frame
-        else:
-            self._draw()
-
-    def _frame_done(self) -> None:
-        """Pace the frames: wait at least as long as the last one took to draw and show, so the
-        event loop keeps half its time for input even where OpenGL is rendered in software."""
-        cost = time.perf_counter() - self._frame_started
-        self.timer.setInterval(max(FRAME_MS, round(1000 * cost)))
-
-    def _finish(self) -> None:
-        self.state = FINISHED
-        self.timer.stop()
-        self._draw(force=True)
-        status = self.simulation.status
-        text = self.simulation.message()
+    def _finished(self) -> None:
+        simulation = self.controller.simulation
+        status, text = simulation.status, simulation.message()
         if status is Status.OK:
-            warnings = self._accuracy_warnings()
+            warnings = "".join(f"; {note}" for note in self._trajectory().warnings())
             self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
-        self._update_controls()
 
-    def _accuracy_warnings(self) -> str:
-        """What a finished run's numbers say about the method and step (empty when all is well)."""
-        notes = []
-        drift = float(np.max(np.abs(self.buffer.energy_error)))
-        if drift > ENERGY_WARNING:
-            notes.append(f"energy changed by {drift:.2g} of its scale: the step is too large for this method")
-        orth = float(self.buffer.orthogonality_error[-1])
-        if orth > ORTHOGONALITY_WARNING:
-            notes.append(f"‖RᵀR − I‖ = {orth:.2g}: R is no longer a rotation (classic update; "
-                         f"Munthe-Kaas keeps it one)")
-        return "".join(f"; {note}" for note in notes)
+    def _trajectory(self) -> Trajectory:
+        """The received rows as a trajectory (no copy)."""
+        ball = self.controller.simulation.scene.ball
+        return Trajectory(self.controller.buffer.rows, mass=ball.mass, radius=ball.radius,
+                          gravity=self.controller.simulation.scene.gravity)
 
     def _liftoff_note(self) -> str:
-        t = self.simulation.liftoff_time if self.simulation else None
+        t = self.controller.simulation.liftoff_time
         return "" if t is None else f"; lift-off at t = {t:.4g} s (not physical from there on)"
+
+    def _run_event(self, index: int, kind: str, t: float) -> None:
+        if kind == "liftoff":
+            self.view.set_liftoff(self.controller.runs[index].buffer.point_at(t))
+            self.show_message(f"Lift-off at t = {t:.4g} s: the real ball would leave the surface "
+                              f"here; the model keeps it on, so what follows is not physical", warning=True)
 
     # -- drawing ---------------------------------------------------------------------
 
@@ -595,50 +651,36 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         center = np.array([s.x, s.y, d[0]]) + r * unit_normal(d)
         self.view.set_ball(center, np.eye(3), r)
-        self._show_readouts(None)
+        self._show_closeup_at(center, np.eye(3), np.array([s.x, s.y]), np.zeros((0, 3)))
+        self.readouts.clear()
 
     def _draw(self, force: bool = False) -> None:
-        buffer = self.buffer
+        buffer = self.controller.buffer
         if buffer is None or len(buffer) == 0:
             return
-        i = buffer.index_at(self.play_time)
+        i = buffer.index_at(self.controller.play_time)
         if i == self.drawn_index and not force:
             return  # the same row as the last frame
         self.drawn_index = i
         row = buffer.rows[i]
-        scene = self.simulation.scene
-        self.view.set_ball(row[3:6], row[12:21].reshape(3, 3), scene.ball.radius)
-        self.view.set_trail(buffer.trail(i, lift=0.004 * self.view.extent))
-        self._show_readouts(i)
+        simulation = self.controller.simulation
+        self.view.set_ball(row[CENTER], row[R].reshape(3, 3), simulation.scene.ball.radius)
+        trail = buffer.trail(i, lift=0.004 * self.view.extent)
+        self.view.set_trail(trail)
+        self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
+        self.readouts.show_row(0, buffer, i)
+        self.timeline.set_time(self.controller.play_time)
         self.frames += 1
         if force or self.frames % PLOT_EVERY == 0:
-            self.plots.show_run(buffer, i)
-        t_end = self.simulation.t_end
-        self.progress.setValue(int(round(1000 * min(1.0, row[0] / t_end))))
-        liftoff = self.simulation.liftoff_time  # set by the kernel as soon as it happens
-        if liftoff is not None and row[0] >= liftoff and not self.liftoff_announced:
-            self.liftoff_announced = True
-            self.view.set_liftoff(buffer.point_at(liftoff))
-            self.show_message(f"Lift-off at t = {liftoff:.4g} s: the real ball would leave the surface "
-                              f"here; the model keeps it on, so what follows is not physical", warning=True)
-
-    def _show_readouts(self, i: int | None) -> None:
-        if i is None:
-            for label in self.readouts.values():
-                label.setText("—")
-            self.readouts["t"].setText("0 s")
-            return
-        b = self.buffer
-        row = b.rows[i]
-        self.readouts["t"].setText(f"{row[0]:.4f} s")
-        self.readouts["energy"].setText(f"{row[21]:.8g} J")
-        self.readouts["drift"].setText(f"{b.energy_error[i]:.2e}")
-        self.readouts["orth"].setText(f"{b.orthogonality_error[i]:.2e}")
-        self.readouts["force"].setText(f"{row[22]:.5g} N")
-        self.readouts["speed"].setText(f"{np.linalg.norm(row[6:9]):.5g} m/s")
+            # while playing, the curves grow with the ball; otherwise they show all that is computed
+            self.plots.show_run(buffer, i if self.state == RUNNING else len(buffer) - 1)
+            self.plots.set_cursor(row[T])
+            self.timeline.set_available(self.controller.end_time)
+            self._show_events()
+        self.progress.setValue(int(round(1000 * min(1.0, row[T] / simulation.t_end))))
 
     def _update_controls(self) -> None:
-        state = self.state
+        state, computed = self.state, self.controller.computed
         self.start_action.setEnabled(state != RUNNING)
         self.start_action.setText("Resume" if state == PAUSED else ("Restart" if state in (FINISHED, STOPPED)
                                                                    else "Start"))
@@ -647,9 +689,17 @@ class MainWindow(QtWidgets.QMainWindow):
         self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
-        self.export_action.setEnabled(self.computed and self.simulation is not None)
+        self.export_action.setEnabled(computed and self.controller.simulation is not None)
+        self.animation_action.setEnabled(bool(self.controller.runs))
+        self.revert_action.setEnabled(self.dirty)
+        for action in (self.back_action, self.forward_action, self.first_action, self.last_action):
+            action.setEnabled(bool(self.controller.runs))
+        self.liftoff_action.setEnabled(self._liftoff_time() is not None)
+        if self.controller.runs:
+            self.timeline.set_available(self.controller.end_time)
+            self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
-        self.state_label.setText(words[state] if self.computed or state in (READY, STOPPED, FINISHED)
+        self.state_label.setText(words[state] if computed or state in (READY, STOPPED, FINISHED)
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
@@ -664,13 +714,108 @@ class MainWindow(QtWidgets.QMainWindow):
         self.show_message(text, warning=True)
         QtWidgets.QMessageBox.warning(self, title, text)
 
-    def show_limits(self) -> None:
-        QtWidgets.QMessageBox.information(self, "Limits of the model", LIMITS_TEXT)
-
     def show_about(self) -> None:
         QtWidgets.QMessageBox.about(self, "About RollBall",
                                     f"<b>RollBall {__version__}</b><p>A solid ball rolling without slipping on "
                                     f"z = f(x, y). Euler, RK4 and Lawson5, classic or Munthe-Kaas.</p>")
+
+    # -- the time shown --------------------------------------------------------------
+
+    def seek(self, t: float) -> None:
+        """Show the moment t of the computed run (held within what is computed)."""
+        self.controller.seek(t)
+
+    def _liftoff_time(self) -> float | None:
+        simulation = self.controller.simulation
+        return simulation.liftoff_time if simulation is not None else None
+
+    def go_to_liftoff(self) -> None:
+        t = self._liftoff_time()
+        if t is not None:
+            self.seek(t)
+
+    def _show_events(self) -> None:
+        """Lift-off and an early stop as markers on the time slider and links beside it."""
+        simulation = self.controller.simulation
+        events = []
+        if simulation.liftoff_time is not None:
+            events.append(Marker(simulation.liftoff_time, LIFTOFF_COLOR, f"lift-off at t = {simulation.liftoff_time:.4g} s"))
+        if simulation.status not in (None, Status.OK, Status.ABORTED) and len(self.controller.buffer):
+            t = self.controller.buffer.end_time
+            events.append(Marker(t, STOP_COLOR, f"{simulation.status.value.replace('_', ' ')} at t = {t:.4g} s"))
+        if [m.text for m in events] != [m.text for _, m in self.timeline.slider.markers]:
+            self.timeline.set_markers(events)
+            self.liftoff_action.setEnabled(simulation.liftoff_time is not None)
+
+    # -- presentation, close-up, text size ------------------------------------------
+
+    def presentation_toggled(self, on: bool) -> None:
+        self.presentation.set_active(on)
+        self.leave_action.setEnabled(on)
+
+    def _show_closeup(self, on: bool) -> None:
+        self.closeup_frame.setVisible(on)
+        self._place_closeup()
+        if not on:
+            return
+        if self.controller.runs:
+            self._draw(force=True)
+        elif self.scene is not None and self.landscape is not None:
+            self._draw_start(self.scene)
+
+    def _place_closeup(self) -> None:
+        w = max(160, round(0.3 * self.view.width()))
+        h = round(0.75 * w)
+        self.closeup_frame.setGeometry(self.view.width() - w - 8, 8, w, h)
+
+    def _show_closeup_at(self, center, R, contact, trail) -> None:
+        if self.closeup.isVisible():
+            self.closeup.show_ball(center, R, contact, trail, self.view.opts["azimuth"], self.view.opts["elevation"])
+
+    def eventFilter(self, watched, event) -> bool:
+        if watched is self.view and event.type() == QtCore.QEvent.Type.Resize:
+            self._place_closeup()
+        return super().eventFilter(watched, event)
+
+    def _set_text_size(self, scale: float, remember: bool = False) -> None:
+        self.presentation.set_preferred(scale)
+        for action in self.text_size_group.actions():
+            action.setChecked(action.data() == scale)
+        if remember:
+            self.preferences.set_font_scale(scale)
+
+    # -- help ------------------------------------------------------------------------
+
+    def _set_help_topics(self) -> None:
+        topics = {"model.html#energy": [self.readouts["energy"], self.readouts["drift"]],
+                  "model.html#munthe-kaas": [self.readouts["orth"], self.panel.munthe_kaas],
+                  "model.html#liftoff": [self.readouts["force"]],
+                  "model.html#methods": [self.panel.methods.buttons()[0].parentWidget()],
+                  "plots.html#energy": [self.plots.plots[0]],
+                  "plots.html#orthogonality": [self.plots.plots[1]],
+                  "plots.html#force": [self.plots.plots[2]],
+                  "plots.html#colours": [self.view],
+                  "plots.html#readouts": [self.readouts]}
+        for topic, widgets in topics.items():
+            for widget in widgets:
+                helps.set_topic(widget, topic)
+
+    def _all_actions(self) -> list[QtGui.QAction]:
+        """The menus' actions in menu order (for the shortcuts page)."""
+        def walk(menu):
+            for action in menu.actions():
+                yield from walk(action.menu()) if action.menu() else (action,)
+        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())]
+
+    def show_help(self, topic: str) -> None:
+        if self.help_window is None:
+            self.help_window = helps.HelpWindow(self._all_actions, self)
+        self.help_window.show_topic(topic)
+
+    def context_help(self) -> None:
+        """Help on the widget under the mouse (the model page if it has no topic)."""
+        widget = QtWidgets.QApplication.widgetAt(QtGui.QCursor.pos())
+        self.show_help(helps.topic_at(widget) or "model.html")
 
     # -- closing ---------------------------------------------------------------------
 
@@ -678,6 +823,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if not self._may_discard():
             event.ignore()
             return
+        self.presentation_action.setChecked(False)   # the window's own layout is what is remembered
         self.preferences.save(self)
         self.reset()  # stops the worker and lets go of the run's arrays
         event.accept()

@@ -16,10 +16,11 @@ import warnings
 from pathlib import Path
 
 from . import __version__
-from .examples import example_scenes
+from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .files import write_target
 from .scene import SceneError
-from .tableaus import METHODS
+from .sweeps.grid import KEYS as SWEEP_KEYS
+from .tableaus import METHODS, MethodKind, get_method
 from .text import shown
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT, EXIT_BROKEN_PIPE = 0, 1, 2, 141
@@ -59,11 +60,18 @@ def _output_file(text: str) -> str:
     return text
 
 
+def _method(text: str) -> str:
+    try:
+        return get_method(text).name
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
         description="Simulate a solid ball rolling without slipping over a landscape z = f(x, y).",
-        epilog="Example: rollball simulate resources/examples/hills.json --csv hills.csv",
+        epilog="Example: rollball simulate hills --csv hills.csv (an example by name, or a scene file)",
     )
     parser.add_argument("--version", action="version", version=f"rollball {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -72,10 +80,11 @@ def build_parser() -> argparse.ArgumentParser:
         "simulate", help="run a scene file and print a one-line summary",
         description="Run a scene file (JSON) and print a one-line summary: steps, status, "
                     "relative energy drift and the first lift-off time. Options override the scene.")
-    sim.add_argument("scene", metavar="SCENE.json", help="scene file to run")
-    sim.add_argument("--method", choices=list(METHODS),
-                     help="Runge-Kutta method; adaptive: Dormand-Prince 5(4) steps that keep to "
-                          "--rtol/--atol, always Munthe-Kaas")
+    sim.add_argument("scene", metavar="SCENE", help="scene file to run, or an example's name (rollball examples)")
+    adaptive = ", ".join(m.name for m in METHODS.values() if m.kind is MethodKind.ADAPTIVE)
+    sim.add_argument("--method", type=_method, metavar="{" + ",".join(METHODS) + "}",
+                     help=f"Runge-Kutta method; adaptive ones ({adaptive}) choose their steps to keep "
+                          "to --rtol/--atol, always Munthe-Kaas")
     mk = sim.add_mutually_exclusive_group()
     mk.add_argument("--munthe-kaas", dest="munthe_kaas", action="store_true", default=None,
                     help="advance the orientation on SO(3) (Runge-Kutta-Munthe-Kaas)")
@@ -95,6 +104,43 @@ def build_parser() -> argparse.ArgumentParser:
                      help="write the trajectory as CSV (- for standard output; the summary then "
                           "goes to standard error)")
 
+    sweep = commands.add_parser(
+        "sweep", help="run a scene over a grid of values: one row of outcomes per run",
+        description="Run a scene once for every combination of the varied values (the last "
+                    "--vary varies fastest) and write sweep.csv (one row per run: the varied "
+                    "values, status, t_reached, liftoff_time, x_end, y_end, energy_drift, "
+                    "min_normal_force, max_speed, path_length), sweep.json and sweep.png. "
+                    "Local on every core by default; --scheduler sends the runs to a Dask "
+                    "cluster. Ctrl-C stops and writes the runs finished so far.")
+    sweep.add_argument("scene", metavar="SCENE.json", help="scene file (a fixed-step method)")
+    sweep.add_argument("--vary", action="append", required=True, metavar="KEY=START:STOP:N",
+                       help=f"N evenly spaced values from START to STOP (both included); "
+                            f"repeat for a grid. KEY: {', '.join(SWEEP_KEYS)}")
+    sweep.add_argument("--color", default="liftoff_time", metavar="OUTCOME",
+                       help="the outcome the map of two varied keys is coloured by "
+                            "(default liftoff_time)")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, metavar="N",
+                       help="local threads (default: every core)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+                            "(needs pip install 'rollball[dask]')")
+    sweep.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
+
+    cmp = commands.add_parser(
+        "compare", help="speed against error of every method on a scene",
+        description="Run every method (or the --runs given) over a ladder of step sizes or "
+                    "tolerances on a scene, measure each run's error against a tight reference and "
+                    "its compute time, fit the orders, and write compare.json, compare.md and "
+                    "compare.png. Ends with the fastest run for errors of 1e-6 and 1e-10.")
+    cmp.add_argument("scene", metavar="SCENE.json", help="scene file (or an example's name)")
+    cmp.add_argument("--runs", metavar="SPECS",
+                     help="comma-separated METHOD or METHOD/classic (default: every method, the "
+                          "fixed-step ones Munthe-Kaas and classic), e.g. euler/classic,rk4,dopri5")
+    cmp.add_argument("--t-end", type=_positive_float, metavar="T", help="end time (s; default: the scene's)")
+    cmp.add_argument("--quick", action="store_true", help="fewer, shorter ladders (under a minute)")
+    cmp.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
+
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
 
@@ -109,50 +155,168 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _load_scene(name: str):
+    """The scene of a file or an example's name, or (after a one-line message) exit status 2."""
+    from .scene import Scene
+
+    try:
+        return Scene.load(scene_path(name))
+    except FileNotFoundError as e:
+        return _fail(f"{shown(e.filename or name)}: {e.strerror}" if e.strerror else str(e))
+    except (SceneError, OSError) as e:
+        return _fail(f"{shown(name)}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+
+
 def _simulate(args) -> int:
     from .scene import Scene
     from .simulation import simulate
     from .trajectory import Status
+    from .warmup import compile_notice
 
-    name = shown(args.scene)
-    try:
-        scene = Scene.load(args.scene)
-    except (SceneError, OSError) as e:
-        return _fail(f"{name}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
     to_stdout = args.csv == STDOUT
     if args.csv and not to_stdout:
         try:  # before the run: a refused target must not cost the run
-            write_target(args.csv, keep=[args.scene])
+            write_target(args.csv, keep=[scene_path(args.scene)])
         except OSError as e:
             return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     try:
-        traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
-                        t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
-                        record_dt=args.record_dt)
+        with compile_notice(lambda: print("rollball: compiling the integrator, first run only ...",
+                                          file=sys.stderr, flush=True)):
+            traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
+                            t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
+                            record_dt=args.record_dt)
     except ValueError as e:  # includes FormulaError
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
-    print(f"{name}: {traj.steps} steps, status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}",
+    warnings = "".join(f", WARNING: {note}" for note in traj.warnings())
+    print(f"{shown(args.scene)}: {traj.steps} steps ({traj.rejected} rejected, {traj.evaluations} evaluations), "
+          f"status {traj.status} ({traj.message}), "
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}",
           file=sys.stderr if to_stdout else sys.stdout)
     if to_stdout:
         traj.write_csv(sys.stdout)
     elif args.csv:
         try:
-            traj.to_csv(args.csv, keep=[args.scene])
+            traj.to_csv(args.csv, keep=[scene_path(args.scene)])
         except OSError as e:
             return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
 
 
-def _examples() -> int:
-    for path, scene in example_scenes():
+def _sweep(args) -> int:
+    import signal
+    import threading
+
+    from tqdm import tqdm
+
+    from .scene import Scene
+    from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+
+    try:
+        grid = Grid.of([parse_vary(text) for text in args.vary])
+    except ValueError as e:
+        return _fail(str(e))
+    if args.color not in OUTCOMES:
+        return _fail(f"--color {shown(args.color)}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        return _fail(f"cannot write to {shown(out)}: {e.strerror or e}")
+    if not os.access(out, os.W_OK):
+        return _fail(f"cannot write to {shown(out)}: permission denied")
+
+    cancel = threading.Event()
+
+    def interrupted(signum, frame):
+        cancel.set()
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # a second Ctrl-C aborts at once
+        print("\nrollball: stopping after the batches under way (Ctrl-C again to abort)", file=sys.stderr)
+
+    bar = tqdm(total=grid.size, unit="run", file=sys.stderr, smoothing=0.1, dynamic_ncols=True)
+
+    def progress(done, total, text):
+        bar.update(done - bar.n)
+
+    previous = signal.signal(signal.SIGINT, interrupted)
+    try:
+        table = sweep(scene, dict(zip(grid.keys, grid.axes)), workers=args.workers,
+                      scheduler=args.scheduler, progress=progress, cancel=cancel)
+    except ValueError as e:
+        return _fail(str(e))
+    except KeyboardInterrupt:
+        print("rollball: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        bar.close()
+    try:
+        files = table.save(out, args.color)
+    except OSError as e:
+        return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
+    done = int(table.done.sum())
+    counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
+    where = f"Dask at {table.scheduler}" if table.scheduler else "local threads"
+    print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
+          f"({done / max(table.seconds, 1e-9):,.0f} runs/s, {table.workers} {where}): {counts}; "
+          f"wrote {', '.join(str(f) for f in files)}")
+    if table.partial:
+        print(f"rollball: stopped early; sweep.csv holds the {done:,} runs finished "
+              f"(sweep.json says partial)", file=sys.stderr)
+        return 130
+    return EXIT_OK
+
+
+def _compare(args) -> int:
+    from tqdm import tqdm
+
+    from .comparison import NothingToCompare, compare, parse_runs
+    from .scene import Scene
+
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
+    try:
+        runs = None if args.runs is None else parse_runs(args.runs)
+    except ValueError as e:
+        return _fail(str(e))
+    with tqdm(total=1, file=sys.stderr, unit="run", dynamic_ncols=True, leave=False) as bar:
+        def progress(done: int, total: int, text: str) -> None:
+            bar.total = total
+            bar.n = done
+            bar.set_description_str(text, refresh=False)
+            bar.refresh()
+
         try:
-            path = path.relative_to(Path.cwd())
-        except ValueError:
-            pass
-        print(f"{shown(path)}: {shown(scene.description)}")
+            result = compare(scene, runs=runs, t_end=args.t_end, quick=args.quick, progress=progress)
+        except NothingToCompare as e:
+            print(f"rollball: {shown(args.scene)}: {e}", file=sys.stderr)
+            return EXIT_STOPPED
+        except ValueError as e:  # includes FormulaError
+            return _fail(str(e))
+    try:
+        result.save(args.out)
+    except OSError as e:
+        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
+    stopped = sum(not r.ok for r in result.runs)
+    note = f"; {stopped} runs stopped early (see compare.md)" if stopped else ""
+    print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
+    return EXIT_OK
+
+
+def _examples() -> int:
+    examples = example_scenes()
+    width = max(len(path.stem) for path, _ in examples)
+    for path, scene in examples:
+        print(f"{path.stem:<{width}}  {shown(scene.description)}")
+    print(f"\nRun one by name (rollball simulate hills); the files are in {EXAMPLES_DIR}")
     return EXIT_OK
 
 
@@ -167,7 +331,7 @@ def _bench(args) -> int:
     try:
         print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
     except OSError as e:
-        return _fail(f"cannot write to {shown(args.out)}: {e.strerror or e}")
+        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
     return EXIT_OK
 
 
@@ -181,7 +345,9 @@ def _warning(message, category, filename, lineno, file=None, line=None):
     print(f"rollball: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
 
-COMMANDS = {"simulate": _simulate, "examples": lambda args: _examples(), "bench": _bench}
+COMMANDS = {"simulate": _simulate, "compare": _compare, "sweep": _sweep,
+            "examples": lambda args: _examples(), "bench": _bench}
+INTERRUPTED = {"simulate": "rollball: interrupted", "compare": "rollball: interrupted (nothing written)"}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -192,13 +358,15 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     with warnings.catch_warnings():
         warnings.showwarning = _warning
-        # overflow or invalid values in derived columns are reported by the run's status
+        # overflowing or undefined numbers in derived columns are reported by the run's status
         warnings.filterwarnings("ignore", category=RuntimeWarning)
         try:
             code = COMMANDS[args.command](args)
             sys.stdout.flush()
         except KeyboardInterrupt:
-            print("rollball: interrupted", file=sys.stderr)
+            if args.command not in INTERRUPTED:
+                raise
+            print(INTERRUPTED[args.command], file=sys.stderr)
             return 130
         except BrokenPipeError:  # the reader left (| head): stop quietly, as SIGPIPE would
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -21,13 +21,13 @@ from pathlib import Path
 from .files import atomic_write_text, open_regular
 from .formula import FormulaError
 from .landscape import landscape_for
-from .tableaus import METHODS
+from .tableaus import METHODS, get_method
 from .text import shown
 
 FORMAT = "rollball-scene"
-VERSION = 1
+VERSION = 2
 MAX_FILE_SIZE = 1 << 20
-MIN_RTOL = 100 * sys.float_info.epsilon   # tighter relative tolerances are below round-off
+MIN_RTOL = 10 * sys.float_info.epsilon   # tighter relative tolerances are below round-off
 MAX_GRID_POINTS = 401   # per side of the drawn landscape (the app draws it; the core refuses more)
 SMALLEST = sys.float_info.min   # the smallest normal positive float
 
@@ -90,11 +90,15 @@ def _not_negative(v):
 def _tolerance(v):
     if not v > 0:
         return "must be greater than 0"
-    return None if v >= MIN_RTOL else f"must be at least {MIN_RTOL:.3g} (100 × the rounding error of a double)"
+    return None if v >= MIN_RTOL else f"must be at least {MIN_RTOL:.3g} (10 × the rounding error of a double)"
 
 
 def _known_method(v):
-    return None if v in METHODS else f"unknown method; valid methods: {', '.join(METHODS)}"
+    try:
+        get_method(v)
+    except ValueError:
+        return f"unknown method; valid methods: {', '.join(METHODS)}"
+    return None
 
 
 def _formula(v):
@@ -135,8 +139,11 @@ class Scene:
         _check(self, "")
         if self.view.min >= self.view.max:
             raise SceneError("view.min", "must be less than view.max")
-        if METHODS[self.integrator.method].adaptive and not self.integrator.munthe_kaas:
-            raise SceneError("integrator.munthe_kaas", "the adaptive method always uses Munthe-Kaas "
+        method = get_method(self.integrator.method)
+        if method.name != self.integrator.method:  # an alias: keep the method's own name
+            object.__setattr__(self.integrator, "method", method.name)
+        if not (method.classic_allowed or self.integrator.munthe_kaas):
+            raise SceneError("integrator.munthe_kaas", f"{method.name} always uses Munthe-Kaas "
                              "(must be true)")
         _check_derived(self)
 
@@ -159,10 +166,13 @@ class Scene:
         if type(version) is not int or version < 1:
             raise SceneError("version", "must be a positive whole number")
         if version > VERSION:
-            raise SceneError("version", f"{version} is newer than this program understands ({VERSION})")
+            raise SceneError("version", f"{version} is newer than this RollBall understands "
+                                        f"(it reads versions 1 to {VERSION})")
         if "landscape" not in data:
             raise SceneError("landscape", "missing")
         body = {k: v for k, v in data.items() if k not in ("format", "version")}
+        for step in MIGRATIONS[version - 1:]:
+            body = step(body)
         return _build(cls, body, "")
 
     @classmethod
@@ -201,6 +211,22 @@ class Scene:
         """Write the scene atomically: an existing file is replaced whole or not at all (and
         read-only or special files are refused; see ``rollball.files``)."""
         atomic_write_text(Path(path), self.dumps())
+
+
+# -- migrations: one small function per version step, each taking the body (without
+# "format" and "version") of one version to the next -------------------------------------
+
+def _v1_to_v2(body: dict) -> dict:
+    """Version 2 renamed the method ``adaptive`` to ``dopri5`` (and added dop853, gauss4)."""
+    integrator = body.get("integrator")
+    if isinstance(integrator, dict) and integrator.get("method") == "adaptive":
+        body = {**body, "integrator": {**integrator, "method": "dopri5"}}
+    return body
+
+
+# MIGRATIONS[k] takes version k + 1 to version k + 2; a file of version v runs MIGRATIONS[v - 1:].
+MIGRATIONS = [_v1_to_v2]
+assert len(MIGRATIONS) == VERSION - 1
 
 
 # Field types, resolved once: loading a scene evaluates nothing.
