@@ -1,6 +1,6 @@
 """Hostile and broken input, declared as data: each entry is (input, the expected message fragment).
 
-Formulas must be refused with a ``FormulaError`` containing the fragment, within 0.5 s, without
+Formulas must be refused with a ``FormulaError`` containing the fragment, quickly, without
 any text being evaluated; ``DERIVATIONS`` parse but would cost unbounded work to differentiate
 and must be refused by the work budget within a few seconds. Scene texts must be refused with a
 ``SceneError`` whose ``key`` is the key given (the message starts with it, escaped when it is

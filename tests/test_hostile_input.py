@@ -45,7 +45,7 @@ def test_hostile_formula_is_refused_quickly_with_nothing_evaluated(text, fragmen
     start = time.perf_counter()
     with pytest.raises(FormulaError) as info:
         parse_formula(text)
-    assert time.perf_counter() - start < 0.5
+    assert time.perf_counter() - start < 2.0  # at most 0.06 s measured, loaded
     message = str(info.value)
     assert fragment in message
     assert "\n" not in message and len(message) < 200
@@ -63,7 +63,7 @@ def test_hostile_scene_text_is_refused_naming_the_key(text, key, no_evaluators):
     start = time.perf_counter()
     with pytest.raises(SceneError) as info:
         Scene.loads(text)
-    assert time.perf_counter() - start < 0.5
+    assert time.perf_counter() - start < 2.0  # at most 0.06 s measured, loaded
     message = str(info.value)
     assert info.value.key == key
     assert message.startswith(f"{shown(key)}:"), message
