@@ -264,6 +264,15 @@ def record_last(rows, ints, t, z, R, probe, p):
 
 
 @JIT
+def shape_of(z):
+    """(n, munthe_kaas) read from the state's length at run time: the functions compiled once
+    (COLD) take them so, not as the constants of the loops, which would compile them anew
+    for every loop."""
+    n = z.shape[0]
+    return n, n == MK_SIZE
+
+
+@JIT
 def _finite(a, lo, hi):
     """a[lo:hi] all finite: a chain of cheap ands, no early exit and no floating-point chain."""
     ok = True
@@ -297,13 +306,14 @@ def _fail(ints, info, status, reason, t, x, y, value):
 
 
 @COLD
-def start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info):
+def start(fn, d, p, z, R, K, probe, rows, ints, info):
     """Check and record the initial state; K[0] and probe describe it afterwards."""
+    n, mk = shape_of(z)
     fn(z[0], z[1], data_pointer(d))
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
-    dynamics(fn, d, p, z, mk, K, 0, probe, True)
+    evaluate(fn, d, p, z, mk, K, 0, probe)
     ints[I_EVALS] += 1
     ints[I_DENSE] = -1
     record(rows, 0, 0.0, z, R, probe, p)
@@ -362,6 +372,16 @@ def trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     if not _finite_row(K, last, 5, n):
         return 2
     return 0
+
+
+# The same, compiled once as functions of their own, for the paths that run once per run or
+# per event (inlining them there too would only add compile time).
+trial_step_once = COLD(trial_step.py_func)
+
+
+@COLD
+def evaluate(fn, d, p, z, mk, K, row, probe):
+    dynamics(fn, d, p, z, mk, K, row, probe, True)
 
 
 @JIT
@@ -430,14 +450,16 @@ BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by 
 BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
                        # 1e50 m samples a smooth landscape too coarsely to tell
 SEGMENT_SAMPLES = 8    # fit checks inside a fixed step whose contact point raced
-FORCE_EVENT, FIT_EVENT = 0, 1
-KINK, JUMP = 0, 1
+# (kinds as floats: numba would compile a function once per integer constant passed to it)
+FORCE_EVENT, FIT_EVENT = 0.0, 1.0
+KINK, JUMP = 0.0, 1.0
 SURFACE_SIZE = 8       # x, y, f, N (3), r * largest and smallest principal curvature
 
 
 @COLD
-def interpolate(lo, hi, z, h, P, K, theta, out):
-    """out[lo:hi] = the dense output at t + theta h (components lo .. hi-1)."""
+def interpolate(z, h, P, K, theta, out):
+    """out = the dense output at t + theta h."""
+    lo, hi = 0, z.shape[0]
     for c in range(lo, hi):
         out[c] = z[c]
     for i in range(P.shape[0]):
@@ -451,8 +473,9 @@ def interpolate(lo, hi, z, h, P, K, theta, out):
 
 
 @COLD
-def dense_stages(fn, d, p, W, mk, n, h, z, K, last, Y, pe, ints):
+def dense_stages(fn, d, p, W, h, z, K, last, Y, pe, ints):
     """The extra dense-output stages of the step being taken (rows last+1 .. of W), once."""
+    n, mk = shape_of(z)
     if ints[I_DENSE] == ints[I_STEPS] + 1:
         return
     ints[I_DENSE] = ints[I_STEPS] + 1
@@ -463,24 +486,25 @@ def dense_stages(fn, d, p, W, mk, n, h, z, K, last, Y, pe, ints):
 
 
 @COLD
-def state_at(fn, d, p, mk, n, z, R, h, P, K, theta, Ye, Re, pe):
+def state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe):
     """The dense output's state at t + theta h in Ye, Re, with its probe pe (one evaluation,
     into the spare last row of K); whether it is finite."""
-    interpolate(0, n, z, h, P, K, theta, Ye)
+    n, mk = shape_of(z)
+    interpolate(z, h, P, K, theta, Ye)
     if mk:
         rodrigues(Ye, R, Re)
     else:
         for a in range(3):
             for c in range(3):
                 Re[a, c] = Ye[5 + 3 * a + c]
-    dynamics(fn, d, p, Ye, mk, K, K.shape[0] - 1, pe, True)
+    evaluate(fn, d, p, Ye, mk, K, K.shape[0] - 1, pe)
     return _finite(Ye, 0, n) and _finite(pe, 0, PROBE_SIZE) and _finite_matrix(Re)
 
 
 @COLD
 def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
     """The landscape under the dense output's contact point at t + theta h, in s (SURFACE_SIZE)."""
-    interpolate(0, 2, z, h, P, K, theta, Ye)
+    interpolate(z, h, P, K, theta, Ye)
     fn(Ye[0], Ye[1], data_pointer(d))
     fx, fy = d[1], d[2]
     iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
@@ -489,11 +513,11 @@ def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
 
 
 @COLD
-def event_value(kind, fn, d, p, mk, n, z, R, h, P, K, theta, Ye, Re, pe, s):
+def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
     """g(theta) of an event, negative before it: -F.N (lift-off) or r*kappa - 1 (no fit);
     +inf where the state is not finite (past any event)."""
     if kind == FORCE_EVENT:
-        ok = state_at(fn, d, p, mk, n, z, R, h, P, K, theta, Ye, Re, pe)
+        ok = state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe)
         g = -pe[PROBE_FORCE]
     else:
         surface_at(fn, d, p[0], z, h, P, K, theta, Ye, s)
@@ -503,7 +527,7 @@ def event_value(kind, fn, d, p, mk, n, z, R, h, P, K, theta, Ye, Re, pe, s):
 
 
 @COLD
-def locate(kind, fn, d, p, mk, n, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, ints):
+def locate(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, ints):
     """Shrink [a, b], g(a) < 0 <= g(b), around the event to ROOT_TOL (Illinois, every third
     try a bisection, so that it never stalls); returns (a, b)."""
     side = 0
@@ -515,7 +539,7 @@ def locate(kind, fn, d, p, mk, n, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, in
             secant = (a * gb - b * ga) / (gb - ga)
             if a < secant < b:
                 m = secant
-        g = event_value(kind, fn, d, p, mk, n, z, R, h, P, K, m, Ye, Re, pe, s)
+        g = event_value(kind, fn, d, p, z, R, h, P, K, m, Ye, Re, pe, s)
         if kind == FORCE_EVENT:
             ints[I_EVALS] += 1
         if g >= 0.0:
@@ -601,24 +625,24 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, zn, pn, ints,
     kink; one whose secant curvature says r*kappa >= 1 stops the run even where smooth.
     """
     fit_end, sharp, jumpy, bend, chord2 = looks(p[0], z, probe, zn, pn)
-    raced = False
-    if segment:
-        dx, dy = zn[0] - z[0], zn[1] - z[1]
-        speed = max(K[0, 0] ** 2 + K[0, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
-        raced = dx * dx + dy * dy > 4.0 * h * h * speed
+    dx, dy = zn[0] - z[0], zn[1] - z[1]
+    speed = max(K[0, 0] ** 2 + K[0, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
+    raced = dx * dx + dy * dy > 4.0 * h * h * speed
+    raced &= segment
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     if not (fit_end or sharp or jumpy or raced or force_end):
         return -1.0  # the usual step: nothing to look at closer
-    return examine_step(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe,
+    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe,
                         sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2)
 
 
 @COLD
-def examine_step(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa, sb, sm,
+def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa, sb, sm,
                  fit_end, sharp, jumpy, raced, force_end, bend, chord2):
     """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
+    n, mk = shape_of(z)
     r = p[0]
-    dense_stages(fn, d, p, W, mk, n, h, z, K, last, Ye, pe, ints)
+    dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
 
     stop, valid = 2.0, 0.0
     # the ball no longer fits: where along the step r*kappa reached 1. A step that raced
@@ -626,7 +650,7 @@ def examine_step(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, pn, ints, in
     # points (its dense output, pulled by the huge speeds near the edge, may bend around it).
     lo, hi = 0.0, 1.0 if fit_end else -1.0
     if raced and not fit_end:
-        interpolate(0, 2, z, h, P, K, 1.0, Ye)  # the step's end contact point
+        interpolate(z, h, P, K, 1.0, Ye)  # the step's end contact point
         zn0, zn1 = Ye[0], Ye[1]
         for j in range(1, SEGMENT_SAMPLES + 1):
             theta = j / (SEGMENT_SAMPLES + 1.0)
@@ -638,9 +662,9 @@ def examine_step(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, pn, ints, in
             lo = theta
     if hi > 0.0:
         a, b = lo, hi
-        gb = event_value(FIT_EVENT, fn, d, p, mk, n, z, R, h, P, K, hi, Ye, Re, pe, sa)
+        gb = event_value(FIT_EVENT, fn, d, p, z, R, h, P, K, hi, Ye, Re, pe, sa)
         if gb >= 0.0:  # the dense output agrees: locate the edge on it
-            a, b = locate(FIT_EVENT, fn, d, p, mk, n, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
+            a, b = locate(FIT_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
                           probe[PROBE_FIT] - 1.0, hi, gb, ints)
         surface_at(fn, d, r, z, h, P, K, b, Ye, sa)
         _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + b * h, sa[0], sa[1], max(sa[6], 1.0))
@@ -666,9 +690,9 @@ def examine_step(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, pn, ints, in
             stop, valid = b, a
     # lift-off: F.N turns negative (first time only, before any stop)
     if force_end and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
-        a, b = locate(FORCE_EVENT, fn, d, p, mk, n, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
+        a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
                       -probe[PROBE_FORCE], 1.0, -pn[PROBE_FORCE], ints)
-        interpolate(0, 2, z, h, P, K, b, Ye)
+        interpolate(z, h, P, K, b, Ye)
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, Ye[0], Ye[1], 0.0
     return valid if stop <= 1.0 else -1.0
 
@@ -677,7 +701,7 @@ REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a s
 
 
 @COLD
-def record_valid(fn, d, p, W, mk, n, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
+def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
                  Ye, sa, sb, sm):
     """A run stopped inside a step: its last valid state, at t + theta h, is the last row.
 
@@ -686,10 +710,11 @@ def record_valid(fn, d, p, W, mk, n, t, h, theta, z, R, K, last, P, probe, rows,
     step's start instead; while such a step still crosses (its ends' looks say so), the stop
     is located again on its own, less spoiled, dense output (and its time and place updated)
     and the step shortened to before it. Failing that, the step's start is the last row."""
+    n, mk = shape_of(z)
     r = p[0]
     for _ in range(REFINE_STEPS):
         hs = theta * h
-        if not (hs > 0.0) or trial_step(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints) != 0:
+        if not (hs > 0.0) or trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints) != 0:
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
         if not (fit_end or sharp or jumpy):
@@ -709,7 +734,7 @@ def record_valid(fn, d, p, W, mk, n, t, h, theta, z, R, K, last, P, probe, rows,
             info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
         elif fit_end and ints[I_REASON] == R_NO_FIT:
             gb = pn[PROBE_FIT] - 1.0
-            a, b = locate(FIT_EVENT, fn, d, p, mk, n, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
+            a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
                           probe[PROBE_FIT] - 1.0, 1.0, gb, ints)
             surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
             info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sa[0], sa[1]
@@ -754,7 +779,7 @@ def _fixed_steps(mk: bool):
         d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
 
         if ints[I_ROWS] == 0:
-            start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info)
+            start(fn, d, p, z, R, K, probe, rows, ints, info)
             if ints[I_STATUS] != RUNNING:
                 return
 
@@ -774,7 +799,7 @@ def _fixed_steps(mk: bool):
             valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, zn, pn, ints, info, True,
                                 Ye, Re, pe, sa, sb, sm)
             if valid >= 0.0:
-                record_valid(fn, d, p, W, mk, n, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                              Rn, pn, Ye, sa, sb, sm)
                 return
             accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
@@ -819,7 +844,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
     last = E.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     if ints[I_ROWS] == 0:
-        start(fn, d, p, True, n, z, R, K, probe, rows, ints, info)
+        start(fn, d, p, z, R, K, probe, rows, ints, info)
         info[F_TIME] = 0.0
         if ints[I_STATUS] != RUNNING:
             return
@@ -859,12 +884,12 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
                 record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
                 ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
             else:
-                dense_stages(fn, d, p, W, True, n, hs, z, K, last, Ye, pe, ints)
-                state_at(fn, d, p, True, n, z, R, hs, P, K, (t_row - t) / hs, Ye, Re, pe)
+                dense_stages(fn, d, p, W, hs, z, K, last, Ye, pe, ints)
+                state_at(fn, d, p, z, R, hs, P, K, (t_row - t) / hs, Ye, Re, pe)
                 record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
             ints[I_ROWS] += 1
         if valid >= 0.0:
-            record_valid(fn, d, p, W, True, n, t, hs, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+            record_valid(fn, d, p, W, t, hs, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                          Rn, pn, Ye, sa, sb, sm)
             break
         if record_dt == 0.0:
