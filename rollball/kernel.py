@@ -8,7 +8,8 @@ second derivatives to out[0:6].
 
 State vector z: contact point (x, y), angular momentum about the contact point v (3),
 then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start) or
-R (9, row-major, integrated as a plain matrix by the classic scheme). Stage derivatives
+R (9, row-major, integrated as a plain matrix by the classic scheme), or nothing: a state
+of MOTION_SIZE carries no orientation at all (sweeps, whose outcomes do not need it). Stage derivatives
 are the rows of K; the hot loop indexes whole arrays and never slices them.
 """
 
@@ -86,7 +87,7 @@ MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below 
 # run stops as a fixed-step run would at the first.
 NONFINITE_TRIES = 50
 
-MK_SIZE, CLASSIC_SIZE = 8, 14
+MOTION_SIZE, MK_SIZE, CLASSIC_SIZE = 5, 8, 14
 
 
 def state_size(munthe_kaas: bool) -> int:
@@ -138,7 +139,9 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 2] = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
     K[row, 3] = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
-    if mk:
+    if K.shape[1] == MOTION_SIZE:  # no orientation carried
+        pass
+    elif mk:
         K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
     else:
         # R' = A(omega) R, column by column
@@ -355,15 +358,16 @@ def trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
         dynamics(fn, d, p, Y, mk, K, i, pn, False)
     ints[I_EVALS] += last - 1
     combine(n, z, h, W, last, K, last, zn)
-    if mk:
+    orientation = n > MOTION_SIZE
+    if orientation and mk:
         rodrigues(zn, R, Rn)
-    else:
+    elif orientation:
         for a in range(3):
             for c in range(3):
                 Rn[a, c] = zn[5 + 3 * a + c]
     if not _finite(zn, 0, 5):
         return 1
-    if not (_finite(zn, 5, n) and _finite_matrix(Rn)):
+    if orientation and not (_finite(zn, 5, n) and _finite_matrix(Rn)):
         return 2
     dynamics(fn, d, p, zn, mk, K, last, pn, True)
     ints[I_EVALS] += 1
@@ -420,7 +424,7 @@ def accept(mk, n, z, R, K, last, probe, zn, Rn, pn):
     for q in range(n):
         z[q] = zn[q]
         K[0, q] = K[last, q]
-    if mk:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
+    if mk and n > MOTION_SIZE:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
         for q in range(3):
             z[5 + q] = 0.0
             K[0, 5 + q] = pn[PROBE_OMEGA + q]
@@ -491,7 +495,9 @@ def state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe):
     into the spare last row of K); whether it is finite."""
     n, mk = shape_of(z)
     interpolate(z, h, P, K, theta, Ye)
-    if mk:
+    if n == MOTION_SIZE:  # no orientation carried
+        pass
+    elif mk:
         rodrigues(Ye, R, Re)
     else:
         for a in range(3):

@@ -59,16 +59,30 @@ def _positive(name: str, value) -> float:
     return value
 
 
+def initial_momentum(d: np.ndarray, vx, vy, spin, r, m) -> np.ndarray:
+    """Angular momentum about the contact point, shape (3,) + the shape of the arguments.
+
+    d: the landscape's (f, f_x, f_y, ...) at the contact point (``Landscape.evaluate``);
+    vx, vy: horizontal centre velocity (vz follows from tangency); spin: angular velocity
+    about the normal; r, m: the ball. Elementwise, so one start or a whole array of starts
+    give bit-identical values.
+    """
+    fx, fy = d[1], d[2]
+    n1, n2, n3 = unit_normal(d)
+    c1, c2, c3 = vx, vy, fx * vx + fy * vy
+    o1 = (n2 * c3 - n3 * c2) / r + spin * n1  # omega = N x c' / r + spin N
+    o2 = (n3 * c1 - n1 * c3) / r + spin * n2
+    o3 = (n1 * c2 - n2 * c1) / r + spin * n3
+    no = n1 * o1 + n2 * o2 + n3 * o3
+    mr2 = m * r * r
+    return np.stack([mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)])
+
+
 def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Contact point and angular momentum about it, from the scene's start values."""
     s, r, m = scene.start, scene.ball.radius, scene.ball.mass
-    d = landscape.evaluate(s.x, s.y)
-    fx, fy = d[1], d[2]
-    N = unit_normal(d)
     with np.errstate(all="ignore"):  # an overflow is reported by the kernel's start check
-        cdot = np.array([s.vx, s.vy, fx * s.vx + fy * s.vy])
-        omega = np.cross(N, cdot) / r + s.spin * N
-        v = m * r * r * (1.4 * omega - N * (N @ omega))
+        v = initial_momentum(landscape.evaluate(s.x, s.y), s.vx, s.vy, s.spin, r, m)
     return np.array([s.x, s.y]), v
 
 
