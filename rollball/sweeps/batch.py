@@ -120,8 +120,8 @@ def run(task: Task) -> Result:
         if h > 0 and t > 0:
             n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
     outcomes = np.full((runs, len(sweep_kernel.OUTCOMES)), np.nan)
-    W = method.matrix()
-    sweep_kernel.run_batch(fn, W, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
-                           status, outcomes, *sweep_kernel.scratch_arrays(W.shape[1]))
+    W, _, D = method.kernel_arrays()
+    sweep_kernel.run_batch(fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
+                           status, outcomes, *sweep_kernel.scratch_arrays(W.shape[0]))
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)
