@@ -217,7 +217,7 @@ class SceneView(gl.GLViewWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.setBackgroundColor(BACKGROUND)
-        self.setMinimumSize(480, 360)
+        self.setMinimumSize(440, 280)   # the window fits 1024x700 with a two-line message
         self.follow = False
         self.framed = False                   # the camera is as reset_camera left it
         self.surface: gl.GLMeshItem | None = None
