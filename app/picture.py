@@ -10,6 +10,10 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import METHODS, Scene
 
+from .view3d import BALL_STRIPES, LIFTOFF_COLOR, NO_FIT_COLOR, TRAIL_COLOR
+
+# colours of the view that must stay recognisable in a GIF's palette
+ACCENTS = (TRAIL_COLOR[:3], LIFTOFF_COLOR[:3], NO_FIT_COLOR[:3], *BALL_STRIPES, (0.97, 0.97, 0.97))
 INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
 CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)
 
@@ -67,6 +71,9 @@ def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
     if caption:
         font = QtGui.QFont(QtWidgets.QApplication.font())
         font.setPixelSize(text_px)
+        while text_px > 7 and QtGui.QFontMetrics(font).horizontalAdvance(caption) > width - text_px:
+            text_px -= 1   # a narrow picture: a smaller caption rather than a cut one
+            font.setPixelSize(text_px)
         painter.setFont(font)
         painter.setPen(QtGui.QColor("#222222"))
         painter.fillRect(0, height, width, caption_h, QtGui.QColor("#f3f1ea"))

@@ -25,7 +25,7 @@ from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunContr
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
 from .inputs import ScenePanel
-from .picture import caption_height, caption_text, compose, rgb_array
+from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
@@ -539,7 +539,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
             done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
-                          progress)
+                          progress, ACCENTS)
         finally:
             self.seek(shown)
         if not done:

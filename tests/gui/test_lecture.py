@@ -205,3 +205,16 @@ def test_headless_record_writes_the_video_and_exits_0(tmp_path):
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and ".mp4 or .gif" in bad.stderr
     assert not (tmp_path / "x.avi").exists()
+
+
+def test_arrow_and_home_keys_still_edit_text_in_a_field(qtbot, window):
+    set_field(qtbot, window, "duration", "0.5")
+    run_to_end(qtbot, window)
+    window.seek(0.25)
+    edit = window.panel.formula
+    edit.setFocus()
+    edit.setCursorPosition(3)
+    for key in (QtCore.Qt.Key.Key_Left, QtCore.Qt.Key.Key_Home, QtCore.Qt.Key.Key_End):
+        qtbot.keyClick(edit, key)
+    assert edit.cursorPosition() == len(edit.text())
+    assert window.controller.play_time == 0.25
