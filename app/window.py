@@ -801,11 +801,11 @@ class MainWindow(QtWidgets.QMainWindow):
                 helps.set_topic(widget, topic)
 
     def _all_actions(self) -> list[QtGui.QAction]:
-        """The menus' actions in menu order (for the shortcuts page)."""
+        """The menus' actions in menu order, then the window's own (for the shortcuts page)."""
         def walk(menu):
             for action in menu.actions():
                 yield from walk(action.menu()) if action.menu() else (action,)
-        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())]
+        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())] + self.actions()
 
     def show_help(self, topic: str) -> None:
         if self.help_window is None:

@@ -180,7 +180,8 @@ def test_help_pages_teach_and_the_shortcuts_page_lists_every_shortcut(qtbot, win
         assert words in text
     window.keys_help_action.trigger()
     keys = browser.toPlainText()
-    for action in (window.undo_action, window.presentation_action, window.animation_action, window.back_action):
+    for action in (window.undo_action, window.presentation_action, window.animation_action, window.back_action,
+                   window.leave_action):
         assert action.shortcut().toString(QtGui.QKeySequence.SequenceFormat.NativeText) in keys
         assert action.text().replace("&", "").rstrip("…") in keys
     window.plots_help_action.trigger()
