@@ -37,7 +37,7 @@ class LivePlots(QtWidgets.QWidget):
             plot.setLogMode(y=log)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)
-            plot.setMinimumHeight(150)
+            plot.setMinimumSize(150, 150)   # three side by side in a 1024-pixel window
             if name == "force":
                 plot.addItem(pg.InfiniteLine(pos=0.0, angle=0, pen=pg.mkPen("#c0392b", style=QtCore.Qt.PenStyle.DashLine)))
             cursor = pg.InfiniteLine(pos=0.0, angle=90, pen=pg.mkPen("#555", width=1))

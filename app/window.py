@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import Scene, SceneError, Simulation, Status, Trajectory, __version__
+from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
 from rollball.trajectory import CONTACT
-from rollball.geometry import unit_normal
+from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.trajectory import CENTER, R, T
@@ -21,6 +21,7 @@ from rollball.trajectory import CENTER, R, T
 from . import help as helps
 from .animation import DEFAULT_FPS, frame_times, record
 from .closeup import CloseUp
+from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
@@ -30,6 +31,8 @@ from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
 from .readouts import Readouts
+from .speed_window import SpeedWindow
+from .sweep_dialog import SweepDialog
 from .timeline import Marker, TimeSlider
 from .undo import SceneChange
 from .view3d import SceneView
@@ -71,6 +74,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline = TimeSlider()
         self.timeline.seeked.connect(self.seek)
         self.plots = LivePlots()
+        self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.readouts = Readouts()
         self.undo_stack = QtGui.QUndoStack(self)
         self.undo_stack.cleanChanged.connect(lambda _clean: self._update_controls())
@@ -81,9 +85,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_menus()
         self._build_toolbar()
         self._build_status()
+        self.compare = CompareMode(self)
+        self.compare.panel.followChanged.connect(lambda _i: self._follow(self.follow_action.isChecked()))
         self.presentation = Presentation(self)
         self.presentation.bar.addActions([self.scene_panel_action, self.presentation_action])
         self.preferences.restore(self)
+        self.compare.dock.hide()   # compare mode starts off, whatever the last session showed
         self._set_text_size(self.preferences.font_scale())
         self._set_help_topics()
         self._update_controls()
@@ -110,7 +117,9 @@ class MainWindow(QtWidgets.QMainWindow):
         v.addWidget(self.timeline)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
-        splitter.addWidget(self.plots)
+        self.bottom = QtWidgets.QStackedWidget()   # the live plots, or compare mode's error plots
+        self.bottom.addWidget(self.plots)
+        splitter.addWidget(self.bottom)
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
         self.setCentralWidget(splitter)
@@ -179,7 +188,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.closeup_action = self._action("&Close-up", self._show_closeup, "Z",
                                            "A close-up following the ball in the corner of the view",
                                            checkable=True)
-        self.trail_action = self._action("Show &Trail", lambda on: self.view.trail.setVisible(on), "T",
+        self.compare_action = self._action("&Compare Methods", lambda on: self.compare.set_active(on), "Ctrl+K",
+                                           "Several methods side by side on this scene, with their true errors",
+                                           checkable=True)
+        self.speed_error_action = self._action("&Speed against Error…", self.show_speed_against_error, None,
+                                               "Every method on this scene: error against compute time "
+                                               "and against step size")
+        self.trail_action = self._action("Show &Trail", self.view.set_trails_visible, "T",
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
@@ -192,6 +207,8 @@ class MainWindow(QtWidgets.QMainWindow):
                                                 "Help on what the mouse points at")
         self.limits_action = self._action("Limits of the Model", lambda: self.show_help("model.html#liftoff"),
                                           None, "When the model stops being valid")
+        self.sweep_action = self._action("&Sweep…", self.open_sweep, None,
+                                         "Run the scene over a grid of start values or parameters")
         self.about_action = self._action("&About RollBall", self.show_about, None, "Version and licence")
         keyed = [self.start_action, self.pause_action, self.step_action, self.stop_action, self.reset_action,
                  self.back_action, self.forward_action, self.first_action, self.last_action, self.leave_action,
@@ -231,6 +248,8 @@ class MainWindow(QtWidgets.QMainWindow):
         run.addSeparator()
         run.addActions([self.back_action, self.forward_action, self.first_action, self.last_action,
                         self.liftoff_action])
+        run.addSeparator()
+        run.addAction(self.compare_action)
         view = bar.addMenu("&View")
         view.addActions([self.presentation_action, self.closeup_action])
         sizes = view.addMenu("Text &Size")
@@ -243,6 +262,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.text_size_group.addAction(action)
         view.addSeparator()
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
+        analysis = bar.addMenu("&Analysis")
+        analysis.addActions([self.speed_error_action, self.sweep_action])
         help_menu = bar.addMenu("&Help")
         help_menu.addActions([self.model_help_action, self.plots_help_action, self.keys_help_action,
                               self.context_help_action])
@@ -261,6 +282,8 @@ class MainWindow(QtWidgets.QMainWindow):
                              (self.reset_action, icons.SP_MediaSkipBackward)):
             action.setIcon(style.standardIcon(icon))
             bar.addAction(action)
+        bar.addSeparator()
+        bar.addAction(self.compare_action)
         bar.addSeparator()
         bar.addWidget(QtWidgets.QLabel(" Playback "))
         self.speed = QtWidgets.QComboBox(objectName="speed")
@@ -351,26 +374,32 @@ class MainWindow(QtWidgets.QMainWindow):
             self._warn("Cannot use this landscape", str(error))
             return []
         notes = []
-        surface_changed = (old is None or old.landscape != scene.landscape or old.view != scene.view
-                           or old.ball.radius != scene.ball.radius)
+        grid_changed = old is None or old.landscape != scene.landscape or old.view != scene.view
+        surface_changed = (grid_changed or old.ball.radius != scene.ball.radius or old.start != scene.start
+                           or old.gravity != scene.gravity)   # the cut follows the ball's energy
         if surface_changed:
             self.landscape = landscape
-            facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius)
+            start = landscape.evaluate(scene.start.x, scene.start.y)
+            reachable = reachable_height(start, scene) if np.all(np.isfinite(start)) else np.inf
+            facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius, reachable)
             self.closeup.set_landscape(landscape, scene.ball.radius, self.view.z_span)
             if facts["no_fit"]:
                 notes.append("red: the ball does not fit there")
             if facts["undefined"]:
                 notes.append("grey: the landscape is undefined there")
+            if facts["cut"]:
+                notes.append("cut level where the ball's energy cannot take it")
             self.show_message("; ".join(notes).capitalize())
-        if redraw_camera:
-            self.view.reset_camera()
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
         if run_changed:
             if self.controller.state in (RUNNING, PAUSED):
                 self.show_message("Scene changed: the run was reset")
             self.reset()
+        if redraw_camera or grid_changed:
+            self.view.reset_camera()   # after reset(), so the ball stands at the start
         self.shown_scene = scene
+        self.compare.scene_changed(scene)
         self._update_title()
         return notes
 
@@ -566,6 +595,13 @@ class MainWindow(QtWidgets.QMainWindow):
         if scene is None:
             return
         self.reset()
+        if self.compare.active:
+            try:
+                self.compare.start(scene)
+            except ValueError as error:
+                self._warn("Cannot compare", str(error))
+            self._follow(self.follow_action.isChecked())
+            return
         try:
             simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
         except ValueError as error:
@@ -581,6 +617,33 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline.set_span(simulation.t_end)
         self.controller.start([Run(simulation, self.landscape)])
         self.show_message(note)
+
+    def show_speed_against_error(self) -> None:
+        """Compare every method on the current scene, in a window of its own."""
+        self.panel.apply()
+        if self.scene is None:
+            return
+        if self.speed_window is None:
+            self.speed_window = SpeedWindow(self)
+            self.speed_window.runChosen.connect(self.load_run)
+        self.speed_window.compute(self.scene)
+
+    def load_run(self, result) -> None:
+        """Run the scene with a comparison run's method and step (or tolerance)."""
+        data = self.scene.to_dict()
+        integrator = data["integrator"]
+        integrator.update(method=result.spec.method, munthe_kaas=result.spec.munthe_kaas)
+        if result.dt is not None:
+            integrator["dt"] = result.dt
+        else:
+            integrator.update(rtol=result.rtol, atol=result.atol)
+        scene = Scene.from_dict(data)
+        self.compare_action.setChecked(False)
+        if scene != self.scene:
+            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Speed against Error",
+                                             applied=False))
+        self.start()
+        self.activateWindow()
 
     def toggle_pause(self) -> None:
         self.controller.toggle_pause()
@@ -604,6 +667,8 @@ class MainWindow(QtWidgets.QMainWindow):
         """Back to the start of the current scene; the computed run is dropped."""
         self.controller.reset()
         self.drawn_index = -1
+        self.view.set_runs(None)
+        self.readouts.set_runs([None])
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
@@ -615,19 +680,16 @@ class MainWindow(QtWidgets.QMainWindow):
         self.progress.setValue(0)
 
     def _finished(self) -> None:
+        if self.compare.active:
+            self.compare.finished()
+            return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
         if status is Status.OK:
-            warnings = "".join(f"; {note}" for note in self._trajectory().warnings())
+            warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
             self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
-
-    def _trajectory(self) -> Trajectory:
-        """The received rows as a trajectory (no copy)."""
-        ball = self.controller.simulation.scene.ball
-        return Trajectory(self.controller.buffer.rows, mass=ball.mass, radius=ball.radius,
-                          gravity=self.controller.simulation.scene.gravity)
 
     def _liftoff_note(self) -> str:
         t = self.controller.simulation.liftoff_time
@@ -635,8 +697,9 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _run_event(self, index: int, kind: str, t: float) -> None:
         if kind == "liftoff":
-            self.view.set_liftoff(self.controller.runs[index].buffer.point_at(t))
-            self.show_message(f"Lift-off at t = {t:.4g} s: the real ball would leave the surface "
+            self.view.add_liftoff(self.controller.runs[index].buffer.point_at(t))
+            who = f"{self.controller.runs[index].label}: " if self.compare.active else ""
+            self.show_message(f"{who}Lift-off at t = {t:.4g} s: the real ball would leave the surface "
                               f"here; the model keeps it on, so what follows is not physical", warning=True)
 
     # -- drawing ---------------------------------------------------------------------
@@ -655,29 +718,38 @@ class MainWindow(QtWidgets.QMainWindow):
         self.readouts.clear()
 
     def _draw(self, force: bool = False) -> None:
-        buffer = self.controller.buffer
-        if buffer is None or len(buffer) == 0:
+        runs, t = self.controller.runs, self.controller.play_time
+        if not runs or all(len(run.buffer) == 0 for run in runs):
             return
-        i = buffer.index_at(self.controller.play_time)
-        if i == self.drawn_index and not force:
-            return  # the same row as the last frame
-        self.drawn_index = i
-        row = buffer.rows[i]
-        simulation = self.controller.simulation
-        self.view.set_ball(row[CENTER], row[R].reshape(3, 3), simulation.scene.ball.radius)
-        trail = buffer.trail(i, lift=0.004 * self.view.extent)
-        self.view.set_trail(trail)
-        self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
-        self.readouts.show_row(0, buffer, i)
-        self.timeline.set_time(self.controller.play_time)
+        indices = tuple(run.index_at(t) for run in runs)
+        if indices == self.drawn_index and not force:
+            return  # the same rows as the last frame
+        self.drawn_index = indices
+        radius = runs[0].simulation.scene.ball.radius
+        followed = self.view.followed
+        for k, (run, i) in enumerate(zip(runs, indices)):
+            if len(run.buffer):
+                row = run.buffer.rows[i]
+                trail = run.buffer.trail(i, lift=0.004 * self.view.extent)
+                self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
+                self.view.set_trail(trail, k)
+                if k == followed:
+                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
+                self.readouts.show_row(k, run.buffer, i)
+        self.timeline.set_time(t)
         self.frames += 1
         if force or self.frames % PLOT_EVERY == 0:
-            # while playing, the curves grow with the ball; otherwise they show all that is computed
-            self.plots.show_run(buffer, i if self.state == RUNNING else len(buffer) - 1)
-            self.plots.set_cursor(row[T])
+            if self.compare.active:
+                self.compare.error_plots.show_time(t)
+            else:
+                # while playing, the curves grow with the ball; otherwise they show all that is computed
+                buffer = runs[0].buffer
+                self.plots.show_run(buffer, indices[0] if self.state == RUNNING else len(buffer) - 1)
+                self.plots.set_cursor(buffer.t[indices[0]])
             self.timeline.set_available(self.controller.end_time)
             self._show_events()
-        self.progress.setValue(int(round(1000 * min(1.0, row[T] / simulation.t_end))))
+        shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
+        self.progress.setValue(int(round(1000 * min(1.0, shown / self.controller.t_end))))
 
     def _update_controls(self) -> None:
         state, computed = self.state, self.controller.computed
@@ -703,7 +775,22 @@ class MainWindow(QtWidgets.QMainWindow):
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
-        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None)
+        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=self.compare.followed)
+
+    def open_sweep(self) -> SweepDialog:
+        """Analysis → Sweep…: a sweep of the current scene; a clicked run's scene is loaded here."""
+        dialog = SweepDialog(self.scene, self)
+        dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
+        dialog.startChosen.connect(self.load_start)
+        dialog.show()
+        return dialog
+
+    def load_start(self, scene: Scene) -> None:
+        """Show a run of a sweep in the fields and the view, ready to run (undoable, not saved)."""
+        if scene != self.scene:
+            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Sweep",
+                                             applied=False))
+        self.show_message("Start loaded from the sweep: press Start to run it")
 
     def show_message(self, text: str, warning: bool = False) -> None:
         self.message.setText(text)
@@ -825,7 +912,10 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.presentation_action.setChecked(False)   # the window's own layout is what is remembered
         self.preferences.save(self)
+        if self.speed_window is not None:
+            self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
+        self.controller.shutdown()
         event.accept()
 
 

@@ -20,7 +20,7 @@ from ..scene import Scene, SceneError
 from ..simulation import initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
 from . import kernel as sweep_kernel
-from .grid import Grid, with_values
+from .grid import KEYS, Grid, value_of, with_values
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -55,17 +55,8 @@ class Result:
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
     """Every sweepable key's value per run: the varied column or the scene's own value."""
-    columns = {}
-    for key in ("start.x", "start.y", "start.vx", "start.vy", "start.spin", "ball.radius", "ball.mass",
-                "gravity", "integrator.dt", "duration"):
-        if key in grid.keys:
-            columns[key] = values[:, grid.keys.index(key)]
-        else:
-            obj = scene
-            for part in key.split("."):
-                obj = getattr(obj, part)
-            columns[key] = np.full(len(values), float(obj))
-    return columns
+    return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
+            for key in KEYS}
 
 
 def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
@@ -120,8 +111,8 @@ def run(task: Task) -> Result:
         if h > 0 and t > 0:
             n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
     outcomes = np.full((runs, len(sweep_kernel.OUTCOMES)), np.nan)
-    W = method.matrix()
-    sweep_kernel.run_batch(fn, W, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
-                           status, outcomes, *sweep_kernel.scratch_arrays(W.shape[1]))
+    W, _, D = method.kernel_arrays()
+    sweep_kernel.run_batch(fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
+                           status, outcomes, *sweep_kernel.scratch_arrays(W.shape[0]))
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)

@@ -112,6 +112,14 @@ class Grid:
         return np.stack([a[i] for a, i in zip(self.axes, index)], axis=1)
 
 
+def value_of(scene: Scene, key: str) -> float:
+    """The scene's value of a dotted key."""
+    obj = scene
+    for part in key.split("."):
+        obj = getattr(obj, part)
+    return float(obj)
+
+
 def with_value(scene: Scene, key: str, value: float) -> Scene:
     """The scene with one dotted key set (validated like a scene file: ``SceneError``)."""
     group, _, name = key.rpartition(".")

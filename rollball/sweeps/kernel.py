@@ -17,7 +17,7 @@ import numpy as np
 from .. import kernel
 # The narrow seam to the main kernel: these names and nothing else.
 from ..kernel import (F_LIFTOFF, I_ROWS, I_STATUS, JIT, MOTION_SIZE, NONFINITE, OK, RUNNING, accept,
-                      check_step, record, scratch, start, trial_step)
+                      record, record_valid, scratch, start, step_events, trial_step)
 from ..trajectory import CENTER, ENERGY, NORMAL_FORCE, VELOCITY
 
 # One row of outcomes per run, in this order (the status is kept apart, as a code).
@@ -53,18 +53,19 @@ def _take_row(row, first, acc):
 
 
 @JIT
-def run_batch(fn, W, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, R, ints, info, acc, work):
+def run_batch(fn, W, D, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, R, ints, info, acc, work):
     """Run every run of a batch whose status is NOT_RUN; write its status and outcomes.
 
-    fn: the compiled landscape; W: the tableau (kernel layout); per run b: Z0[b] the initial
+    fn: the compiled landscape; W, D: the tableau and its dense output (``Tableau.kernel_arrays``,
+    W and P there); per run b: Z0[b] the initial
     motion state, P[b] the kernel parameters (``kernel.parameters``), DT[b], T_END[b], N_STEPS[b]
     the fixed steps. K, probe, rows (one row), R (3x3), ints, info, acc (8) and work
     (``kernel.work_size(MOTION_SIZE)``) are scratch.
     """
     n = MOTION_SIZE
-    s = W.shape[1]
+    last = W.shape[0] - 1
     z = work[work.shape[0] - n:]  # the current state, at the end of the scratch
-    d, Y, zn, pn, Rn = scratch(work, n)
+    d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     row = rows[0]
     for b in range(Z0.shape[0]):
         if status[b] != NOT_RUN:
@@ -78,7 +79,7 @@ def run_batch(fn, W, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, R, 
             info[q] = math.nan
         for q in range(out.shape[1]):
             out[b, q] = math.nan
-        start(fn, d, p, False, n, z, R, K, probe, rows, ints, info)
+        start(fn, d, p, z, R, K, probe, rows, ints, info)
         if ints[I_ROWS] == 0:  # the initial state is not finite: nothing to report
             status[b] = ints[I_STATUS]
             continue
@@ -86,22 +87,31 @@ def run_batch(fn, W, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, R, 
         t_reached = 0.0
         dt, t_end, n_steps = DT[b], T_END[b], N_STEPS[b]
         k = 0
+        x_end, y_end = z[0], z[1]
         while ints[I_STATUS] == RUNNING and k < n_steps:
             k += 1
-            last = k == n_steps
-            h = t_end - (k - 1) * dt if last else dt
-            t = t_end if last else k * dt
-            bad = trial_step(fn, d, p, W, s, False, n, h, z, R, K, s, Y, zn, Rn, pn, ints)
+            final = k == n_steps
+            t0 = (k - 1) * dt
+            h = t_end - t0 if final else dt
+            t = t_end if final else k * dt
+            bad = trial_step(fn, d, p, W, False, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
             if bad:
                 ints[I_STATUS] = NONFINITE
-            else:
-                check_step(fn, d, p[0], t, h, z, zn, probe, pn, K, s, ints, info, True)
-            if ints[I_STATUS] != RUNNING:
                 break
-            accept(False, n, t, h, z, R, K, s, probe, zn, Rn, pn, info)
+            valid = step_events(fn, d, p, W, False, n, t0, h, z, R, K, last, D, probe, zn, pn, ints, info,
+                                True, Ye, Re, pe, sa, sb, sm)
+            if valid >= 0.0:  # the last valid state inside the step, as simulate finds it
+                ints[I_ROWS] = 0
+                record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, D, probe, rows, ints, info, Y, zn, Rn,
+                             pn, Ye, sa, sb, sm)
+                if ints[I_ROWS] == 1:
+                    _take_row(row, False, acc)
+                    t_reached, x_end, y_end = row[0], row[1], row[2]
+                break
+            accept(False, n, z, R, K, last, probe, zn, Rn, pn)
             record(rows, 0, t, z, R, probe, p)
             _take_row(row, False, acc)
-            t_reached = t
+            t_reached, x_end, y_end = t, z[0], z[1]
         if ints[I_STATUS] == RUNNING:
             ints[I_STATUS] = OK
         status[b] = ints[I_STATUS]
@@ -109,13 +119,14 @@ def run_batch(fn, W, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, R, 
         o = out[b]
         o[O_T] = t_reached
         o[O_LIFTOFF] = info[F_LIFTOFF]
-        o[O_X], o[O_Y] = z[0], z[1]
+        o[O_X], o[O_Y] = x_end, y_end
         o[O_DRIFT] = acc[1] / max(abs(acc[0]), m * g0 * r, _TINY)
         o[O_MIN_FORCE], o[O_MAX_SPEED], o[O_PATH] = acc[5], acc[6], acc[7]
 
 
 def scratch_arrays(stages: int) -> tuple:
-    """The scratch arrays ``run_batch`` needs after its outcome arrays (one set per thread)."""
+    """The scratch arrays ``run_batch`` needs after its outcome arrays (one set per thread);
+    stages: the rows of the method's W."""
     n = MOTION_SIZE
     return (np.zeros((stages + 1, n)), np.zeros(kernel.PROBE_SIZE), np.zeros((1, kernel.ROW_SIZE)),
             np.eye(3), np.zeros(kernel.INTS_SIZE, dtype=np.int64), np.zeros(kernel.INFO_SIZE),

@@ -66,6 +66,7 @@ def figure(table, path, color: str = "liftoff_time") -> bool:
              f"{table.seconds:.1f} s wall on {table.workers} "
              f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}")
     fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.93))
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=130)
     plt.close(fig)
@@ -106,7 +107,6 @@ def _map(plt, table, color):
                   frameon=False)
     ax.set_xlabel(label(kx))
     ax.set_ylabel(label(ky))
-    fig.tight_layout()
     return fig
 
 
@@ -134,5 +134,4 @@ def _curves(plt, table, color):
     for ax in axes[1]:
         ax.set_xlabel(label(key), fontsize=9)
     axes[0, 0].legend(fontsize=8)
-    fig.tight_layout()
     return fig
