@@ -19,10 +19,13 @@ INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
 CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)
 
 
-def caption_text(scene: Scene, t: float) -> str:
-    """One line saying what is shown: formula, method and step (or tolerance), time."""
+def caption_text(scene: Scene, t: float, methods: list[str] | None = None) -> str:
+    """One line saying what is shown: formula, method and step (or tolerance) — or the labels of
+    the runs compared — and the time."""
     method = METHODS[scene.integrator.method]
-    if method.adaptive:
+    if methods:
+        stepping = "; ".join(methods)
+    elif method.adaptive:
         stepping = f"{method.label}, rtol {scene.integrator.rtol:g}"
     else:
         orientation = "Munthe-Kaas" if scene.integrator.munthe_kaas else "classic"

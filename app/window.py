@@ -508,10 +508,16 @@ class MainWindow(QtWidgets.QMainWindow):
     def picture(self, size: tuple[int, int], caption: bool = False, plots: bool = False) -> QtGui.QImage:
         """The 3-D view at ``size`` as shown (with the close-up when it is on), optionally with a
         caption and the plots."""
-        scene = self.controller.simulation.scene if self.controller.runs else self.scene
-        text = caption_text(scene, self.controller.play_time) if caption and scene else None
         return compose(self.view, size, inset=self.closeup if self.closeup.isVisible() else None,
-                       caption=text, plots=self.plots if plots else None)
+                       caption=self.caption() if caption else None,
+                       plots=self.bottom.currentWidget() if plots else None)
+
+    def caption(self) -> str | None:
+        """What is shown, in one line: formula, method(s) and step, time."""
+        runs = self.controller.runs
+        scene = runs[0].simulation.scene if runs else self.scene
+        methods = [run.label for run in runs] if self.compare.active and runs else None
+        return caption_text(scene, self.controller.play_time, methods) if scene else None
 
     def save_image(self, path: Path, scale: int = 1, caption: bool = False, plots: bool = False) -> bool:
         """The 3-D view as a PNG at ``scale`` times its size on screen, written atomically."""

@@ -219,3 +219,15 @@ def test_arrow_and_home_keys_still_edit_text_in_a_field(qtbot, window):
         qtbot.keyClick(edit, key)
     assert edit.cursorPosition() == len(edit.text())
     assert window.controller.play_time == 0.25
+
+
+def test_compare_mode_records_every_ball(qtbot, window, tmp_path):
+    from .test_compare import compare_to_end
+
+    set_field(qtbot, window, "duration", "1")
+    compare_to_end(qtbot, window, "euler/classic,rk4")
+    path = tmp_path / "compare.gif"
+    assert window.export_animation(path, fps=5, size=(160, 120))
+    assert frames_of(path).shape == (6, 120, 160, 3)
+    assert window.picture((160, 120), caption=True).height() > 120
+    assert all(run.label in window.caption() for run in window.controller.runs)
