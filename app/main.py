@@ -22,8 +22,15 @@ def prepare_qt() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
-    parser.add_argument("scene", nargs="?", help="scene file to open (default: the hills example)")
+    parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
     args = parser.parse_args(argv)
+
+    from rollball.examples import DEFAULT_EXAMPLE, scene_path
+
+    try:
+        path = scene_path(args.scene) if args.scene else DEFAULT_EXAMPLE
+    except FileNotFoundError as error:
+        parser.exit(2, f"rollball-app: error: {error}\n")
 
     from PySide6 import QtWidgets
 
@@ -32,11 +39,10 @@ def main(argv: list[str] | None = None) -> int:
     app.setOrganizationName("RollBall")
     app.setApplicationName("RollBall")
 
-    from rollball.examples import DEFAULT_EXAMPLE
-
     from .window import MainWindow
 
     window = MainWindow()
-    window.open_scene(args.scene or DEFAULT_EXAMPLE, remember=args.scene is not None)
+    named_file = args.scene is not None and str(path) == args.scene   # not an example's name
+    window.open_scene(path, remember=named_file)
     window.show()
     return app.exec()

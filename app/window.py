@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -88,8 +89,7 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- layout ----------------------------------------------------------------------
 
     def _build_layout(self) -> None:
-        self.setWindowIcon(QtGui.QIcon(str(Path(__file__).resolve().parent.parent / "resources" / "icons"
-                                           / "rollball.svg")))
+        self.setWindowIcon(QtGui.QIcon(str(resources.files("app") / "icons" / "rollball.svg")))
         scroll = QtWidgets.QScrollArea(widgetResizable=True)
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from . import __version__
-from .examples import example_scenes
+from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .scene import SceneError
 from .tableaus import METHODS
 
@@ -47,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
         description="Simulate a solid ball rolling without slipping over a landscape z = f(x, y).",
-        epilog="Example: rollball simulate resources/examples/hills.json --csv hills.csv",
+        epilog="Example: rollball simulate hills --csv hills.csv (an example by name, or a scene file)",
     )
     parser.add_argument("--version", action="version", version=f"rollball {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -56,7 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
         "simulate", help="run a scene file and print a one-line summary",
         description="Run a scene file (JSON) and print a one-line summary: steps, status, "
                     "relative energy drift and the first lift-off time. Options override the scene.")
-    sim.add_argument("scene", metavar="SCENE.json", help="scene file to run")
+    sim.add_argument("scene", metavar="SCENE", help="scene file to run, or an example's name (rollball examples)")
     sim.add_argument("--method", choices=list(METHODS),
                      help="Runge-Kutta method; adaptive: Dormand-Prince 5(4) steps that keep to "
                           "--rtol/--atol, always Munthe-Kaas")
@@ -97,7 +97,9 @@ def _simulate(args) -> int:
     from .trajectory import Status
 
     try:
-        scene = Scene.load(args.scene)
+        scene = Scene.load(scene_path(args.scene))
+    except FileNotFoundError as e:
+        return _fail(str(e))
     except (SceneError, OSError) as e:
         return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
     try:
@@ -119,12 +121,11 @@ def _simulate(args) -> int:
 
 
 def _examples() -> int:
-    for path, scene in example_scenes():
-        try:
-            path = path.relative_to(Path.cwd())
-        except ValueError:
-            pass
-        print(f"{path}: {scene.description}")
+    examples = example_scenes()
+    width = max(len(path.stem) for path, _ in examples)
+    for path, scene in examples:
+        print(f"{path.stem:<{width}}  {scene.description}")
+    print(f"\nRun one by name (rollball simulate hills); the files are in {EXAMPLES_DIR}")
     return EXIT_OK
 
 

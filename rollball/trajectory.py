@@ -14,7 +14,14 @@ from .files import atomic_write
 COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
            "energy", "normal_force")
-HEADER = ",".join(COLUMNS)
+# The CSV adds columns derived per row after the 23 above (DESIGN §5); readers that take the
+# first 23 keep working.
+CSV_COLUMNS = COLUMNS + ("energy_error",)
+UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
+         "vx": "m/s", "vy": "m/s", "vz": "m/s", "wx": "rad/s", "wy": "rad/s", "wz": "rad/s",
+         **{f"r{i}{j}": "1" for i in (1, 2, 3) for j in (1, 2, 3)},
+         "energy": "J", "normal_force": "N", "energy_error": "1"}
+HEADER = ",".join(CSV_COLUMNS)
 
 
 class Status(str, enum.Enum):
@@ -110,19 +117,22 @@ class Trajectory:
         atomic_write(path, self.write_csv)
 
     def write_csv(self, stream) -> None:
+        """Provenance and unit lines (``#``), the header, then the rows with the energy error."""
         for key, value in self.provenance.items():
             stream.write(f"# {key}: {value}\n")
+        stream.write(f"# units: {','.join(UNITS[name] for name in CSV_COLUMNS)}\n")
         stream.write(HEADER + "\n")
-        np.savetxt(stream, self.data, fmt="%.17g", delimiter=",")
+        np.savetxt(stream, np.column_stack([self.data, self.energy_error()]), fmt="%.17g", delimiter=",")
 
 
 def read_csv(path: str | os.PathLike) -> np.ndarray:
-    """Read a trajectory CSV back as an (n, 23) array (provenance lines are skipped)."""
+    """Read a trajectory CSV back as an (n, 23) array of its first 23 columns (``#`` lines are
+    skipped; files with only these 23 columns, as written before the energy error, read too)."""
     with open(path, encoding="utf-8") as stream:
         lines = [line for line in stream if not line.startswith("#")]
-    if not lines or lines[0].strip() != HEADER:
-        raise ValueError(f"{path}: not a RollBall trajectory (header must be {HEADER})")
+    if not lines or tuple(lines[0].strip().split(",")[: len(COLUMNS)]) != COLUMNS:
+        raise ValueError(f"{path}: not a RollBall trajectory (header must begin {','.join(COLUMNS)})")
     body = "".join(lines[1:])
     if not body.strip():
         return np.empty((0, len(COLUMNS)))
-    return np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2)
+    return np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, usecols=range(len(COLUMNS)))

@@ -78,7 +78,16 @@ def test_bad_scene_file_names_the_key(tmp_path, capsys):
 def test_examples_lists_descriptions(capsys):
     assert main(["examples"]) == 0
     out = capsys.readouterr().out
-    assert "hills.json: Sine-cosine hills" in out and len(out.splitlines()) >= 8
+    assert "hills     Sine-cosine hills" in out and len(out.splitlines()) >= 8
+
+
+def test_an_example_runs_by_name_from_any_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "hills", "--t-end", "0.1"]) == 0
+    assert capsys.readouterr().out.startswith("hills: 100 steps")
+    assert main(["simulate", "hillz"]) == 2
+    err = capsys.readouterr().err
+    assert "no such scene file or example" in err and "hills" in err and len(err.strip().splitlines()) == 1
 
 
 def test_installed_entry_point_runs(tmp_path):

@@ -78,11 +78,38 @@ def test_csv_round_trip_at_full_precision(scene_factory, tmp_path):
     traj.to_csv(path)
     lines = path.read_text().splitlines()
     header = [line for line in lines if not line.startswith("#")][0]
-    assert header == ",".join(COLUMNS) and " " not in header
+    assert header == ",".join(COLUMNS) + ",energy_error" and " " not in header
     assert any(line.startswith("# landscape: 0.5*sin(x)*cos(y)") for line in lines)
     back = read_csv(path)
     assert back.shape == (len(traj), 23)
     assert np.array_equal(back, traj.data)  # bit for bit
+
+
+def test_csv_says_every_unit_and_each_rows_energy_error(scene_factory, tmp_path):
+    scene = scene_factory("0.5*sin(x)*cos(y)", x=0.3, vx=1.0)
+    traj = simulate(scene, method="euler", dt=0.01, t_end=1.0)
+    path = tmp_path / "out.csv"
+    traj.to_csv(path)
+    lines = path.read_text().splitlines()
+    names = lines[[not line.startswith("#") for line in lines].index(True)].split(",")
+    units = next(line for line in lines if line.startswith("# units: "))[len("# units: "):].split(",")
+    assert len(units) == len(names) == 24
+    unit = dict(zip(names, units))
+    assert [unit[k] for k in ("t", "x", "cz", "vx", "wz", "r23", "energy", "normal_force", "energy_error")] == [
+        "s", "m", "m", "m/s", "rad/s", "1", "J", "N", "1"]
+    table = np.loadtxt(path, delimiter=",", comments="#", skiprows=lines.index(",".join(names)) + 1)
+    energy = table[:, names.index("energy")]
+    scale = max(abs(energy[0]), scene.ball.mass * scene.gravity * scene.ball.radius)
+    np.testing.assert_allclose(table[:, 23], (energy - energy[0]) / scale, rtol=1e-15, atol=0)
+    assert abs(table[-1, 23]) > 1e-6  # Euler at this step visibly changes the energy
+
+
+def test_csv_without_the_extra_columns_still_reads(scene_factory, tmp_path):
+    traj = simulate(scene_factory("0.1*x*y", vx=0.5), t_end=0.1)
+    path = tmp_path / "old.csv"
+    rows = "\n".join(",".join(repr(float(v)) for v in row) for row in traj.data)
+    path.write_text("# program: rollball 0.1.0\n" + ",".join(COLUMNS) + "\n" + rows + "\n")
+    assert np.array_equal(read_csv(path), traj.data)
 
 
 def test_csv_of_an_empty_trajectory_has_the_header(scene_factory, tmp_path):
@@ -90,7 +117,8 @@ def test_csv_of_an_empty_trajectory_has_the_header(scene_factory, tmp_path):
     assert len(traj) == 0
     path = tmp_path / "empty.csv"
     traj.to_csv(path)
-    assert [line for line in path.read_text().splitlines() if not line.startswith("#")] == [",".join(COLUMNS)]
+    assert [line for line in path.read_text().splitlines() if not line.startswith("#")] == [
+        ",".join(COLUMNS) + ",energy_error"]
     assert read_csv(path).shape == (0, 23)
 
 

@@ -1,0 +1,39 @@
+"""The example scenes shipped with RollBall: the JSON files in this package, read as package
+data (``importlib.resources``), so they are found from any folder, in a checkout as in an
+installed wheel. A scene can be named by its file or, for an example, by its name alone."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+from ..scene import Scene
+
+# an installed package is a folder on disk, so this is a Path
+EXAMPLES_DIR: Path = resources.files(__name__)
+DEFAULT_EXAMPLE = EXAMPLES_DIR / "hills.json"
+
+
+def example_names() -> list[str]:
+    """The examples' names (their file names without ``.json``), sorted."""
+    return sorted(entry.name[:-5] for entry in EXAMPLES_DIR.iterdir() if entry.name.endswith(".json"))
+
+
+def example_scenes() -> list[tuple[Path, Scene]]:
+    """Every example scene, sorted by file name."""
+    return [(EXAMPLES_DIR / f"{name}.json", Scene.load(EXAMPLES_DIR / f"{name}.json"))
+            for name in example_names()]
+
+
+def scene_path(text: str) -> Path:
+    """The scene file ``text`` names: what exists at that path (reading it says what is wrong
+    with it), else the example of that name (with or without ``.json``). Raises
+    ``FileNotFoundError`` with a one-line message listing the examples when it is neither."""
+    path = Path(text)
+    if path.exists():
+        return path
+    name = path.name[:-5] if path.name.endswith(".json") else path.name
+    if path.parent == Path(".") and name in example_names():
+        return EXAMPLES_DIR / f"{name}.json"
+    raise FileNotFoundError(f"{text}: no such scene file or example "
+                            f"(examples: {', '.join(example_names())})")

@@ -1,0 +1,58 @@
+"""The installed package carries its data: a wheel built from the sources holds the example
+scenes, the app's icon and the benchmark's C source, and lists the examples from any folder."""
+
+import shutil
+import subprocess
+import sys
+import zipfile
+
+import pytest
+
+from rollball.examples import example_names
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    pytest.importorskip("setuptools", minversion="77")
+    source = tmp_path_factory.mktemp("source")
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, source)
+    for package in ("rollball", "app"):
+        shutil.copytree(ROOT / package, source / package,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    out = tmp_path_factory.mktemp("dist")
+    result = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+                             "--quiet", "-w", str(out), str(source)], capture_output=True, text=True,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    (path,) = out.glob("rollball-*.whl")
+    return path
+
+
+def test_wheel_holds_examples_icon_and_c_source(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert {f"rollball/examples/{name}.json" for name in example_names()} <= names
+    assert len(example_names()) >= 10
+    assert {"app/icons/rollball.svg", "rollball/bench/step.c", "rollball/examples/__init__.py"} <= names
+    entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
+    text = zipfile.ZipFile(wheel).read(entry_points).decode()
+    assert "rollball = rollball.cli:main" in text and "rollball-app = app:main" in text
+
+
+def test_installed_wheel_lists_examples_from_any_folder(wheel, tmp_path):
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--target", str(target),
+                    str(wheel)], check=True, capture_output=True, timeout=300)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    code = ("import sys, rollball.cli; from importlib import resources; "
+            "assert resources.files('app').joinpath('icons', 'rollball.svg').is_file(); "
+            "sys.exit(rollball.cli.main(['examples']))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                            cwd=elsewhere, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin"})
+    assert result.returncode == 0, result.stderr
+    listed = [line.split()[0] for line in result.stdout.splitlines()[:len(example_names())]]
+    assert listed == example_names()
+    assert str(target) in result.stdout   # read from the installed copy, not this checkout
