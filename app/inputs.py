@@ -137,9 +137,8 @@ class ScenePanel(QtWidgets.QWidget):
         h = QtWidgets.QHBoxLayout(row)
         h.setContentsMargins(0, 0, 0, 0)
         for name, tableau in METHODS.items():
-            label = "Adaptive" if tableau.adaptive else tableau.label
-            button = QtWidgets.QRadioButton(label, objectName=f"method.{name}")
-            button.setToolTip(f"{tableau.label}: explicit Runge–Kutta of order {tableau.order}"
+            button = QtWidgets.QRadioButton(tableau.label, objectName=f"method.{name}")
+            button.setToolTip(f"{tableau.label}: Runge–Kutta of order {tableau.order}"
                               + (", step size chosen for the tolerances" if tableau.adaptive else ""))
             button.setProperty("method", name)
             self.methods.addButton(button)
@@ -159,10 +158,11 @@ class ScenePanel(QtWidgets.QWidget):
 
     def _method_state(self) -> None:
         """Adaptive: Munthe-Kaas always, tolerances instead of a recording stride."""
-        adaptive = METHODS[self.method()].adaptive
-        if adaptive:
+        method = METHODS[self.method()]
+        adaptive = method.adaptive
+        if not method.classic_allowed:
             self.munthe_kaas.setChecked(True)
-        self.munthe_kaas.setEnabled(not adaptive)
+        self.munthe_kaas.setEnabled(method.classic_allowed)
         for key in ("integrator.rtol", "integrator.atol"):
             self.numbers[key].setEnabled(adaptive)
         self.record_every.setEnabled(not adaptive)

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from rollball import Trajectory
+from rollball import COLUMNS, Trajectory
+from rollball.trajectory import CONTACT, T
 
-ROW = 23
+ROW = len(COLUMNS)
 EXTRA = 3   # contact height, relative energy error, orthogonality error
 
 
@@ -36,7 +37,7 @@ class RunBuffer:
 
     @property
     def t(self) -> np.ndarray:
-        return self._data[: self.n, 0]
+        return self._data[: self.n, T]
 
     @property
     def contact_height(self) -> np.ndarray:
@@ -52,7 +53,7 @@ class RunBuffer:
 
     @property
     def end_time(self) -> float:
-        return float(self._data[self.n - 1, 0]) if self.n else 0.0
+        return float(self._data[self.n - 1, T]) if self.n else 0.0
 
     def derive(self, rows: np.ndarray) -> np.ndarray:
         """Rows with the derived columns appended. Runs in the worker thread, chunk by chunk."""
@@ -61,7 +62,7 @@ class RunBuffer:
             self.e0, self.scale = float(part.energy[0]), part.energy_scale
         block = np.empty((len(rows), ROW + EXTRA))
         block[:, :ROW] = rows
-        block[:, ROW] = self.landscape.height(rows[:, 1], rows[:, 2])
+        block[:, ROW] = self.landscape.height(*rows[:, CONTACT].T)
         block[:, ROW + 1] = (part.energy - self.e0) / self.scale
         block[:, ROW + 2] = part.orthogonality_error()
         return block
@@ -87,7 +88,7 @@ class RunBuffer:
         stride = max(1, -(-(index + 1) // max_points))
         picked = np.r_[np.arange(0, index + 1, stride), index] if self.n else np.zeros(0, dtype=int)
         points = np.empty((len(picked), 3))
-        points[:, :2] = self._data[picked, 1:3]
+        points[:, :2] = self._data[picked, CONTACT]
         points[:, 2] = self._data[picked, ROW] + lift
         return points
 
@@ -95,7 +96,7 @@ class RunBuffer:
         """The contact point at time t, interpolated between recorded rows."""
         i = self.index_at(t)
         j = min(i + 1, self.n - 1)
-        t0, t1 = self._data[i, 0], self._data[j, 0]
+        t0, t1 = self._data[i, T], self._data[j, T]
         w = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
-        x, y = (1 - w) * self._data[i, 1:3] + w * self._data[j, 1:3]
+        x, y = (1 - w) * self._data[i, CONTACT] + w * self._data[j, CONTACT]
         return np.array([x, y, float(self.landscape.height(x, y))])

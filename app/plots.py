@@ -6,6 +6,8 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
+from rollball.trajectory import NORMAL_FORCE
+
 FLOOR = 1e-17       # log plots show exact zeros at this level
 MAX_POINTS = 2000   # per curve; longer runs are thinned for drawing
 
@@ -63,4 +65,4 @@ class LivePlots(QtWidgets.QWidget):
         t = buffer.t[picked]
         self.curves["energy"].setData(t, np.maximum(np.abs(buffer.energy_error[picked]), FLOOR))
         self.curves["orthogonality"].setData(t, np.maximum(buffer.orthogonality_error[picked], FLOOR))
-        self.curves["force"].setData(t, buffer.rows[picked, 22])
+        self.curves["force"].setData(t, buffer.rows[picked, NORMAL_FORCE])

@@ -3,39 +3,33 @@
 from __future__ import annotations
 
 import math
-import time
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
+from rollball import Scene, SceneError, Simulation, Status, Trajectory, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
 from rollball.geometry import unit_normal
 from rollball.landscape import landscape_for
-from rollball.simulation import step_count
+from rollball.simulation import recording
+from rollball.trajectory import CENTER, R, T
 
+from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
+from .document import Document
 from .inputs import ScenePanel
-from .playback import RunBuffer
 from .plots import LivePlots
 from .preferences import Preferences
+from .readouts import Readouts
 from .view3d import SceneView
-from .worker import SimulationThread
 
-FRAME_MS = 16                  # redraw at most ~60 Hz
 PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
-AUTO_ROWS = 200_000            # "record: auto" keeps at most about this many rows
-ADAPTIVE_ROWS = 10_000
-ENERGY_WARNING = 1e-2          # a finished run whose energy error exceeds this gets a warning
-ORTHOGONALITY_WARNING = 1e-3   # likewise for ||R^T R - I|| at the end         # an adaptive run records this many evenly spaced rows
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
 CSV_FILTER = "CSV files (*.csv);;All files (*)"
-
-READY, RUNNING, PAUSED, FINISHED, STOPPED = "ready", "running", "paused", "finished", "stopped"
 
 LIMITS_TEXT = """<p><b>What the model assumes.</b> A homogeneous solid ball rolls without slipping
 and always touches the surface in exactly one point.</p>
@@ -55,35 +49,29 @@ class MainWindow(QtWidgets.QMainWindow):
     def __init__(self, preferences: Preferences | None = None):
         super().__init__()
         self.preferences = preferences or Preferences()
-        self.path: Path | None = None       # the scene file (None: new or an example)
-        self.example: str | None = None     # name of the example the scene came from
-        self.saved_scene: Scene | None = None
+        self.document = Document()
         self.landscape = None
         self.shown_scene: Scene | None = None   # what the view and the run belong to
-        self.simulation: Simulation | None = None
-        self.thread: SimulationThread | None = None
-        self.buffer: RunBuffer | None = None
-        self.state = READY
-        self.play_time = 0.0
-        self.computed = False               # the worker has finished the run
-        self.liftoff_announced = False
         self.drawn_index = -1                # the row the view shows
         self.frames = 0
-        self._last_tick = self._frame_started = time.perf_counter()
 
+        self.controller = RunController(self)
+        self.controller.stateChanged.connect(lambda _state: self._update_controls())
+        self.controller.frameReady.connect(self._draw)
+        self.controller.event.connect(self._run_event)
+        self.controller.finished.connect(self._finished)
+        self.controller.failed.connect(lambda message: self._warn("The computation failed", message))
         self.panel = ScenePanel()
         self.panel.sceneChanged.connect(self._scene_edited)
         self.view = SceneView()
         self.plots = LivePlots()
+        self.readouts = Readouts()
         self._build_layout()
         self._build_actions()
         self._build_menus()
         self._build_toolbar()
         self._build_status()
         self.preferences.restore(self)
-
-        self.timer = QtCore.QTimer(self, interval=FRAME_MS, timerType=QtCore.Qt.TimerType.PreciseTimer)
-        self.timer.timeout.connect(self._tick)
         self._update_controls()
 
     # -- layout ----------------------------------------------------------------------
@@ -100,32 +88,12 @@ class MainWindow(QtWidgets.QMainWindow):
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, dock)
 
-        self.readouts = {}
-        grid = QtWidgets.QGridLayout()
-        for i, (key, label) in enumerate((("t", "Time t"), ("energy", "Energy E"),
-                                          ("drift", "(E − E₀)/E₀"), ("orth", "‖RᵀR − I‖"),
-                                          ("force", "Normal force F·N"), ("speed", "Speed |ċ|"))):
-            name = QtWidgets.QLabel(label)
-            name.setStyleSheet("color: #555;")
-            value = QtWidgets.QLabel("—", objectName=f"readout.{key}")
-            value.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-            value.setMinimumWidth(110)
-            font = value.font()
-            font.setFamily("monospace")
-            font.setStyleHint(QtGui.QFont.StyleHint.Monospace)
-            value.setFont(font)
-            grid.addWidget(name, 0, i)
-            grid.addWidget(value, 1, i)
-            self.readouts[key] = value
-        readouts = QtWidgets.QWidget()
-        readouts.setLayout(grid)
-
         splitter = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical)
         top = QtWidgets.QWidget()
         v = QtWidgets.QVBoxLayout(top)
         v.setContentsMargins(0, 0, 0, 0)
         v.addWidget(self.view, 1)
-        v.addWidget(readouts)
+        v.addWidget(self.readouts)
         splitter.addWidget(top)
         splitter.addWidget(self.plots)
         splitter.setStretchFactor(0, 4)
@@ -222,6 +190,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.speed = QtWidgets.QComboBox(objectName="speed")
         for label, value in SPEEDS:
             self.speed.addItem(label, value)
+        self.speed.currentIndexChanged.connect(lambda: setattr(self.controller, "speed", self.speed.currentData()))
         self.speed.setCurrentIndex(3)
         self.speed.setToolTip("Simulated seconds per wall-clock second")
         bar.addWidget(self.speed)
@@ -264,15 +233,12 @@ class MainWindow(QtWidgets.QMainWindow):
             return False
         if not self._may_discard():
             return False
-        self.stop_worker()
-        is_example = not remember
-        self.path = None if is_example else path
-        self.example = path.stem if is_example else None
+        self.reset()
+        self.document.opened(path, scene, example=not remember)
         if remember:
             self.preferences.add_recent(path)
             self.preferences.set_last_folder(path)
         self.panel.set_scene(scene)
-        self.saved_scene = scene
         notes = self._use_scene(scene, redraw_camera=True)
         self.show_message(f"Opened {path.name}" + (f": {scene.description}" if scene.description else "")
                           + "".join(f" ({note})" for note in notes))
@@ -307,7 +273,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
         if run_changed:
-            if self.state in (RUNNING, PAUSED):
+            if self.controller.state in (RUNNING, PAUSED):
                 self.show_message("Scene changed: the run was reset")
             self.reset()
         self.shown_scene = scene
@@ -315,13 +281,12 @@ class MainWindow(QtWidgets.QMainWindow):
         return notes
 
     def _update_title(self) -> None:
-        name = self.path.name if self.path else (f"{self.example} (example)" if self.example else "untitled")
         self.setWindowModified(self.dirty)
-        self.setWindowTitle(f"{name}[*] — RollBall")
+        self.setWindowTitle(self.document.title())
 
     @property
     def dirty(self) -> bool:
-        return self.scene is not None and self.scene != self.saved_scene
+        return self.document.dirty(self.scene)
 
     def _may_discard(self) -> bool:
         """Ask before unsaved scene changes are lost; True to go on."""
@@ -359,12 +324,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu.addAction("Clear Recent", self.preferences.clear_recent).setEnabled(bool(files))
 
     def save(self) -> bool:
-        if self.path is None:
+        if self.document.path is None:
             return self.save_as()
-        return self.save_to(self.path)
+        return self.save_to(self.document.path)
 
     def save_as(self) -> bool:
-        suggestion = str(Path(self.preferences.last_folder()) / f"{self.path.stem if self.path else self.example or 'scene'}.json")
+        suggestion = str(Path(self.preferences.last_folder()) / f"{self.document.stem or 'scene'}.json")
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save scene", suggestion, SCENE_FILTER)
         return bool(path) and self.save_to(Path(path))
 
@@ -374,7 +339,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_message(f"Saving the last valid scene ({self.panel.error_text})")
         if not self._write("save scene", path, scene.save):
             return False
-        self.path, self.example, self.saved_scene = Path(path), None, scene
+        self.document.saved(path, scene)
         self.preferences.add_recent(path)
         self._update_title()
         self.show_message(f"Saved {Path(path).name}")
@@ -391,16 +356,16 @@ class MainWindow(QtWidgets.QMainWindow):
         return True
 
     def export_dialog(self) -> None:
-        stem = self.path.stem if self.path else self.example or "trajectory"
-        suggestion = str(Path(self.preferences.last_folder()) / f"{stem}.csv")
+        suggestion = str(Path(self.preferences.last_folder()) / f"{self.document.stem or 'trajectory'}.csv")
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export trajectory", suggestion, CSV_FILTER)
         if path:
             self.export_csv(Path(path))
 
     def export_csv(self, path: Path) -> bool:
-        if self.simulation is None or not self.computed:
+        simulation = self.controller.simulation
+        if simulation is None or not self.controller.computed:
             return False
-        trajectory = self.simulation.trajectory()
+        trajectory = simulation.trajectory()
         if not self._write("export trajectory", path, trajectory.to_csv):
             return False
         self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
@@ -425,6 +390,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -- running ---------------------------------------------------------------------
 
+    @property
+    def state(self) -> str:
+        return self.controller.state
+
     def start(self) -> None:
         """Start from t = 0 (or resume when paused)."""
         if self.state == PAUSED:
@@ -436,74 +405,42 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.reset()
         try:
-            if METHODS[scene.integrator.method].adaptive:
-                self.simulation = Simulation(scene, record_dt=scene.duration / ADAPTIVE_ROWS)
-                note = f"Running adaptive steps to t = {scene.duration:g} s"
-            else:
-                steps = step_count(scene.integrator.dt, scene.duration)
-                every = self.panel.record_every.value() or max(1, math.ceil(steps / AUTO_ROWS))
-                self.simulation = Simulation(scene, record_every=every)
-                note = f"Running {steps:,} steps" + (f" (recording every {every}th step)" if every > 1 else "")
+            simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
         except ValueError as error:
             self._warn("Cannot start", str(error))
             return
+        if simulation.adaptive:
+            note = f"Running adaptive steps to t = {scene.duration:g} s"
+        else:
+            every = simulation.record_every
+            note = (f"Running {simulation.n_steps:,} steps"
+                    + (f" (recording every {every}th step)" if every > 1 else ""))
         self.plots.set_duration(scene.duration)
-        self.buffer = RunBuffer(self.landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
-                                capacity=self.simulation.row_capacity)
-        self.computed = False
-        self.thread = SimulationThread(self.simulation, self.buffer.derive, self)
-        self.thread.rowsReady.connect(self._rows_ready)
-        self.thread.failed.connect(lambda message: self._warn("The computation failed", message))
-        self.thread.finished.connect(self._computed)
-        self.state = RUNNING
-        self._last_tick = time.perf_counter()
-        self.thread.start()
-        self.timer.start()
+        self.controller.start([Run(simulation, self.landscape)])
         self.show_message(note)
-        self._update_controls()
 
     def toggle_pause(self) -> None:
-        if self.state == RUNNING:
-            self.state = PAUSED
-        elif self.state == PAUSED:
-            self.state = RUNNING
-            self._last_tick = time.perf_counter()
-        self._update_controls()
+        self.controller.toggle_pause()
 
     def step_frame(self) -> None:
         """Advance the playback by one frame (starting the run paused if needed)."""
         if self.state == READY:
             self.start()
-            self.state = PAUSED
-            self._update_controls()
+            self.controller.pause()
             return
-        if self.state not in (RUNNING, PAUSED):
-            return
-        if self.state == RUNNING:
-            self.state = PAUSED
-        speed = self.speed.currentData()
-        frame = FRAME_MS / 1000 * (speed if math.isfinite(speed) else 10.0)
-        self.play_time = min(self.play_time + frame, self.buffer.end_time if self.buffer else 0.0)
-        self._draw(force=True)
-        self._update_controls()
+        self.controller.step()
 
     def stop(self) -> None:
         """Stop computing and playing; what was computed stays (export it, or Reset)."""
         if self.state not in (RUNNING, PAUSED):
             return
-        self.stop_worker()
-        self.state = STOPPED
-        self.timer.stop()
-        self._draw(force=True)
-        self.show_message(f"Stopped at t = {self.play_time:.4g} s")
-        self._update_controls()
+        self.controller.stop()
+        self.show_message(f"Stopped at t = {self.controller.play_time:.4g} s")
 
     def reset(self) -> None:
         """Back to the start of the current scene; the computed run is dropped."""
-        self.stop_worker()
-        self.timer.stop()
-        self.simulation, self.buffer, self.computed = None, None, False
-        self.state, self.play_time, self.liftoff_announced, self.drawn_index = READY, 0.0, False, -1
+        self.controller.reset()
+        self.drawn_index = -1
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
@@ -511,77 +448,31 @@ class MainWindow(QtWidgets.QMainWindow):
         self.view.set_liftoff(None)
         self.view.set_trail(np.zeros((0, 3)))
         self.progress.setValue(0)
-        self._update_controls()
 
-    def stop_worker(self) -> None:
-        if self.thread is not None:
-            self.thread.rowsReady.disconnect(self._rows_ready)
-            self.thread.finished.disconnect(self._computed)
-            self.thread.stop()
-            self.thread.deleteLater()
-            self.thread = None
-
-    def _rows_ready(self, block: np.ndarray) -> None:
-        if self.buffer is not None:
-            self.buffer.append(block)
-
-    def _computed(self) -> None:
-        self.computed = True
-        if self.thread is not None:
-            self.thread.deleteLater()
-            self.thread = None
-        self._update_controls()
-
-    def _tick(self) -> None:
-        now = time.perf_counter()
-        elapsed, self._last_tick = now - self._last_tick, now
-        self._frame_started = now
-        QtCore.QTimer.singleShot(0, self._frame_done)  # runs once this frame is painted
-        if self.buffer is None or self.state != RUNNING:
-            return  # paused: nothing moves (Step draws its own frame)
-        speed = self.speed.currentData()
-        end = self.buffer.end_time
-        self.play_time = end if math.isinf(speed) else min(self.play_time + elapsed * speed, end)
-        if self.computed and self.play_time >= end:
-            self.play_time = end
-            self._finish()  # draws the last frame
-        else:
-            self._draw()
-
-    def _frame_done(self) -> None:
-        """Pace the frames: wait at least as long as the last one took to draw and show, so the
-        event loop keeps half its time for input even where OpenGL is rendered in software."""
-        cost = time.perf_counter() - self._frame_started
-        self.timer.setInterval(max(FRAME_MS, round(1000 * cost)))
-
-    def _finish(self) -> None:
-        self.state = FINISHED
-        self.timer.stop()
-        self._draw(force=True)
-        status = self.simulation.status
-        text = self.simulation.message()
+    def _finished(self) -> None:
+        simulation = self.controller.simulation
+        status, text = simulation.status, simulation.message()
         if status is Status.OK:
-            warnings = self._accuracy_warnings()
+            warnings = "".join(f"; {note}" for note in self._trajectory().warnings())
             self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
-        self._update_controls()
 
-    def _accuracy_warnings(self) -> str:
-        """What a finished run's numbers say about the method and step (empty when all is well)."""
-        notes = []
-        drift = float(np.max(np.abs(self.buffer.energy_error)))
-        if drift > ENERGY_WARNING:
-            notes.append(f"energy changed by {drift:.2g} of its scale: the step is too large for this method")
-        orth = float(self.buffer.orthogonality_error[-1])
-        if orth > ORTHOGONALITY_WARNING:
-            notes.append(f"‖RᵀR − I‖ = {orth:.2g}: R is no longer a rotation (classic update; "
-                         f"Munthe-Kaas keeps it one)")
-        return "".join(f"; {note}" for note in notes)
+    def _trajectory(self) -> Trajectory:
+        """The received rows as a trajectory (no copy)."""
+        ball = self.controller.simulation.scene.ball
+        return Trajectory(self.controller.buffer.rows, mass=ball.mass, radius=ball.radius,
+                          gravity=self.controller.simulation.scene.gravity)
 
     def _liftoff_note(self) -> str:
-        t = self.simulation.liftoff_time if self.simulation else None
+        t = self.controller.simulation.liftoff_time
         return "" if t is None else f"; lift-off at t = {t:.4g} s (not physical from there on)"
+
+    def _run_event(self, index: int, kind: str, t: float) -> None:
+        if kind == "liftoff":
+            self.view.set_liftoff(self.controller.runs[index].buffer.point_at(t))
+            self.show_message(f"Lift-off at t = {t:.4g} s: the real ball would leave the surface "
+                              f"here; the model keeps it on, so what follows is not physical", warning=True)
 
     # -- drawing ---------------------------------------------------------------------
 
@@ -595,50 +486,28 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         center = np.array([s.x, s.y, d[0]]) + r * unit_normal(d)
         self.view.set_ball(center, np.eye(3), r)
-        self._show_readouts(None)
+        self.readouts.clear()
 
     def _draw(self, force: bool = False) -> None:
-        buffer = self.buffer
+        buffer = self.controller.buffer
         if buffer is None or len(buffer) == 0:
             return
-        i = buffer.index_at(self.play_time)
+        i = buffer.index_at(self.controller.play_time)
         if i == self.drawn_index and not force:
             return  # the same row as the last frame
         self.drawn_index = i
         row = buffer.rows[i]
-        scene = self.simulation.scene
-        self.view.set_ball(row[3:6], row[12:21].reshape(3, 3), scene.ball.radius)
+        simulation = self.controller.simulation
+        self.view.set_ball(row[CENTER], row[R].reshape(3, 3), simulation.scene.ball.radius)
         self.view.set_trail(buffer.trail(i, lift=0.004 * self.view.extent))
-        self._show_readouts(i)
+        self.readouts.show_row(0, buffer, i)
         self.frames += 1
         if force or self.frames % PLOT_EVERY == 0:
             self.plots.show_run(buffer, i)
-        t_end = self.simulation.t_end
-        self.progress.setValue(int(round(1000 * min(1.0, row[0] / t_end))))
-        liftoff = self.simulation.liftoff_time  # set by the kernel as soon as it happens
-        if liftoff is not None and row[0] >= liftoff and not self.liftoff_announced:
-            self.liftoff_announced = True
-            self.view.set_liftoff(buffer.point_at(liftoff))
-            self.show_message(f"Lift-off at t = {liftoff:.4g} s: the real ball would leave the surface "
-                              f"here; the model keeps it on, so what follows is not physical", warning=True)
-
-    def _show_readouts(self, i: int | None) -> None:
-        if i is None:
-            for label in self.readouts.values():
-                label.setText("—")
-            self.readouts["t"].setText("0 s")
-            return
-        b = self.buffer
-        row = b.rows[i]
-        self.readouts["t"].setText(f"{row[0]:.4f} s")
-        self.readouts["energy"].setText(f"{row[21]:.8g} J")
-        self.readouts["drift"].setText(f"{b.energy_error[i]:.2e}")
-        self.readouts["orth"].setText(f"{b.orthogonality_error[i]:.2e}")
-        self.readouts["force"].setText(f"{row[22]:.5g} N")
-        self.readouts["speed"].setText(f"{np.linalg.norm(row[6:9]):.5g} m/s")
+        self.progress.setValue(int(round(1000 * min(1.0, row[T] / simulation.t_end))))
 
     def _update_controls(self) -> None:
-        state = self.state
+        state, computed = self.state, self.controller.computed
         self.start_action.setEnabled(state != RUNNING)
         self.start_action.setText("Resume" if state == PAUSED else ("Restart" if state in (FINISHED, STOPPED)
                                                                    else "Start"))
@@ -647,9 +516,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
-        self.export_action.setEnabled(self.computed and self.simulation is not None)
+        self.export_action.setEnabled(computed and self.controller.simulation is not None)
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
-        self.state_label.setText(words[state] if self.computed or state in (READY, STOPPED, FINISHED)
+        self.state_label.setText(words[state] if computed or state in (READY, STOPPED, FINISHED)
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:

@@ -1,8 +1,9 @@
-"""The integrator in a worker thread, handing over chunks of recorded rows.
+"""The integrators in a worker thread, handing over chunks of recorded rows.
 
 The compiled kernel releases the GIL, so the GUI thread keeps serving events while a chunk
 is computed. Chunks are sized to take about ``CHUNK_SECONDS`` each, so a stop request is
-answered within that time.
+answered within that time. Several runs share the thread: the one furthest behind in
+simulated time goes next, so they are computed in step with each other.
 """
 
 from __future__ import annotations
@@ -16,36 +17,43 @@ MIN_STEPS, MAX_STEPS = 256, 1 << 20
 
 
 class SimulationThread(QtCore.QThread):
-    """Runs ``simulation.advance`` in chunks until it is done or stopped.
+    """Runs each simulation's ``advance`` in chunks until all are done or stopped.
 
-    ``rowsReady`` carries each chunk's new rows passed through ``derive`` (an owned array);
-    ``failed`` a one-line message if the core raised (the GUI stays up).
+    ``rowsReady`` carries a run's index and its chunk's new rows passed through that run's
+    ``derive`` (an owned array); ``failed`` a one-line message if the core raised (the GUI
+    stays up).
     """
 
-    rowsReady = QtCore.Signal(object)
+    rowsReady = QtCore.Signal(int, object)
     failed = QtCore.Signal(str)
 
-    def __init__(self, simulation, derive, parent=None):
+    def __init__(self, simulations, derives, parent=None):
         super().__init__(parent)
-        self.simulation = simulation
-        self.derive = derive
+        self.simulations = list(simulations)
+        self.derives = list(derives)
 
     def run(self) -> None:
-        sim, steps = self.simulation, 4096
+        sims = self.simulations
+        steps = [4096] * len(sims)
         try:
-            while not sim.done and not self.isInterruptionRequested():
+            while not self.isInterruptionRequested():
+                pending = [i for i, sim in enumerate(sims) if not sim.done]
+                if not pending:
+                    break
+                i = min(pending, key=lambda k: sims[k].progress)
                 started = time.perf_counter()
-                rows = sim.advance(steps)
+                rows = sims[i].advance(steps[i])
                 if len(rows):
-                    self.rowsReady.emit(self.derive(rows))
+                    self.rowsReady.emit(i, self.derives[i](rows))
                 elapsed = time.perf_counter() - started
                 scale = CHUNK_SECONDS / max(elapsed, 1e-6)
-                steps = int(min(MAX_STEPS, max(MIN_STEPS, steps * min(4.0, max(0.25, scale)))))
+                steps[i] = int(min(MAX_STEPS, max(MIN_STEPS, steps[i] * min(4.0, max(0.25, scale)))))
         except Exception as error:  # a defect in the core must not take the window down
             self.failed.emit(f"{type(error).__name__}: {error}")
 
     def stop(self) -> None:
-        """Cancel the run and wait for the thread to end (at most about one chunk)."""
+        """Cancel the runs and wait for the thread to end (at most about one chunk)."""
         self.requestInterruption()
-        self.simulation.cancel()
+        for sim in self.simulations:
+            sim.cancel()
         self.wait()

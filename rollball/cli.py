@@ -13,7 +13,7 @@ from pathlib import Path
 from . import __version__
 from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .scene import SceneError
-from .tableaus import METHODS
+from .tableaus import METHODS, MethodKind, get_method
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -43,6 +43,13 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _method(text: str) -> str:
+    try:
+        return get_method(text).name
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
@@ -57,9 +64,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a scene file (JSON) and print a one-line summary: steps, status, "
                     "relative energy drift and the first lift-off time. Options override the scene.")
     sim.add_argument("scene", metavar="SCENE", help="scene file to run, or an example's name (rollball examples)")
-    sim.add_argument("--method", choices=list(METHODS),
-                     help="Runge-Kutta method; adaptive: Dormand-Prince 5(4) steps that keep to "
-                          "--rtol/--atol, always Munthe-Kaas")
+    adaptive = ", ".join(m.name for m in METHODS.values() if m.kind is MethodKind.ADAPTIVE)
+    sim.add_argument("--method", type=_method, metavar="{" + ",".join(METHODS) + "}",
+                     help=f"Runge-Kutta method; adaptive ones ({adaptive}) choose their steps to keep "
+                          "to --rtol/--atol, always Munthe-Kaas")
     mk = sim.add_mutually_exclusive_group()
     mk.add_argument("--munthe-kaas", dest="munthe_kaas", action="store_true", default=None,
                     help="advance the orientation on SO(3) (Runge-Kutta-Munthe-Kaas)")
@@ -110,8 +118,10 @@ def _simulate(args) -> int:
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
-    print(f"{args.scene}: {traj.steps} steps, status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}")
+    warnings = "".join(f", WARNING: {note}" for note in traj.warnings())
+    print(f"{args.scene}: {traj.steps} steps ({traj.rejected} rejected, {traj.evaluations} evaluations), "
+          f"status {traj.status} ({traj.message}), "
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}")
     if args.csv:
         try:
             traj.to_csv(args.csv)

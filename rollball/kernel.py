@@ -49,17 +49,28 @@ PROBE_HEIGHT = 8   # f(x, y)
 PROBE_SIZE = 9
 
 # Integer run counters (``ints``) and float run facts (``info``).
-I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE = 0, 1, 2, 3, 4, 5
+I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON = range(8)
 F_LIFTOFF, F_PREV_FORCE, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(8)
-# F_FAIL_VALUE: r*kappa for DOES_NOT_FIT; for NONFINITE 0 (the motion), 1 (only the classic
-# orientation) or 2 (the adaptive step size fell below round-off)
-INTS_SIZE, INFO_SIZE = 6, 8
+INTS_SIZE, INFO_SIZE = 8, 8
 
-# Status codes (see simulation.Status).
+# Status codes (see trajectory.Status).
 RUNNING, OK, DOES_NOT_FIT, NONFINITE = 0, 1, 2, 3
+# Why a run stopped (ints[I_REASON]; see trajectory.Reason), with F_FAIL_VALUE:
+R_NONE = 0
+R_NO_FIT = 1               # r * kappa >= 1 at the end of a step (value: r * kappa)
+R_SECANT_NO_FIT = 2        # the secant curvature of a step says r * kappa >= 1 (value: that)
+R_START_UNDEFINED = 3      # the landscape gives non-finite values at the start point
+R_START_OVERFLOW = 4       # the landscape is finite at the start, the initial state overflows
+R_UNDEFINED = 5            # the state or the landscape became non-finite during the run
+R_ORIENTATION = 6          # only the orientation overflowed (value: 1 classic, 0 Munthe-Kaas)
+R_STEP_UNDERFLOW = 7       # the adaptive step size fell below round-off (value: the step)
 
 ROW_SIZE = 23  # t, x, y, c(3), c'(3), omega(3), R(9), energy, normal force
 
+# Step-size control of the embedded pairs: the next step is h * SAFETY * err^exponent,
+# bounded to [MIN_FACTOR, MAX_FACTOR] times h, with exponent -1/(q + 1) for an error
+# estimate of order q (the method's ``error_exponent``).
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 5.0
 MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below t = 1) stop the run
 # An adaptive step that turns the state non-finite is retried 5 times smaller; after this
 # many such steps in a run the ball is pressing against the end of the landscape, and the
@@ -262,19 +273,20 @@ def check_step(fn, d, r, t, h, z, zn, probe, pn, K, last, ints, info, segment):
     while the run may go on.
     """
     if pn[PROBE_FIT] >= 1.0:
-        _fail(ints, info, DOES_NOT_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
+        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
         return False
     dx, dy, df = zn[0] - z[0], zn[1] - z[1], pn[PROBE_HEIGHT] - probe[PROBE_HEIGHT]
     bend = -((pn[0] - probe[0]) * dx + (pn[1] - probe[1]) * dy + (pn[2] - probe[2]) * df)
     chord2 = dx * dx + dy * dy + df * df
     if r * bend >= chord2 and chord2 > 0.0:  # r * (secant curvature) >= 1, without a division
-        _fail(ints, info, DOES_NOT_FIT, t, z[0] + 0.5 * dx, z[1] + 0.5 * dy, r * bend / chord2)
+        _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t, z[0] + 0.5 * dx, z[1] + 0.5 * dy,
+              r * bend / chord2)
         return False
     if segment:
         fit, fx, fy = _fit_along_segment(fn, d, r, z, zn, h, K[0, 0] ** 2 + K[0, 1] ** 2,
                                          K[last, 0] ** 2 + K[last, 1] ** 2)
         if fit >= 1.0:
-            _fail(ints, info, DOES_NOT_FIT, t, fx, fy, fit)
+            _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t, fx, fy, fit)
             return False
     return True
 
@@ -306,28 +318,32 @@ def _finite_matrix(R):
 
 
 @JIT
-def _fail(ints, info, status, t, x, y, value):
+def _fail(ints, info, status, reason, t, x, y, value):
     ints[I_STATUS] = status
+    ints[I_REASON] = reason
     info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y], info[F_FAIL_VALUE] = t, x, y, value
 
 
 @JIT
 def start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info):
     """Check and record the initial state; K[0] and probe describe it afterwards."""
-    if not _finite(z, 0, n):
-        _fail(ints, info, NONFINITE, 0.0, z[0], z[1], 0.0)
+    fn(z[0], z[1], data_pointer(d))
+    if not _finite(d, 0, 6):
+        _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
     dynamics(fn, d, p, z, mk, K, 0, probe, True)
-    if not (_finite_row(K, 0, 0, n) and _finite(probe, 0, PROBE_SIZE)):
-        _fail(ints, info, NONFINITE, 0.0, z[0], z[1], 0.0)
-        return
+    ints[I_EVALS] += 1
     record(rows, 0, 0.0, z, R, probe, p)
+    if not (_finite(z, 0, n) and _finite_row(K, 0, 0, n) and _finite(probe, 0, PROBE_SIZE)
+            and _finite_row(rows, 0, 0, ROW_SIZE)):
+        _fail(ints, info, NONFINITE, R_START_OVERFLOW, 0.0, z[0], z[1], math.nan)
+        return
     ints[I_ROWS] = 1
     info[F_PREV_FORCE] = probe[PROBE_FORCE]
-    if probe[PROBE_FORCE] <= 0.0:
+    if probe[PROBE_FORCE] < 0.0:
         info[F_LIFTOFF] = 0.0
     if probe[PROBE_FIT] >= 1.0:
-        _fail(ints, info, DOES_NOT_FIT, 0.0, z[0], z[1], probe[PROBE_FIT])
+        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, 0.0, z[0], z[1], probe[PROBE_FIT])
 
 
 @JIT
@@ -343,17 +359,19 @@ def combine(n, z, h, W, row, K, s, out):
 
 
 @JIT
-def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn):
+def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
 
     W holds the tableau: rows 0 .. s-1 the stage coefficients A, row s the weights b.
     Stages 1 .. last-1 fill K[1 .. last-1]; zn = z + h sum b_i K_i; then the full
     evaluation at zn (before u is reset) goes to K[last] and pn. Returns whether the new
     state is finite: 0 = yes, 1 = the motion is not, 2 = only the orientation is not.
+    Counts its right-hand-side evaluations in ints[I_EVALS].
     """
     for i in range(1, last):
         combine(n, z, h, W, i, K, i, Y)
         dynamics(fn, d, p, Y, mk, K, i, pn, False)
+    ints[I_EVALS] += last - 1
     combine(n, z, h, W, s, K, last, zn)
     if mk:
         rodrigues(zn, R, Rn)
@@ -366,6 +384,7 @@ def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn):
     if not (_finite(zn, 5, n) and _finite_matrix(Rn)):
         return 2
     dynamics(fn, d, p, zn, mk, K, last, pn, True)
+    ints[I_EVALS] += 1
     if not (_finite_row(K, last, 0, 5) and _finite(pn, 0, PROBE_SIZE)):
         return 1
     if not _finite_row(K, last, 5, n):
@@ -377,7 +396,7 @@ def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn):
 def accept(mk, n, t, h, z, R, K, last, probe, zn, Rn, pn, info):
     """Make the trial state the current one; K[0] becomes its derivative (u-part = omega)."""
     force = pn[PROBE_FORCE]
-    if force <= 0.0 and info[F_PREV_FORCE] > 0.0 and math.isnan(info[F_LIFTOFF]):
+    if force < 0.0 and info[F_PREV_FORCE] >= 0.0 and math.isnan(info[F_LIFTOFF]):
         prev = info[F_PREV_FORCE]
         info[F_LIFTOFF] = t - h + h * prev / (prev - force)
     info[F_PREV_FORCE] = force
@@ -437,9 +456,10 @@ def _fixed_steps(mk: bool):
             last = k == n_steps
             h = t_end - (k - 1) * dt if last else dt
             t = t_end if last else k * dt
-            bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, s, Y, zn, Rn, pn)
+            bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, s, Y, zn, Rn, pn, ints)
             if bad:
-                _fail(ints, info, NONFINITE, t, z[0], z[1], 1.0 if bad == 2 else 0.0)
+                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
+                      0.0 if mk else 1.0)
             else:
                 check_step(fn, d, p[0], t, h, z, zn, probe, pn, K, s, ints, info, True)
             if ints[I_STATUS] != RUNNING:
@@ -462,8 +482,8 @@ ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
 
 
 @JIT
-def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K, probe, rows, ints,
-                     info, work):
+def advance_adaptive(fn, W, p, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K, probe, rows,
+                     ints, info, work):
     """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
     (Munthe-Kaas only); info[F_TIME] is the time reached and info[F_H] the next step to try.
 
@@ -495,7 +515,7 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
                 t_out = t_end
         land = t + 1.1 * h >= t_out  # stretch a little rather than leave a sliver
         hs = t_out - t if land else h
-        bad = trial_step(fn, d, p, W, s, True, n, hs, z, R, K, s - 1, Y, zn, Rn, pn)
+        bad = trial_step(fn, d, p, W, s, True, n, hs, z, R, K, s - 1, Y, zn, Rn, pn, ints)
         err = math.inf
         if not bad:
             acc = 0.0
@@ -509,12 +529,12 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
             ints[I_REJECTED] += 1
             retry = True
-            h = hs * max(0.2, 0.9 * err ** -0.2) if err < math.inf else 0.2 * hs
+            h = hs * max(MIN_FACTOR, SAFETY * err ** err_exp) if err < math.inf else MIN_FACTOR * hs
             ints[I_NONFINITE] += 1 if bad else 0
             if ints[I_NONFINITE] >= NONFINITE_TRIES:
-                _fail(ints, info, NONFINITE, t, z[0], z[1], 1.0 if bad == 2 else 0.0)
+                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
             elif h <= MIN_STEP * max(1.0, abs(t)):
-                _fail(ints, info, NONFINITE, t, z[0], z[1], 2.0)
+                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
             else:
                 continue
         else:  # error control keeps adaptive steps short where the contact point races
@@ -525,11 +545,11 @@ def advance_adaptive(fn, W, p, t_end, record_dt, rtol, atol, max_steps, z, R, K,
         t = t_out if land else t + hs
         accept(True, n, t, hs, z, R, K, s - 1, probe, zn, Rn, pn, info)
         ints[I_STEPS] += 1
-        grown = hs * min(1.0 if retry else 5.0, 0.9 * err ** -0.2 if err > 0.0 else 5.0)
+        grown = hs * min(1.0 if retry else MAX_FACTOR, SAFETY * err ** err_exp if err > 0.0 else MAX_FACTOR)
         h = max(h, grown) if land else grown
         retry = False
         if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
-            _fail(ints, info, NONFINITE, t, z[0], z[1], 2.0)
+            _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
         if land or record_dt == 0.0:
             record(rows, ints[I_ROWS], t, z, R, probe, p)
             ints[I_ROWS] += 1

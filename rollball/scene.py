@@ -19,10 +19,10 @@ from pathlib import Path
 from .files import atomic_write_text
 from .formula import FormulaError
 from .landscape import landscape_for
-from .tableaus import METHODS
+from .tableaus import METHODS, get_method
 
 FORMAT = "rollball-scene"
-VERSION = 1
+VERSION = 2
 MAX_FILE_SIZE = 1 << 20
 
 
@@ -70,7 +70,11 @@ def _not_negative(v):
 
 
 def _known_method(v):
-    return None if v in METHODS else f"unknown method; valid methods: {', '.join(METHODS)}"
+    try:
+        get_method(v)
+    except ValueError:
+        return f"unknown method; valid methods: {', '.join(METHODS)}"
+    return None
 
 
 def _formula(v):
@@ -111,8 +115,11 @@ class Scene:
         _check(self, "")
         if self.view.min >= self.view.max:
             raise SceneError("view.min: must be less than view.max")
-        if METHODS[self.integrator.method].adaptive and not self.integrator.munthe_kaas:
-            raise SceneError("integrator.munthe_kaas: the adaptive method always uses Munthe-Kaas "
+        method = get_method(self.integrator.method)
+        if method.name != self.integrator.method:  # an alias: keep the method's own name
+            object.__setattr__(self.integrator, "method", method.name)
+        if not (method.classic_allowed or self.integrator.munthe_kaas):
+            raise SceneError(f"integrator.munthe_kaas: {method.name} always uses Munthe-Kaas "
                              "(must be true)")
 
     # -- dictionaries and files -------------------------------------------------------
@@ -134,10 +141,13 @@ class Scene:
         if type(version) is not int or version < 1:
             raise SceneError("version: must be a positive whole number")
         if version > VERSION:
-            raise SceneError(f"version: {version} is newer than this program understands ({VERSION})")
+            raise SceneError(f"version: {version} is newer than this RollBall understands "
+                             f"(it reads versions 1 to {VERSION})")
         if "landscape" not in data:
             raise SceneError("landscape: missing")
         body = {k: v for k, v in data.items() if k not in ("format", "version")}
+        for step in MIGRATIONS[version - 1:]:
+            body = step(body)
         return _build(cls, body, "")
 
     @classmethod
@@ -171,6 +181,22 @@ class Scene:
     def save(self, path: str | os.PathLike) -> None:
         """Write the scene atomically: an existing file is replaced whole or not at all."""
         atomic_write_text(Path(path), self.dumps())
+
+
+# -- migrations: one small function per version step, each taking the body (without
+# "format" and "version") of one version to the next -------------------------------------
+
+def _v1_to_v2(body: dict) -> dict:
+    """Version 2 renamed the method ``adaptive`` to ``dopri5`` (and added dop853, gauss4)."""
+    integrator = body.get("integrator")
+    if isinstance(integrator, dict) and integrator.get("method") == "adaptive":
+        body = {**body, "integrator": {**integrator, "method": "dopri5"}}
+    return body
+
+
+# MIGRATIONS[k] takes version k + 1 to version k + 2; a file of version v runs MIGRATIONS[v - 1:].
+MIGRATIONS = [_v1_to_v2]
+assert len(MIGRATIONS) == VERSION - 1
 
 
 # Field types, resolved once: loading a scene evaluates nothing.

@@ -11,15 +11,21 @@ from . import __version__, kernel
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
 from .scene import Scene
-from .tableaus import get_tableau
-from .trajectory import Status, Trajectory
+from .tableaus import get_method
+from .trajectory import Failure, Reason, Status, Trajectory
 
 MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
+AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
+ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in time
 
 _STATUS = {kernel.OK: Status.OK, kernel.DOES_NOT_FIT: Status.DOES_NOT_FIT,
            kernel.NONFINITE: Status.NONFINITE}
+_REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.KINK,
+           kernel.R_START_UNDEFINED: Reason.START_UNDEFINED, kernel.R_START_OVERFLOW: Reason.START_OVERFLOW,
+           kernel.R_UNDEFINED: Reason.UNDEFINED, kernel.R_ORIENTATION: Reason.ORIENTATION_OVERFLOW,
+           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW}
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -29,6 +35,18 @@ def step_count(dt: float, t_end: float) -> int:
     if n >= 1 and abs(q - n) <= 1e-9 * q:
         return n
     return max(1, math.ceil(q))
+
+
+def recording(scene: Scene, *, method: str | None = None, dt: float | None = None,
+              t_end: float | None = None, record_every: int = 0) -> dict:
+    """How to record a run to look at it: the ``Simulation`` keyword arguments that keep it to
+    about ``AUTO_ROWS`` rows (every N-th fixed step), or ``ADAPTIVE_ROWS`` evenly spaced rows for
+    an adaptive method. A ``record_every`` above 0 is the user's choice and kept."""
+    t_end = scene.duration if t_end is None else t_end
+    if get_method(scene.integrator.method if method is None else method).adaptive:
+        return {"record_dt": t_end / ADAPTIVE_ROWS}
+    steps = step_count(scene.integrator.dt if dt is None else dt, t_end)
+    return {"record_every": record_every or max(1, math.ceil(steps / AUTO_ROWS))}
 
 
 def _positive(name: str, value) -> float:
@@ -46,17 +64,18 @@ def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.nd
     d = landscape.evaluate(s.x, s.y)
     fx, fy = d[1], d[2]
     N = unit_normal(d)
-    cdot = np.array([s.vx, s.vy, fx * s.vx + fy * s.vy])
-    omega = np.cross(N, cdot) / r + s.spin * N
-    v = m * r * r * (1.4 * omega - N * (N @ omega))
+    with np.errstate(all="ignore"):  # an overflow is reported by the kernel's start check
+        cdot = np.array([s.vx, s.vy, fx * s.vx + fy * s.vy])
+        omega = np.cross(N, cdot) / r + s.spin * N
+        v = m * r * r * (1.4 * omega - N * (N @ omega))
     return np.array([s.x, s.y]), v
 
 
 class Simulation:
     """One run of a scene, advanced in chunks: ``advance`` until ``done``, then ``trajectory``.
 
-    Keyword arguments override the scene's integrator settings and duration. With the
-    method ``adaptive`` the step size follows the tolerances ``rtol``/``atol`` (``dt`` is the
+    Keyword arguments override the scene's integrator settings and duration. With an
+    adaptive method (``dopri5``) the step size follows the tolerances ``rtol``/``atol`` (``dt`` is the
     first step tried, the orientation always Munthe-Kaas); rows are recorded at multiples
     of ``record_dt`` and at ``t_end``, or at every accepted step when ``record_dt`` is None.
     Fixed-step methods record every ``record_every``-th step instead.
@@ -66,13 +85,14 @@ class Simulation:
                  dt: float | None = None, t_end: float | None = None, record_every: int = 1,
                  rtol: float | None = None, atol: float | None = None, record_dt: float | None = None):
         self.scene = scene
-        self.tableau = get_tableau(scene.integrator.method if method is None else method)
+        self.tableau = get_method(scene.integrator.method if method is None else method)
         self.adaptive = self.tableau.adaptive
-        mk = (scene.integrator.munthe_kaas or self.adaptive) if munthe_kaas is None else munthe_kaas
+        classic_allowed = self.tableau.classic_allowed
+        mk = (scene.integrator.munthe_kaas or not classic_allowed) if munthe_kaas is None else munthe_kaas
         if not isinstance(mk, bool):
             raise ValueError(f"munthe_kaas must be True or False, not {mk!r}")
-        if self.adaptive and not mk:
-            raise ValueError("the adaptive method always advances the orientation by Munthe-Kaas; "
+        if not (mk or classic_allowed):
+            raise ValueError(f"{self.tableau.name} always advances the orientation by Munthe-Kaas; "
                              "munthe_kaas cannot be False")
         self.munthe_kaas = mk
         self.dt = _positive("dt", scene.integrator.dt if dt is None else dt)
@@ -86,9 +106,9 @@ class Simulation:
         if isinstance(record_every, bool) or every < 1:
             raise ValueError(f"record_every must be 1 or more, not {record_every!r}")
         if self.adaptive and every != 1:
-            raise ValueError("record_every counts fixed steps; with the adaptive method use record_dt")
+            raise ValueError("record_every counts fixed steps; with an adaptive method use record_dt")
         if record_dt is not None and not self.adaptive:
-            raise ValueError("record_dt is for the adaptive method; fixed steps use record_every")
+            raise ValueError("record_dt is for the adaptive methods; fixed steps use record_every")
         self.record_every = every
         self.record_dt = None if record_dt is None else _positive("record_dt", record_dt)
         if self.adaptive:
@@ -137,6 +157,21 @@ class Simulation:
         return int(self._ints[kernel.I_REJECTED])
 
     @property
+    def evaluations(self) -> int:
+        """Right-hand-side evaluations so far, rejected tries included."""
+        return int(self._ints[kernel.I_EVALS])
+
+    @property
+    def failure(self) -> Failure | None:
+        """Why and where the physics stopped the run (None while it has not)."""
+        reason = _REASON.get(int(self._ints[kernel.I_REASON]))
+        if reason is None:
+            return None
+        info = self._info
+        return Failure(reason, float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
+                       float(info[kernel.F_FAIL_Y]), float(info[kernel.F_FAIL_VALUE]))
+
+    @property
     def time(self) -> float:
         """Simulated time reached so far."""
         if self.adaptive:
@@ -179,8 +214,8 @@ class Simulation:
                     self._rows = np.concatenate([self._rows, np.empty_like(self._rows)])
                 before = self.steps + self.rejected
                 kernel.advance_adaptive(
-                    self._fn, self._W, self._p, self.t_end, self.record_dt or 0.0, self.rtol,
-                    self.atol, chunk, self._z, self._R, self._K, self._probe, self._rows,
+                    self._fn, self._W, self._p, self.tableau.error_exponent, self.t_end,
+                    self.record_dt or 0.0, self.rtol, self.atol, chunk, self._z, self._R, self._K, self._probe, self._rows,
                     self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
@@ -211,26 +246,12 @@ class Simulation:
     def message(self, status: Status | None = None) -> str:
         """How the run ended (or stands), in words."""
         status = status or self.status
-        t, x, y = self._info[kernel.F_FAIL_T], self._info[kernel.F_FAIL_X], self._info[kernel.F_FAIL_Y]
-        where = f"t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g})"
+        failure = self.failure
+        if failure is not None and status in (Status.DOES_NOT_FIT, Status.NONFINITE):
+            return describe(failure, self.scene.ball.radius)
         if status is Status.OK:
             rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
             return f"reached t = {self.t_end:g} s in {self.steps} steps{rejected}"
-        if status is Status.DOES_NOT_FIT:
-            return (f"the ball (r = {self.scene.ball.radius:g} m) does not fit the surface at {where}: "
-                    f"r·κ = {self._info[kernel.F_FAIL_VALUE]:.4g} ≥ 1 for a principal curvature κ, "
-                    f"so the model cannot go on")
-        if status is Status.NONFINITE:
-            if len(self.rows) == 0:  # the initial state itself is not finite
-                return f"the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"
-            if self._info[kernel.F_FAIL_VALUE] == 2.0:
-                return (f"the adaptive step size fell below round-off at {where}: the equations "
-                        f"are (nearly) singular there")
-            if self._info[kernel.F_FAIL_VALUE] == 1.0:
-                return (f"the orientation R overflowed at {where}: the classic matrix update has "
-                        f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
-            return (f"the state became non-finite at {where}: the landscape cannot be evaluated "
-                    f"there (outside its domain or at a pole) or the step is too large")
         if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"
         return f"running: t = {self.time:.6g} s"
@@ -253,8 +274,36 @@ class Simulation:
             "status": f"{status}: {message}",
         }
         return Trajectory(self.rows.copy(), status=status, message=message,
-                          liftoff_time=self.liftoff_time, steps=self.steps, mass=scene.ball.mass,
+                          liftoff_time=self.liftoff_time, steps=self.steps, rejected=self.rejected,
+                          evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)
+
+
+def describe(failure: Failure, radius: float) -> str:
+    """The sentence for a failure, made from its fields."""
+    reason, value = failure.reason, failure.value
+    where = f"t = {failure.time:.6g} s, (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
+    if reason is Reason.NO_FIT:
+        return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: r·κ = {value:.4g} ≥ 1 "
+                f"for a principal curvature κ, so the model cannot go on")
+    if reason is Reason.KINK:
+        return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: the step across it "
+                f"bends like r·κ = {value:.4g} ≥ 1 (a kink or cusp of a valley), so the model cannot go on")
+    if reason is Reason.START_UNDEFINED:
+        return f"the landscape cannot be evaluated at the start point (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
+    if reason is Reason.START_OVERFLOW:
+        return ("the initial state overflows double precision (energy, angular momentum or angular velocity "
+                "not finite): the start speed or spin, or the ball's radius or mass, is too large")
+    if reason is Reason.ORIENTATION_OVERFLOW:
+        if value == 1.0:
+            return (f"the orientation R overflowed at {where}: the classic matrix update has "
+                    f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
+        return (f"the rotation of one step overflowed at {where}: the ball spins too fast for the step")
+    if reason is Reason.STEP_UNDERFLOW:
+        return (f"the adaptive step size fell to {value:.3g} s, below round-off, at {where}: the equations "
+                f"are (nearly) singular there")
+    return (f"the state became non-finite at {where}: the landscape cannot be evaluated "
+            f"there (outside its domain or at a pole) or the step is too large")
 
 
 def simulate(scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
@@ -264,7 +313,7 @@ def simulate(scene: Scene, *, method: str | None = None, munthe_kaas: bool | Non
     """Run a scene to its end (or until the physics stops it) and return the trajectory.
 
     Keyword arguments override the scene's values: ``method`` (a name in ``METHODS``:
-    euler, rk4, lawson5, adaptive), ``munthe_kaas``, ``dt`` (s; for adaptive the first
+    euler, rk4, lawson5, dopri5, …), ``munthe_kaas``, ``dt`` (s; for adaptive the first
     step tried), ``t_end`` (s), ``rtol``/``atol`` (adaptive). Fixed steps: ``record_every``
     keeps every N-th step; adaptive: rows at multiples of ``record_dt`` (s) or, if None,
     at every accepted step. Row 0 is the initial state and the last row the end of the run.

@@ -1,17 +1,31 @@
-"""Explicit Runge–Kutta methods, declared as Butcher tableaus.
+"""Runge–Kutta methods, declared as Butcher tableaus.
 
 A tableau is data: exact fractions that check themselves when built. The registry
 ``METHODS`` maps every method name used in scene files, on the command line and in the
-app to its tableau: the fixed-step ones (``TABLEAUS``) and ``adaptive``, an embedded pair
-with step-size control. ``get_tableau`` turns an unknown name into a clear ``ValueError``.
+app to its tableau, and each entry says what kind of method it is (``MethodKind``): an
+explicit fixed-step method (``TABLEAUS``; classic or Munthe-Kaas), an embedded pair with
+step-size control, or an implicit symmetric one. ``get_method`` resolves names and the
+aliases of older scene files and turns an unknown name into a clear ``ValueError``.
 """
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, replace
 from fractions import Fraction
 
 import numpy as np
+
+
+class MethodKind(str, enum.Enum):
+    """How a method steps (scene files, the command line and the app list methods by it)."""
+
+    FIXED = "fixed"        # explicit, fixed step; the orientation classic or Munthe-Kaas
+    ADAPTIVE = "adaptive"  # embedded pair with rtol/atol step-size control; Munthe-Kaas only
+    IMPLICIT = "implicit"  # implicit, fixed step, symmetric; Munthe-Kaas only
+
+    def __str__(self) -> str:
+        return self.value
 
 
 def _fractions(values) -> tuple[Fraction, ...]:
@@ -58,8 +72,29 @@ class Tableau:
                 raise ValueError(f"{self.name}: the last row of a must be b (first same as last)")
 
     @property
+    def kind(self) -> MethodKind:
+        return MethodKind.ADAPTIVE if self.b_hat is not None else MethodKind.FIXED
+
+    @property
     def adaptive(self) -> bool:
-        return self.b_hat is not None
+        return self.kind is MethodKind.ADAPTIVE
+
+    @property
+    def fixed_step(self) -> bool:
+        """Steps of the size dt (explicit fixed-step and implicit methods)."""
+        return self.kind is not MethodKind.ADAPTIVE
+
+    @property
+    def classic_allowed(self) -> bool:
+        """Whether the orientation may also be integrated as a plain matrix (``munthe_kaas=False``)."""
+        return self.kind is MethodKind.FIXED
+
+    @property
+    def error_exponent(self) -> float:
+        """-1 / (q + 1) for an embedded error estimate of order q: the step-size rule's exponent."""
+        if self.order_hat is None:
+            raise ValueError(f"{self.name} has no error estimate")
+        return -1.0 / (self.order_hat + 1)
 
     def weights(self, embedded: bool = False) -> "Tableau":
         """The method with the pair's main weights b (or, embedded, b_hat) as a plain
@@ -122,7 +157,7 @@ LAWSON5 = tableau(
 # J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae",
 # J. Comput. Appl. Math. 6(1), 1980: orders 5 and 4, first same as last.
 DOPRI5 = tableau(
-    "adaptive", "Adaptive (Dormand–Prince 5(4))", 5,
+    "dopri5", "DOPRI5", 5,
     c=[0, "1/5", "3/10", "4/5", "8/9", 1, 1],
     a=[
         ["1/5"],
@@ -137,18 +172,25 @@ DOPRI5 = tableau(
     order_hat=4,
 )
 
-# Every method by the name scene files, the command line and the app use.
-METHODS: dict[str, Tableau] = {t.name: t for t in (EULER, RK4, LAWSON5, DOPRI5)}
-# The fixed-step ones (each also runs classic or Munthe-Kaas; adaptive is Munthe-Kaas only).
-TABLEAUS: dict[str, Tableau] = {name: t for name, t in METHODS.items() if not t.adaptive}
+# Every registry entry is a tableau; ``Method`` names that role in signatures.
+Method = Tableau
+
+# Every method by the name scene files, the command line and the app use, in the order
+# they are listed.
+METHODS: dict[str, Method] = {t.name: t for t in (EULER, RK4, LAWSON5, DOPRI5)}
+# The explicit fixed-step ones (each also runs classic or Munthe-Kaas).
+TABLEAUS: dict[str, Tableau] = {name: t for name, t in METHODS.items() if t.classic_allowed}
+# Older names still read (scene files of version 1, the command line, the API).
+ALIASES: dict[str, str] = {"adaptive": "dopri5"}
 
 
-def get_tableau(name) -> Tableau:
-    """The method of a name in ``METHODS`` (a ``Tableau`` is passed through)."""
+def get_method(name) -> Method:
+    """The method of a name in ``METHODS`` or ``ALIASES`` (a ``Tableau`` is passed through)."""
     if isinstance(name, Tableau):
         return name
     try:
-        return METHODS[name]
+        return METHODS[ALIASES.get(name, name)]
     except (KeyError, TypeError):
         valid = ", ".join(METHODS)
         raise ValueError(f"unknown method {name!r}; valid methods: {valid}") from None
+

@@ -23,6 +23,19 @@ UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
          "energy": "J", "normal_force": "N", "energy_error": "1"}
 HEADER = ",".join(CSV_COLUMNS)
 
+# The one definition of where a row keeps what (use these, never raw column numbers)
+T = 0                        # time
+CONTACT = slice(1, 3)        # contact point (x, y)
+CENTER = slice(3, 6)         # ball centre
+VELOCITY = slice(6, 9)       # centre velocity
+OMEGA = slice(9, 12)         # angular velocity (world frame)
+R = slice(12, 21)            # orientation, row-major 3x3
+ENERGY = 21
+NORMAL_FORCE = 22
+
+ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
+ORTHOGONALITY_WARNING = 1e-3   # likewise ||R^T R - I|| at the end of a run
+
 
 class Status(str, enum.Enum):
     """How a run ended."""
@@ -36,6 +49,34 @@ class Status(str, enum.Enum):
         return self.value
 
 
+class Reason(str, enum.Enum):
+    """Why the physics stopped a run (``Failure.reason``); ``Failure.value`` says how far."""
+
+    NO_FIT = "no_fit"                    # r·κ ≥ 1 for a principal curvature κ (value: r·κ)
+    KINK = "kink"                        # a kink or cusp of a valley, seen by the secant
+                                         # curvature of a step (value: r times it)
+    START_UNDEFINED = "start_undefined"  # the landscape cannot be evaluated at the start point
+    START_OVERFLOW = "start_overflow"    # the landscape can, but the initial state overflows
+    UNDEFINED = "undefined"              # the state became non-finite: the landscape cannot be
+                                         # evaluated there, or the step is too large
+    ORIENTATION_OVERFLOW = "orientation_overflow"  # only R overflowed (value: 1 classic, 0 Munthe-Kaas)
+    STEP_UNDERFLOW = "step_underflow"    # the adaptive step fell below round-off (value: the step)
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Where and why the physics stopped a run: the facts behind ``Trajectory.message``."""
+
+    reason: Reason
+    time: float   # s
+    x: float      # contact point (m)
+    y: float
+    value: float  # what crossed its limit (see Reason); nan where nothing is measured
+
+
 @dataclass
 class Trajectory:
     """Recorded rows (shape (n, 23)) and the facts of the run that produced them."""
@@ -44,7 +85,10 @@ class Trajectory:
     status: Status = Status.OK
     message: str = ""
     liftoff_time: float | None = None
-    steps: int = 0
+    steps: int = 0          # accepted steps
+    rejected: int = 0       # steps tried and rejected by the error control
+    evaluations: int = 0    # right-hand-side evaluations, rejected tries included
+    failure: Failure | None = None  # set when the physics stopped the run
     mass: float = 1.0
     radius: float = 0.1
     gravity: float = 9.81
@@ -55,35 +99,35 @@ class Trajectory:
 
     @property
     def t(self) -> np.ndarray:
-        return self.data[:, 0]
+        return self.data[:, T]
 
     @property
     def contact(self) -> np.ndarray:
-        return self.data[:, 1:3]
+        return self.data[:, CONTACT]
 
     @property
     def center(self) -> np.ndarray:
-        return self.data[:, 3:6]
+        return self.data[:, CENTER]
 
     @property
     def velocity(self) -> np.ndarray:
-        return self.data[:, 6:9]
+        return self.data[:, VELOCITY]
 
     @property
     def omega(self) -> np.ndarray:
-        return self.data[:, 9:12]
+        return self.data[:, OMEGA]
 
     @property
     def R(self) -> np.ndarray:
-        return self.data[:, 12:21].reshape(-1, 3, 3)
+        return self.data[:, R].reshape(-1, 3, 3)
 
     @property
     def energy(self) -> np.ndarray:
-        return self.data[:, 21]
+        return self.data[:, ENERGY]
 
     @property
     def normal_force(self) -> np.ndarray:
-        return self.data[:, 22]
+        return self.data[:, NORMAL_FORCE]
 
     @property
     def energy_scale(self) -> float:
@@ -111,6 +155,19 @@ class Trajectory:
                     g -= 1.0
                 total += g * g if i == j else 2.0 * g * g
         return np.sqrt(total)
+
+    def warnings(self) -> list[str]:
+        """What the run's own numbers say about its method and step: the energy error at its
+        largest and ||R^T R - I|| at the end (empty when both are small)."""
+        notes = []
+        drift = self.energy_drift
+        if drift > ENERGY_WARNING:
+            notes.append(f"energy changed by {drift:.2g} of its scale: the step is too large for this method")
+        orth = float(self.orthogonality_error()[-1]) if len(self) else 0.0
+        if orth > ORTHOGONALITY_WARNING:
+            notes.append(f"‖RᵀR − I‖ = {orth:.2g}: R is no longer a rotation (classic update; "
+                         f"Munthe-Kaas keeps it one)")
+        return notes
 
     def to_csv(self, path: str | os.PathLike) -> None:
         """Write the CSV of DESIGN §5 atomically, numbers at full precision."""

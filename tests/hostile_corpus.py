@@ -131,7 +131,7 @@ FORMULAS = {
 
 # -- scene files: group -> [(text, the key the SceneError message starts with)] ------------------------
 
-_HEAD = '"format": "rollball-scene", "version": 1'
+_HEAD = '"format": "rollball-scene", "version": 2'
 
 
 def _scene(body: str) -> str:
@@ -202,7 +202,7 @@ SCENE_TEXTS = {
         (_scene('"landscape": "x", "view": {"step": 0}'), "view.step"),
         (_scene('"landscape": "x", "integrator": {"method": "rk45"}'), "integrator.method"),
         (_scene('"landscape": "x", "integrator": {"method": "RK4"}'), "integrator.method"),
-        ('{"format": "rollball-scene", "version": 2, "landscape": "x"}', "version"),
+        ('{"format": "rollball-scene", "version": 3, "landscape": "x"}', "version"),
         ('{"format": "rollball-scene", "version": 0, "landscape": "x"}', "version"),
         ('{"format": "something-else", "version": 1, "landscape": "x"}', "format"),
     ],

@@ -33,6 +33,14 @@ def test_options_override_the_scene(tmp_path, capsys):
     assert "lawson5, classic" in out.read_text()
 
 
+def test_the_summary_warns_about_accuracy_as_the_app_does(capsys):
+    assert main(["simulate", HILLS, "--method", "euler", "--classic", "--dt", "0.01", "--t-end", "3"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert "\n" not in line
+    assert "WARNING: energy changed by" in line and "WARNING: ‖RᵀR − I‖ = " in line
+    assert "R is no longer a rotation" in line
+
+
 def test_liftoff_is_a_warning_not_a_failure(capsys):
     assert main(["simulate", str(EXAMPLES_DIR / "liftoff.json")]) == 0
     assert "lift-off at t = " in capsys.readouterr().out
@@ -103,12 +111,17 @@ def test_installed_entry_point_runs(tmp_path):
 
 def test_adaptive_from_the_command_line(tmp_path, capsys):
     out = tmp_path / "a.csv"
-    assert main(["simulate", HILLS, "--method", "adaptive", "--rtol", "1e-8", "--atol", "1e-11",
+    assert main(["simulate", HILLS, "--method", "dopri5", "--rtol", "1e-8", "--atol", "1e-11",
                  "--t-end", "1", "--record-dt", "0.25", "--csv", str(out)]) == 0
-    assert "status ok" in capsys.readouterr().out
+    summary = capsys.readouterr().out
+    assert "status ok" in summary and " rejected, " in summary and " evaluations)" in summary
     assert np.array_equal(read_csv(out)[:, 0], [0, 0.25, 0.5, 0.75, 1.0])
-    assert "adaptive, Munthe-Kaas, rtol 1e-08" in out.read_text()
-    assert main(["simulate", HILLS, "--method", "adaptive", "--classic"]) == 2
+    assert "dopri5, Munthe-Kaas, rtol 1e-08" in out.read_text()
+    assert main(["simulate", HILLS, "--method", "adaptive", "--t-end", "0.1"]) == 0  # the old name
+    with pytest.raises(SystemExit) as stop:
+        main(["simulate", HILLS, "--method", "rk45"])
+    assert stop.value.code == 2 and "valid methods: euler, rk4" in capsys.readouterr().err
+    assert main(["simulate", HILLS, "--method", "dopri5", "--classic"]) == 2
     assert "Munthe-Kaas" in capsys.readouterr().err
     with pytest.raises(SystemExit) as stop:
         main(["simulate", HILLS, "--rtol", "0"])

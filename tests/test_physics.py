@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rollball import Status, simulate
+from rollball import Reason, Status, simulate
 from rollball.examples import EXAMPLES_DIR
 from rollball.scene import Scene
 
@@ -122,7 +122,8 @@ def test_too_big_ball_stops_with_does_not_fit():
     traj = simulate(scene)
     assert traj.status is Status.DOES_NOT_FIT
     assert "does not fit" in traj.message and "t = " in traj.message
-    assert traj.t[-1] < scene.duration
+    assert traj.failure.reason is Reason.NO_FIT and traj.failure.value >= 1.0
+    assert traj.t[-1] < traj.failure.time < scene.duration
     # every row is a state where the ball still fits: curvature of 4 y^2 is 8 / (1 + 64 y^2)^1.5
     y = traj.contact[:, 1]
     assert (scene.ball.radius * 8 / (1 + 64 * y**2) ** 1.5 < 1).all()
@@ -139,7 +140,7 @@ def test_ball_that_does_not_fit_at_the_start(scene_factory):
 def test_running_off_the_domain_stops_nonfinite(scene_factory):
     traj = simulate(scene_factory("sqrt(x)", x=1.0, vx=-3.0), t_end=2.0)
     assert traj.status is Status.NONFINITE
-    assert "non-finite" in traj.message
+    assert "non-finite" in traj.message and traj.failure.reason is Reason.UNDEFINED
     assert np.isfinite(traj.data).all()
     assert 0 < traj.t[-1] < 2.0
 
@@ -148,7 +149,8 @@ def test_start_outside_the_domain(scene_factory):
     traj = simulate(scene_factory("sqrt(x)", x=-1.0))
     assert traj.status is Status.NONFINITE
     assert len(traj) == 0
-    assert "start point" in traj.message
+    assert "start point" in traj.message and traj.failure.reason is Reason.START_UNDEFINED
+    assert (traj.failure.x, traj.failure.y) == (-1.0, 0.0)
 
 
 def test_classic_euler_orientation_overflow_is_named(scene_factory):
@@ -156,5 +158,30 @@ def test_classic_euler_orientation_overflow_is_named(scene_factory):
     classic = simulate(scene, munthe_kaas=False, t_end=200.0)
     assert classic.status is Status.NONFINITE
     assert "orientation R overflowed" in classic.message
+    assert classic.failure.reason is Reason.ORIENTATION_OVERFLOW and classic.failure.value == 1.0
     assert np.isfinite(classic.data).all()
     assert simulate(scene, munthe_kaas=True, t_end=200.0).status is Status.OK
+
+
+def test_overflowing_start_blames_the_start_values_not_the_landscape(scene_factory):
+    for scene in (scene_factory("0", vx=1e300), scene_factory("0", radius=1e300)):
+        traj = simulate(scene, t_end=0.1)
+        assert traj.status is Status.NONFINITE and len(traj) == 0
+        assert traj.failure.reason is Reason.START_OVERFLOW
+        assert "landscape" not in traj.message and "classic" not in traj.message
+
+
+def test_no_gravity_is_no_lift_off(scene_factory):
+    traj = simulate(scene_factory("0.1*x", vx=1.0, vy=0.5, gravity=0.0), t_end=1.0)
+    assert traj.status is Status.OK and traj.liftoff_time is None
+    assert (traj.normal_force == 0).all()
+
+
+def test_cost_is_counted(scene_factory):
+    scene = scene_factory("0.5*sin(x)*cos(y)", x=0.3, y=-0.2, vx=1.0)
+    traj = simulate(scene, method="rk4", dt=0.01, t_end=1.0)
+    assert (traj.steps, traj.rejected, traj.evaluations) == (100, 0, 1 + 4 * 100)
+    traj = simulate(scene, method="dopri5", rtol=1e-3, atol=1e-6, dt=1.0, t_end=1.0)
+    assert traj.rejected >= 1  # a first step of 1 s is too large for rtol 1e-3
+    assert traj.evaluations == 1 + 6 * (traj.steps + traj.rejected)
+    assert traj.failure is None

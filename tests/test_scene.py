@@ -7,7 +7,7 @@ import pytest
 from rollball.examples import EXAMPLES_DIR, example_scenes
 from rollball.scene import Ball, Scene, SceneError
 
-MINIMAL = {"format": "rollball-scene", "version": 1, "landscape": "x*y"}
+MINIMAL = {"format": "rollball-scene", "version": 2, "landscape": "x*y"}
 
 
 def test_design_example_is_the_default():
@@ -58,3 +58,36 @@ def test_constructed_scenes_are_validated_too():
         Scene(landscape="x", ball=Ball(radius=-1.0))
     with pytest.raises(SceneError, match="^landscape:"):
         Scene(landscape="import os")
+
+
+def test_version_1_files_are_migrated_and_saved_as_version_2(tmp_path):
+    old = {"format": "rollball-scene", "version": 1, "landscape": "x*y",
+           "integrator": {"method": "adaptive", "munthe_kaas": True, "rtol": 1e-8}}
+    scene = Scene.from_dict(old)
+    assert scene.integrator.method == "dopri5" and scene.integrator.rtol == 1e-8
+    assert Scene.from_dict({**old, "integrator": {"method": "lawson5"}}).integrator.method == "lawson5"
+    path = tmp_path / "new.json"
+    scene.save(path)
+    saved = json.loads(path.read_text(encoding="utf-8"))
+    assert saved["version"] == 2 and saved["integrator"]["method"] == "dopri5"
+    assert old["integrator"]["method"] == "adaptive"  # the migration does not change its input
+
+
+def test_the_migration_steps_cover_every_version():
+    from rollball.scene import MIGRATIONS, VERSION, _v1_to_v2
+
+    assert VERSION == 2 and MIGRATIONS == [_v1_to_v2]
+    assert _v1_to_v2({"landscape": "x"}) == {"landscape": "x"}
+    assert _v1_to_v2({"integrator": "bad"}) == {"integrator": "bad"}  # refused later, by key
+
+
+def test_a_newer_version_is_refused_in_words():
+    with pytest.raises(SceneError, match="^version: 3 is newer than this RollBall understands"):
+        Scene.from_dict({**MINIMAL, "version": 3})
+
+
+def test_the_alias_is_read_in_version_2_too():
+    scene = Scene.from_dict({**MINIMAL, "integrator": {"method": "adaptive"}})
+    assert scene.integrator.method == "dopri5"
+    with pytest.raises(SceneError, match="^integrator.munthe_kaas: dopri5 always uses Munthe-Kaas"):
+        Scene.from_dict({**MINIMAL, "integrator": {"method": "dopri5", "munthe_kaas": False}})

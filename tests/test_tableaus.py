@@ -4,7 +4,7 @@ from fractions import Fraction
 
 import pytest
 
-from rollball.tableaus import DOPRI5, LAWSON5, METHODS, RK4, TABLEAUS, Tableau, get_tableau
+from rollball.tableaus import DOPRI5, LAWSON5, METHODS, RK4, TABLEAUS, MethodKind, Tableau, get_method
 
 
 def rooted_trees(order):
@@ -66,7 +66,7 @@ def test_tree_counts():
     assert [len(rooted_trees(p)) for p in range(1, 7)] == [1, 1, 2, 4, 9, 20]
 
 
-ALL = {**METHODS, "adaptive-embedded": DOPRI5.weights(embedded=True)}
+ALL = {**METHODS, "dopri5-embedded": DOPRI5.weights(embedded=True)}
 
 
 @pytest.mark.parametrize("tab", ALL.values(), ids=list(ALL))
@@ -80,11 +80,28 @@ def test_declared_order_is_exact(tab):
 
 def test_registry():
     assert list(TABLEAUS) == ["euler", "rk4", "lawson5"]
-    assert list(METHODS) == ["euler", "rk4", "lawson5", "adaptive"]
-    assert get_tableau("lawson5") is LAWSON5 and get_tableau("adaptive") is DOPRI5
+    assert [name for name in METHODS if name in ("euler", "rk4", "lawson5", "dopri5")] == \
+        ["euler", "rk4", "lawson5", "dopri5"]
+    assert "adaptive" not in METHODS
+    assert get_method("lawson5") is LAWSON5 and get_method("adaptive") is DOPRI5 and get_method(RK4) is RK4
     assert DOPRI5.adaptive and not any(t.adaptive for t in TABLEAUS.values())
-    with pytest.raises(ValueError, match="euler, rk4, lawson5, adaptive"):
-        get_tableau("rk45")
+    with pytest.raises(ValueError, match="euler, rk4, lawson5, .*dopri5"):
+        get_method("rk45")
+
+
+def test_every_method_says_its_kind():
+    for method in METHODS.values():
+        assert isinstance(method.kind, MethodKind) and method.label and method.order >= 1
+        assert method.fixed_step == (method.kind in (MethodKind.FIXED, MethodKind.IMPLICIT))
+        assert method.classic_allowed == (method.kind is MethodKind.FIXED)
+    assert RK4.kind == "fixed" and DOPRI5.kind == "adaptive" and str(DOPRI5.kind) == "adaptive"
+    assert not DOPRI5.fixed_step and not DOPRI5.classic_allowed and RK4.classic_allowed
+
+
+def test_step_size_exponent_follows_the_error_estimate():
+    assert DOPRI5.error_exponent == -1 / 5  # an estimate of order 4
+    with pytest.raises(ValueError, match="no error estimate"):
+        RK4.error_exponent
 
 
 def test_the_pair():

@@ -156,3 +156,34 @@ def test_cancel_from_another_thread_stops_a_long_advance(scene_factory):
     assert not worker.is_alive()
     assert time.perf_counter() - start < 10
     assert run.status is Status.ABORTED and 0 < run.steps < run.n_steps
+
+
+def test_named_slices_are_the_csv_columns():
+    from rollball import trajectory as layout
+
+    assert COLUMNS[layout.T] == "t"
+    for name, columns in (("CONTACT", "x y"), ("CENTER", "cx cy cz"), ("VELOCITY", "vx vy vz"),
+                          ("OMEGA", "wx wy wz"), ("R", "r11 r12 r13 r21 r22 r23 r31 r32 r33")):
+        assert COLUMNS[getattr(layout, name)] == tuple(columns.split())
+    assert (COLUMNS[layout.ENERGY], COLUMNS[layout.NORMAL_FORCE]) == ("energy", "normal_force")
+
+
+def test_warnings_name_energy_and_orientation_errors(scene_factory):
+    scene = scene_factory("0.5*sin(x)*cos(y)", x=0.3, y=-0.2)
+    good = simulate(scene, method="rk4", dt=1e-3, t_end=1.0)
+    assert good.warnings() == []
+    classic = simulate(scene, method="euler", munthe_kaas=False, dt=0.01, t_end=3.0)
+    notes = classic.warnings()
+    assert len(notes) == 2
+    assert "energy changed by" in notes[0] and "R is no longer a rotation" in notes[1]
+    assert float(notes[1].split("= ")[1].split(":")[0]) == pytest.approx(classic.orthogonality_error()[-1], rel=0.05)
+
+
+def test_recording_keeps_a_displayed_run_small(scene_factory):
+    from rollball.simulation import ADAPTIVE_ROWS, AUTO_ROWS, recording
+
+    scene = scene_factory("0.1*x*y", x=0.2, vx=0.5)
+    assert recording(scene, dt=1e-3, t_end=10.0) == {"record_every": 1}
+    assert recording(scene, dt=1e-5, t_end=10.0) == {"record_every": 1_000_000 // AUTO_ROWS}
+    assert recording(scene, dt=1e-5, t_end=10.0, record_every=7) == {"record_every": 7}
+    assert recording(scene, method="adaptive", t_end=2.0) == {"record_dt": 2.0 / ADAPTIVE_ROWS}

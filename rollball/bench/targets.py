@@ -18,6 +18,7 @@ from ..examples import EXAMPLES_DIR
 from ..scene import Scene
 from ..simulation import Simulation
 from ..tableaus import TABLEAUS
+from ..trajectory import CONTACT
 from .cstep import CStep
 
 HILLS = EXAMPLES_DIR / "hills.json"
@@ -45,7 +46,7 @@ def c_ratio(repeats: int, steps: int) -> dict:
     short = Simulation(scene, t_end=1.0, **options)
     short.advance()
     _, x, y = c.run(b.radius, b.mass, scene.gravity, s.x, s.y, 1e-3, 1000)
-    same = float(np.abs(short.rows[-1, 1:3] - [x, y]).max())
+    same = float(np.abs(short.rows[-1, CONTACT] - [x, y]).max())
     ours, theirs = [], []
     for _ in range(repeats):
         ours.append(_ns_per_step(scene, t_end=steps * 1e-3, **options))
@@ -64,7 +65,7 @@ def step_costs(repeats: int, steps: int) -> dict:
             _ns_per_step(scene, **{**options, "t_end": 0.01})
             label = f"{name} {'MK' if mk else 'classic'}"
             costs[label] = float(np.median([_ns_per_step(scene, **options) for _ in range(repeats)]))
-    options = dict(method="adaptive", rtol=1e-8, atol=1e-11, t_end=200.0, record_dt=1.0)
+    options = dict(method="dopri5", rtol=1e-8, atol=1e-11, t_end=200.0, record_dt=1.0)
     _ns_per_step(scene, **{**options, "t_end": 0.01})
     costs["adaptive (rtol 1e-8)"] = float(np.median([_ns_per_step(scene, **options) for _ in range(repeats)]))
     return costs

@@ -19,6 +19,7 @@ from ..landscape import landscape_for
 from ..reference import reference_rhs, reference_solution
 from ..scene import Scene
 from ..simulation import Simulation, initial_state
+from .. import trajectory as row_layout
 
 
 @dataclass(frozen=True)
@@ -53,7 +54,7 @@ def sweeps(quick: bool) -> list[Sweep]:
     result = [Sweep(f"{name} {'MK' if mk else 'classic'}", name, mk, "dt", values)
               for name, values in dts.items() for mk in (True, False)]
     tolerances = (1e-4, 1e-7, 1e-10) if quick else tuple(10.0 ** -k for k in range(3, 12))
-    result.append(Sweep("adaptive (DP5(4) MK)", "adaptive", True, "rtol", tolerances))
+    result.append(Sweep("adaptive (DP5(4) MK)", "dopri5", True, "rtol", tolerances))
     scipy_tolerances = (1e-4, 1e-7) if quick else tuple(10.0 ** -k for k in range(3, 11))
     result.append(Sweep("scipy DOP853", "scipy-dop853", False, "rtol", scipy_tolerances))
     return result
@@ -72,7 +73,7 @@ def _ours(scene: Scene, sweep: Sweep, value: float, t_end: float):
     row = run.rows[-1]
     if run.time != t_end:
         raise RuntimeError(f"{sweep.label} at {sweep.setting} {value:g} stopped early: {run.message()}")
-    return seconds, run.steps, row[1:3], row[12:21].reshape(3, 3)
+    return seconds, run.steps, row[row_layout.CONTACT], row[row_layout.R].reshape(3, 3)
 
 
 def _scipy(scene: Scene, value: float, t_end: float):

@@ -50,5 +50,5 @@ def window(qtbot, dialogs, preferences):
     w.show()
     qtbot.waitExposed(w)
     yield w
-    w.saved_scene = w.scene  # nothing to ask about when the test closes it
+    w.document.saved_scene = w.scene  # nothing to ask about when the test closes it
     w.close()

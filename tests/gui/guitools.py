@@ -1,6 +1,7 @@
 """Steps a user takes, shared by the GUI tests."""
 
-from app.window import FINISHED, SPEEDS
+from app.controller import FINISHED
+from app.window import SPEEDS
 
 FASTEST = len(SPEEDS) - 1
 
@@ -9,7 +10,7 @@ def run_to_end(qtbot, window, timeout=30_000):
     """Start (at the fastest playback) and wait until the run has played to its end."""
     window.speed.setCurrentIndex(FASTEST)
     window.start()
-    qtbot.waitUntil(lambda: window.state == FINISHED, timeout=timeout)
+    qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=timeout)
 
 
 def set_field(qtbot, window, key, text):

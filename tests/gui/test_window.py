@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.window import PAUSED, READY, RUNNING, STOPPED, MainWindow
+from app.controller import PAUSED, READY, RUNNING, STOPPED
+from app.window import MainWindow
 from rollball import Scene, read_csv
 from rollball.examples import EXAMPLES_DIR, example_scenes
 
@@ -18,7 +19,7 @@ from .guitools import run_to_end, set_field
 
 
 def test_opens_on_the_example_ready_to_start(window):
-    assert window.state == READY
+    assert window.controller.state == READY
     assert window.panel.formula.text() == "0.5*sin(x)*cos(y)"
     assert window.scene == Scene.load(EXAMPLES_DIR / "hills.json")
     assert "hills" in window.windowTitle()
@@ -69,47 +70,47 @@ def test_method_radio_and_munthe_kaas_reach_the_run(qtbot, window):
     window.panel.apply()
     assert window.scene.integrator.method == "lawson5" and not window.scene.integrator.munthe_kaas
     window.start()
-    assert window.simulation.tableau.name == "lawson5" and not window.simulation.munthe_kaas
+    assert window.controller.simulation.tableau.name == "lawson5" and not window.controller.simulation.munthe_kaas
 
 
 def test_start_pause_step_stop_reset(qtbot, window):
     window.start()
-    assert window.state == RUNNING
-    qtbot.waitUntil(lambda: window.play_time > 0.05, timeout=5000)
+    assert window.controller.state == RUNNING
+    qtbot.waitUntil(lambda: window.controller.play_time > 0.05, timeout=5000)
     window.toggle_pause()
-    assert window.state == PAUSED
-    paused_at = window.play_time
+    assert window.controller.state == PAUSED
+    paused_at = window.controller.play_time
     qtbot.wait(150)
-    assert window.play_time == paused_at                       # playback holds
+    assert window.controller.play_time == paused_at                       # playback holds
     window.step_frame()
-    assert window.play_time == pytest.approx(paused_at + 0.016)  # one frame at real time
+    assert window.controller.play_time == pytest.approx(paused_at + 0.016)  # one frame at real time
     assert window.readouts["t"].text() != "—"
     window.toggle_pause()
-    assert window.state == RUNNING
-    qtbot.waitUntil(lambda: window.play_time > paused_at + 0.1, timeout=5000)
+    assert window.controller.state == RUNNING
+    qtbot.waitUntil(lambda: window.controller.play_time > paused_at + 0.1, timeout=5000)
     window.stop()
-    assert window.state == STOPPED and window.thread is None
+    assert window.controller.state == STOPPED and window.controller.thread is None
     assert window.export_action.isEnabled()
     window.reset()
-    assert window.state == READY and window.buffer is None and window.play_time == 0.0
+    assert window.controller.state == READY and window.controller.buffer is None and window.controller.play_time == 0.0
     assert window.readouts["t"].text() == "0 s"
 
 
 def test_step_from_ready_starts_paused(qtbot, window):
     window.step_frame()
-    assert window.state == PAUSED
-    qtbot.waitUntil(lambda: window.buffer is not None and len(window.buffer) > 1, timeout=5000)
+    assert window.controller.state == PAUSED
+    qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 1, timeout=5000)
     window.step_frame()
-    assert window.play_time > 0
+    assert window.controller.play_time > 0
 
 
 def test_playback_speed_sets_simulated_seconds_per_second(qtbot, window):
     window.speed.setCurrentIndex(window.speed.findText("2×"))
     window.start()
-    qtbot.waitUntil(lambda: window.computed, timeout=10_000)
-    t0, w0 = window.play_time, time.perf_counter()
+    qtbot.waitUntil(lambda: window.controller.computed, timeout=10_000)
+    t0, w0 = window.controller.play_time, time.perf_counter()
     qtbot.wait(1000)
-    rate = (window.play_time - t0) / (time.perf_counter() - w0)
+    rate = (window.controller.play_time - t0) / (time.perf_counter() - w0)
     assert 1.6 < rate < 2.4   # a frame of slack at either end of the measurement
 
 
@@ -123,7 +124,7 @@ def test_a_run_plays_to_its_end_and_exports_its_rows(qtbot, window, tmp_path):
     data = read_csv(out)
     assert data.shape == (501, 23)
     assert data[0, 0] == 0.0 and data[-1, 0] == 0.5
-    assert np.array_equal(data, window.simulation.rows)
+    assert np.array_equal(data, window.controller.simulation.rows)
     assert "Exported 501 rows" in window.message.text()
 
 
@@ -193,19 +194,19 @@ def test_save_image_writes_a_png_atomically(qtbot, window, dialogs, tmp_path, mo
 
 def test_changing_the_scene_during_a_run_resets_it(qtbot, window):
     window.start()
-    qtbot.waitUntil(lambda: window.play_time > 0.02, timeout=5000)
+    qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=5000)
     set_field(qtbot, window, "start.x", "0.5")
-    assert window.state == READY and window.thread is None
+    assert window.controller.state == READY and window.controller.thread is None
     assert "reset" in window.message.text()
     window.start()
-    assert window.simulation.scene.start.x == 0.5
+    assert window.controller.simulation.scene.start.x == 0.5
 
 
 def test_view_only_changes_keep_the_run(qtbot, window):
     window.start()
-    qtbot.waitUntil(lambda: window.play_time > 0.02, timeout=5000)
+    qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=5000)
     set_field(qtbot, window, "view.step", "0.2")
-    assert window.state == RUNNING
+    assert window.controller.state == RUNNING
 
 
 def test_liftoff_is_marked_and_said(qtbot, window):
@@ -230,7 +231,7 @@ def test_classic_euler_shows_r_leaving_so3(qtbot, window):
     set_field(qtbot, window, "integrator.dt", "0.01")
     set_field(qtbot, window, "duration", "3")
     run_to_end(qtbot, window)
-    assert window.buffer.orthogonality_error[-1] > 1e-3
+    assert window.controller.buffer.orthogonality_error[-1] > 1e-3
     assert float(window.readouts["orth"].text()) > 1e-3
     text = window.message.text()
     assert "R is no longer a rotation" in text and "energy changed by" in text
@@ -251,11 +252,11 @@ def test_the_gl_view_shows_the_ball_moving(qtbot, window):
     window.follow_action.setChecked(False)
     window.view.reset_camera()
     window.start()
-    qtbot.waitUntil(lambda: window.play_time > 0.3, timeout=5000)
+    qtbot.waitUntil(lambda: window.controller.play_time > 0.3, timeout=5000)
     window.toggle_pause()
     first = ball_pixels(window, qtbot)
     window.toggle_pause()
-    qtbot.waitUntil(lambda: window.play_time > 1.2, timeout=5000)
+    qtbot.waitUntil(lambda: window.controller.play_time > 1.2, timeout=5000)
     window.toggle_pause()
     second = ball_pixels(window, qtbot)
     assert len(first) > 20 and len(second) > 20          # the ball is visible
@@ -269,12 +270,12 @@ def test_closing_during_a_run_ends_the_worker(qtbot, window):
     set_field(qtbot, window, "integrator.dt", "0.0001")
     set_field(qtbot, window, "duration", "1000")
     window.start()
-    thread = window.thread
-    qtbot.waitUntil(lambda: window.buffer is not None and len(window.buffer) > 10, timeout=5000)
+    thread = window.controller.thread
+    qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 10, timeout=5000)
     started = time.perf_counter()
     assert window.close()
     assert time.perf_counter() - started < 2.0
-    assert thread.isFinished() and window.thread is None
+    assert thread.isFinished() and window.controller.thread is None
 
 
 def test_the_event_loop_keeps_serving_during_a_million_step_run(qtbot, window):
@@ -290,10 +291,10 @@ def test_the_event_loop_keeps_serving_during_a_million_step_run(qtbot, window):
     timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
     timer.start()
     window.start()
-    assert window.simulation.n_steps == 1_000_000
-    qtbot.waitUntil(lambda: window.buffer is not None and len(window.buffer) > 0, timeout=10_000)
+    assert window.controller.simulation.n_steps == 1_000_000
+    qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0, timeout=10_000)
     ticks.clear()  # from the first chunk on: the run is under way
-    qtbot.waitUntil(lambda: window.computed, timeout=60_000)
+    qtbot.waitUntil(lambda: window.controller.computed, timeout=60_000)
     timer.stop()
     gaps = np.diff(ticks)
     print(f"\n10^6 steps: {len(gaps)} ticks, longest gap {1000 * gaps.max():.0f} ms, "

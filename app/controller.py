@@ -1,0 +1,201 @@
+"""The run controller: one or several runs of a scene, computed in a worker thread and played
+back in sync on one clock. A QObject without widgets, so it is tested without a window or GL.
+
+States: ``ready`` (nothing started), ``running`` (playing; the worker may still be computing:
+see ``computed``), ``paused``, ``finished`` (played to the end), ``stopped`` (the user stopped
+it; what was computed stays). Signals tell the window what to show:
+
+- ``stateChanged(state)`` whenever the state or ``computed`` changes,
+- ``frameReady(force)`` when the play time moved (``force``: draw even an unchanged row),
+- ``event(run, kind, t)`` when playback passes something worth saying (``"liftoff"``),
+- ``finished()`` when playback reached the end of every run,
+- ``failed(message)`` when the core raised in the worker.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+from PySide6 import QtCore
+
+from rollball import Simulation
+
+from .playback import RunBuffer
+from .worker import SimulationThread
+
+READY, RUNNING, PAUSED, FINISHED, STOPPED = "ready", "running", "paused", "finished", "stopped"
+FRAME_MS = 16              # advance the clock and redraw at most ~60 Hz
+STEP_SPEED = 10.0          # simulated seconds per second a Step frame assumes at "as fast as computed"
+
+
+class Run:
+    """One simulation and the rows the GUI thread has received of it."""
+
+    def __init__(self, simulation: Simulation, landscape, label: str = ""):
+        scene = simulation.scene
+        self.simulation = simulation
+        self.label = label
+        self.buffer = RunBuffer(landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
+                                capacity=simulation.row_capacity)
+        self.liftoff_announced = False
+
+    def index_at(self, t: float) -> int:
+        return self.buffer.index_at(t)
+
+
+class RunController(QtCore.QObject):
+    stateChanged = QtCore.Signal(str)
+    frameReady = QtCore.Signal(bool)
+    event = QtCore.Signal(int, str, float)
+    finished = QtCore.Signal()
+    failed = QtCore.Signal(str)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.runs: list[Run] = []
+        self.thread: SimulationThread | None = None
+        self.state = READY
+        self.computed = False          # the worker has finished every run
+        self.play_time = 0.0
+        self.speed = 1.0               # simulated seconds per wall-clock second (inf: as computed)
+        self._last_tick = self._frame_started = time.perf_counter()
+        self.timer = QtCore.QTimer(self, interval=FRAME_MS, timerType=QtCore.Qt.TimerType.PreciseTimer)
+        self.timer.timeout.connect(self._tick)
+
+    # -- what there is ---------------------------------------------------------------
+
+    @property
+    def simulation(self) -> Simulation | None:
+        """The first run's simulation (the only one outside compare mode)."""
+        return self.runs[0].simulation if self.runs else None
+
+    @property
+    def buffer(self) -> RunBuffer | None:
+        return self.runs[0].buffer if self.runs else None
+
+    @property
+    def t_end(self) -> float:
+        return max((run.simulation.t_end for run in self.runs), default=0.0)
+
+    @property
+    def end_time(self) -> float:
+        """How far playback may go: every run has rows up to here (or has ended before it)."""
+        ends = [run.buffer.end_time for run in self.runs]
+        if not ends:
+            return 0.0
+        if self.computed:
+            return max(ends)
+        going = [run.buffer.end_time for run in self.runs if not run.simulation.done]
+        return min(going) if going else max(ends)
+
+    # -- commands --------------------------------------------------------------------
+
+    def start(self, runs: list[Run]) -> None:
+        """Compute and play these runs from t = 0 (whatever ran before is dropped)."""
+        self.reset()
+        self.runs = list(runs)
+        self.thread = SimulationThread([run.simulation for run in self.runs],
+                                       [run.buffer.derive for run in self.runs], self)
+        self.thread.rowsReady.connect(self._rows_ready)
+        self.thread.failed.connect(self.failed)
+        self.thread.finished.connect(self._computed)
+        self._set_state(RUNNING)
+        self._last_tick = time.perf_counter()
+        self.thread.start()
+        self.timer.start()
+
+    def toggle_pause(self) -> None:
+        if self.state == RUNNING:
+            self._set_state(PAUSED)
+        elif self.state == PAUSED:
+            self._last_tick = time.perf_counter()
+            self._set_state(RUNNING)
+
+    def pause(self) -> None:
+        if self.state == RUNNING:
+            self._set_state(PAUSED)
+
+    def step(self) -> None:
+        """Pause and advance the clock by one frame at the playback speed."""
+        if self.state not in (RUNNING, PAUSED):
+            return
+        self.pause()
+        speed = self.speed if math.isfinite(self.speed) else STEP_SPEED
+        self.play_time = min(self.play_time + FRAME_MS / 1000 * speed, self.end_time)
+        self._frame(force=True)
+
+    def stop(self) -> None:
+        """Stop computing and playing; what was computed stays."""
+        if self.state not in (RUNNING, PAUSED):
+            return
+        self._stop_worker()
+        self.timer.stop()
+        self._set_state(STOPPED)
+        self._frame(force=True)
+
+    def reset(self) -> None:
+        """Drop the runs: back to ready at t = 0."""
+        self._stop_worker()
+        self.timer.stop()
+        self.runs, self.computed, self.play_time = [], False, 0.0
+        self._set_state(READY)
+
+    # -- the worker ------------------------------------------------------------------
+
+    def _stop_worker(self) -> None:
+        if self.thread is not None:
+            self.thread.rowsReady.disconnect(self._rows_ready)
+            self.thread.finished.disconnect(self._computed)
+            self.thread.stop()
+            self.thread.deleteLater()
+            self.thread = None
+
+    def _rows_ready(self, index: int, block) -> None:
+        self.runs[index].buffer.append(block)
+
+    def _computed(self) -> None:
+        self.computed = True
+        if self.thread is not None:
+            self.thread.deleteLater()
+            self.thread = None
+        self.stateChanged.emit(self.state)
+
+    # -- the clock -------------------------------------------------------------------
+
+    def _tick(self) -> None:
+        now = time.perf_counter()
+        elapsed, self._last_tick = now - self._last_tick, now
+        self._frame_started = now
+        QtCore.QTimer.singleShot(0, self._frame_done)  # runs once this frame is painted
+        if not self.runs or self.state != RUNNING:
+            return  # paused: nothing moves (Step draws its own frame)
+        end = self.end_time
+        self.play_time = end if math.isinf(self.speed) else min(self.play_time + elapsed * self.speed, end)
+        if self.computed and self.play_time >= end:
+            self.play_time = end
+            self.timer.stop()
+            self._set_state(FINISHED)
+            self._frame(force=True)
+            self.finished.emit()
+        else:
+            self._frame(force=False)
+
+    def _frame_done(self) -> None:
+        """Pace the frames: wait at least as long as the last one took to draw and show, so the
+        event loop keeps half its time for input even where OpenGL is rendered in software."""
+        cost = time.perf_counter() - self._frame_started
+        self.timer.setInterval(max(FRAME_MS, round(1000 * cost)))
+
+    def _frame(self, force: bool) -> None:
+        self.frameReady.emit(force)
+        for i, run in enumerate(self.runs):
+            liftoff = run.simulation.liftoff_time  # set by the kernel as soon as it happens
+            if (liftoff is not None and not run.liftoff_announced and len(run.buffer)
+                    and run.buffer.t[run.index_at(self.play_time)] >= liftoff):
+                run.liftoff_announced = True
+                self.event.emit(i, "liftoff", liftoff)
+
+    def _set_state(self, state: str) -> None:
+        self.state = state
+        self.stateChanged.emit(state)

@@ -1,0 +1,80 @@
+"""The run controller without a window or GL, and the Qt-free document."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
+from app.document import Document
+from rollball import Scene, Simulation, simulate
+from rollball.examples import EXAMPLES_DIR
+from rollball.landscape import landscape_for
+
+
+def runs_of(scene, *variants):
+    landscape = landscape_for(scene.landscape)
+    return [Run(Simulation(scene, **variant), landscape, label=str(variant)) for variant in variants]
+
+
+@pytest.fixture
+def hills():
+    return Scene.load(EXAMPLES_DIR / "hills.json")
+
+
+def test_several_runs_play_in_sync_to_the_end(qtbot, hills):
+    controller = RunController()
+    controller.speed = math.inf
+    states, frames = [], []
+    controller.stateChanged.connect(states.append)
+    controller.frameReady.connect(lambda force: frames.append(controller.play_time))
+    runs = runs_of(hills, dict(method="rk4", t_end=0.5), dict(method="euler", munthe_kaas=False, dt=0.01,
+                                                                 t_end=0.5, record_every=5))
+    with qtbot.waitSignal(controller.finished, timeout=30_000):
+        controller.start(runs)
+    assert controller.state == FINISHED and controller.computed and controller.thread is None
+    assert states[:2] == [READY, RUNNING] and states[-1] == FINISHED
+    assert controller.play_time == 0.5 and frames[-1] == 0.5 and frames == sorted(frames)
+    assert [len(run.buffer) for run in runs] == [501, 11]
+    expected = simulate(hills, method="euler", munthe_kaas=False, dt=0.01, t_end=0.5, record_every=5)
+    assert np.array_equal(runs[1].buffer.rows, expected.data)   # rows arrive whole and in order
+
+
+def test_pause_step_stop_and_reset(qtbot, hills):
+    controller = RunController()
+    controller.start(runs_of(hills, dict(method="rk4", t_end=5.0)))
+    qtbot.waitUntil(lambda: controller.play_time > 0.05, timeout=5000)
+    controller.toggle_pause()
+    held = controller.play_time
+    qtbot.wait(100)
+    assert controller.state == PAUSED and controller.play_time == held
+    controller.step()
+    assert controller.play_time == pytest.approx(held + 0.016)
+    controller.stop()
+    assert controller.state == STOPPED and controller.thread is None and len(controller.buffer) > 1
+    controller.reset()
+    assert controller.state == READY and controller.runs == [] and controller.play_time == 0.0
+
+
+def test_liftoff_is_an_event_once(qtbot):
+    scene = Scene.load(EXAMPLES_DIR / "liftoff.json")
+    controller = RunController()
+    controller.speed = math.inf
+    events = []
+    controller.event.connect(lambda i, kind, t: events.append((i, kind, t)))
+    runs = runs_of(scene, {})
+    with qtbot.waitSignal(controller.finished, timeout=30_000):
+        controller.start(runs)
+    assert events == [(0, "liftoff", runs[0].simulation.liftoff_time)]
+
+
+def test_document_title_and_dirty_flag(hills):
+    doc = Document()
+    assert doc.title() == "untitled[*] — RollBall" and doc.dirty(hills) and doc.stem is None
+    doc.opened(EXAMPLES_DIR / "hills.json", hills, example=True)
+    assert doc.name == "hills (example)" and doc.path is None and not doc.dirty(hills)
+    changed = Scene.from_dict({**hills.to_dict(), "duration": 3.0})
+    assert doc.dirty(changed)
+    doc.saved(Path("/tmp/mine.json"), changed)
+    assert doc.title() == "mine.json[*] — RollBall" and doc.stem == "mine" and not doc.dirty(changed)
