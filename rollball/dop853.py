@@ -19,6 +19,7 @@ from decimal import Decimal, localcontext
 
 import numpy as np
 
+from .kinds import MethodInfo, MethodKind
 from .order_conditions import ElementaryWeights, density, residuals, rooted_trees, size
 
 C = (
@@ -155,8 +156,8 @@ def _dense_weights(b, D) -> list[list[Decimal]]:
 
 
 @dataclass(frozen=True)
-class DensePair:
-    """An explicit embedded pair with dense output, as exact numbers, checked when built.
+class DensePair(MethodInfo):
+    """DOP853 as exact numbers, checked when built: an explicit embedded pair with dense output.
 
     ``A`` is square over all stages (strictly lower triangular; the rows after ``STAGES``
     are the dense output's extra stages), ``b`` the weights of the ``STAGES`` stages,
@@ -170,6 +171,16 @@ class DensePair:
     e5: tuple
     e3: tuple
     P: tuple
+
+    name = "dop853"
+    label = "DOP853"
+    order = ORDER
+    kind = MethodKind.ADAPTIVE
+    stages = STAGES + 1          # with the derivative at the new state ("first same as last")
+    k_rows = ALL_STAGES          # the stages, that derivative and the dense output's stages
+    # the combined estimate err5^2 / sqrt(err5^2 + err3^2 / 100) behaves like an estimate of
+    # order 7: dop853.f's (and scipy's) step-size exponent -1/8
+    error_exponent = -1.0 / 8.0
 
     def __post_init__(self):
         with localcontext() as context:

@@ -64,6 +64,7 @@ R_START_OVERFLOW = 4       # the landscape is finite at the start, the initial s
 R_UNDEFINED = 5            # the state or the landscape became non-finite during the run
 R_ORIENTATION = 6          # only the orientation overflowed (value: 1 classic, 0 Munthe-Kaas)
 R_STEP_UNDERFLOW = 7       # the adaptive step size fell below round-off (value: the step)
+R_NOT_CONVERGED = 10       # an implicit step's stage equations did not converge (value: the step)
 
 ROW_SIZE = 23  # t, x, y, c(3), c'(3), omega(3), R(9), energy, normal force
 
@@ -130,12 +131,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 3] = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
     if mk:
-        # u' = dexp_u^-1(omega) = omega - 1/2 u x omega + 1/12 u x (u x omega)
-        u1, u2, u3 = z[5], z[6], z[7]
-        c1, c2, c3 = u2 * o3 - u3 * o2, u3 * o1 - u1 * o3, u1 * o2 - u2 * o1
-        K[row, 5] = o1 - 0.5 * c1 + (u2 * c3 - u3 * c2) * (1.0 / 12.0)
-        K[row, 6] = o2 - 0.5 * c2 + (u3 * c1 - u1 * c3) * (1.0 / 12.0)
-        K[row, 7] = o3 - 0.5 * c3 + (u1 * c2 - u2 * c1) * (1.0 / 12.0)
+        K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
     else:
         # R' = A(omega) R, column by column
         for j in range(3):
@@ -151,6 +147,15 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
                          + (o1 * d2 - o2 * d1) * n3) + mg * n3
         probe[7] = r * largest_curvature(fx, fy, fxx, fxy, fyy, iW)
         probe[8] = d[0]
+
+
+@JIT
+def dexpinv(u1, u2, u3, o1, o2, o3):
+    """u' = dexp_u^-1(omega) = omega - 1/2 u x omega + 1/12 u x (u x omega)."""
+    c1, c2, c3 = u2 * o3 - u3 * o2, u3 * o1 - u1 * o3, u1 * o2 - u2 * o1
+    return (o1 - 0.5 * c1 + (u2 * c3 - u3 * c2) * (1.0 / 12.0),
+            o2 - 0.5 * c2 + (u3 * c1 - u1 * c3) * (1.0 / 12.0),
+            o3 - 0.5 * c3 + (u1 * c2 - u2 * c1) * (1.0 / 12.0))
 
 
 @JIT
@@ -428,21 +433,200 @@ def scratch(work, n):
             work[i + PROBE_SIZE:i + PROBE_SIZE + 9].reshape((3, 3)))
 
 
-def _fixed_steps(mk: bool):
-    """The fixed-step loop for one orientation scheme: with mk and the state size n
-    constants of the compiled code, the stage loops unroll as in hand-written C."""
+# What a step reports (trial_step and the implicit steps alike): 0 done, 1 the motion is not
+# finite, 2 only the orientation is not, 3 an implicit step's stage equations did not converge.
+STEP_NOT_CONVERGED = 3
+
+
+# -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
+#
+# An s-stage Gauss method solves K_i = z'(z + h sum_j a_ij K_j) at every step. The iteration
+# lives here, beside the explicit stage loop, so that numba's disk cache (which watches only
+# the file a function is defined in) recompiles it whenever what it inlines changes.
+
+# The stage iteration is converged once the scaled change of the stage values is at
+# round-off (or the error it predicts at the rate seen is below EPSILON), or once it has
+# stopped shrinking (no new smallest change in STALL iterations) below NOISE (round-off
+# fluctuations); it fails when it stops shrinking above NOISE (it diverges) or has not
+# converged after MAX_ITERATIONS.
+EPSILON = 2.0 ** -52
+ROUND_OFF = 4.0 * EPSILON
+NOISE = 1e-13
+STALL = 3
+MAX_ITERATIONS = 60
+
+
+@JIT
+def collocation_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
+    arguments and codes of trial_step (the orientation always Munthe-Kaas: mk is True).
+
+    The stage equations are solved in two parts, since u does not act on (alpha, v): first
+    the motion, evaluating the right-hand side with u = 0 (so that its u-part is omega),
+    then the increments u at the stages from those omegas, which needs no evaluations.
+
+    K[0] holds z'(z); K[1 .. s] hold the stage derivatives (on entry those of the previous
+    step, extrapolated with K[0] after the first step; on return this step's); K[s+1 .. 2s] is scratch
+    (on return its u-part holds omega at the stages); K[last] = K[2s+1] and pn receive the
+    full evaluation at zn. Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the
+    motion is not finite), 2 (only the orientation is not) or STEP_NOT_CONVERGED.
+    """
+    new = s + 1
+    # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
+    for i in range(s):
+        for q in range(5):
+            acc = K[0, q]
+            if ints[I_STEPS] > 0:
+                acc *= W[2 * s + 1, i]
+                for j in range(s):
+                    acc += W[s + 1 + i, j] * K[1 + j, q]
+            K[new + i, q] = acc
+    for i in range(s):
+        for q in range(5):
+            K[1 + i, q] = K[new + i, q]
+    for q in range(5, n):
+        Y[q] = 0.0
+    code = _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn)
+    if code == 0:
+        code = _increments(s, h, K, W)
+    if code != 0:
+        return code
+    for q in range(n):
+        zn[q] = z[q]
+    for i in range(s):
+        c = h * W[s, i]
+        for q in range(n):
+            zn[q] += c * K[1 + i, q]
+    rodrigues(zn, R, Rn)
+    if not _finite(zn, 0, 5):
+        return 1
+    if not (_finite(zn, 5, n) and _finite_matrix(Rn)):
+        return 2
+    dynamics(fn, d, p, zn, True, K, last, pn, True)
+    ints[I_EVALS] += 1
+    if not (_finite_row(K, last, 0, 5) and _finite(pn, 0, PROBE_SIZE)):
+        return 1
+    if not _finite_row(K, last, 5, n):
+        return 2
+    return 0
+
+
+@JIT
+def _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn):
+    """Fixed-point iteration for the (alpha, v) parts of the stage derivatives K[1 .. s]."""
+    new = s + 1
+    best, stalled, previous = np.inf, 0, np.inf
+    for _ in range(MAX_ITERATIONS):
+        for i in range(s):
+            for q in range(5):
+                Y[q] = z[q]
+            for j in range(s):
+                c = h * W[i, j]
+                for q in range(5):
+                    Y[q] += c * K[1 + j, q]
+            dynamics(fn, d, p, Y, True, K, new + i, pn, False)
+        ints[I_EVALS] += s
+        change = max(_scaled_change(s, h, z, K, 0, 2), _scaled_change(s, h, z, K, 2, 5))
+        for i in range(s):
+            for q in range(5):
+                K[1 + i, q] = K[new + i, q]
+        if change != change:  # the stages left the landscape's domain
+            return 1
+        # done when the change, or the error it predicts at the rate seen (Hairer, Lubich and
+        # Wanner VIII.6: change * rate / (1 - rate)), is at round-off
+        rate = change / previous  # (0 at the first iteration, which predicts nothing)
+        if change <= ROUND_OFF or (0.0 < rate < 1.0 and change * rate <= EPSILON * (1.0 - rate)):
+            return 0
+        previous = change
+        # a change passes from alpha to v and back, so it need not shrink at every
+        # iteration: only STALL iterations without a new smallest change end the iteration
+        if change < best:
+            best, stalled = change, 0
+        else:
+            stalled += 1
+            if stalled == STALL:  # at round-off, or not contracting
+                return 0 if change <= NOISE else STEP_NOT_CONVERGED
+    return STEP_NOT_CONVERGED
+
+
+@JIT
+def _increments(s, h, K, W):
+    """The u-parts of K[1 .. s]: U_i = h sum_j a_ij dexp^-1_(U_j)(omega_j), iterated from U = 0
+    (omega_j in the u-part of K[s+1+j]); no right-hand-side evaluations."""
+    new = s + 1
+    for i in range(s):
+        for q in range(5, 8):
+            K[1 + i, q] = K[new + i, q]  # dexp^-1 at U = 0
+    best, stalled = np.inf, 0
+    for _ in range(MAX_ITERATIONS):
+        change, size = 0.0, 0.0
+        for i in range(s):
+            u1, u2, u3 = 0.0, 0.0, 0.0
+            for j in range(s):
+                c = h * W[i, j]
+                u1 += c * K[1 + j, 5]
+                u2 += c * K[1 + j, 6]
+                u3 += c * K[1 + j, 7]
+            k1, k2, k3 = dexpinv(u1, u2, u3, K[new + i, 5], K[new + i, 6], K[new + i, 7])
+            change = max(change, abs(k1 - K[1 + i, 5]), abs(k2 - K[1 + i, 6]), abs(k3 - K[1 + i, 7]))
+            size = max(size, abs(k1), abs(k2), abs(k3))
+            # (Gauss-Seidel: later stages see this one's new value at once)
+            K[1 + i, 5], K[1 + i, 6], K[1 + i, 7] = k1, k2, k3
+        if not change <= size * 1e300:
+            return 2
+        if change <= ROUND_OFF * size:
+            return 0
+        if change < best:
+            best, stalled = change, 0
+        else:
+            stalled += 1
+            if stalled == STALL:
+                return 0 if change <= NOISE * size else STEP_NOT_CONVERGED
+    return STEP_NOT_CONVERGED
+
+
+@JIT
+def _scaled_change(s, h, z, K, lo, hi):
+    """The largest change h |K_new - K_old| of a stage value in z[lo:hi] (alpha or v), relative
+    to the size of that part of the state plus how far the stages move it; nan if an
+    iterate is not finite."""
+    scale = 0.0
+    for q in range(lo, hi):
+        scale = max(scale, abs(z[q]))
+        for i in range(s):
+            scale = max(scale, abs(h * K[s + 1 + i, q]))
+    worst = 0.0
+    for q in range(lo, hi):
+        for i in range(s):
+            delta = abs(h * (K[s + 1 + i, q] - K[1 + i, q]))
+            if not delta < np.inf:
+                return np.nan
+            if delta > 0.0:  # (a part at rest whose stages still move: a large change)
+                worst = max(worst, delta / scale if scale > 0.0 else 1.0)
+    return worst
+
+
+
+
+def fixed_steps(mk: bool, implicit: bool):
+    """The fixed-step loop for one orientation scheme and one kind of step: with mk, the
+    state size n and the step (trial_step for the explicit tableaus, collocation_step for
+    the implicit ones) constants of the compiled code, the stage loops unroll as in
+    hand-written C.
+    """
     n = state_size(mk)
 
     @JIT
     def advance(fn, W, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
         """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
-        K has one row more than the tableau has stages (the evaluation at the new state). On the
+        K's last row receives the evaluation at the new state (for an explicit tableau it has one
+        row more than the tableau has stages). On the
         first call (no rows yet) the initial state is checked and recorded. The run stops early,
         with ints[I_STATUS] set, where the state turns non-finite or the ball no longer fits;
         the last valid state is then the last row.
         """
-        s = W.shape[1]
+        s, last_row = W.shape[1], K.shape[0] - 1
         d, Y, zn, pn, Rn = scratch(work, n)
 
         if ints[I_ROWS] == 0:
@@ -456,16 +640,21 @@ def _fixed_steps(mk: bool):
             last = k == n_steps
             h = t_end - (k - 1) * dt if last else dt
             t = t_end if last else k * dt
-            bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, s, Y, zn, Rn, pn, ints)
-            if bad:
+            if implicit:
+                bad = collocation_step(fn, d, p, W, s, mk, n, h, z, R, K, last_row, Y, zn, Rn, pn, ints)
+            else:
+                bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last_row, Y, zn, Rn, pn, ints)
+            if bad == STEP_NOT_CONVERGED:
+                _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+            elif bad:
                 _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
                       0.0 if mk else 1.0)
             else:
-                check_step(fn, d, p[0], t, h, z, zn, probe, pn, K, s, ints, info, True)
+                check_step(fn, d, p[0], t, h, z, zn, probe, pn, K, last_row, ints, info, True)
             if ints[I_STATUS] != RUNNING:
                 record_last(rows, ints, (k - 1) * dt, z, R, probe, p)
                 return
-            accept(mk, n, t, h, z, R, K, s, probe, zn, Rn, pn, info)
+            accept(mk, n, t, h, z, R, K, last_row, probe, zn, Rn, pn, info)
             ints[I_STEPS] = k
             if k - ints[I_LAST_RECORDED] == every or last:  # (no division in the loop)
                 record(rows, ints[I_ROWS], t, z, R, probe, p)
@@ -477,8 +666,10 @@ def _fixed_steps(mk: bool):
     return advance
 
 
-# advance(fn, W, p, ...) by scheme: ADVANCE[munthe_kaas]
-ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
+# advance(fn, W, p, ...) of the explicit tableaus by scheme: ADVANCE[munthe_kaas]; of the
+# implicit ones (always Munthe-Kaas): ADVANCE_IMPLICIT
+ADVANCE = {mk: fixed_steps(mk, False) for mk in (True, False)}
+ADVANCE_IMPLICIT = fixed_steps(True, True)
 
 
 @JIT
