@@ -9,7 +9,9 @@ it; what was computed stays). Signals tell the window what to show:
 - ``frameReady(force)`` when the play time moved (``force``: draw even an unchanged row),
 - ``event(run, kind, t)`` when playback passes something worth saying (``"liftoff"``),
 - ``finished()`` when playback reached the end of every run,
-- ``failed(message)`` when the core raised in the worker.
+- ``failed(message)`` when the core raised in the worker,
+- ``measured()`` when a comparison's reference is known and every run's true error against
+  it (``Run.errors``) has been computed.
 """
 
 from __future__ import annotations
@@ -19,10 +21,10 @@ import time
 
 from PySide6 import QtCore
 
-from rollball import Simulation
+from rollball import Scene, Simulation, Trajectory
 
 from .playback import RunBuffer
-from .worker import SimulationThread
+from .worker import ReferenceThread, SimulationThread
 
 READY, RUNNING, PAUSED, FINISHED, STOPPED = "ready", "running", "paused", "finished", "stopped"
 FRAME_MS = 16              # advance the clock and redraw at most ~60 Hz
@@ -32,16 +34,24 @@ STEP_SPEED = 10.0          # simulated seconds per second a Step frame assumes a
 class Run:
     """One simulation and the rows the GUI thread has received of it."""
 
-    def __init__(self, simulation: Simulation, landscape, label: str = ""):
+    def __init__(self, simulation: Simulation, landscape, label: str = "", color: str | None = None):
         scene = simulation.scene
         self.simulation = simulation
-        self.label = label
+        self.label, self.color = label, color
+        self.seconds = 0.0                 # compute time, known once the worker is done with it
+        self.errors: dict | None = None    # true errors against the reference, per row
         self.buffer = RunBuffer(landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
                                 capacity=simulation.row_capacity)
         self.liftoff_announced = False
 
     def index_at(self, t: float) -> int:
         return self.buffer.index_at(t)
+
+    def trajectory(self) -> Trajectory:
+        """The rows received so far as a trajectory (no copy)."""
+        scene = self.simulation.scene
+        return Trajectory(self.buffer.rows, mass=scene.ball.mass, radius=scene.ball.radius,
+                          gravity=scene.gravity)
 
 
 class RunController(QtCore.QObject):
@@ -50,6 +60,9 @@ class RunController(QtCore.QObject):
     event = QtCore.Signal(int, str, float)
     finished = QtCore.Signal()
     failed = QtCore.Signal(str)
+    measured = QtCore.Signal()
+
+    _references: set = set()     # reference threads still computing (they cannot be interrupted)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -59,6 +72,8 @@ class RunController(QtCore.QObject):
         self.computed = False          # the worker has finished every run
         self.play_time = 0.0
         self.speed = 1.0               # simulated seconds per wall-clock second (inf: as computed)
+        self.reference: tuple[Trajectory, float] | None = None   # trajectory, its error estimate
+        self._reference_thread: ReferenceThread | None = None
         self._last_tick = self._frame_started = time.perf_counter()
         self.timer = QtCore.QTimer(self, interval=FRAME_MS, timerType=QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self._tick)
@@ -91,13 +106,21 @@ class RunController(QtCore.QObject):
 
     # -- commands --------------------------------------------------------------------
 
-    def start(self, runs: list[Run]) -> None:
-        """Compute and play these runs from t = 0 (whatever ran before is dropped)."""
+    def start(self, runs: list[Run], reference: tuple[Scene, float, float] | None = None,
+              warm_ups: list[Simulation] = ()) -> None:
+        """Compute and play these runs from t = 0 (whatever ran before is dropped). With
+        ``reference`` = (scene, t_end, record_dt) a reference run is computed alongside and
+        every run is measured against it; ``warm_ups`` run first, so compiling is not timed."""
         self.reset()
         self.runs = list(runs)
+        if reference is not None:
+            self._start_reference(*reference)
         self.thread = SimulationThread([run.simulation for run in self.runs],
-                                       [run.buffer.derive for run in self.runs], self)
-        self.thread.rowsReady.connect(self._rows_ready)
+                                       [run.buffer.derive for run in self.runs], self, warm_ups)
+        runs = self.runs
+        # a chunk still queued when its thread was stopped belongs to runs since dropped
+        self.thread.rowsReady.connect(lambda index, block: runs is self.runs and self._rows_ready(index, block),
+                                      QtCore.Qt.ConnectionType.QueuedConnection)
         self.thread.failed.connect(self.failed)
         self.thread.finished.connect(self._computed)
         self._set_state(RUNNING)
@@ -110,19 +133,30 @@ class RunController(QtCore.QObject):
             self._set_state(PAUSED)
         elif self.state == PAUSED:
             self._last_tick = time.perf_counter()
+            self.timer.start()   # stopped if the run had played to its end before a seek
             self._set_state(RUNNING)
 
     def pause(self) -> None:
         if self.state == RUNNING:
             self._set_state(PAUSED)
 
-    def step(self) -> None:
-        """Pause and advance the clock by one frame at the playback speed."""
-        if self.state not in (RUNNING, PAUSED):
+    def step(self, frames: int = 1) -> None:
+        """Pause and move the clock by ``frames`` frames (back if negative) at the playback speed."""
+        if self.state not in (RUNNING, PAUSED, FINISHED):
             return
-        self.pause()
         speed = self.speed if math.isfinite(self.speed) else STEP_SPEED
-        self.play_time = min(self.play_time + FRAME_MS / 1000 * speed, self.end_time)
+        self.seek(self.play_time + frames * FRAME_MS / 1000 * speed)
+        self.pause()
+
+    def seek(self, t: float) -> None:
+        """Show time t (held within what is computed). A finished run pauses there, so Resume
+        plays on from that moment; a running one plays on from it."""
+        if not self.runs:
+            return
+        self.play_time = min(max(0.0, t), self.end_time)
+        self._last_tick = time.perf_counter()
+        if self.state == FINISHED:
+            self._set_state(PAUSED)
         self._frame(force=True)
 
     def stop(self) -> None:
@@ -133,19 +167,27 @@ class RunController(QtCore.QObject):
         self.timer.stop()
         self._set_state(STOPPED)
         self._frame(force=True)
+        self._measure()
 
     def reset(self) -> None:
         """Drop the runs: back to ready at t = 0."""
         self._stop_worker()
         self.timer.stop()
         self.runs, self.computed, self.play_time = [], False, 0.0
+        self.reference, self._reference_thread = None, None
         self._set_state(READY)
+
+    def shutdown(self) -> None:
+        """Reset, and wait for reference runs still computing (before the app quits)."""
+        self.reset()
+        for thread in list(RunController._references):
+            thread.wait()
 
     # -- the worker ------------------------------------------------------------------
 
     def _stop_worker(self) -> None:
         if self.thread is not None:
-            self.thread.rowsReady.disconnect(self._rows_ready)
+            self._take_seconds()
             self.thread.finished.disconnect(self._computed)
             self.thread.stop()
             self.thread.deleteLater()
@@ -154,12 +196,46 @@ class RunController(QtCore.QObject):
     def _rows_ready(self, index: int, block) -> None:
         self.runs[index].buffer.append(block)
 
+    def _take_seconds(self) -> None:
+        for run, seconds in zip(self.runs, self.thread.seconds):
+            run.seconds = seconds
+
     def _computed(self) -> None:
         self.computed = True
         if self.thread is not None:
+            self._take_seconds()
             self.thread.deleteLater()
             self.thread = None
         self.stateChanged.emit(self.state)
+        self._measure()
+
+    # -- the reference ---------------------------------------------------------------
+
+    def _start_reference(self, scene: Scene, t_end: float, record_dt: float) -> None:
+        thread = self._reference_thread = ReferenceThread(scene, t_end, record_dt)
+        RunController._references.add(thread)
+        thread.done.connect(lambda trajectory, estimate: self._reference_done(thread, trajectory, estimate))
+        thread.failed.connect(lambda message: thread is self._reference_thread and self.failed.emit(
+            f"The reference run failed: {message}"))
+        thread.finished.connect(lambda: (RunController._references.discard(thread), thread.deleteLater()))
+        thread.start()
+
+    def _reference_done(self, thread, trajectory: Trajectory, estimate: float) -> None:
+        if thread is not self._reference_thread:
+            return  # a reference of runs since dropped
+        self.reference = (trajectory, estimate)
+        self._measure()
+
+    def _measure(self) -> None:
+        """Every run's errors against the reference, once both are complete (or the runs were
+        stopped: then up to where they got)."""
+        if self.reference is None or self.thread is not None or not self.runs:
+            return
+        from rollball.comparison import error_series
+
+        for run in self.runs:
+            run.errors = error_series(run.trajectory(), self.reference[0])
+        self.measured.emit()
 
     # -- the clock -------------------------------------------------------------------
 

@@ -1,4 +1,5 @@
-"""Preferences kept in QSettings, apart from scenes: window geometry, recent files, last folder."""
+"""Preferences kept in QSettings, apart from scenes: window geometry, recent files, last folder,
+text size."""
 
 from __future__ import annotations
 
@@ -35,6 +36,17 @@ class Preferences:
 
     def set_last_folder(self, path: str | Path) -> None:
         self.settings.setValue("lastFolder", str(Path(path).resolve().parent))
+
+    def font_scale(self) -> float:
+        """The text size of readouts, status and plots, as a factor (1: normal)."""
+        try:
+            value = float(self.settings.value("fontScale", 1.0))
+        except (TypeError, ValueError):
+            return 1.0
+        return value if 0.5 <= value <= 4.0 else 1.0
+
+    def set_font_scale(self, scale: float) -> None:
+        self.settings.setValue("fontScale", float(scale))
 
     def restore(self, window) -> None:
         geometry, state = self.settings.value("geometry"), self.settings.value("windowState")

@@ -17,7 +17,7 @@ QUANTITIES = (("t", "Time t"), ("energy", "Energy E"), ("drift", "(E − E₀)/E
 def _value_label(name: str) -> QtWidgets.QLabel:
     label = QtWidgets.QLabel("—", objectName=name)
     label.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-    label.setMinimumWidth(110)
+    label.setMinimumWidth(96)   # six of them fit a 1024-pixel window beside the scene fields
     font = label.font()
     font.setFamily("monospace")
     font.setStyleHint(QtGui.QFont.StyleHint.Monospace)
@@ -45,11 +45,12 @@ class Readouts(QtWidgets.QWidget):
         return self.rows[0][key]
 
     def set_runs(self, runs: list[tuple[str, str] | None]) -> None:
-        """One row per run: ``(name, colour)``, or ``[None]`` for a single unnamed run."""
-        for widget in [*self.names, *(label for row in self.rows for label in row.values())]:
+        """One row per run: ``(name, colour)``, or ``[None]`` for a single unnamed run. The
+        first row's labels stay the same widgets (what is attached to them stays)."""
+        for widget in [*self.names, *(label for row in self.rows[1:] for label in row.values())]:
             self.grid.removeWidget(widget)
             widget.deleteLater()
-        self.rows, self.names = [], []
+        self.rows, self.names = self.rows[:1], []
         for r, run in enumerate(runs):
             if run is not None:
                 name, color = run
@@ -57,6 +58,8 @@ class Readouts(QtWidgets.QWidget):
                 tag.setStyleSheet(f"color: {color}; font-weight: bold;")
                 self.grid.addWidget(tag, r + 1, 0)
                 self.names.append(tag)
+            if r < len(self.rows):
+                continue
             prefix = "readout." if r == 0 else f"readout{r}."
             row = {key: _value_label(prefix + key) for key, _ in QUANTITIES}
             for i, label in enumerate(row.values()):

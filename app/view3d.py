@@ -19,15 +19,24 @@ NO_FIT_COLOR = (0.86, 0.12, 0.20, 1.0)      # where the ball does not fit: r·κ
 UNDEFINED_COLOR = (0.55, 0.55, 0.55, 1.0)   # where the formula cannot be evaluated
 GRID_COLOR = (0.0, 0.0, 0.0, 0.22)
 MAX_GRID_LINES = 30                          # per direction; more would hide the surface
+CUT_COLOR = (0.15, 0.15, 0.15, 0.55)        # the edge where unreachable heights are cut away
+AXIS_COLOR = (0.30, 0.30, 0.30, 1.0)
+TEXT_COLOR = (60, 60, 60, 255)
 TRAIL_COLOR = (0.80, 0.10, 0.10, 1.0)
 LIFTOFF_COLOR = (1.0, 0.55, 0.0, 1.0)
 BALL_STRIPES = np.array([(0.90, 0.20, 0.15), (1.00, 0.80, 0.10), (0.15, 0.45, 0.85),
                          (0.95, 0.55, 0.10), (0.20, 0.65, 0.30), (0.55, 0.25, 0.70)])
 HEIGHT_MAP = pg.colormap.get("viridis")
+FILL = 0.9               # the framed landscape fills up to this fraction of the view
+# camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
+# the usual side from ever higher up, then the other sides
+VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
+              for elevation in (30, 45, 60, 75)] + [(90, -90)]
 
 
-def ball_mesh(rows: int = 24, cols: int = 48) -> gl.MeshData:
-    """A unit beach ball: six coloured segments around the body z axis, white caps.
+def ball_mesh(stripes: np.ndarray = BALL_STRIPES, cap=(0.97, 0.97, 0.97), rows: int = 24,
+              cols: int = 48) -> gl.MeshData:
+    """A unit beach ball: six coloured segments around the body z axis, caps of one colour.
 
     Its pattern makes every rotation visible, and a non-orthogonal R visibly deforms it.
     """
@@ -35,62 +44,190 @@ def ball_mesh(rows: int = 24, cols: int = 48) -> gl.MeshData:
     centres = mesh.vertexes(indexed="faces").mean(axis=1)
     segment = ((np.arctan2(centres[:, 1], centres[:, 0]) + np.pi) / (2 * np.pi) * 6).astype(int) % 6
     colors = np.ones((len(centres), 4))
-    colors[:, :3] = BALL_STRIPES[segment]
-    colors[np.abs(centres[:, 2]) > 0.88, :3] = 0.97
+    colors[:, :3] = np.asarray(stripes)[segment]
+    colors[np.abs(centres[:, 2]) > 0.88, :3] = cap
     mesh.setFaceColors(colors)
     return mesh
 
 
-def surface_colors(z: np.ndarray, fit: np.ndarray) -> np.ndarray:
-    """Vertex colours: height by colour map, the no-fit region and undefined points apart."""
+def run_ball_mesh(color) -> gl.MeshData:
+    """A beach ball in one run's colour: its segments alternate the colour and a pale tint of
+    it, with dark caps, so rotation and deformation stay as visible as on the striped ball."""
+    c = np.asarray(pg.mkColor(color).getRgbF()[:3])
+    pale = 0.35 * c + 0.65
+    return ball_mesh(np.array([c, pale] * 3), cap=0.45 * c)
+
+
+def ball_transform(center: np.ndarray, R: np.ndarray, radius: float) -> pg.Transform3D:
+    """The unit ball mesh placed at ``center`` and turned by R; a matrix R that is no rotation
+    deforms it (one that grows is drawn no larger than the ball, so its shape stays visible)."""
+    m = np.eye(4)
+    m[:3, :3] = R * (radius / max(1.0, float(np.linalg.norm(R, 2))))
+    m[:3, 3] = center
+    return pg.Transform3D(*m.ravel())
+
+
+def height_span(z: np.ndarray) -> tuple[float, float]:
+    """The heights the colour map spans: those of the finite points."""
     finite = np.isfinite(z)
-    lo, hi = (np.min(z[finite]), np.max(z[finite])) if finite.any() else (0.0, 1.0)
-    level = (np.where(finite, z, lo) - lo) / (hi - lo) if hi > lo else np.full(z.shape, 0.5)
+    return (float(np.min(z[finite])), float(np.max(z[finite]))) if finite.any() else (0.0, 1.0)
+
+
+def surface_colors(z: np.ndarray, fit: np.ndarray, span: tuple[float, float] | None = None) -> np.ndarray:
+    """Vertex colours: height by colour map over ``span`` (default: z's own), the no-fit region
+    and undefined points apart."""
+    finite = np.isfinite(z)
+    lo, hi = span or height_span(z)
+    level = np.clip((np.where(finite, z, lo) - lo) / (hi - lo), 0.0, 1.0) if hi > lo else np.full(z.shape, 0.5)
     colors = HEIGHT_MAP.map(level.ravel(), mode="float").reshape(z.shape + (4,))
     colors[fit >= 1.0] = NO_FIT_COLOR
     colors[~finite] = UNDEFINED_COLOR
     return colors
 
 
-def grid_lines(axis: np.ndarray, z: np.ndarray, lift: float) -> np.ndarray:
-    """Segments (pairs of points) along every k-th grid line of the surface, raised by ``lift``."""
+def grid_lines(axis: np.ndarray, z: np.ndarray, lift: float, cap: float = np.inf) -> np.ndarray:
+    """Segments (pairs of points) along every k-th grid line of the surface, raised by ``lift``;
+    none wholly above ``cap`` (where the surface is cut away)."""
     n = len(axis)
     k = max(1, -(-n // MAX_GRID_LINES))
     picked = np.arange(0, n, k)
     xs, ys = np.meshgrid(axis, axis, indexing="ij")
-    points = np.stack([xs, ys, z + lift], axis=-1)
+    points = np.stack([xs, ys, z], axis=-1)
     along_y = points[picked]                   # lines of constant x
     along_x = points[:, picked].swapaxes(0, 1)  # lines of constant y
     lines = np.concatenate([along_y, along_x])
-    return np.stack([lines[:, :-1], lines[:, 1:]], axis=2).reshape(-1, 3)
+    pairs = np.stack([lines[:, :-1], lines[:, 1:]], axis=2).reshape(-1, 2, 3)
+    pairs = pairs[pairs[:, :, 2].min(axis=1) <= cap]
+    pairs[:, :, 2] = np.minimum(pairs[:, :, 2], cap) + lift
+    return pairs.reshape(-1, 3)
+
+
+def height_cap(lowest: float, reachable: float, radius: float) -> float:
+    """Heights above this are not drawn: the ball's energy never takes it up there
+    (``reachable``, E / (m g)); the margin keeps a little of every wall in sight."""
+    return reachable + 2.0 * radius + 0.1 * max(reachable - lowest, 0.0)
+
+
+def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float) -> gl.MeshData:
+    """The grid as triangles, without those wholly above ``cap``; heights above it are
+    lowered to it, so the surface ends in a level cut."""
+    n = len(axis)
+    xs, ys = np.meshgrid(axis, axis, indexing="ij")
+    vertexes = np.stack([xs, ys, np.minimum(z, cap)], axis=-1).reshape(-1, 3)
+    index = np.arange(n * n).reshape(n, n)
+    a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[:-1, 1:].ravel(), index[1:, 1:].ravel()
+    faces = np.concatenate([np.stack([a, d, b], axis=1), np.stack([a, c, d], axis=1)])   # as GLSurfacePlotItem winds them
+    faces = faces[(z.ravel()[faces] <= cap).any(axis=1)]
+    return gl.MeshData(vertexes=vertexes, faces=faces, vertexColors=colors.reshape(-1, 4))
+
+
+def level_segments(axis: np.ndarray, z: np.ndarray, level: float) -> np.ndarray:
+    """Where the surface crosses the height ``level``: segments (pairs of points) through the
+    grid cells (marching squares, crossings placed linearly along the cell edges)."""
+    xs, ys = np.meshgrid(axis, axis, indexing="ij")
+    corners = [(slice(None, -1), slice(None, -1)), (slice(1, None), slice(None, -1)),
+               (slice(1, None), slice(1, None)), (slice(None, -1), slice(1, None))]
+    points, crossed = [], []
+    for k in range(4):  # the cell's four edges, corner k to corner k + 1
+        i, j = corners[k], corners[(k + 1) % 4]
+        za, zb = z[i], z[j]
+        hit = (za - level) * (zb - level) < 0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            w = np.where(hit, (level - za) / (zb - za), 0.0)
+        points.append(np.stack([xs[i] + w * (xs[j] - xs[i]), ys[i] + w * (ys[j] - ys[i]),
+                                np.full(za.shape, level)], axis=-1))
+        crossed.append(hit)
+    points, crossed = np.stack(points).reshape(4, -1, 3), np.stack(crossed).reshape(4, -1)
+    count, cells = crossed.sum(axis=0), np.arange(crossed.shape[1])
+    edges = np.argsort(~crossed, axis=0, kind="stable")   # each cell's crossed edges first
+    two, four = count == 2, count == 4   # a saddle cell crossed on all four edges: 0-1 and 2-3
+    pairs = [(points[edges[0, two], cells[two]], points[edges[1, two], cells[two]]),
+             (points[0, four], points[1, four]), (points[2, four], points[3, four])]
+    return np.concatenate([np.stack(pair, axis=1) for pair in pairs]).reshape(-1, 3)
+
+
+def nice_step(span: float, ticks: int = 5) -> float:
+    """A round tick spacing (1, 2 or 5 times a power of ten) giving about ``ticks`` ticks."""
+    raw = span / ticks
+    power = 10.0 ** np.floor(np.log10(raw))
+    return float(min((m * power for m in (1, 2, 5, 10) if m * power >= raw), default=10 * power))
+
+
+def look(center: np.ndarray, distance: float, elevation: float, azimuth: float) -> np.ndarray:
+    """The camera's position, as pyqtgraph places it (angles in degrees)."""
+    el, az = np.radians(elevation), np.radians(azimuth)
+    return center + distance * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+
+
+def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, fov: float, aspect: float) -> np.ndarray:
+    """Normalised view coordinates (-1 to 1 across the view) of points seen from ``eye``
+    looking at ``center`` with z up, ``fov`` the horizontal field of view in degrees and
+    ``aspect`` = height / width; points behind the camera come out as inf."""
+    forward = (center - eye) / np.linalg.norm(center - eye)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    up = np.cross(right, forward)
+    rel = np.atleast_2d(points) - eye
+    depth = rel @ forward
+    half = np.tan(np.radians(fov) / 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.stack([(rel @ right) / (depth * half), (rel @ up) / (depth * half * aspect)], axis=-1)
+    out[depth <= 0] = np.inf
+    return out
 
 
 class SceneView(gl.GLViewWidget):
-    """Landscape, ball, trail and lift-off marker, with a camera that can follow the ball."""
+    """Landscape, ball, trail and lift-off marker, with a camera that can follow the ball.
+
+    The surface is drawn up to the height the ball's energy can reach (plus a margin) and cut
+    level there, with a faint line along the cut; axes with ticks in metres give the scale.
+    The camera frames the drawn landscape, heights included, from a side where the ball is
+    in sight, and keeps that framing when the view is resized until the user turns or zooms.
+    """
 
     def __init__(self, parent=None):
         super().__init__(parent)
         self.setBackgroundColor(BACKGROUND)
         self.setMinimumSize(480, 360)
         self.follow = False
-        self.surface: gl.GLSurfacePlotItem | None = None
+        self.framed = False                   # the camera is as reset_camera left it
+        self.surface: gl.GLMeshItem | None = None
         self.extent = 6.0
+        self.z_span = (0.0, 1.0)   # heights the colour map spans
+        self.bounds = np.array([[-3.0, -3.0, 0.0], [3.0, 3.0, 0.0]])  # drawn box: lowest, highest corner
+        self.no_fit_points = np.zeros((0, 3))  # some drawn points where the ball does not fit
+        self.lowest_point = np.zeros(3)         # where the ball is heading, shown if possible
+        self.cap = np.inf                     # heights above this are cut away
+        self._axis = np.linspace(-3.0, 3.0, 2)
+        self._drawn = np.zeros((2, 2))        # drawn heights on the grid (-inf where cut away)
         self.grid_lines = gl.GLLinePlotItem(color=GRID_COLOR, width=1.0, antialias=True, mode="lines")
         self.grid_lines.setGLOptions("translucent")
-        self.addItem(self.grid_lines)
+        self.cut_edge = gl.GLLinePlotItem(color=CUT_COLOR, width=1.5, antialias=True, mode="lines")
+        self.cut_edge.setGLOptions("translucent")
+        self.axes = gl.GLLinePlotItem(color=AXIS_COLOR, width=1.5, antialias=True, mode="lines")
+        self.axis_labels: list[gl.GLTextItem] = []
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
         self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=3.0, antialias=True, mode="line_strip")
         self.liftoff = gl.GLScatterPlotItem(color=LIFTOFF_COLOR, size=16.0, pxMode=True)
         self.liftoff.setGLOptions("translucent")
-        for item in (self.ball, self.trail, self.liftoff):
+        for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
-        self.ball_center = np.zeros(3)
+        self.ball_radius = 0.1
+        self.balls, self.trails = [self.ball], [self.trail]   # one per run (compare mode: several)
+        self.centers = [np.zeros(3)]
+        self.followed = 0                                      # the run the camera follows
+        self.trails_shown = True
+
+    @property
+    def ball_center(self) -> np.ndarray:
+        return self.centers[self.followed]
 
     # -- landscape -------------------------------------------------------------------
 
-    def set_landscape(self, landscape, view, radius: float) -> dict:
-        """Draw the landscape on the scene's grid; returns what the grid showed (for the status)."""
+    def set_landscape(self, landscape, view, radius: float, reachable: float = np.inf) -> dict:
+        """Draw the landscape on the scene's grid, cut above what the ball can reach (its
+        energy as a height, ``reachable``); returns what the grid showed (for the status)."""
         n = int(round((view.max - view.min) / view.step)) + 1
         axis = np.linspace(view.min, view.min + (n - 1) * view.step, n)
         xs, ys = np.meshgrid(axis, axis, indexing="ij")
@@ -102,51 +239,214 @@ class SceneView(gl.GLViewWidget):
         lowest = z[finite].min() if finite.any() else 0.0
         # undefined points sit at the lowest height (drawn grey); walls are cut at twice the grid
         shown = np.clip(np.where(finite, z, lowest), -2 * self.extent, 2 * self.extent)
-        colors = surface_colors(z, fit)
+        self.cap = min(height_cap(lowest, reachable, radius), 2 * self.extent)
+        self.z_span = height_span(np.minimum(z, self.cap))   # the colours span what is drawn
+        colors = surface_colors(np.minimum(z, self.cap), fit, self.z_span)
         if self.surface is not None:
             self.removeItem(self.surface)
-        self.surface = gl.GLSurfacePlotItem(x=axis, y=axis, z=shown, colors=colors, shader="shaded",
-                                            smooth=True, drawEdges=False,
-                                            edgeColor=(0.0, 0.0, 0.0, 0.18))
-        self.surface.setGLOptions("opaque")
+        self.surface = gl.GLMeshItem(meshdata=surface_mesh(axis, shown, colors, self.cap), smooth=True,
+                                     shader="shaded", glOptions="opaque")
         self.addItem(self.surface)
-        self.grid_lines.setData(pos=grid_lines(axis, shown, lift=0.002 * self.extent))
-        for item in (self.grid_lines, self.trail, self.liftoff):   # drawn after the surface, on top of it
+        lift = 0.002 * self.extent
+        self.grid_lines.setData(pos=grid_lines(axis, shown, lift=lift, cap=self.cap))
+        cut = level_segments(axis, shown, self.cap) if shown.max() > self.cap else np.zeros((0, 3))
+        self.cut_edge.setData(pos=cut + [0.0, 0.0, lift])
+        self._axis, self._drawn = axis, np.where(shown <= self.cap, shown, -np.inf)
+        red = np.flatnonzero(((fit >= 1.0) & (shown <= self.cap)).ravel())   # a few no-fit points to show
+        picked = red[np.linspace(0, len(red) - 1, min(len(red), 5)).astype(int)] if len(red) else red
+        low = np.unravel_index(np.argmin(np.where(finite, shown, np.inf)), shown.shape)
+        self.lowest_point = np.array([axis[low[0]], axis[low[1]], shown[low]])
+        self.no_fit_points = np.stack([xs.ravel()[picked], ys.ravel()[picked], shown.ravel()[picked]], axis=-1)
+        kept = shown <= self.cap   # the box around what is drawn (a cell beyond, where it is cut)
+        near = kept | np.roll(kept, 1, 0) | np.roll(kept, -1, 0) | np.roll(kept, 1, 1) | np.roll(kept, -1, 1)
+        xs_kept, ys_kept = xs[near], ys[near]
+        self.bounds = np.array([[xs_kept.min(), ys_kept.min(), float(shown.min())],
+                                [xs_kept.max(), ys_kept.max(), float(min(shown.max(), self.cap))]])
+        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff):   # drawn after the surface
             self.removeItem(item)
             self.addItem(item)
-        return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any())}
+        return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
+                "cut": bool(shown.max() > self.cap)}
+
+    def height_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The drawn surface's height at points, interpolated bilinearly on the grid (-inf
+        outside the grid or where the surface is cut away)."""
+        axis, n = self._axis, len(self._axis)
+        step = (axis[-1] - axis[0]) / max(n - 1, 1)
+        u, v = (np.asarray(x) - axis[0]) / step, (np.asarray(y) - axis[0]) / step
+        inside = (u >= 0) & (u <= n - 1) & (v >= 0) & (v <= n - 1)
+        i, j = np.clip(np.floor(u).astype(int), 0, n - 2), np.clip(np.floor(v).astype(int), 0, n - 2)
+        a, b = np.clip(u - i, 0, 1), np.clip(v - j, 0, 1)
+        z = self._drawn
+        with np.errstate(invalid="ignore"):   # -inf corners stay -inf
+            h = ((1 - a) * (1 - b) * z[i, j] + a * (1 - b) * z[i + 1, j] + (1 - a) * b * z[i, j + 1]
+                 + a * b * z[i + 1, j + 1])
+        return np.where(inside & np.isfinite(h), h, -np.inf)
+
+    def in_sight(self, point: np.ndarray, eye: np.ndarray, clearance: float) -> bool:
+        """Whether the straight line from ``eye`` to ``point`` passes above the drawn surface
+        by at least a quarter of ``clearance`` (from ``clearance`` away from the point on, so
+        that the ball itself does not count)."""
+        length = float(np.linalg.norm(eye - point))
+        t = np.linspace(min(clearance / length, 1.0), 1.0, 400)[:, None]
+        samples = point + t * (eye - point)
+        return bool(np.all(samples[:, 2] >= self.height_at(samples[:, 0], samples[:, 1]) + clearance / 4))
+
+    # -- camera ----------------------------------------------------------------------
 
     def reset_camera(self) -> None:
-        self.setCameraPosition(distance=1.25 * self.extent, elevation=30, azimuth=-60)
-        c = self.ball_center if self.follow else np.zeros(3)
-        self.opts["center"] = QtGui.QVector3D(*map(float, c))
+        """Frame the drawn landscape, its heights included, from the first viewpoint of
+        ``VIEWPOINTS`` where the ball, some of the region where it does not fit and the lowest
+        point are in sight (not behind a wall); failing that, without the lowest point."""
+        r = self.ball_radius
+        box = np.array([np.minimum(self.bounds[0], self.ball_center - r),
+                        np.maximum(self.bounds[1], self.ball_center + r)])
+        center = box.mean(axis=0)
+        corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+        aspect = self.height() / max(self.width(), 1)
+        fov = self.opts["fov"]
+        views = [(self._fit_distance(corners, center, elevation, azimuth, fov, aspect), elevation, azimuth)
+                 for elevation, azimuth in VIEWPOINTS]
+        must = (self.ball_center, *self.no_fit_points)
+        chosen = next((view for wanted in ((*must, self.lowest_point), must) for view in views
+                       if all(self.in_sight(point, look(center, *view), 2 * r) for point in wanted)),
+                      views[0])   # the landscape framed, should no side show the ball
+        distance, elevation, azimuth = chosen
+        self.setCameraPosition(distance=distance, elevation=elevation, azimuth=azimuth)
+        focus = self.ball_center if self.follow else center
+        self.opts["center"] = QtGui.QVector3D(*map(float, focus))
+        self._draw_axes(box, look(center, distance, elevation, azimuth))
+        self.framed = True
         self.update()
+
+    @staticmethod
+    def _fit_distance(corners, center, elevation, azimuth, fov, aspect) -> float:
+        """The camera distance at which every corner lies within FILL of the view."""
+        near, far = 1e-3, 1e3 * float(np.ptp(corners, axis=0).max() + 1.0)
+        for _ in range(50):
+            mid = np.sqrt(near * far)
+            seen = project(corners, look(center, mid, elevation, azimuth), center, fov, aspect)
+            near, far = (near, mid) if np.all(np.abs(seen) <= FILL) else (mid, far)
+        return far
+
+    def _draw_axes(self, box: np.ndarray, eye: np.ndarray) -> None:
+        """Axes with ticks and labels in metres along the box's lower edges nearest the eye,
+        and a height axis at their corner."""
+        (x0, y0, z0), (x1, y1, z1) = box
+        ox = x1 if eye[0] > (x0 + x1) / 2 else x0     # the corner nearest the camera
+        oy = y1 if eye[1] > (y0 + y1) / 2 else y0
+        horizontal = max(x1 - x0, y1 - y0)
+        tick = 0.015 * horizontal
+        away = np.array([1.0 if ox == x1 else -1.0, 1.0 if oy == y1 else -1.0, 0.0]) * tick
+        segments, labels = [], []
+        for k, (lo, hi) in enumerate(((x0, x1), (y0, y1), (z0, z1))):
+            start = np.array([ox, oy, z0])
+            start[k] = lo
+            end = start.copy()
+            end[k] = hi
+            segments += [start, end]
+            out = away * ([0.0, 1.0, 0.0] if k == 0 else [1.0, 0.0, 0.0])   # ticks point outwards
+            if k == 2 and hi - lo < 0.03 * horizontal:
+                break   # a flat landscape: no height axis
+            step = nice_step(hi - lo, 6 if k < 2 else 4)
+            corner = (ox, oy)[k] if k < 2 else None
+            for value in np.arange(np.ceil(lo / step) * step, hi + 1e-9 * step, step):
+                at = start.copy()
+                at[k] = value
+                segments += [at, at + out]
+                if corner is None or abs(value - corner) > 0.5 * step:   # the corner is the height axis's
+                    labels.append((at + 2.5 * out, f"{value:g}"))
+            labels.append((end + 6 * out, "xyz"[k] + " (m)"))
+        self.axes.setData(pos=np.array(segments))
+        for item in self.axis_labels:
+            self.removeItem(item)
+        font = QtGui.QFont()
+        font.setPointSize(8)
+        self.axis_labels = [gl.GLTextItem(pos=np.asarray(pos, dtype=float), text=text, color=TEXT_COLOR,
+                                          font=font, glOptions="translucent") for pos, text in labels]
+        for item in self.axis_labels:
+            self.addItem(item)
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        if self.framed:
+            self.reset_camera()
+
+    def mousePressEvent(self, event) -> None:
+        self.framed = False   # the user takes the camera
+        super().mousePressEvent(event)
+
+    def wheelEvent(self, event) -> None:
+        self.framed = False
+        super().wheelEvent(event)
 
     # -- ball, trail, markers ---------------------------------------------------------
 
-    def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float) -> None:
-        """Place the ball; a matrix R that is no rotation deforms it (one that grows is drawn no
-        larger than the ball, so its shape stays visible)."""
-        m = np.eye(4)
-        m[:3, :3] = R * (radius / max(1.0, float(np.linalg.norm(R, 2))))
-        m[:3, 3] = center
-        self.ball.setTransform(pg.Transform3D(*m.ravel()))
-        self.ball_center = np.asarray(center, dtype=float)
-        if self.follow:
+    def set_runs(self, colors: list | None) -> None:
+        """One ball and trail per colour (compare mode), or None: the single striped ball."""
+        for item in self.balls[1:] + self.trails[1:]:
+            self.removeItem(item)
+        self.balls, self.trails = [self.ball], [self.trail]
+        self.ball.setMeshData(meshdata=ball_mesh() if colors is None else run_ball_mesh(colors[0]))
+        self.trail.setData(color=TRAIL_COLOR if colors is None else pg.mkColor(colors[0]).getRgbF())
+        # one trail is added onto the surface; several keep their own colours where they cross
+        self.trail.setGLOptions("additive" if colors is None else "translucent")
+        for color in (colors or [])[1:]:
+            ball = gl.GLMeshItem(meshdata=run_ball_mesh(color), smooth=False, shader="shaded",
+                                 glOptions="opaque")
+            trail = gl.GLLinePlotItem(color=pg.mkColor(color).getRgbF(), width=3.0, antialias=True,
+                                      mode="line_strip", glOptions="translucent")
+            self.addItem(ball)
+            self.addItem(trail)
+            self.balls.append(ball)
+            self.trails.append(trail)
+        self.removeItem(self.liftoff)  # the marker stays on top
+        self.addItem(self.liftoff)
+        for ball, trail in zip(self.balls, self.trails):
+            ball.setVisible(True)
+            trail.setVisible(self.trails_shown)
+        self.centers = [self.centers[0]] * len(self.balls)
+        self.followed = 0
+
+    def set_run_visible(self, index: int, visible: bool) -> None:
+        self.balls[index].setVisible(visible)
+        self.trails[index].setVisible(visible and self.trails_shown)
+
+    def set_trails_visible(self, on: bool) -> None:
+        self.trails_shown = on
+        for ball, trail in zip(self.balls, self.trails):
+            trail.setVisible(on and ball.visible())
+
+    def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float, index: int = 0) -> None:
+        """Place a run's ball (see ``ball_transform``)."""
+        self.balls[index].setTransform(ball_transform(center, R, radius))
+        self.centers[index] = np.asarray(center, dtype=float)
+        self.ball_radius = radius
+        if self.follow and index == self.followed:
             self.opts["center"] = QtGui.QVector3D(*map(float, center))
         self.update()
 
-    def set_trail(self, points: np.ndarray) -> None:
-        self.trail.setData(pos=points if len(points) >= 2 else np.zeros((0, 3)))
+    def set_trail(self, points: np.ndarray, index: int = 0) -> None:
+        self.trails[index].setData(pos=points if len(points) >= 2 else np.zeros((0, 3)))
 
     def set_liftoff(self, point: np.ndarray | None) -> None:
+        """Mark the lift-off point; None hides the marker."""
         self.liftoff.setVisible(point is not None)
         if point is not None:
             self.liftoff.setData(pos=np.asarray(point, dtype=float).reshape(1, 3))
 
-    def set_follow(self, follow: bool, radius: float | None = None) -> None:
-        """Keep the ball in the centre of the view; zoom in to it when a radius is given."""
+    def add_liftoff(self, point: np.ndarray) -> None:
+        """One more lift-off point (one per run in compare mode)."""
+        shown = self.liftoff.pos if self.liftoff.visible() and self.liftoff.pos is not None else np.zeros((0, 3))
+        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]))
+        self.liftoff.setVisible(True)
+
+    def set_follow(self, follow: bool, radius: float | None = None, index: int | None = None) -> None:
+        """Keep a run's ball (``index``, or the one followed so far) in the centre of the view;
+        zoom in to it when a radius is given."""
         self.follow = follow
+        if index is not None:
+            self.followed = index
         if follow:
             self.opts["center"] = QtGui.QVector3D(*map(float, self.ball_center))
             if radius is not None:

@@ -9,20 +9,32 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import Scene, SceneError, Simulation, Status, Trajectory, __version__
+from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
-from rollball.geometry import unit_normal
+from rollball.trajectory import CONTACT
+from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.trajectory import CENTER, R, T
 
+from . import help as helps
+from .animation import DEFAULT_FPS, frame_times, record
+from .closeup import CloseUp
+from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
+from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
 from .inputs import ScenePanel
+from .picture import caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
+from .presentation import TEXT_SIZES, Presentation
 from .readouts import Readouts
+from .speed_window import SpeedWindow
+from .sweep_dialog import SweepDialog
+from .timeline import Marker, TimeSlider
+from .undo import SceneChange
 from .view3d import SceneView
 
 PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
@@ -30,19 +42,7 @@ SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), 
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
 CSV_FILTER = "CSV files (*.csv);;All files (*)"
-
-LIMITS_TEXT = """<p><b>What the model assumes.</b> A homogeneous solid ball rolls without slipping
-and always touches the surface in exactly one point.</p>
-<p><b>Lift-off.</b> Where the normal force F·N drops to zero the real ball would leave the
-surface (over a crest, at high speed). The model keeps it glued on, so from there on the
-motion is not physical. The app marks the first lift-off point in orange and says so in the
-status bar; the run goes on so you can see what the equations do.</p>
-<p><b>Does not fit.</b> Where the surface curves up more tightly than the ball (r·κ ≥ 1 for a
-principal curvature κ of a valley) the ball cannot touch in one point. These regions are
-drawn in red; a run that reaches one stops there with the time and position.</p>
-<p><b>Non-finite.</b> A landscape that cannot be evaluated where the ball is (log or sqrt
-outside its domain, a pole), or a step so large that the numbers overflow, stops the run with
-the time and position. Undefined regions are drawn in grey.</p>"""
+LIFTOFF_COLOR, STOP_COLOR = "#ff8c00", "#c0392b"   # markers on the time slider
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -64,14 +64,35 @@ class MainWindow(QtWidgets.QMainWindow):
         self.panel = ScenePanel()
         self.panel.sceneChanged.connect(self._scene_edited)
         self.view = SceneView()
+        self.closeup_frame = QtWidgets.QFrame(self.view, objectName="closeupFrame")
+        self.closeup_frame.setStyleSheet("#closeupFrame { border: 2px solid #333; background: #333; }")
+        self.closeup = CloseUp()
+        frame_layout = QtWidgets.QVBoxLayout(self.closeup_frame)
+        frame_layout.setContentsMargins(2, 2, 2, 2)
+        frame_layout.addWidget(self.closeup)
+        self.closeup_frame.hide()
+        self.timeline = TimeSlider()
+        self.timeline.seeked.connect(self.seek)
         self.plots = LivePlots()
+        self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.readouts = Readouts()
+        self.undo_stack = QtGui.QUndoStack(self)
+        self.undo_stack.cleanChanged.connect(lambda _clean: self._update_controls())
+        self.help_window: helps.HelpWindow | None = None
+        self.view.installEventFilter(self)   # keeps the close-up in the view's corner
         self._build_layout()
         self._build_actions()
         self._build_menus()
         self._build_toolbar()
         self._build_status()
+        self.compare = CompareMode(self)
+        self.compare.panel.followChanged.connect(lambda _i: self._follow(self.follow_action.isChecked()))
+        self.presentation = Presentation(self)
+        self.presentation.bar.addActions([self.scene_panel_action, self.presentation_action])
         self.preferences.restore(self)
+        self.compare.dock.hide()   # compare mode starts off, whatever the last session showed
+        self._set_text_size(self.preferences.font_scale())
+        self._set_help_topics()
         self._update_controls()
 
     # -- layout ----------------------------------------------------------------------
@@ -82,7 +103,7 @@ class MainWindow(QtWidgets.QMainWindow):
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)
         scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        dock = QtWidgets.QDockWidget("Scene", self, objectName="sceneDock")
+        self.scene_dock = dock = QtWidgets.QDockWidget("Scene", self, objectName="sceneDock")
         dock.setWidget(scroll)
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetMovable
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
@@ -93,9 +114,12 @@ class MainWindow(QtWidgets.QMainWindow):
         v = QtWidgets.QVBoxLayout(top)
         v.setContentsMargins(0, 0, 0, 0)
         v.addWidget(self.view, 1)
+        v.addWidget(self.timeline)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
-        splitter.addWidget(self.plots)
+        self.bottom = QtWidgets.QStackedWidget()   # the live plots, or compare mode's error plots
+        self.bottom.addWidget(self.plots)
+        splitter.addWidget(self.bottom)
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
         self.setCentralWidget(splitter)
@@ -121,7 +145,17 @@ class MainWindow(QtWidgets.QMainWindow):
         self.export_action = self._action("&Export Trajectory CSV…", self.export_dialog, "Ctrl+E",
                                           "Write the computed trajectory as CSV")
         self.image_action = self._action("Save &Image…", self.save_image_dialog, "Ctrl+Shift+I",
-                                         "Save the 3-D view as a PNG image")
+                                         "Save the 3-D view as a PNG image (1×, 2×, 4×; caption; plots)")
+        self.animation_action = self._action("Export &Animation…", self.export_animation_dialog, "Ctrl+Shift+E",
+                                             "Write the run's playback as an MP4 video or a GIF")
+        self.revert_action = self._action("Re&vert Scene", self.revert, None,
+                                          "Back to the scene as it was opened or last saved")
+        self.undo_action = self.undo_stack.createUndoAction(self, "&Undo")
+        self.undo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Z")])
+        self.redo_action = self.undo_stack.createRedoAction(self, "&Redo")
+        self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
+        self.undo_action.setStatusTip("Undo the last change of the scene's fields")
+        self.redo_action.setStatusTip("Redo the change undone last")
         self.quit_action = self._action("&Quit", self.close, keys.Quit, "Quit RollBall")
         self.start_action = self._action("Start", self.start, "F5", "Start the run from t = 0")
         self.pause_action = self._action("Pause", self.toggle_pause, "Space", "Pause or resume playback",
@@ -131,18 +165,57 @@ class MainWindow(QtWidgets.QMainWindow):
         self.reset_action = self._action("Reset", self.reset, "Ctrl+R", "Back to t = 0")
         self.follow_action = self._action("&Follow Ball", self._follow, "F", "Camera follows the ball",
                                           checkable=True)
-        self.camera_action = self._action("Reset &Camera", self.view.reset_camera, "Home", "Default camera")
-        self.trail_action = self._action("Show &Trail", lambda on: self.view.trail.setVisible(on), "T",
+        self.camera_action = self._action("Reset &Camera", self.view.reset_camera, "C", "Default camera")
+        self.back_action = self._action("Frame Back", lambda: self.controller.step(-1), "Left",
+                                        "Show the moment one frame earlier")
+        self.forward_action = self._action("Frame Forward", lambda: self.controller.step(1), "Right",
+                                           "Show the moment one frame later")
+        self.first_action = self._action("Go to Start", lambda: self.seek(0.0), "Home", "Show t = 0")
+        self.last_action = self._action("Go to End", lambda: self.seek(math.inf), "End",
+                                        "Show the last computed moment")
+        self.liftoff_action = self._action("Go to &Lift-off", self.go_to_liftoff, "L",
+                                           "Show the moment the real ball would leave the surface")
+        self.presentation_action = self._action("&Presentation", self.presentation_toggled, "F11",
+                                                "Full screen, large text, close-up of the ball (Esc leaves)",
+                                                checkable=True)
+        self.leave_action = self._action("Leave Presentation", lambda: self.presentation_action.setChecked(False),
+                                         "Esc", "Back from presentation mode")
+        self.scene_panel_action = self._action("Scene", lambda on: self.scene_dock.setVisible(on), None,
+                                               "Show or hide the scene panel", checkable=True,
+                                               name="scene_panel")
+        self.scene_dock.visibilityChanged.connect(self.scene_panel_action.setChecked)
+        self.leave_action.setEnabled(False)
+        self.closeup_action = self._action("&Close-up", self._show_closeup, "Z",
+                                           "A close-up following the ball in the corner of the view",
+                                           checkable=True)
+        self.compare_action = self._action("&Compare Methods", lambda on: self.compare.set_active(on), "Ctrl+K",
+                                           "Several methods side by side on this scene, with their true errors",
+                                           checkable=True)
+        self.speed_error_action = self._action("&Speed against Error…", self.show_speed_against_error, None,
+                                               "Every method on this scene: error against compute time "
+                                               "and against step size")
+        self.trail_action = self._action("Show &Trail", self.view.set_trails_visible, "T",
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
-        self.limits_action = self._action("Limits of the &Model", self.show_limits, None,
-                                          "When the model stops being valid")
+        self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
+                                              "The equations of motion, lift-off, no-fit, Munthe-Kaas")
+        self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
+                                              "What the plots, readouts and colours say")
+        self.keys_help_action = self._action("&Keyboard Shortcuts", lambda: self.show_help("keys"), None,
+                                             "Every shortcut of the menus")
+        self.context_help_action = self._action("Help on This", self.context_help, "F1",
+                                                "Help on what the mouse points at")
+        self.limits_action = self._action("Limits of the Model", lambda: self.show_help("model.html#liftoff"),
+                                          None, "When the model stops being valid")
+        self.sweep_action = self._action("&Sweep…", self.open_sweep, None,
+                                         "Run the scene over a grid of start values or parameters")
         self.about_action = self._action("&About RollBall", self.show_about, None, "Version and licence")
-        for action in (self.start_action, self.pause_action, self.step_action, self.stop_action,
-                       self.reset_action):
+        keyed = [self.start_action, self.pause_action, self.step_action, self.stop_action, self.reset_action,
+                 self.back_action, self.forward_action, self.first_action, self.last_action, self.leave_action,
+                 self.context_help_action]
+        for action in keyed:
             action.setShortcutContext(QtCore.Qt.ShortcutContext.WindowShortcut)
-        self.addActions([self.start_action, self.pause_action, self.step_action, self.stop_action,
-                         self.reset_action])
+        self.addActions(keyed)
 
     def _build_menus(self) -> None:
         bar = self.menuBar()
@@ -162,16 +235,40 @@ class MainWindow(QtWidgets.QMainWindow):
         files.addSeparator()
         files.addActions([self.save_action, self.save_as_action])
         files.addSeparator()
-        files.addActions([self.export_action, self.image_action])
+        files.addAction(self.revert_action)
+        files.addSeparator()
+        files.addActions([self.export_action, self.image_action, self.animation_action])
         files.addSeparator()
         files.addAction(self.quit_action)
+        edit = bar.addMenu("&Edit")
+        edit.addActions([self.undo_action, self.redo_action])
         run = bar.addMenu("&Run")
         run.addActions([self.start_action, self.pause_action, self.step_action, self.stop_action,
                         self.reset_action])
+        run.addSeparator()
+        run.addActions([self.back_action, self.forward_action, self.first_action, self.last_action,
+                        self.liftoff_action])
+        run.addSeparator()
+        run.addAction(self.compare_action)
         view = bar.addMenu("&View")
+        view.addActions([self.presentation_action, self.closeup_action])
+        sizes = view.addMenu("Text &Size")
+        self.text_size_group = QtGui.QActionGroup(self)
+        for label, scale in TEXT_SIZES:
+            action = sizes.addAction(label)
+            action.setCheckable(True)
+            action.setData(scale)
+            action.triggered.connect(lambda _=False, k=scale: self._set_text_size(k, remember=True))
+            self.text_size_group.addAction(action)
+        view.addSeparator()
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
-        helps = bar.addMenu("&Help")
-        helps.addActions([self.limits_action, self.about_action])
+        analysis = bar.addMenu("&Analysis")
+        analysis.addActions([self.speed_error_action, self.sweep_action])
+        help_menu = bar.addMenu("&Help")
+        help_menu.addActions([self.model_help_action, self.plots_help_action, self.keys_help_action,
+                              self.context_help_action])
+        help_menu.addSeparator()
+        help_menu.addActions([self.limits_action, self.about_action])
 
     def _build_toolbar(self) -> None:
         bar = self.addToolBar("Run")
@@ -185,6 +282,8 @@ class MainWindow(QtWidgets.QMainWindow):
                              (self.reset_action, icons.SP_MediaSkipBackward)):
             action.setIcon(style.standardIcon(icon))
             bar.addAction(action)
+        bar.addSeparator()
+        bar.addAction(self.compare_action)
         bar.addSeparator()
         bar.addWidget(QtWidgets.QLabel(" Playback "))
         self.speed = QtWidgets.QComboBox(objectName="speed")
@@ -234,6 +333,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if not self._may_discard():
             return False
         self.reset()
+        self.undo_stack.clear()
         self.document.opened(path, scene, example=not remember)
         if remember:
             self.preferences.add_recent(path)
@@ -245,7 +345,23 @@ class MainWindow(QtWidgets.QMainWindow):
         return True
 
     def _scene_edited(self, scene: Scene) -> None:
+        old = self.shown_scene
         self._use_scene(scene)
+        if old is not None and old != scene:
+            self.undo_stack.push(SceneChange(self.show_scene, old, scene))
+
+    def show_scene(self, scene: Scene) -> None:
+        """Put a scene into the fields and the view (undo, redo, revert)."""
+        self.panel.set_scene(scene)
+        self._use_scene(scene)
+
+    def revert(self) -> None:
+        """Back to the scene as opened or last saved (itself undoable)."""
+        saved = self.document.saved_scene
+        if saved is None or not self.dirty:
+            return
+        self.undo_stack.push(SceneChange(self.show_scene, self.scene, saved, "Revert to saved", applied=False))
+        self.show_message(f"Reverted to {self.document.name}")
 
     def _use_scene(self, scene: Scene, redraw_camera: bool = False) -> list[str]:
         """Show a valid scene; a change to what a run depends on resets the run. Returns notes
@@ -258,30 +374,38 @@ class MainWindow(QtWidgets.QMainWindow):
             self._warn("Cannot use this landscape", str(error))
             return []
         notes = []
-        surface_changed = (old is None or old.landscape != scene.landscape or old.view != scene.view
-                           or old.ball.radius != scene.ball.radius)
+        grid_changed = old is None or old.landscape != scene.landscape or old.view != scene.view
+        surface_changed = (grid_changed or old.ball.radius != scene.ball.radius or old.start != scene.start
+                           or old.gravity != scene.gravity)   # the cut follows the ball's energy
         if surface_changed:
             self.landscape = landscape
-            facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius)
+            start = landscape.evaluate(scene.start.x, scene.start.y)
+            reachable = reachable_height(start, scene) if np.all(np.isfinite(start)) else np.inf
+            facts = self.view.set_landscape(landscape, scene.view, scene.ball.radius, reachable)
+            self.closeup.set_landscape(landscape, scene.ball.radius, self.view.z_span)
             if facts["no_fit"]:
                 notes.append("red: the ball does not fit there")
             if facts["undefined"]:
                 notes.append("grey: the landscape is undefined there")
+            if facts["cut"]:
+                notes.append("cut level where the ball's energy cannot take it")
             self.show_message("; ".join(notes).capitalize())
-        if redraw_camera:
-            self.view.reset_camera()
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
         if run_changed:
             if self.controller.state in (RUNNING, PAUSED):
                 self.show_message("Scene changed: the run was reset")
             self.reset()
+        if redraw_camera or grid_changed:
+            self.view.reset_camera()   # after reset(), so the ball stands at the start
         self.shown_scene = scene
+        self.compare.scene_changed(scene)
         self._update_title()
         return notes
 
     def _update_title(self) -> None:
         self.setWindowModified(self.dirty)
+        self.revert_action.setEnabled(self.dirty)
         self.setWindowTitle(self.document.title())
 
     @property
@@ -371,21 +495,88 @@ class MainWindow(QtWidgets.QMainWindow):
         self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
         return True
 
-    def save_image_dialog(self) -> None:
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save image", str(Path(self.preferences.last_folder())
-                                                        / "rollball.png"), "PNG images (*.png)")
-        if path:
-            self.save_image(Path(path))
+    def _suggest(self, suffix: str) -> Path:
+        """A file name saying the scene and the time shown, in the last folder used."""
+        t = self.controller.play_time if self.controller.runs else 0.0
+        return Path(self.preferences.last_folder()) / f"{self.document.stem or 'rollball'}-t{t:.2f}s{suffix}"
 
-    def save_image(self, path: Path) -> bool:
-        """The 3-D view as a PNG, written atomically."""
+    def save_image_dialog(self) -> None:
+        dialog = ImageDialog(self._suggest(".png"), self)
+        if dialog.exec() == QtWidgets.QDialog.DialogCode.Accepted:
+            self.save_image(dialog.path, **dialog.options())
+
+    def picture(self, size: tuple[int, int], caption: bool = False, plots: bool = False) -> QtGui.QImage:
+        """The 3-D view at ``size`` as shown (with the close-up when it is on), optionally with a
+        caption and the plots."""
+        scene = self.controller.simulation.scene if self.controller.runs else self.scene
+        text = caption_text(scene, self.controller.play_time) if caption and scene else None
+        return compose(self.view, size, inset=self.closeup if self.closeup.isVisible() else None,
+                       caption=text, plots=self.plots if plots else None)
+
+    def save_image(self, path: Path, scale: int = 1, caption: bool = False, plots: bool = False) -> bool:
+        """The 3-D view as a PNG at ``scale`` times its size on screen, written atomically."""
+        image = self.picture((scale * self.view.width(), scale * self.view.height()), caption, plots)
         data = QtCore.QByteArray()
         buffer = QtCore.QBuffer(data)
         buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
-        self.view.grabFramebuffer().save(buffer, "PNG")
+        image.save(buffer, "PNG")
         if not self._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data))):
             return False
-        self.show_message(f"Saved {path.name}")
+        self.show_message(f"Saved {path.name} ({image.width()}×{image.height()})")
+        return True
+
+    def export_animation_dialog(self) -> None:
+        if not self.controller.runs:
+            return
+        size = (self.view.width() - self.view.width() % 2, self.view.height() - self.view.height() % 2)
+        dialog = AnimationDialog(self._suggest(".mp4").with_name(f"{self.document.stem or 'rollball'}.mp4"),
+                                 size, self.controller.end_time, self)
+        if dialog.exec() != QtWidgets.QDialog.DialogCode.Accepted:
+            return
+        options = dialog.options()
+        progress = QtWidgets.QProgressDialog("Exporting animation…", "Cancel", 0, 100, self)
+        progress.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
+        progress.setMinimumDuration(300)
+
+        def report(done: int, total: int) -> bool:
+            progress.setMaximum(total)
+            progress.setValue(done)
+            return not progress.wasCanceled()
+        try:
+            self.export_animation(dialog.path, progress=report, **options)
+        except (OSError, ValueError) as error:
+            self._warn("Cannot export animation", f"{dialog.path}: {getattr(error, 'strerror', None) or error}. "
+                                                  "Nothing was changed.")
+        finally:
+            progress.close()
+
+    def export_animation(self, path: Path, fps: float = DEFAULT_FPS, t0: float = 0.0, t1: float | None = None,
+                         size: tuple[int, int] | None = None, caption: bool = True, progress=None) -> bool:
+        """Play the computed run from t0 to t1 into an MP4 or GIF, ``fps`` frames per simulated
+        second, each frame the 3-D view at ``size`` (default: as on screen). False if there is
+        no run or it was cancelled; OSError or ValueError if it cannot be written. Either way a
+        file is written whole or not at all."""
+        if not self.controller.runs:
+            return False
+        end = self.controller.end_time
+        t1 = end if t1 is None else min(t1, end)
+        size = size or (self.view.width(), self.view.height())
+        times = frame_times(t0, t1, fps)
+        shown, started = self.controller.play_time, QtCore.QElapsedTimer()
+        started.start()
+        self.controller.pause()
+        try:
+            view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
+            done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
+                          progress)
+        finally:
+            self.seek(shown)
+        if not done:
+            self.show_message("Export cancelled; nothing was written")
+            return False
+        self.preferences.set_last_folder(path)
+        self.show_message(f"Exported {len(times)} frames ({times[-1] - times[0]:.3g} s at {fps:g} per second) "
+                          f"to {Path(path).name} in {started.elapsed() / 1000:.1f} s")
         return True
 
     # -- running ---------------------------------------------------------------------
@@ -404,6 +595,13 @@ class MainWindow(QtWidgets.QMainWindow):
         if scene is None:
             return
         self.reset()
+        if self.compare.active:
+            try:
+                self.compare.start(scene)
+            except ValueError as error:
+                self._warn("Cannot compare", str(error))
+            self._follow(self.follow_action.isChecked())
+            return
         try:
             simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
         except ValueError as error:
@@ -416,8 +614,36 @@ class MainWindow(QtWidgets.QMainWindow):
             note = (f"Running {simulation.n_steps:,} steps"
                     + (f" (recording every {every}th step)" if every > 1 else ""))
         self.plots.set_duration(scene.duration)
+        self.timeline.set_span(simulation.t_end)
         self.controller.start([Run(simulation, self.landscape)])
         self.show_message(note)
+
+    def show_speed_against_error(self) -> None:
+        """Compare every method on the current scene, in a window of its own."""
+        self.panel.apply()
+        if self.scene is None:
+            return
+        if self.speed_window is None:
+            self.speed_window = SpeedWindow(self)
+            self.speed_window.runChosen.connect(self.load_run)
+        self.speed_window.compute(self.scene)
+
+    def load_run(self, result) -> None:
+        """Run the scene with a comparison run's method and step (or tolerance)."""
+        data = self.scene.to_dict()
+        integrator = data["integrator"]
+        integrator.update(method=result.spec.method, munthe_kaas=result.spec.munthe_kaas)
+        if result.dt is not None:
+            integrator["dt"] = result.dt
+        else:
+            integrator.update(rtol=result.rtol, atol=result.atol)
+        scene = Scene.from_dict(data)
+        self.compare_action.setChecked(False)
+        if scene != self.scene:
+            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Speed against Error",
+                                             applied=False))
+        self.start()
+        self.activateWindow()
 
     def toggle_pause(self) -> None:
         self.controller.toggle_pause()
@@ -441,28 +667,29 @@ class MainWindow(QtWidgets.QMainWindow):
         """Back to the start of the current scene; the computed run is dropped."""
         self.controller.reset()
         self.drawn_index = -1
+        self.view.set_runs(None)
+        self.readouts.set_runs([None])
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
         self.plots.show_run(None, 0)
+        self.plots.set_cursor(None)
+        self.timeline.set_span(0.0)
         self.view.set_liftoff(None)
         self.view.set_trail(np.zeros((0, 3)))
         self.progress.setValue(0)
 
     def _finished(self) -> None:
+        if self.compare.active:
+            self.compare.finished()
+            return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
         if status is Status.OK:
-            warnings = "".join(f"; {note}" for note in self._trajectory().warnings())
+            warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
             self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
         else:
             self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
-
-    def _trajectory(self) -> Trajectory:
-        """The received rows as a trajectory (no copy)."""
-        ball = self.controller.simulation.scene.ball
-        return Trajectory(self.controller.buffer.rows, mass=ball.mass, radius=ball.radius,
-                          gravity=self.controller.simulation.scene.gravity)
 
     def _liftoff_note(self) -> str:
         t = self.controller.simulation.liftoff_time
@@ -470,8 +697,9 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _run_event(self, index: int, kind: str, t: float) -> None:
         if kind == "liftoff":
-            self.view.set_liftoff(self.controller.runs[index].buffer.point_at(t))
-            self.show_message(f"Lift-off at t = {t:.4g} s: the real ball would leave the surface "
+            self.view.add_liftoff(self.controller.runs[index].buffer.point_at(t))
+            who = f"{self.controller.runs[index].label}: " if self.compare.active else ""
+            self.show_message(f"{who}Lift-off at t = {t:.4g} s: the real ball would leave the surface "
                               f"here; the model keeps it on, so what follows is not physical", warning=True)
 
     # -- drawing ---------------------------------------------------------------------
@@ -486,25 +714,42 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         center = np.array([s.x, s.y, d[0]]) + r * unit_normal(d)
         self.view.set_ball(center, np.eye(3), r)
+        self._show_closeup_at(center, np.eye(3), np.array([s.x, s.y]), np.zeros((0, 3)))
         self.readouts.clear()
 
     def _draw(self, force: bool = False) -> None:
-        buffer = self.controller.buffer
-        if buffer is None or len(buffer) == 0:
+        runs, t = self.controller.runs, self.controller.play_time
+        if not runs or all(len(run.buffer) == 0 for run in runs):
             return
-        i = buffer.index_at(self.controller.play_time)
-        if i == self.drawn_index and not force:
-            return  # the same row as the last frame
-        self.drawn_index = i
-        row = buffer.rows[i]
-        simulation = self.controller.simulation
-        self.view.set_ball(row[CENTER], row[R].reshape(3, 3), simulation.scene.ball.radius)
-        self.view.set_trail(buffer.trail(i, lift=0.004 * self.view.extent))
-        self.readouts.show_row(0, buffer, i)
+        indices = tuple(run.index_at(t) for run in runs)
+        if indices == self.drawn_index and not force:
+            return  # the same rows as the last frame
+        self.drawn_index = indices
+        radius = runs[0].simulation.scene.ball.radius
+        followed = self.view.followed
+        for k, (run, i) in enumerate(zip(runs, indices)):
+            if len(run.buffer):
+                row = run.buffer.rows[i]
+                trail = run.buffer.trail(i, lift=0.004 * self.view.extent)
+                self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
+                self.view.set_trail(trail, k)
+                if k == followed:
+                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
+                self.readouts.show_row(k, run.buffer, i)
+        self.timeline.set_time(t)
         self.frames += 1
         if force or self.frames % PLOT_EVERY == 0:
-            self.plots.show_run(buffer, i)
-        self.progress.setValue(int(round(1000 * min(1.0, row[T] / simulation.t_end))))
+            if self.compare.active:
+                self.compare.error_plots.show_time(t)
+            else:
+                # while playing, the curves grow with the ball; otherwise they show all that is computed
+                buffer = runs[0].buffer
+                self.plots.show_run(buffer, indices[0] if self.state == RUNNING else len(buffer) - 1)
+                self.plots.set_cursor(buffer.t[indices[0]])
+            self.timeline.set_available(self.controller.end_time)
+            self._show_events()
+        shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
+        self.progress.setValue(int(round(1000 * min(1.0, shown / self.controller.t_end))))
 
     def _update_controls(self) -> None:
         state, computed = self.state, self.controller.computed
@@ -517,12 +762,35 @@ class MainWindow(QtWidgets.QMainWindow):
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
         self.export_action.setEnabled(computed and self.controller.simulation is not None)
+        self.animation_action.setEnabled(bool(self.controller.runs))
+        self.revert_action.setEnabled(self.dirty)
+        for action in (self.back_action, self.forward_action, self.first_action, self.last_action):
+            action.setEnabled(bool(self.controller.runs))
+        self.liftoff_action.setEnabled(self._liftoff_time() is not None)
+        if self.controller.runs:
+            self.timeline.set_available(self.controller.end_time)
+            self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
         self.state_label.setText(words[state] if computed or state in (READY, STOPPED, FINISHED)
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
-        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None)
+        self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=self.compare.followed)
+
+    def open_sweep(self) -> SweepDialog:
+        """Analysis → Sweep…: a sweep of the current scene; a clicked run's scene is loaded here."""
+        dialog = SweepDialog(self.scene, self)
+        dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
+        dialog.startChosen.connect(self.load_start)
+        dialog.show()
+        return dialog
+
+    def load_start(self, scene: Scene) -> None:
+        """Show a run of a sweep in the fields and the view, ready to run (undoable, not saved)."""
+        if scene != self.scene:
+            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Sweep",
+                                             applied=False))
+        self.show_message("Start loaded from the sweep: press Start to run it")
 
     def show_message(self, text: str, warning: bool = False) -> None:
         self.message.setText(text)
@@ -533,13 +801,108 @@ class MainWindow(QtWidgets.QMainWindow):
         self.show_message(text, warning=True)
         QtWidgets.QMessageBox.warning(self, title, text)
 
-    def show_limits(self) -> None:
-        QtWidgets.QMessageBox.information(self, "Limits of the model", LIMITS_TEXT)
-
     def show_about(self) -> None:
         QtWidgets.QMessageBox.about(self, "About RollBall",
                                     f"<b>RollBall {__version__}</b><p>A solid ball rolling without slipping on "
                                     f"z = f(x, y). Euler, RK4 and Lawson5, classic or Munthe-Kaas.</p>")
+
+    # -- the time shown --------------------------------------------------------------
+
+    def seek(self, t: float) -> None:
+        """Show the moment t of the computed run (held within what is computed)."""
+        self.controller.seek(t)
+
+    def _liftoff_time(self) -> float | None:
+        simulation = self.controller.simulation
+        return simulation.liftoff_time if simulation is not None else None
+
+    def go_to_liftoff(self) -> None:
+        t = self._liftoff_time()
+        if t is not None:
+            self.seek(t)
+
+    def _show_events(self) -> None:
+        """Lift-off and an early stop as markers on the time slider and links beside it."""
+        simulation = self.controller.simulation
+        events = []
+        if simulation.liftoff_time is not None:
+            events.append(Marker(simulation.liftoff_time, LIFTOFF_COLOR, f"lift-off at t = {simulation.liftoff_time:.4g} s"))
+        if simulation.status not in (None, Status.OK, Status.ABORTED) and len(self.controller.buffer):
+            t = self.controller.buffer.end_time
+            events.append(Marker(t, STOP_COLOR, f"{simulation.status.value.replace('_', ' ')} at t = {t:.4g} s"))
+        if [m.text for m in events] != [m.text for _, m in self.timeline.slider.markers]:
+            self.timeline.set_markers(events)
+            self.liftoff_action.setEnabled(simulation.liftoff_time is not None)
+
+    # -- presentation, close-up, text size ------------------------------------------
+
+    def presentation_toggled(self, on: bool) -> None:
+        self.presentation.set_active(on)
+        self.leave_action.setEnabled(on)
+
+    def _show_closeup(self, on: bool) -> None:
+        self.closeup_frame.setVisible(on)
+        self._place_closeup()
+        if not on:
+            return
+        if self.controller.runs:
+            self._draw(force=True)
+        elif self.scene is not None and self.landscape is not None:
+            self._draw_start(self.scene)
+
+    def _place_closeup(self) -> None:
+        w = max(160, round(0.3 * self.view.width()))
+        h = round(0.75 * w)
+        self.closeup_frame.setGeometry(self.view.width() - w - 8, 8, w, h)
+
+    def _show_closeup_at(self, center, R, contact, trail) -> None:
+        if self.closeup.isVisible():
+            self.closeup.show_ball(center, R, contact, trail, self.view.opts["azimuth"], self.view.opts["elevation"])
+
+    def eventFilter(self, watched, event) -> bool:
+        if watched is self.view and event.type() == QtCore.QEvent.Type.Resize:
+            self._place_closeup()
+        return super().eventFilter(watched, event)
+
+    def _set_text_size(self, scale: float, remember: bool = False) -> None:
+        self.presentation.set_preferred(scale)
+        for action in self.text_size_group.actions():
+            action.setChecked(action.data() == scale)
+        if remember:
+            self.preferences.set_font_scale(scale)
+
+    # -- help ------------------------------------------------------------------------
+
+    def _set_help_topics(self) -> None:
+        topics = {"model.html#energy": [self.readouts["energy"], self.readouts["drift"]],
+                  "model.html#munthe-kaas": [self.readouts["orth"], self.panel.munthe_kaas],
+                  "model.html#liftoff": [self.readouts["force"]],
+                  "model.html#methods": [self.panel.methods.buttons()[0].parentWidget()],
+                  "plots.html#energy": [self.plots.plots[0]],
+                  "plots.html#orthogonality": [self.plots.plots[1]],
+                  "plots.html#force": [self.plots.plots[2]],
+                  "plots.html#colours": [self.view],
+                  "plots.html#readouts": [self.readouts]}
+        for topic, widgets in topics.items():
+            for widget in widgets:
+                helps.set_topic(widget, topic)
+
+    def _all_actions(self) -> list[QtGui.QAction]:
+        """The menus' actions in menu order (for the shortcuts page)."""
+        def walk(menu):
+            for action in menu.actions():
+                yield from walk(action.menu()) if action.menu() else (action,)
+        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())]
+
+    def show_help(self, topic: str) -> None:
+        if self.help_window is None:
+            self.help_window = helps.HelpWindow(self._all_actions, self)
+        self.help_window.show_topic(topic)
+
+    def context_help(self) -> None:
+        """Help on the widget under the mouse (the model page if it has no topic)."""
+        widget = QtWidgets.QApplication.widgetAt(QtGui.QCursor.pos())
+        self.show_help(helps.topic_at(widget) or "model.html")
 
     # -- closing ---------------------------------------------------------------------
 
@@ -547,8 +910,12 @@ class MainWindow(QtWidgets.QMainWindow):
         if not self._may_discard():
             event.ignore()
             return
+        self.presentation_action.setChecked(False)   # the window's own layout is what is remembered
         self.preferences.save(self)
+        if self.speed_window is not None:
+            self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
+        self.controller.shutdown()
         event.accept()
 
 

@@ -21,21 +21,27 @@ class SimulationThread(QtCore.QThread):
 
     ``rowsReady`` carries a run's index and its chunk's new rows passed through that run's
     ``derive`` (an owned array); ``failed`` a one-line message if the core raised (the GUI
-    stays up).
+    stays up). ``seconds[i]`` is the time run i's ``advance`` took so far (its compute time);
+    the ``warm_ups`` (tiny runs of the same methods) are run first, untimed, so that loading or
+    compiling a method's kernel does not count.
     """
 
     rowsReady = QtCore.Signal(int, object)
     failed = QtCore.Signal(str)
 
-    def __init__(self, simulations, derives, parent=None):
+    def __init__(self, simulations, derives, parent=None, warm_ups=()):
         super().__init__(parent)
         self.simulations = list(simulations)
         self.derives = list(derives)
+        self.warm_ups = list(warm_ups)
+        self.seconds = [0.0] * len(self.simulations)
 
     def run(self) -> None:
         sims = self.simulations
         steps = [4096] * len(sims)
         try:
+            for warm_up in self.warm_ups:
+                warm_up.advance()
             while not self.isInterruptionRequested():
                 pending = [i for i, sim in enumerate(sims) if not sim.done]
                 if not pending:
@@ -43,9 +49,10 @@ class SimulationThread(QtCore.QThread):
                 i = min(pending, key=lambda k: sims[k].progress)
                 started = time.perf_counter()
                 rows = sims[i].advance(steps[i])
+                elapsed = time.perf_counter() - started
+                self.seconds[i] += elapsed
                 if len(rows):
                     self.rowsReady.emit(i, self.derives[i](rows))
-                elapsed = time.perf_counter() - started
                 scale = CHUNK_SECONDS / max(elapsed, 1e-6)
                 steps[i] = int(min(MAX_STEPS, max(MIN_STEPS, steps[i] * min(4.0, max(0.25, scale)))))
         except Exception as error:  # a defect in the core must not take the window down
@@ -57,3 +64,29 @@ class SimulationThread(QtCore.QThread):
         for sim in self.simulations:
             sim.cancel()
         self.wait()
+
+
+class ReferenceThread(QtCore.QThread):
+    """Computes the reference run of a comparison (``rollball.comparison.reference_run``).
+
+    ``done`` carries the reference trajectory and its own error estimate; ``failed`` a
+    one-line message. It cannot be interrupted (it takes seconds): a reference no longer
+    wanted is left to finish, and its result is ignored.
+    """
+
+    done = QtCore.Signal(object, float)
+    failed = QtCore.Signal(str)
+
+    def __init__(self, scene, t_end: float, record_dt: float, parent=None):
+        super().__init__(parent)
+        self.scene, self.t_end, self.record_dt = scene, t_end, record_dt
+
+    def run(self) -> None:
+        from rollball.comparison import reference_run
+
+        try:
+            trajectory, estimate = reference_run(self.scene, self.t_end, self.record_dt)
+        except Exception as error:  # noqa: BLE001 - shown, never raised into Qt
+            self.failed.emit(f"{type(error).__name__}: {error}")
+            return
+        self.done.emit(trajectory, estimate)

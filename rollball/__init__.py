@@ -6,9 +6,11 @@ from .formula import FormulaError, parse_formula  # noqa: E402
 from .landscape import Landscape  # noqa: E402
 from .scene import Scene, SceneError  # noqa: E402
 from .simulation import Simulation, simulate  # noqa: E402
+from .sweeps import SweepTable, sweep  # noqa: E402
 from .tableaus import METHODS, TABLEAUS, Method, MethodKind, Tableau, get_method  # noqa: E402
 from .trajectory import COLUMNS, Failure, Reason, Status, Trajectory, read_csv  # noqa: E402
+from .comparison import Comparison, RunSpec, compare, parse_runs  # noqa: E402
 
-__all__ = ["COLUMNS", "Failure", "FormulaError", "Landscape", "METHODS", "Method", "MethodKind", "Reason",
-           "Scene", "SceneError", "Simulation", "Status", "TABLEAUS", "Tableau", "Trajectory", "get_method",
-           "parse_formula", "read_csv", "simulate"]
+__all__ = ["COLUMNS", "Comparison", "Failure", "FormulaError", "Landscape", "METHODS", "Method", "MethodKind",
+           "Reason", "RunSpec", "Scene", "SceneError", "Simulation", "Status", "SweepTable", "TABLEAUS", "Tableau",
+           "Trajectory", "compare", "get_method", "parse_formula", "parse_runs", "read_csv", "simulate", "sweep"]

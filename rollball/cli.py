@@ -7,12 +7,14 @@ stopped it early (the trajectory up to there is still written), 2 for bad input 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 from . import __version__
 from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .scene import SceneError
+from .sweeps.grid import KEYS as SWEEP_KEYS
 from .tableaus import METHODS, MethodKind, get_method
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
@@ -85,6 +87,43 @@ def build_parser() -> argparse.ArgumentParser:
                           "default: every accepted step)")
     sim.add_argument("--csv", metavar="OUT.csv", help="write the trajectory as CSV")
 
+    sweep = commands.add_parser(
+        "sweep", help="run a scene over a grid of values: one row of outcomes per run",
+        description="Run a scene once for every combination of the varied values (the last "
+                    "--vary varies fastest) and write sweep.csv (one row per run: the varied "
+                    "values, status, t_reached, liftoff_time, x_end, y_end, energy_drift, "
+                    "min_normal_force, max_speed, path_length), sweep.json and sweep.png. "
+                    "Local on every core by default; --scheduler sends the runs to a Dask "
+                    "cluster. Ctrl-C stops and writes the runs finished so far.")
+    sweep.add_argument("scene", metavar="SCENE.json", help="scene file (a fixed-step method)")
+    sweep.add_argument("--vary", action="append", required=True, metavar="KEY=START:STOP:N",
+                       help=f"N evenly spaced values from START to STOP (both included); "
+                            f"repeat for a grid. KEY: {', '.join(SWEEP_KEYS)}")
+    sweep.add_argument("--color", default="liftoff_time", metavar="OUTCOME",
+                       help="the outcome the map of two varied keys is coloured by "
+                            "(default liftoff_time)")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, metavar="N",
+                       help="local threads (default: every core)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+                            "(needs pip install 'rollball[dask]')")
+    sweep.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
+
+    cmp = commands.add_parser(
+        "compare", help="speed against error of every method on a scene",
+        description="Run every method (or the --runs given) over a ladder of step sizes or "
+                    "tolerances on a scene, measure each run's error against a tight reference and "
+                    "its compute time, fit the orders, and write compare.json, compare.md and "
+                    "compare.png. Ends with the fastest run for errors of 1e-6 and 1e-10.")
+    cmp.add_argument("scene", metavar="SCENE.json", help="scene file (or an example's name)")
+    cmp.add_argument("--runs", metavar="SPECS",
+                     help="comma-separated METHOD or METHOD/classic (default: every method, the "
+                          "fixed-step ones Munthe-Kaas and classic), e.g. euler/classic,rk4,dopri5")
+    cmp.add_argument("--t-end", type=_positive_float, metavar="T", help="end time (s; default: the scene's)")
+    cmp.add_argument("--quick", action="store_true", help="fewer, shorter ladders (under a minute)")
+    cmp.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
+
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
 
@@ -99,21 +138,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _load_scene(name: str):
+    """The scene of a file or an example's name, or (after a one-line message) exit status 2."""
+    from .scene import Scene
+
+    try:
+        return Scene.load(scene_path(name))
+    except FileNotFoundError as e:
+        return _fail(str(e))
+    except (SceneError, OSError) as e:
+        return _fail(f"{name}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+
+
 def _simulate(args) -> int:
     from .scene import Scene
     from .simulation import simulate
     from .trajectory import Status
+    from .warmup import compile_notice
 
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
     try:
-        scene = Scene.load(scene_path(args.scene))
-    except FileNotFoundError as e:
-        return _fail(str(e))
-    except (SceneError, OSError) as e:
-        return _fail(f"{args.scene}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
-    try:
-        traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
-                        t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
-                        record_dt=args.record_dt)
+        with compile_notice(lambda: print("rollball: compiling the integrator, first run only ...",
+                                          file=sys.stderr, flush=True)):
+            traj = simulate(scene, method=args.method, munthe_kaas=args.munthe_kaas, dt=args.dt,
+                            t_end=args.t_end, record_every=args.every, rtol=args.rtol, atol=args.atol,
+                            record_dt=args.record_dt)
     except ValueError as e:  # includes FormulaError
         return _fail(str(e))
     liftoff = ("no lift-off" if traj.liftoff_time is None
@@ -128,6 +179,110 @@ def _simulate(args) -> int:
         except OSError as e:
             return _fail(f"cannot write {args.csv}: {e.strerror or e}")
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
+
+
+def _sweep(args) -> int:
+    import signal
+    import threading
+
+    from tqdm import tqdm
+
+    from .scene import Scene
+    from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+
+    try:
+        grid = Grid.of([parse_vary(text) for text in args.vary])
+    except ValueError as e:
+        return _fail(str(e))
+    if args.color not in OUTCOMES:
+        return _fail(f"--color {args.color}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        return _fail(f"cannot write to {out}: {e.strerror or e}")
+    if not os.access(out, os.W_OK):
+        return _fail(f"cannot write to {out}: permission denied")
+
+    cancel = threading.Event()
+
+    def interrupted(signum, frame):
+        cancel.set()
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # a second Ctrl-C aborts at once
+        print("\nrollball: stopping after the batches under way (Ctrl-C again to abort)", file=sys.stderr)
+
+    bar = tqdm(total=grid.size, unit="run", file=sys.stderr, smoothing=0.1, dynamic_ncols=True)
+
+    def progress(done, total, text):
+        bar.update(done - bar.n)
+
+    previous = signal.signal(signal.SIGINT, interrupted)
+    try:
+        table = sweep(scene, dict(zip(grid.keys, grid.axes)), workers=args.workers,
+                      scheduler=args.scheduler, progress=progress, cancel=cancel)
+    except ValueError as e:
+        return _fail(str(e))
+    except KeyboardInterrupt:
+        print("rollball: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        bar.close()
+    try:
+        files = table.save(out, args.color)
+    except OSError as e:
+        return _fail(f"cannot write to {out}: {e.strerror or e}")
+    done = int(table.done.sum())
+    counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
+    where = f"Dask at {table.scheduler}" if table.scheduler else "local threads"
+    print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
+          f"({done / max(table.seconds, 1e-9):,.0f} runs/s, {table.workers} {where}): {counts}; "
+          f"wrote {', '.join(str(f) for f in files)}")
+    if table.partial:
+        print(f"rollball: stopped early; sweep.csv holds the {done:,} runs finished "
+              f"(sweep.json says partial)", file=sys.stderr)
+        return 130
+    return EXIT_OK
+
+
+def _compare(args) -> int:
+    from tqdm import tqdm
+
+    from .comparison import NothingToCompare, compare, parse_runs
+    from .scene import Scene
+
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
+    try:
+        runs = None if args.runs is None else parse_runs(args.runs)
+    except ValueError as e:
+        return _fail(str(e))
+    with tqdm(total=1, file=sys.stderr, unit="run", dynamic_ncols=True, leave=False) as bar:
+        def progress(done: int, total: int, text: str) -> None:
+            bar.total = total
+            bar.n = done
+            bar.set_description_str(text, refresh=False)
+            bar.refresh()
+
+        try:
+            result = compare(scene, runs=runs, t_end=args.t_end, quick=args.quick, progress=progress)
+        except NothingToCompare as e:
+            print(f"rollball: {args.scene}: {e}", file=sys.stderr)
+            return EXIT_STOPPED
+        except ValueError as e:  # includes FormulaError
+            return _fail(str(e))
+    try:
+        result.save(args.out)
+    except OSError as e:
+        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+    stopped = sum(not r.ok for r in result.runs)
+    note = f"; {stopped} runs stopped early (see compare.md)" if stopped else ""
+    print(f"{args.scene}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
+    return EXIT_OK
 
 
 def _examples() -> int:
@@ -168,6 +323,14 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("rollball: interrupted", file=sys.stderr)
             return 130
+    if args.command == "compare":
+        try:
+            return _compare(args)
+        except KeyboardInterrupt:
+            print("rollball: interrupted (nothing written)", file=sys.stderr)
+            return 130
+    if args.command == "sweep":
+        return _sweep(args)
     if args.command == "examples":
         return _examples()
     if args.command == "bench":

@@ -34,3 +34,18 @@ def fit_ratio(d: np.ndarray, radius: float) -> np.ndarray:
         gauss = (h11 * h22 - h12 * h12) / W2
         ratio = radius * (mean + np.sqrt(np.maximum(mean * mean - gauss, 0.0)))
     return np.where(np.isnan(d).any(axis=0), np.nan, ratio)
+
+
+def reachable_height(d: np.ndarray, scene) -> float:
+    """The highest the centre, and so the contact point, of the scene's ball can ever get:
+    its energy at the start as a height, E / (m g) (inf without gravity). ``d`` is the
+    derivative array at the start point.
+
+    Rolling, the kinetic energy per mass is ½|ċ|² + ⅕ r²|ω|² with |ω|² = |ċ|²/r² + spin²,
+    so E / m = g c_z + 0.7 |ċ|² + 0.2 r² spin².
+    """
+    s, r = scene.start, scene.ball.radius
+    vz = d[1] * s.vx + d[2] * s.vy
+    kinetic = 0.7 * (s.vx * s.vx + s.vy * s.vy + vz * vz) + 0.2 * r * r * s.spin * s.spin
+    center_z = d[0] + r * unit_normal(d)[2]
+    return float(center_z + kinetic / scene.gravity) if scene.gravity > 0 else float("inf")

@@ -24,7 +24,7 @@ from decimal import Decimal, localcontext
 
 import numpy as np
 
-from .kinds import MethodInfo, MethodKind
+from .kinds import MethodInfo, MethodKind, cubic_hermite
 from .order_conditions import residuals, size
 
 PRECISION = 60             # digits of the coefficients and of the checks
@@ -76,10 +76,10 @@ class Collocation(MethodInfo):
         return len(self.b)
 
     @property
-    def k_rows(self) -> int:
-        """Rows of the kernel's stage array K: the derivative at the step's start, the stage
-        derivatives, the next iterate of them, and the derivative at the new state."""
-        return 2 * self.stages + 2
+    def last(self) -> int:
+        """Index of the derivative at the new state among the kernel's stage derivatives K:
+        K_0 = z'(z_n), K_1 .. K_s the stages, K_s+1 .. K_2s their next iterate, then it."""
+        return 2 * self.stages + 1
 
     def extrapolation(self) -> np.ndarray:
         """E with K_i(next step) ~ sum_j E[i, j] K_j(this step) + E[i, s] z'(new state): the
@@ -95,14 +95,29 @@ class Collocation(MethodInfo):
                         E[i, j] *= (1.0 + nodes[i] - nodes[m]) / (nodes[j] - nodes[m])
         return E
 
-    def matrix(self) -> np.ndarray:
-        """What the kernel reads (s columns): rows 0 .. s-1 the stage matrix a, row s the
-        weights b, rows s+1 .. 2s the extrapolation E of the stage derivatives and row 2s+1
-        its weights of the derivative at the step's end (E's last column)."""
-        a = np.array([[float(v) for v in row] for row in self.a])
-        b = np.array([[float(v) for v in self.b]])
+    def dense_output(self) -> tuple[tuple, ...]:
+        """The interpolation matrix P over K_0 .. K_last: the cubic Hermite interpolant of the
+        step's ends (error O(h^4) inside a step; the collocation polynomial's is O(h^(s+1)))."""
+        s = self.stages
+        b = [0.0] + [float(v) for v in self.b] + [0.0] * (s + 1)
+        return cubic_hermite(b, self.last)
+
+    interpolation_order = 3
+
+    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(W, E, P) as kernel.collocation_step reads them, over K_0 .. K_last: W square, rows
+        1 .. s the stage coefficients a (columns 1 .. s), rows s+1 .. 2s the extrapolation of
+        the next step's stages (columns 0 .. s: K_0 then holds the new state's derivative),
+        row ``last`` the weights b; no error weights E; P the dense output."""
+        s, last = self.stages, self.last
+        W = np.zeros((last + 1, last + 1))
+        W[1:s + 1, 1:s + 1] = [[float(v) for v in row] for row in self.a]
         E = self.extrapolation()
-        return np.vstack([a, b, E[:, :-1], E[:, -1:].T])
+        W[s + 1:2 * s + 1, 1:s + 1] = E[:, :s]
+        W[s + 1:2 * s + 1, 0] = E[:, s]
+        W[last, 1:s + 1] = [float(v) for v in self.b]
+        P = np.array(self.dense_output(), dtype=float)
+        return W, np.zeros((0, last + 1)), P
 
 
 def _gauss4() -> Collocation:

@@ -8,7 +8,8 @@ second derivatives to out[0:6].
 
 State vector z: contact point (x, y), angular momentum about the contact point v (3),
 then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start) or
-R (9, row-major, integrated as a plain matrix by the classic scheme). Stage derivatives
+R (9, row-major, integrated as a plain matrix by the classic scheme), or nothing: a state
+of MOTION_SIZE carries no orientation at all (sweeps, whose outcomes do not need it). Stage derivatives
 are the rows of K; the hot loop indexes whole arrays and never slices them.
 """
 
@@ -29,6 +30,9 @@ LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(ty
 # counting of arrays handed between the inlined helpers would cost as much as a stage.
 JIT = njit(cache=True, nogil=True, error_model="numpy", inline="always", fastmath={"contract"},
            _nrt=False)
+# What runs once per run, per recorded row or per event is compiled once as a function of its
+# own instead (inlining it into every loop would multiply the compile time, not the speed).
+COLD = njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 
 
 @intrinsic
@@ -46,12 +50,16 @@ PROBE_OMEGA = 3    # angular velocity omega (3)
 PROBE_FORCE = 6    # normal force F.N
 PROBE_FIT = 7      # r * largest principal curvature (the ball fits while < 1)
 PROBE_HEIGHT = 8   # f(x, y)
-PROBE_SIZE = 9
+PROBE_FIT_LO = 9   # r * smallest principal curvature (< 0 where the surface bends away)
+PROBE_SIZE = 10
 
 # Integer run counters (``ints``) and float run facts (``info``).
-I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON = range(8)
-F_LIFTOFF, F_PREV_FORCE, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(8)
-INTS_SIZE, INFO_SIZE = 8, 8
+# I_DENSE: the step whose extra dense-output stages K holds (they are computed on demand).
+I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE = range(9)
+# F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
+# F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
+F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(10)
+INTS_SIZE, INFO_SIZE = 9, 10
 
 # Status codes (see trajectory.Status).
 RUNNING, OK, DOES_NOT_FIT, NONFINITE = 0, 1, 2, 3
@@ -64,6 +72,8 @@ R_START_OVERFLOW = 4       # the landscape is finite at the start, the initial s
 R_UNDEFINED = 5            # the state or the landscape became non-finite during the run
 R_ORIENTATION = 6          # only the orientation overflowed (value: 1 classic, 0 Munthe-Kaas)
 R_STEP_UNDERFLOW = 7       # the adaptive step size fell below round-off (value: the step)
+R_KINK = 8                 # a kink or cusp of a valley (value: the angle the normal turns, rad)
+R_HEIGHT_JUMP = 9          # the height jumps (value: the jump, m)
 R_NOT_CONVERGED = 10       # an implicit step's stage equations did not converge (value: the step)
 
 ROW_SIZE = 23  # t, x, y, c(3), c'(3), omega(3), R(9), energy, normal force
@@ -78,7 +88,7 @@ MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below 
 # run stops as a fixed-step run would at the first.
 NONFINITE_TRIES = 50
 
-MK_SIZE, CLASSIC_SIZE = 8, 14
+MOTION_SIZE, MK_SIZE, CLASSIC_SIZE = 5, 8, 14
 
 
 def state_size(munthe_kaas: bool) -> int:
@@ -130,7 +140,9 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 2] = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
     K[row, 3] = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
-    if mk:
+    if K.shape[1] == MOTION_SIZE:  # no orientation carried
+        pass
+    elif mk:
         K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
     else:
         # R' = A(omega) R, column by column
@@ -145,29 +157,46 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
         # F.N = m (c'' - g).N with c''.N = r (omega x N').N
         probe[6] = mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2
                          + (o1 * d2 - o2 * d1) * n3) + mg * n3
-        probe[7] = r * largest_curvature(fx, fy, fxx, fxy, fyy, iW)
+        hi, lo = curvatures(fx, fy, fxx, fxy, fyy, iW)
+        probe[7] = r * hi
         probe[8] = d[0]
+        probe[9] = r * lo
+
+
+# Below this |u|^2 the coefficient of dexp^-1 is its series (to round-off for |u| < 0.1).
+DEXPINV_SERIES = 1e-2
 
 
 @JIT
 def dexpinv(u1, u2, u3, o1, o2, o3):
-    """u' = dexp_u^-1(omega) = omega - 1/2 u x omega + 1/12 u x (u x omega)."""
+    """dexp_u^-1(omega) = omega - 1/2 u x omega + c(theta) u x (u x omega) on so(3), exact:
+    c = (1 - (theta/2) cot(theta/2)) / theta^2, theta = |u|, with its series
+    1/12 + theta^2/720 + theta^4/30240 + theta^6/1209600 for small theta. (The truncation
+    after 1/12 limits Munthe-Kaas to order 5; the exact inverse to none.)"""
+    th2 = u1 * u1 + u2 * u2 + u3 * u3
+    if th2 < DEXPINV_SERIES:
+        c = 1.0 / 12.0 + th2 * (1.0 / 720.0 + th2 * (1.0 / 30240.0 + th2 * (1.0 / 1209600.0)))
+    else:
+        x = 0.5 * math.sqrt(th2)
+        c = (1.0 - x * math.cos(x) / math.sin(x)) / th2
     c1, c2, c3 = u2 * o3 - u3 * o2, u3 * o1 - u1 * o3, u1 * o2 - u2 * o1
-    return (o1 - 0.5 * c1 + (u2 * c3 - u3 * c2) * (1.0 / 12.0),
-            o2 - 0.5 * c2 + (u3 * c1 - u1 * c3) * (1.0 / 12.0),
-            o3 - 0.5 * c3 + (u1 * c2 - u2 * c1) * (1.0 / 12.0))
+    return (o1 - 0.5 * c1 + c * (u2 * c3 - u3 * c2),
+            o2 - 0.5 * c2 + c * (u3 * c1 - u1 * c3),
+            o3 - 0.5 * c3 + c * (u1 * c2 - u2 * c1))
 
 
 @JIT
-def largest_curvature(fx, fy, fxx, fxy, fyy, iW):
-    """The largest principal curvature (> 0 bending up), iW = 1 / sqrt(1 + f_x² + f_y²)."""
+def curvatures(fx, fy, fxx, fxy, fyy, iW):
+    """The largest and smallest principal curvature (> 0 bending up towards the ball),
+    iW = 1 / sqrt(1 + f_x² + f_y²)."""
     # roots of det(II - kappa G) = 0, G first, II second fundamental form
     G11, G12, G22 = 1.0 + fx * fx, fx * fy, 1.0 + fy * fy
     h11, h12, h22 = fxx * iW, fxy * iW, fyy * iW
     iW2 = iW * iW
     mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) * iW2
     gauss = (h11 * h22 - h12 * h12) * iW2
-    return mean + math.sqrt(max(mean * mean - gauss, 0.0))
+    root = math.sqrt(max(mean * mean - gauss, 0.0))
+    return mean + root, mean - root
 
 
 @njit(cache=True, nogil=True)
@@ -229,7 +258,7 @@ def record(rows, i, t, z, R, probe, p):
     rows[i, 22] = probe[6]
 
 
-@JIT
+@COLD
 def record_last(rows, ints, t, z, R, probe, p):
     """A run stopped by the physics: its last valid state (the current one) is the last row."""
     if ints[I_LAST_RECORDED] != ints[I_STEPS]:
@@ -238,62 +267,13 @@ def record_last(rows, ints, t, z, R, probe, p):
         ints[I_LAST_RECORDED] = ints[I_STEPS]
 
 
-SEGMENT_SAMPLES = 8  # fit checks between the ends of a step whose contact point raced
-
-
 @JIT
-def _fit_along_segment(fn, d, r, z, zn, h, speed0_sq, speed1_sq):
-    """r * kappa inside the step, if the contact point moved farther than its end speeds explain.
-
-    Near the no-fit boundary the contact point speeds up without bound, so a fixed step can
-    jump across a thin no-fit region with both ends fitting. Such a step moves the contact
-    point much farther than h times its speed at either end; then the fit is sampled along
-    the straight segment between the two contact points. speed0_sq, speed1_sq: squared
-    contact-point speeds at the two ends. Returns (largest r*kappa, x, y).
-    """
-    dx, dy = zn[0] - z[0], zn[1] - z[1]
-    if dx * dx + dy * dy <= 4.0 * h * h * max(speed0_sq, speed1_sq):  # squares: no root per step
-        return 0.0, 0.0, 0.0
-    worst, wx, wy = 0.0, 0.0, 0.0
-    for j in range(1, SEGMENT_SAMPLES + 1):
-        s = j / (SEGMENT_SAMPLES + 1.0)
-        x, y = z[0] + s * dx, z[1] + s * dy
-        fn(x, y, data_pointer(d))
-        iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
-        fit = r * largest_curvature(d[1], d[2], d[3], d[4], d[5], iW)
-        if fit > worst:
-            worst, wx, wy = fit, x, y
-    return worst, wx, wy
-
-
-@JIT
-def check_step(fn, d, r, t, h, z, zn, probe, pn, K, last, ints, info, segment):
-    """Whether the ball still fits over a finished step; otherwise stop with DOES_NOT_FIT.
-
-    Three looks, cheapest first: r*kappa at the step's end; the secant curvature between the
-    two contact points, -(N1 - N0).(phi1 - phi0) / |phi1 - phi0|^2, which is the normal
-    curvature along the step for a smooth surface and grows like 1/step across a kink or cusp
-    of a valley (abs, min, max, sqrt(abs)), whose second derivative the model cannot see;
-    and, with ``segment``, samples along a step whose contact point raced. Returns True
-    while the run may go on.
-    """
-    if pn[PROBE_FIT] >= 1.0:
-        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t, zn[0], zn[1], pn[PROBE_FIT])
-        return False
-    dx, dy, df = zn[0] - z[0], zn[1] - z[1], pn[PROBE_HEIGHT] - probe[PROBE_HEIGHT]
-    bend = -((pn[0] - probe[0]) * dx + (pn[1] - probe[1]) * dy + (pn[2] - probe[2]) * df)
-    chord2 = dx * dx + dy * dy + df * df
-    if r * bend >= chord2 and chord2 > 0.0:  # r * (secant curvature) >= 1, without a division
-        _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t, z[0] + 0.5 * dx, z[1] + 0.5 * dy,
-              r * bend / chord2)
-        return False
-    if segment:
-        fit, fx, fy = _fit_along_segment(fn, d, r, z, zn, h, K[0, 0] ** 2 + K[0, 1] ** 2,
-                                         K[last, 0] ** 2 + K[last, 1] ** 2)
-        if fit >= 1.0:
-            _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t, fx, fy, fit)
-            return False
-    return True
+def shape_of(z):
+    """(n, munthe_kaas) read from the state's length at run time: the functions compiled once
+    (COLD) take them so, not as the constants of the loops, which would compile them anew
+    for every loop."""
+    n = z.shape[0]
+    return n, n == MK_SIZE
 
 
 @JIT
@@ -329,24 +309,25 @@ def _fail(ints, info, status, reason, t, x, y, value):
     info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y], info[F_FAIL_VALUE] = t, x, y, value
 
 
-@JIT
-def start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info):
+@COLD
+def start(fn, d, p, z, R, K, probe, rows, ints, info):
     """Check and record the initial state; K[0] and probe describe it afterwards."""
+    n, mk = shape_of(z)
     fn(z[0], z[1], data_pointer(d))
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
-    dynamics(fn, d, p, z, mk, K, 0, probe, True)
+    evaluate(fn, d, p, z, mk, K, 0, probe)
     ints[I_EVALS] += 1
+    ints[I_DENSE] = -1
     record(rows, 0, 0.0, z, R, probe, p)
     if not (_finite(z, 0, n) and _finite_row(K, 0, 0, n) and _finite(probe, 0, PROBE_SIZE)
             and _finite_row(rows, 0, 0, ROW_SIZE)):
         _fail(ints, info, NONFINITE, R_START_OVERFLOW, 0.0, z[0], z[1], math.nan)
         return
     ints[I_ROWS] = 1
-    info[F_PREV_FORCE] = probe[PROBE_FORCE]
     if probe[PROBE_FORCE] < 0.0:
-        info[F_LIFTOFF] = 0.0
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = 0.0, z[0], z[1], 0.0
     if probe[PROBE_FIT] >= 1.0:
         _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, 0.0, z[0], z[1], probe[PROBE_FIT])
 
@@ -364,29 +345,30 @@ def combine(n, z, h, W, row, K, s, out):
 
 
 @JIT
-def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
+def trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
 
-    W holds the tableau: rows 0 .. s-1 the stage coefficients A, row s the weights b.
-    Stages 1 .. last-1 fill K[1 .. last-1]; zn = z + h sum b_i K_i; then the full
-    evaluation at zn (before u is reset) goes to K[last] and pn. Returns whether the new
-    state is finite: 0 = yes, 1 = the motion is not, 2 = only the orientation is not.
-    Counts its right-hand-side evaluations in ints[I_EVALS].
+    W holds the method (see ``Tableau.kernel_arrays``): rows 1 .. last-1 the stage
+    coefficients, row ``last`` the weights b. Stages 1 .. last-1 fill K[1 .. last-1];
+    zn = z + h sum b_i K_i; then the full evaluation at zn (before u is reset) goes to
+    K[last] and pn. Returns whether the new state is finite: 0 = yes, 1 = the motion is
+    not, 2 = only the orientation is not. Counts its evaluations in ints[I_EVALS].
     """
     for i in range(1, last):
         combine(n, z, h, W, i, K, i, Y)
         dynamics(fn, d, p, Y, mk, K, i, pn, False)
     ints[I_EVALS] += last - 1
-    combine(n, z, h, W, s, K, last, zn)
-    if mk:
+    combine(n, z, h, W, last, K, last, zn)
+    orientation = n > MOTION_SIZE
+    if orientation and mk:
         rodrigues(zn, R, Rn)
-    else:
+    elif orientation:
         for a in range(3):
             for c in range(3):
                 Rn[a, c] = zn[5 + 3 * a + c]
     if not _finite(zn, 0, 5):
         return 1
-    if not (_finite(zn, 5, n) and _finite_matrix(Rn)):
+    if orientation and not (_finite(zn, 5, n) and _finite_matrix(Rn)):
         return 2
     dynamics(fn, d, p, zn, mk, K, last, pn, True)
     ints[I_EVALS] += 1
@@ -397,43 +379,7 @@ def trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     return 0
 
 
-@JIT
-def accept(mk, n, t, h, z, R, K, last, probe, zn, Rn, pn, info):
-    """Make the trial state the current one; K[0] becomes its derivative (u-part = omega)."""
-    force = pn[PROBE_FORCE]
-    if force < 0.0 and info[F_PREV_FORCE] >= 0.0 and math.isnan(info[F_LIFTOFF]):
-        prev = info[F_PREV_FORCE]
-        info[F_LIFTOFF] = t - h + h * prev / (prev - force)
-    info[F_PREV_FORCE] = force
-    for q in range(n):
-        z[q] = zn[q]
-        K[0, q] = K[last, q]
-    if mk:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
-        for q in range(3):
-            z[5 + q] = 0.0
-            K[0, 5 + q] = pn[PROBE_OMEGA + q]
-    for a in range(3):
-        for c in range(3):
-            R[a, c] = Rn[a, c]
-    for q in range(PROBE_SIZE):
-        probe[q] = pn[q]
-
-
-def work_size(n: int) -> int:
-    """Length of the scratch array the stepping loops need for a state of size n."""
-    return 6 + 2 * n + PROBE_SIZE + 9
-
-
-@JIT
-def scratch(work, n):
-    """Views into the caller's scratch array: landscape values, stage state, trial state,
-    trial probe and trial orientation (nothing is allocated inside the kernel)."""
-    i = 6 + 2 * n
-    return (work[:6], work[6:6 + n], work[6 + n:i], work[i:i + PROBE_SIZE],
-            work[i + PROBE_SIZE:i + PROBE_SIZE + 9].reshape((3, 3)))
-
-
-# What a step reports (trial_step and the implicit steps alike): 0 done, 1 the motion is not
+# What a step reports (trial_step and collocation_step alike): 0 done, 1 the motion is not
 # finite, 2 only the orientation is not, 3 an implicit step's stage equations did not converge.
 STEP_NOT_CONVERGED = 3
 
@@ -457,7 +403,7 @@ MAX_ITERATIONS = 60
 
 
 @JIT
-def collocation_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
+def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
     arguments and codes of trial_step (the orientation always Munthe-Kaas: mk is True).
 
@@ -465,21 +411,24 @@ def collocation_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, int
     the motion, evaluating the right-hand side with u = 0 (so that its u-part is omega),
     then the increments u at the stages from those omegas, which needs no evaluations.
 
-    K[0] holds z'(z); K[1 .. s] hold the stage derivatives (on entry those of the previous
-    step, extrapolated with K[0] after the first step; on return this step's); K[s+1 .. 2s] is scratch
-    (on return its u-part holds omega at the stages); K[last] = K[2s+1] and pn receive the
-    full evaluation at zn. Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the
-    motion is not finite), 2 (only the orientation is not) or STEP_NOT_CONVERGED.
+    W (``Collocation.kernel_arrays``) holds a_ij at W[1+i, 1+j], b_i at W[last, 1+i] and the
+    extrapolation of the starting values in rows s+1 .. 2s. K[0] holds z'(z); K[1 .. s] hold
+    the stage derivatives (on entry those of the previous step, extrapolated with K[0] after
+    the first step; on return this step's); K[s+1 .. 2s] is scratch (on return its u-part
+    holds omega at the stages); K[last] = K[2s+1] and pn receive the full evaluation at zn.
+    Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the motion is not finite),
+    2 (only the orientation is not) or STEP_NOT_CONVERGED.
     """
+    s = (last - 1) // 2
     new = s + 1
     # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
     for i in range(s):
         for q in range(5):
             acc = K[0, q]
             if ints[I_STEPS] > 0:
-                acc *= W[2 * s + 1, i]
+                acc *= W[new + i, 0]
                 for j in range(s):
-                    acc += W[s + 1 + i, j] * K[1 + j, q]
+                    acc += W[new + i, 1 + j] * K[1 + j, q]
             K[new + i, q] = acc
     for i in range(s):
         for q in range(5):
@@ -494,7 +443,7 @@ def collocation_step(fn, d, p, W, s, mk, n, h, z, R, K, last, Y, zn, Rn, pn, int
     for q in range(n):
         zn[q] = z[q]
     for i in range(s):
-        c = h * W[s, i]
+        c = h * W[last, 1 + i]
         for q in range(n):
             zn[q] += c * K[1 + i, q]
     rodrigues(zn, R, Rn)
@@ -521,7 +470,7 @@ def _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn):
             for q in range(5):
                 Y[q] = z[q]
             for j in range(s):
-                c = h * W[i, j]
+                c = h * W[1 + i, 1 + j]
                 for q in range(5):
                     Y[q] += c * K[1 + j, q]
             dynamics(fn, d, p, Y, True, K, new + i, pn, False)
@@ -563,7 +512,7 @@ def _increments(s, h, K, W):
         for i in range(s):
             u1, u2, u3 = 0.0, 0.0, 0.0
             for j in range(s):
-                c = h * W[i, j]
+                c = h * W[1 + i, 1 + j]
                 u1 += c * K[1 + j, 5]
                 u2 += c * K[1 + j, 6]
                 u3 += c * K[1 + j, 7]
@@ -606,57 +555,454 @@ def _scaled_change(s, h, z, K, lo, hi):
     return worst
 
 
+# The same, compiled once as functions of their own, for the paths that run once per run or
+# per event (inlining them there too would only add compile time).
+trial_step_once = COLD(trial_step.py_func)
+collocation_step_once = COLD(collocation_step.py_func)
 
 
-def fixed_steps(mk: bool, implicit: bool):
+@COLD
+def evaluate(fn, d, p, z, mk, K, row, probe):
+    dynamics(fn, d, p, z, mk, K, row, probe, True)
+
+
+@JIT
+def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
+    """The error of a step in units of the tolerance (the step is accepted when <= 1).
+
+    Each estimate is h (E K)_q per state component q, weighed by scale_q = atol + rtol
+    max(|z_q|, |zn_q|) for alpha (m) and v, and by atol + rtol for the rotation increment u:
+    its angle in radians is held to the tolerance as R's entries, of size 1, would be.
+    kind 0: one estimate (E row 0), RMS over the state (Hairer's DOPRI5). kind 1: two
+    estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
+    as Hairer's DOP853 does.
+    """
+    a5, a3 = 0.0, 0.0
+    for q in range(n):
+        scale = atol + rtol * (max(abs(z[q]), abs(zn[q])) if q < 5 else 1.0)
+        e = 0.0
+        for i in range(last + 1):
+            e += E[0, i] * K[i, q]
+        a5 += (e / scale) ** 2
+        if kind == 1:
+            e = 0.0
+            for i in range(last + 1):
+                e += E[1, i] * K[i, q]
+            a3 += (e / scale) ** 2
+    if kind == 1:
+        if a5 == 0.0 and a3 == 0.0:
+            return 0.0
+        return abs(h) * a5 / math.sqrt((a5 + 0.01 * a3) * n)
+    return abs(h) * math.sqrt(a5 / n)
+
+
+@JIT
+def accept(mk, n, z, R, K, last, probe, zn, Rn, pn):
+    """Make the trial state the current one; K[0] becomes its derivative (u-part = omega)."""
+    for q in range(n):
+        z[q] = zn[q]
+        K[0, q] = K[last, q]
+    if mk and n > MOTION_SIZE:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
+        for q in range(3):
+            z[5 + q] = 0.0
+            K[0, 5 + q] = pn[PROBE_OMEGA + q]
+    for a in range(3):
+        for c in range(3):
+            R[a, c] = Rn[a, c]
+    for q in range(PROBE_SIZE):
+        probe[q] = pn[q]
+
+
+# -- dense output and events -----------------------------------------------------------------
+#
+# After a step from z at t to t + h, z(t + theta h) = z + h sum_i K_i sum_k P[i, k] theta^(k+1)
+# (P: ``Tableau.dense_output``), and R(t + theta h) = exp(A(u(theta))) R for Munthe-Kaas.
+# Rows at fixed times and the events of a step are read from it. Methods whose dense output
+# needs more stages than the step (DOP853: three) give them as rows of W (and K, P) after
+# ``last``; ``dense_stages`` computes them once per step, only when the step is interpolated.
+
+ROOT_ITERATIONS = 100  # at most this many evaluations to locate one event
+ROOT_TOL = 1e-13       # events are located to this fraction of a step
+BREAK_HALVINGS = 48    # bisections that tell a jump or kink of the surface from a smooth bend
+KINK_SLACK = 1e-3      # a step whose secant curvature r*|kappa| exceeds twice its ends' plus
+                       # this is looked at closer (kinks have no curvature the model can see)
+JUMP_SLACK = 0.1       # likewise a height change off the slopes' by this fraction of the step
+BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by more (relative
+                       # to 1 + |f|), across 2^-48 of a step is a kink or a jump...
+BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
+                       # 1e50 m samples a smooth landscape too coarsely to tell
+SEGMENT_SAMPLES = 8    # fit checks inside a fixed step whose contact point raced
+# (kinds as floats: numba would compile a function once per integer constant passed to it)
+FORCE_EVENT, FIT_EVENT = 0.0, 1.0
+KINK, JUMP = 0.0, 1.0
+SURFACE_SIZE = 8       # x, y, f, N (3), r * largest and smallest principal curvature
+
+
+@COLD
+def interpolate(z, h, P, K, theta, out):
+    """out = the dense output at t + theta h."""
+    lo, hi = 0, z.shape[0]
+    for c in range(lo, hi):
+        out[c] = z[c]
+    for i in range(P.shape[0]):
+        w = 0.0
+        for k in range(P.shape[1] - 1, -1, -1):
+            w = (w + P[i, k]) * theta
+        w *= h
+        if w != 0.0:
+            for c in range(lo, hi):
+                out[c] += w * K[i, c]
+
+
+@COLD
+def dense_stages(fn, d, p, W, h, z, K, last, Y, pe, ints):
+    """The extra dense-output stages of the step being taken (rows last+1 .. of W), once."""
+    n, mk = shape_of(z)
+    if ints[I_DENSE] == ints[I_STEPS] + 1:
+        return
+    ints[I_DENSE] = ints[I_STEPS] + 1
+    for i in range(last + 1, W.shape[0]):
+        combine(n, z, h, W, i, K, i, Y)
+        dynamics(fn, d, p, Y, mk, K, i, pe, False)
+        ints[I_EVALS] += 1
+
+
+@COLD
+def state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe):
+    """The dense output's state at t + theta h in Ye, Re, with its probe pe (one evaluation,
+    into the spare last row of K); whether it is finite."""
+    n, mk = shape_of(z)
+    interpolate(z, h, P, K, theta, Ye)
+    if n == MOTION_SIZE:  # no orientation carried
+        pass
+    elif mk:
+        rodrigues(Ye, R, Re)
+    else:
+        for a in range(3):
+            for c in range(3):
+                Re[a, c] = Ye[5 + 3 * a + c]
+    evaluate(fn, d, p, Ye, mk, K, K.shape[0] - 1, pe)
+    return _finite(Ye, 0, n) and _finite(pe, 0, PROBE_SIZE) and _finite_matrix(Re)
+
+
+@COLD
+def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
+    """The landscape under the dense output's contact point at t + theta h, in s (SURFACE_SIZE)."""
+    interpolate(z, h, P, K, theta, Ye)
+    fn(Ye[0], Ye[1], data_pointer(d))
+    fx, fy = d[1], d[2]
+    iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
+    hi, lo = curvatures(fx, fy, d[3], d[4], d[5], iW)
+    s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7] = Ye[0], Ye[1], d[0], -fx * iW, -fy * iW, iW, r * hi, r * lo
+
+
+@COLD
+def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
+    """g(theta) of an event, negative before it: -F.N (lift-off) or r*kappa - 1 (no fit);
+    +inf where the state is not finite (past any event)."""
+    if kind == FORCE_EVENT:
+        ok = state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe)
+        g = -pe[PROBE_FORCE]
+    else:
+        surface_at(fn, d, p[0], z, h, P, K, theta, Ye, s)
+        ok = True
+        g = s[6] - 1.0
+    return g if ok and math.isfinite(g) else math.inf
+
+
+@COLD
+def locate(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, ints):
+    """Shrink [a, b], g(a) < 0 <= g(b), around the event to ROOT_TOL (Illinois, every third
+    try a bisection, so that it never stalls); returns (a, b)."""
+    side = 0
+    for it in range(ROOT_ITERATIONS):
+        if b - a <= ROOT_TOL:
+            break
+        m = 0.5 * (a + b)
+        if it % 3 != 2:
+            secant = (a * gb - b * ga) / (gb - ga)
+            if a < secant < b:
+                m = secant
+        g = event_value(kind, fn, d, p, z, R, h, P, K, m, Ye, Re, pe, s)
+        if kind == FORCE_EVENT:
+            ints[I_EVALS] += 1
+        if g >= 0.0:
+            b, gb = m, g
+            if side == 1:
+                ga *= 0.5
+            side = 1
+        else:
+            a, ga = m, g
+            if side == -1:
+                gb *= 0.5
+            side = -1
+    return a, b
+
+
+@JIT
+def break_measure(kind, sa, sb):
+    """How much of a break of the surface lies between two surface points: the angle the
+    normal turns (KINK), or the height change beyond the slopes' trapezoid (JUMP)."""
+    if kind == KINK:
+        return math.sqrt((sb[3] - sa[3]) ** 2 + (sb[4] - sa[4]) ** 2 + (sb[5] - sa[5]) ** 2)
+    dx, dy = sb[0] - sa[0], sb[1] - sa[1]
+    slope = ((sa[3] / sa[5] + sb[3] / sb[5]) * dx + (sa[4] / sa[5] + sb[4] / sb[5]) * dy) * 0.5
+    return abs(sb[2] - sa[2] + slope)  # grad f = -(N1, N2) / N3
+
+
+@COLD
+def locate_break(kind, fn, d, r, z, h, P, K, Ye, sa, sb, sm, a, b):
+    """Halve [a, b] (fractions of the step) BREAK_HALVINGS times towards the half holding more
+    of the break; returns (a, b, the measure over [a, b]), sa and sb the surface at a and b.
+    A smooth surface's measure vanishes with the interval; a kink's or jump's does not."""
+    surface_at(fn, d, r, z, h, P, K, a, Ye, sa)
+    surface_at(fn, d, r, z, h, P, K, b, Ye, sb)
+    for _ in range(BREAK_HALVINGS):
+        m = 0.5 * (a + b)
+        surface_at(fn, d, r, z, h, P, K, m, Ye, sm)
+        if break_measure(kind, sa, sm) >= break_measure(kind, sm, sb):
+            b = m
+            for q in range(SURFACE_SIZE):
+                sb[q] = sm[q]
+        else:
+            a = m
+            for q in range(SURFACE_SIZE):
+                sa[q] = sm[q]
+    if (sb[0] - sa[0]) ** 2 + (sb[1] - sa[1]) ** 2 > BREAK_SPAN * BREAK_SPAN:
+        return a, b, 0.0
+    return a, b, break_measure(kind, sa, sb)
+
+
+@JIT
+def looks(r, z, probe, zn, pn):
+    """The cheap looks at a step from (z, probe) to (zn, pn), from what its ends know: whether
+    the ball does not fit at the end; whether the step bends sharper than the curvatures at
+    its ends explain (``sharp``: a kink, or a secant curvature with r*kappa >= 1); whether the
+    height changed off the slopes' trapezoid (``jumpy``). Returns them with the bend
+    -(N1 - N0).(phi1 - phi0) and the squared chord |phi1 - phi0|^2."""
+    f0 = probe[PROBE_HEIGHT]
+    dx, dy, df = zn[0] - z[0], zn[1] - z[1], pn[PROBE_HEIGHT] - f0
+    bend = -((pn[0] - probe[0]) * dx + (pn[1] - probe[1]) * dy + (pn[2] - probe[2]) * df)
+    chord2 = dx * dx + dy * dy + df * df
+    worst = max(probe[PROBE_FIT], pn[PROBE_FIT], -probe[PROBE_FIT_LO], -pn[PROBE_FIT_LO])
+    fit_end = pn[PROBE_FIT] >= 1.0
+    sharp = chord2 > 0.0 and (r * bend >= chord2 or r * abs(bend) > chord2 * (2.0 * worst + KINK_SLACK))
+    # the height change against the slopes' trapezoid, grad f = -(N1, N2) / N3; 1 / N3 bounds
+    # 1 and |grad f| (squares: no root per step)
+    w0, w1 = 1.0 / probe[2], 1.0 / pn[2]
+    off = df + 0.5 * ((probe[0] * w0 + pn[0] * w1) * dx + (probe[1] * w0 + pn[1] * w1) * dy)
+    jumpy = off * off > JUMP_SLACK * JUMP_SLACK * (dx * dx + dy * dy) * (w0 + w1) ** 2 + 1e-24 * (1.0 + f0 * f0)
+    return fit_end, sharp, jumpy, bend, chord2
+
+
+@JIT
+def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, zn, pn, ints, info, segment, Ye, Re,
+                pe, sa, sb, sm):
+    """The validity checks and events of a finished step from t to t + h, located on its dense
+    output. Returns -1 while the run may go on; otherwise the run stops (status and reason
+    set) and the result is theta, the last valid point of the step (0 <= theta < 1).
+
+    Stops: r*kappa reaches 1 (at the step's end, or, with ``segment``, at samples inside a
+    step whose contact point raced); a kink or cusp of a valley; a jump in height. A convex
+    kink (a ridge) is a lift-off there, and F.N turning negative is one: the first is kept.
+    A step bending more sharply than the curvatures at its ends explain is searched for a
+    kink; one whose secant curvature says r*kappa >= 1 stops the run even where smooth.
+    """
+    fit_end, sharp, jumpy, bend, chord2 = looks(p[0], z, probe, zn, pn)
+    dx, dy = zn[0] - z[0], zn[1] - z[1]
+    speed = max(K[0, 0] ** 2 + K[0, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
+    raced = dx * dx + dy * dy > 4.0 * h * h * speed
+    raced &= segment
+    force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
+    if not (fit_end or sharp or jumpy or raced or force_end):
+        return -1.0  # the usual step: nothing to look at closer
+    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe,
+                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2)
+
+
+@COLD
+def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa, sb, sm,
+                 fit_end, sharp, jumpy, raced, force_end, bend, chord2):
+    """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
+    n, mk = shape_of(z)
+    r = p[0]
+    dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+
+    stop, valid = 2.0, 0.0
+    # the ball no longer fits: where along the step r*kappa reached 1. A step that raced
+    # across a thin no-fit region is sampled along the straight line between its contact
+    # points (its dense output, pulled by the huge speeds near the edge, may bend around it).
+    lo, hi = 0.0, 1.0 if fit_end else -1.0
+    if raced and not fit_end:
+        interpolate(z, h, P, K, 1.0, Ye)  # the step's end contact point
+        zn0, zn1 = Ye[0], Ye[1]
+        for j in range(1, SEGMENT_SAMPLES + 1):
+            theta = j / (SEGMENT_SAMPLES + 1.0)
+            fn(z[0] + theta * (zn0 - z[0]), z[1] + theta * (zn1 - z[1]), data_pointer(d))
+            iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+            if not r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] < 1.0:
+                hi = theta
+                break
+            lo = theta
+    if hi > 0.0:
+        a, b = lo, hi
+        gb = event_value(FIT_EVENT, fn, d, p, z, R, h, P, K, hi, Ye, Re, pe, sa)
+        if gb >= 0.0:  # the dense output agrees: locate the edge on it
+            a, b = locate(FIT_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
+                          probe[PROBE_FIT] - 1.0, hi, gb, ints)
+        surface_at(fn, d, r, z, h, P, K, b, Ye, sa)
+        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + b * h, sa[0], sa[1], max(sa[6], 1.0))
+        stop, valid = b, a
+    # a bend sharper than the step's ends explain: a kink, or a bend tighter than the ball
+    if sharp and stop > 1.0:
+        a, b, turn = locate_break(KINK, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+        if turn > BREAK_MIN:
+            phi = (sb[0] - sa[0]) * (sb[3] - sa[3]) + (sb[1] - sa[1]) * (sb[4] - sa[4]) + (sb[2] - sa[2]) * (sb[5] - sa[5])
+            if phi < 0.0:  # the normal turns towards the motion: a valley, where the ball cannot fit
+                _fail(ints, info, DOES_NOT_FIT, R_KINK, t + b * h, sb[0], sb[1], turn)
+                stop, valid = b, a
+            elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
+                info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
+        elif r * bend >= chord2:
+            _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
+            stop, valid = b, a
+    # a jump in height
+    if jumpy and stop > 1.0:
+        a, b, jump = locate_break(JUMP, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+        if jump > BREAK_MIN * (1.0 + abs(sa[2])):
+            _fail(ints, info, DOES_NOT_FIT, R_HEIGHT_JUMP, t + b * h, sb[0], sb[1], sb[2] - sa[2])
+            stop, valid = b, a
+    # lift-off: F.N turns negative (first time only, before any stop)
+    if force_end and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
+        a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
+                      -probe[PROBE_FORCE], 1.0, -pn[PROBE_FORCE], ints)
+        interpolate(z, h, P, K, b, Ye)
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, Ye[0], Ye[1], 0.0
+    return valid if stop <= 1.0 else -1.0
+
+
+REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a stop
+
+
+@COLD
+def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
+                 Ye, sa, sb, sm, implicit=False):
+    """A run stopped inside a step: its last valid state, at t + theta h, is the last row.
+
+    The dense output of a step across a kink, a jump or the edge of the no-fit region is
+    spoiled by the stages beyond it, so that state is computed by a step of theta h from the
+    step's start instead; while such a step still crosses (its ends' looks say so), the stop
+    is located again on its own, less spoiled, dense output (and its time and place updated)
+    and the step shortened to before it. Failing that, the step's start is the last row."""
+    n, mk = shape_of(z)
+    r = p[0]
+    for _ in range(REFINE_STEPS):
+        hs = theta * h
+        if not hs > 0.0:
+            break
+        if implicit:  # (the implicit methods' own step: ``implicit`` is True for them)
+            bad = collocation_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        else:
+            bad = trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        if bad != 0:
+            break
+        fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
+        if not (fit_end or sharp or jumpy):
+            record(rows, ints[I_ROWS], t + hs, zn, Rn, pn, p)
+            ints[I_ROWS] += 1
+            kind = KINK if ints[I_REASON] == R_KINK else JUMP if ints[I_REASON] == R_HEIGHT_JUMP else -1
+            if kind >= 0 and theta < 1.0:  # the break is beyond this clean step: its dense output,
+                # continued a little past its end, says when the motion before it reaches it
+                a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 1.0, min(1.0 / theta, 2.0))
+                if size > 0.0:
+                    info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
+            return
+        a, b, size = 0.0, 0.0, 0.0
+        if sharp or jumpy:
+            a, b, size = locate_break(KINK if sharp else JUMP, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+        if size > 0.0 and (ints[I_REASON] == R_KINK or ints[I_REASON] == R_HEIGHT_JUMP):
+            info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
+        elif fit_end and ints[I_REASON] == R_NO_FIT:
+            gb = pn[PROBE_FIT] - 1.0
+            a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
+                          probe[PROBE_FIT] - 1.0, 1.0, gb, ints)
+            surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
+            info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sa[0], sa[1]
+        theta *= a if a > 0.0 else 0.5
+    record_last(rows, ints, t, z, R, probe, p)
+
+
+def work_size(n: int) -> int:
+    """Length of the scratch array the stepping loops need for a state of size n."""
+    return 6 + 3 * n + 2 * PROBE_SIZE + 18 + 3 * SURFACE_SIZE
+
+
+@JIT
+def scratch(work, n):
+    """Views into the caller's scratch array (nothing is allocated inside the kernel):
+    landscape values d, stage state Y, trial state zn, probe pn and orientation Rn, and for
+    the dense output a state Ye, orientation Re, probe pe and three surface points."""
+    i = 6 + 2 * n
+    j = i + PROBE_SIZE + 9
+    k = j + n + PROBE_SIZE + 9
+    return (work[:6], work[6:6 + n], work[6 + n:i], work[i:i + PROBE_SIZE],
+            work[i + PROBE_SIZE:j].reshape((3, 3)), work[j:j + n], work[j + n:j + n + 9].reshape((3, 3)),
+            work[j + n + 9:k], work[k:k + SURFACE_SIZE], work[k + SURFACE_SIZE:k + 2 * SURFACE_SIZE],
+            work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
+
+
+def _fixed_steps(mk: bool, implicit: bool):
     """The fixed-step loop for one orientation scheme and one kind of step: with mk, the
     state size n and the step (trial_step for the explicit tableaus, collocation_step for
     the implicit ones) constants of the compiled code, the stage loops unroll as in
-    hand-written C.
-    """
+    hand-written C."""
     n = state_size(mk)
 
     @JIT
-    def advance(fn, W, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
+    def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
         """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
-        K's last row receives the evaluation at the new state (for an explicit tableau it has one
-        row more than the tableau has stages). On the
-        first call (no rows yet) the initial state is checked and recorded. The run stops early,
-        with ints[I_STATUS] set, where the state turns non-finite or the ball no longer fits;
-        the last valid state is then the last row.
+        W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
+        evaluations on the dense output). On the first call (no rows yet) the initial state is
+        checked and recorded. The run stops early, with ints[I_STATUS] set, where the state
+        turns non-finite or a check fails; the last valid state is then the last row.
         """
-        s, last_row = W.shape[1], K.shape[0] - 1
-        d, Y, zn, pn, Rn = scratch(work, n)
+        last = W.shape[0] - 1
+        d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
 
         if ints[I_ROWS] == 0:
-            start(fn, d, p, mk, n, z, R, K, probe, rows, ints, info)
+            start(fn, d, p, z, R, K, probe, rows, ints, info)
             if ints[I_STATUS] != RUNNING:
                 return
 
         k0 = ints[I_STEPS]
         k_stop = min(n_steps, k0 + max_steps)
         for k in range(k0 + 1, k_stop + 1):
-            last = k == n_steps
-            h = t_end - (k - 1) * dt if last else dt
-            t = t_end if last else k * dt
+            final = k == n_steps
+            t0 = (k - 1) * dt
+            h = t_end - t0 if final else dt
+            t = t_end if final else k * dt
             if implicit:
-                bad = collocation_step(fn, d, p, W, s, mk, n, h, z, R, K, last_row, Y, zn, Rn, pn, ints)
+                bad = collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
             else:
-                bad = trial_step(fn, d, p, W, s, mk, n, h, z, R, K, last_row, Y, zn, Rn, pn, ints)
-            if bad == STEP_NOT_CONVERGED:
-                _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
-            elif bad:
-                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
-                      0.0 if mk else 1.0)
-            else:
-                check_step(fn, d, p[0], t, h, z, zn, probe, pn, K, last_row, ints, info, True)
-            if ints[I_STATUS] != RUNNING:
-                record_last(rows, ints, (k - 1) * dt, z, R, probe, p)
+                bad = trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            if bad:
+                if bad == STEP_NOT_CONVERGED:
+                    _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+                else:
+                    _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
+                          0.0 if mk else 1.0)
+                record_last(rows, ints, t0, z, R, probe, p)
                 return
-            accept(mk, n, t, h, z, R, K, last_row, probe, zn, Rn, pn, info)
+            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, zn, pn, ints, info, True,
+                                Ye, Re, pe, sa, sb, sm)
+            if valid >= 0.0:
+                record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                             Rn, pn, Ye, sa, sb, sm, implicit)
+                return
+            accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
             ints[I_STEPS] = k
-            if k - ints[I_LAST_RECORDED] == every or last:  # (no division in the loop)
+            if k - ints[I_LAST_RECORDED] == every or final:  # (no division in the loop)
                 record(rows, ints[I_ROWS], t, z, R, probe, p)
                 ints[I_ROWS] += 1
                 ints[I_LAST_RECORDED] = k
@@ -666,57 +1012,51 @@ def fixed_steps(mk: bool, implicit: bool):
     return advance
 
 
-# advance(fn, W, p, ...) of the explicit tableaus by scheme: ADVANCE[munthe_kaas]; of the
+# advance(fn, W, P, p, ...) of the explicit tableaus by scheme: ADVANCE[munthe_kaas]; of the
 # implicit ones (always Munthe-Kaas): ADVANCE_IMPLICIT
-ADVANCE = {mk: fixed_steps(mk, False) for mk in (True, False)}
-ADVANCE_IMPLICIT = fixed_steps(True, True)
+ADVANCE = {mk: _fixed_steps(mk, False) for mk in (True, False)}
+ADVANCE_IMPLICIT = _fixed_steps(True, True)
 
 
 @JIT
-def advance_adaptive(fn, W, p, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K, probe, rows,
-                     ints, info, work):
+def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K,
+                     probe, rows, ints, info, work):
     """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
     (Munthe-Kaas only); info[F_TIME] is the time reached and info[F_H] the next step to try.
 
-    W holds the pair: rows 0 .. s-1 the stage coefficients, row s the weights b (last one
-    zero: the last stage is the evaluation at the new state, "first same as last") and
-    row s+1 the error weights b - b_hat. The error of a step is measured in alpha and v
-    relative to rtol |value| + atol, and in u against rtol + atol (R's entries are of size 1).
-    Rows land exactly on the multiples of record_dt and on t_end (steps are shortened to
-    reach them), or on every accepted step when record_dt is 0. Returns early, still
-    running, when ``rows`` is full: the caller grows it and calls again.
+    The loop is generic over the pair; its plug-in points are data (``Tableau.kernel_arrays``):
+    - W, square: rows 1 .. last-1 the stage coefficients, row ``last`` the weights b (the
+      evaluation at the new state is K[last]; first same as last or not);
+    - E, (estimates x (last + 1)): the error weights; ``last`` is E.shape[1] - 1;
+    - err_kind: how ``error_norm`` combines E's rows (0: one estimate; 1: DOP853's estimates
+      of orders 5 and 3); err_exp = -1/(q + 1) for an estimate of order q;
+    - P, (rows of W x degree): the continuous extension, as scipy's ``P``;
+    - extra dense-output stages (DOP853's three): rows of W and P after ``last``, evaluated by
+      ``dense_stages`` only for steps that are interpolated (a row or an event inside them).
+    K needs W.shape[0] + 1 rows (the last one spare, for evaluations on the dense output).
+
+    Steps are cut only to land on t_end. Rows at the multiples of record_dt are the dense
+    output at those times (record_dt 0: every accepted step is a row). Events are located on
+    the dense output (``step_events``). Returns early, still running, when ``rows`` has fewer
+    than two free rows while recording every step: the caller grows it and calls again.
     """
     n = MK_SIZE
-    s = W.shape[1]
-    d, Y, zn, pn, Rn = scratch(work, n)
+    last = E.shape[1] - 1
+    d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     if ints[I_ROWS] == 0:
-        start(fn, d, p, True, n, z, R, K, probe, rows, ints, info)
+        start(fn, d, p, z, R, K, probe, rows, ints, info)
         info[F_TIME] = 0.0
         if ints[I_STATUS] != RUNNING:
             return
     t, h = info[F_TIME], info[F_H]
     retry = False  # right after a rejection the step may shrink but not grow (Hairer's rule)
     for _ in range(max_steps):
-        if ints[I_ROWS] >= rows.shape[0] - 1:  # keep one row for the last valid state
+        if record_dt == 0.0 and ints[I_ROWS] >= rows.shape[0] - 2:
             break
-        t_out = t_end
-        if record_dt > 0.0:
-            t_out = min(ints[I_ROWS] * record_dt, t_end)
-            if t_end - t_out < 1e-9 * record_dt:
-                t_out = t_end
-        land = t + 1.1 * h >= t_out  # stretch a little rather than leave a sliver
-        hs = t_out - t if land else h
-        bad = trial_step(fn, d, p, W, s, True, n, hs, z, R, K, s - 1, Y, zn, Rn, pn, ints)
-        err = math.inf
-        if not bad:
-            acc = 0.0
-            for q in range(n):
-                e = 0.0
-                for i in range(s):
-                    e += W[s + 1, i] * K[i, q]
-                scale = atol + rtol * (max(abs(z[q]), abs(zn[q])) if q < 5 else 1.0)
-                acc += (hs * e / scale) ** 2
-            err = math.sqrt(acc / n)
+        land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
+        hs = t_end - t if land else h
+        bad = trial_step(fn, d, p, W, True, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        err = math.inf if bad else error_norm(E, err_kind, K, last, n, z, zn, hs, rtol, atol)
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
             ints[I_REJECTED] += 1
             retry = True
@@ -728,24 +1068,42 @@ def advance_adaptive(fn, W, p, err_exp, t_end, record_dt, rtol, atol, max_steps,
                 _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
             else:
                 continue
-        else:  # error control keeps adaptive steps short where the contact point races
-            check_step(fn, d, p[0], t + hs, hs, z, zn, probe, pn, K, s - 1, ints, info, False)
-        if ints[I_STATUS] != RUNNING:
             record_last(rows, ints, t, z, R, probe, p)
             break
-        t = t_out if land else t + hs
-        accept(True, n, t, hs, z, R, K, s - 1, probe, zn, Rn, pn, info)
+        t_new = t_end if land else t + hs
+        valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, zn, pn, ints, info, False,
+                            Ye, Re, pe, sa, sb, sm)
+        t_stop = t + valid * hs if valid >= 0.0 else t_new
+        while record_dt > 0.0:  # the rows inside the step, from its dense output
+            t_row = ints[I_ROWS] * record_dt
+            if t_end - t_row < 1e-9 * record_dt:
+                t_row = t_end
+            if t_row > t_new or (valid >= 0.0 and t_row >= t_stop) or t_row <= rows[ints[I_ROWS] - 1, 0]:
+                break
+            if t_row == t_new:
+                record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
+                ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
+            else:
+                dense_stages(fn, d, p, W, hs, z, K, last, Ye, pe, ints)
+                state_at(fn, d, p, z, R, hs, P, K, (t_row - t) / hs, Ye, Re, pe)
+                record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
+            ints[I_ROWS] += 1
+        if valid >= 0.0:
+            record_valid(fn, d, p, W, t, hs, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                         Rn, pn, Ye, sa, sb, sm)
+            break
+        if record_dt == 0.0:
+            record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
+        t = t_new
+        accept(True, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] += 1
         grown = hs * min(1.0 if retry else MAX_FACTOR, SAFETY * err ** err_exp if err > 0.0 else MAX_FACTOR)
         h = max(h, grown) if land else grown
         retry = False
         if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
             _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
-        if land or record_dt == 0.0:
-            record(rows, ints[I_ROWS], t, z, R, probe, p)
-            ints[I_ROWS] += 1
-            ints[I_LAST_RECORDED] = ints[I_STEPS]
-        if ints[I_STATUS] != RUNNING:
             record_last(rows, ints, t, z, R, probe, p)
             break
         if t == t_end:

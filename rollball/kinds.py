@@ -35,3 +35,15 @@ class MethodInfo:
     def classic_allowed(self) -> bool:
         """Whether the orientation may also be integrated as a plain matrix (``munthe_kaas=False``)."""
         return self.kind is MethodKind.FIXED
+
+
+def cubic_hermite(b, last: int) -> tuple[tuple, ...]:
+    """The dense output P (rows K_0 .. K_last, columns theta, theta^2, theta^3) of the cubic
+    Hermite interpolant of z_n, K_0 = z'(z_n), z_n+1 = z_n + h sum_i b_i K_i and
+    K_last = z'(z_n+1): the coefficients e_0, 3 b - 2 e_0 - e_last and e_0 + e_last - 2 b.
+    ``b`` gives a weight for each of the rows 0 .. last (exact or float)."""
+    rows = []
+    for i in range(last + 1):
+        e0, e1 = int(i == 0), int(i == last)
+        rows.append((e0 + 0 * b[i], 3 * b[i] - 2 * e0 - e1, e0 + e1 - 2 * b[i]))
+    return tuple(rows)

@@ -12,7 +12,7 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
 from .scene import Scene
 from .tableaus import MethodKind, get_method
-from .trajectory import Failure, Reason, Status, Trajectory
+from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
 
 MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
@@ -22,7 +22,8 @@ ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in tim
 
 _STATUS = {kernel.OK: Status.OK, kernel.DOES_NOT_FIT: Status.DOES_NOT_FIT,
            kernel.NONFINITE: Status.NONFINITE}
-_REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.KINK,
+_REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.SECANT_NO_FIT, kernel.R_KINK: Reason.KINK,
+           kernel.R_HEIGHT_JUMP: Reason.HEIGHT_JUMP,
            kernel.R_START_UNDEFINED: Reason.START_UNDEFINED, kernel.R_START_OVERFLOW: Reason.START_OVERFLOW,
            kernel.R_UNDEFINED: Reason.UNDEFINED, kernel.R_ORIENTATION: Reason.ORIENTATION_OVERFLOW,
            kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW, kernel.R_NOT_CONVERGED: Reason.NOT_CONVERGED}
@@ -58,16 +59,30 @@ def _positive(name: str, value) -> float:
     return value
 
 
+def initial_momentum(d: np.ndarray, vx, vy, spin, r, m) -> np.ndarray:
+    """Angular momentum about the contact point, shape (3,) + the shape of the arguments.
+
+    d: the landscape's (f, f_x, f_y, ...) at the contact point (``Landscape.evaluate``);
+    vx, vy: horizontal centre velocity (vz follows from tangency); spin: angular velocity
+    about the normal; r, m: the ball. Elementwise, so one start or a whole array of starts
+    give bit-identical values.
+    """
+    fx, fy = d[1], d[2]
+    n1, n2, n3 = unit_normal(d)
+    c1, c2, c3 = vx, vy, fx * vx + fy * vy
+    o1 = (n2 * c3 - n3 * c2) / r + spin * n1  # omega = N x c' / r + spin N
+    o2 = (n3 * c1 - n1 * c3) / r + spin * n2
+    o3 = (n1 * c2 - n2 * c1) / r + spin * n3
+    no = n1 * o1 + n2 * o2 + n3 * o3
+    mr2 = m * r * r
+    return np.stack([mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)])
+
+
 def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Contact point and angular momentum about it, from the scene's start values."""
     s, r, m = scene.start, scene.ball.radius, scene.ball.mass
-    d = landscape.evaluate(s.x, s.y)
-    fx, fy = d[1], d[2]
-    N = unit_normal(d)
     with np.errstate(all="ignore"):  # an overflow is reported by the kernel's start check
-        cdot = np.array([s.vx, s.vy, fx * s.vx + fy * s.vy])
-        omega = np.cross(N, cdot) / r + s.spin * N
-        v = m * r * r * (1.4 * omega - N * (N @ omega))
+        v = initial_momentum(landscape.evaluate(s.x, s.y), s.vx, s.vy, s.spin, r, m)
     return np.array([s.x, s.y]), v
 
 
@@ -125,7 +140,8 @@ class Simulation:
 
         self.landscape = landscape_for(scene.landscape)
         self._fn = self.landscape.compiled
-        self._W = self.tableau.matrix()
+        self._W, self._E, self._P = self.tableau.kernel_arrays()
+        self._error_kind = max(len(self._E) - 1, 0)  # kernel.error_norm: 1 or 2 estimates
         self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity)
         n = kernel.state_size(mk)
         self._z = np.zeros(n)
@@ -134,7 +150,7 @@ class Simulation:
         self._z[:2], self._z[2:5] = alpha, v
         if not mk:
             self._z[5:] = self._R.ravel()
-        self._K = np.zeros((self.tableau.k_rows, n))
+        self._K = np.zeros((len(self._W) + 1, n))
         self._probe = np.zeros(kernel.PROBE_SIZE)
         self._rows = np.empty((n_rows, kernel.ROW_SIZE))
         self._ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)
@@ -207,22 +223,22 @@ class Simulation:
         while (remaining > 0 or self._ints[kernel.I_ROWS] == 0) and not self.done:
             chunk = int(min(remaining, CHUNK))
             if self.adaptive:
-                if self._ints[kernel.I_ROWS] >= len(self._rows) - 1:
+                if self._ints[kernel.I_ROWS] >= len(self._rows) - 2:
                     if len(self._rows) >= MAX_ROWS:  # give up rather than fill the memory
                         self.status = Status.ABORTED
                         break
                     self._rows = np.concatenate([self._rows, np.empty_like(self._rows)])
                 before = self.steps + self.rejected
                 kernel.advance_adaptive(
-                    self._fn, self._W, self._p, self.tableau.error_exponent, self.t_end,
-                    self.record_dt or 0.0, self.rtol, self.atol, chunk, self._z, self._R, self._K, self._probe, self._rows,
-                    self._ints, self._info, self._work)
+                    self._fn, self._W, self._E, self._P, self._p, self._error_kind,
+                    self.tableau.error_exponent, self.t_end, self.record_dt or 0.0, self.rtol, self.atol, chunk,
+                    self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
                 advance = (kernel.ADVANCE_IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT
                            else kernel.ADVANCE[self.munthe_kaas])
                 advance(
-                    self._fn, self._W, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
+                    self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
                     chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
                     self._work)
             remaining -= chunk
@@ -244,6 +260,15 @@ class Simulation:
     def liftoff_time(self) -> float | None:
         t = self._info[kernel.F_LIFTOFF]
         return None if math.isnan(t) else float(t)
+
+    @property
+    def liftoff(self) -> Liftoff | None:
+        """The first lift-off, as soon as the kernel has found it (None before)."""
+        info = self._info
+        if math.isnan(info[kernel.F_LIFTOFF]):
+            return None
+        return Liftoff(float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]), float(info[kernel.F_LIFT_Y]),
+                       bool(info[kernel.F_LIFT_KINK]))
 
     def message(self, status: Status | None = None) -> str:
         """How the run ended (or stands), in words."""
@@ -276,7 +301,7 @@ class Simulation:
             "status": f"{status}: {message}",
         }
         return Trajectory(self.rows.copy(), status=status, message=message,
-                          liftoff_time=self.liftoff_time, steps=self.steps, rejected=self.rejected,
+                          liftoff=self.liftoff, steps=self.steps, rejected=self.rejected,
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)
 
@@ -289,8 +314,14 @@ def describe(failure: Failure, radius: float) -> str:
         return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: r·κ = {value:.4g} ≥ 1 "
                 f"for a principal curvature κ, so the model cannot go on")
     if reason is Reason.KINK:
+        return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: a kink or cusp of a valley, "
+                f"where the normal turns by {value:.3g} rad at once, so the model cannot go on")
+    if reason is Reason.SECANT_NO_FIT:
         return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: the step across it "
-                f"bends like r·κ = {value:.4g} ≥ 1 (a kink or cusp of a valley), so the model cannot go on")
+                f"bends like r·κ = {value:.4g} ≥ 1, so the model cannot go on")
+    if reason is Reason.HEIGHT_JUMP:
+        return (f"the landscape jumps in height by {value:.4g} m at {where} (it is not continuous there), "
+                f"so the rolling ball cannot go on")
     if reason is Reason.START_UNDEFINED:
         return f"the landscape cannot be evaluated at the start point (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
     if reason is Reason.START_OVERFLOW:

@@ -15,9 +15,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from .dop853 import DOP853, DensePair
 from .implicit import GAUSS4, GAUSS6, Collocation
-from .kinds import MethodInfo, MethodKind
+from .kinds import MethodInfo, MethodKind, cubic_hermite
 
 
 def _fractions(values) -> tuple[Fraction, ...]:
@@ -33,6 +32,13 @@ class Tableau(MethodInfo):
     ``b_hat`` of a lower order ``order_hat``: their difference estimates the error of a
     step. The pairs here are "first same as last": the last row of ``a`` is ``b``, so the
     last stage is the derivative at the new state.
+
+    Dense output: ``dense`` holds a continuous extension of order ``dense_order`` as scipy's
+    ``P``: row i for stage derivative K_i (the derivative at the new state included as one
+    more row for methods that are not first same as last), column k the coefficient of
+    theta^(k+1), so that z(t + theta h) = z + h sum_i K_i sum_k P[i, k] theta^(k+1). Without it
+    the method gets the cubic Hermite interpolant of the step's end values and derivatives
+    (``dense_output``).
     """
 
     name: str
@@ -43,6 +49,8 @@ class Tableau(MethodInfo):
     b: tuple[Fraction, ...]
     b_hat: tuple[Fraction, ...] | None = None
     order_hat: int | None = None
+    dense: tuple[tuple[Fraction, ...], ...] | None = None
+    dense_order: int | None = None
 
     def __post_init__(self):
         s = len(self.b)
@@ -62,6 +70,13 @@ class Tableau(MethodInfo):
                 raise ValueError(f"{self.name}: b_hat must have {s} weights summing to 1, with order_hat")
             if self.a[-1] + (0,) != self.b:
                 raise ValueError(f"{self.name}: the last row of a must be b (first same as last)")
+        if self.dense is not None:
+            rows = s if self.first_same_as_last else s + 1
+            if len(self.dense) != rows or self.dense_order is None:
+                raise ValueError(f"{self.name}: dense must have {rows} rows, with dense_order")
+            b = self.b + (0,) * (rows - s)
+            if any(sum(row) != bi for row, bi in zip(self.dense, b)):
+                raise ValueError(f"{self.name}: the dense output at theta = 1 must be the step (rows sum to b)")
 
     @property
     def kind(self) -> MethodKind:
@@ -79,16 +94,37 @@ class Tableau(MethodInfo):
         fixed-step tableau: for measuring the pair's two orders."""
         b, order = (self.b_hat, self.order_hat) if embedded else (self.b, self.order)
         suffix = "-embedded" if embedded else "-main"
-        return replace(self, name=self.name + suffix, b=b, order=order, b_hat=None, order_hat=None)
+        return replace(self, name=self.name + suffix, b=b, order=order, b_hat=None, order_hat=None,
+                       dense=None, dense_order=None)
 
     @property
     def stages(self) -> int:
         return len(self.b)
 
     @property
-    def k_rows(self) -> int:
-        """Rows of the kernel's stage array K: the stages and the derivative at the new state."""
-        return self.stages + 1
+    def first_same_as_last(self) -> bool:
+        """The last stage is the derivative at the new state (the pairs here)."""
+        return self.b_hat is not None
+
+    @property
+    def last(self) -> int:
+        """Index of the derivative at the new state among the stage derivatives K."""
+        return self.stages - 1 if self.first_same_as_last else self.stages
+
+    def dense_output(self) -> tuple[tuple[Fraction, ...], ...]:
+        """The interpolation matrix P (see the class docstring), exact: the declared one, or
+        the cubic Hermite interpolant of z_n, K_0 = z'(z_n), z_n+1 = z_n + h sum b_i K_i and
+        K_last = z'(z_n+1), whose coefficients of theta, theta^2, theta^3 are
+        e_0, 3 b - 2 e_0 - e_last and e_0 + e_last - 2 b."""
+        if self.dense is not None:
+            return self.dense
+        return cubic_hermite(self.b + (Fraction(0),) * (self.last + 1 - self.stages), self.last)
+
+    @property
+    def interpolation_order(self) -> int:
+        """Order of the dense output: the declared one, or for the cubic Hermite interpolant
+        3 (error O(h^4) inside a step), and never above the method's order."""
+        return self.dense_order if self.dense is not None else min(3, self.order)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The tableau as float arrays (A square, strictly lower triangular; b; c)."""
@@ -98,19 +134,30 @@ class Tableau(MethodInfo):
             A[i, :i] = [float(v) for v in row]
         return A, np.array([float(v) for v in self.b]), np.array([float(v) for v in self.c])
 
-    def matrix(self) -> np.ndarray:
-        """A with the weights b as one more row (and for a pair the error weights b - b_hat
-        as another): the (s + 1) x s or (s + 2) x s array the kernel reads."""
+    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The method as the kernel reads it: (W, E, P) over the stage derivatives K_0 .. K_last
+        (K_last the derivative at the new state, ``last``). W is square and strictly lower
+        triangular: rows 1 .. last-1 the stage coefficients, row ``last`` the weights b.
+        E holds the error weights b - b_hat (no rows for fixed-step methods). P is the dense
+        output. (Extra dense-output stages would be further rows of W, K and P after ``last``.)
+        """
         A, b, _ = self.arrays()
-        rows = [A, b]
+        size = self.last + 1
+        W = np.zeros((size, size))
+        W[: self.stages, : self.stages] = A
+        W[self.last, : self.stages] = b
+        E = np.zeros((0, size))
         if self.adaptive:
-            rows.append(b - np.array([float(v) for v in self.b_hat]))
-        return np.vstack(rows)
+            E = (b - np.array([float(v) for v in self.b_hat]))[None, :]
+        P = np.array([[float(v) for v in row] for row in self.dense_output()])
+        return W, E, P
 
 
-def tableau(name: str, label: str, order: int, c, a, b, b_hat=None, order_hat=None) -> Tableau:
+def tableau(name: str, label: str, order: int, c, a, b, b_hat=None, order_hat=None, dense=None,
+            dense_order=None) -> Tableau:
     return Tableau(name, label, order, _fractions(c), tuple(_fractions(r) for r in a), _fractions(b),
-                   None if b_hat is None else _fractions(b_hat), order_hat)
+                   None if b_hat is None else _fractions(b_hat), order_hat,
+                   None if dense is None else tuple(_fractions(r) for r in dense), dense_order)
 
 
 EULER = tableau("euler", "Euler", 1, c=[0], a=[], b=[1])
@@ -153,11 +200,24 @@ DOPRI5 = tableau(
     b=["35/384", 0, "500/1113", "125/192", "-2187/6784", "11/84", 0],
     b_hat=["5179/57600", 0, "7571/16695", "393/640", "-92097/339200", "187/2100", "1/40"],
     order_hat=4,
+    # the continuous extension of order 4 (L. F. Shampine, "Some practical Runge-Kutta
+    # formulas", Math. Comp. 46, 1986), in the form of scipy's RK45.P
+    dense=[
+        [1, "-8048581381/2820520608", "8663915743/2820520608", "-12715105075/11282082432"],
+        [0, 0, 0, 0],
+        [0, "131558114200/32700410799", "-68118460800/10900136933", "87487479700/32700410799"],
+        [0, "-1754552775/470086768", "14199869525/1410260304", "-10690763975/1880347072"],
+        [0, "127303824393/49829197408", "-318862633887/49829197408", "701980252875/199316789632"],
+        [0, "-282668133/205662961", "2019193451/616988883", "-1453857185/822651844"],
+        [0, "40617522/29380423", "-110615467/29380423", "69997945/29380423"],
+    ],
+    dense_order=4,
 )
 
+# Every registry entry is a tableau; ``Method`` names that role in signatures.
 # A registry entry: an explicit tableau, an implicit collocation method or DOP853's pair,
-# each with name, label, order, kind (and what follows from it) and the kernel's data.
-Method = Tableau | Collocation | DensePair
+# each with name, label, order, kind (and what follows from it) and ``kernel_arrays``.
+Method = Tableau | Collocation
 
 # Every method by the name scene files, the command line and the app use, in the order
 # they are listed.

@@ -53,8 +53,11 @@ class Reason(str, enum.Enum):
     """Why the physics stopped a run (``Failure.reason``); ``Failure.value`` says how far."""
 
     NO_FIT = "no_fit"                    # r·κ ≥ 1 for a principal curvature κ (value: r·κ)
-    KINK = "kink"                        # a kink or cusp of a valley, seen by the secant
-                                         # curvature of a step (value: r times it)
+    KINK = "kink"                        # a kink or cusp of a valley (value: the angle its
+                                         # normal turns there, rad)
+    SECANT_NO_FIT = "secant_no_fit"      # a step bends tighter than the ball (value: r times
+                                         # the secant curvature)
+    HEIGHT_JUMP = "height_jump"          # the landscape's height jumps (value: the jump, m)
     START_UNDEFINED = "start_undefined"  # the landscape cannot be evaluated at the start point
     START_OVERFLOW = "start_overflow"    # the landscape can, but the initial state overflows
     UNDEFINED = "undefined"              # the state became non-finite: the landscape cannot be
@@ -66,6 +69,16 @@ class Reason(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+
+@dataclass(frozen=True)
+class Liftoff:
+    """Where the real ball would first leave the surface: F·N turns negative, or a convex kink."""
+
+    time: float   # s, located on the method's dense output
+    x: float      # contact point (m)
+    y: float
+    kink: bool    # at a convex kink (a ridge) rather than where F·N crosses 0
 
 
 @dataclass(frozen=True)
@@ -86,7 +99,7 @@ class Trajectory:
     data: np.ndarray
     status: Status = Status.OK
     message: str = ""
-    liftoff_time: float | None = None
+    liftoff: Liftoff | None = None
     steps: int = 0          # accepted steps
     rejected: int = 0       # steps tried and rejected by the error control
     evaluations: int = 0    # right-hand-side evaluations, rejected tries included
@@ -95,6 +108,11 @@ class Trajectory:
     radius: float = 0.1
     gravity: float = 9.81
     provenance: dict = field(default_factory=dict)
+
+    @property
+    def liftoff_time(self) -> float | None:
+        """The first lift-off's time (s), or None."""
+        return None if self.liftoff is None else self.liftoff.time
 
     def __len__(self) -> int:
         return len(self.data)

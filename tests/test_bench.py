@@ -9,31 +9,25 @@ from rollball import Scene, Simulation
 from rollball.bench import Config, run, targets
 from rollball.bench.cstep import CStep
 from rollball.cli import main
+from rollball.comparison import default_runs
 
 
 def test_small_work_precision_report(tmp_path):
-    text = run(tmp_path, Config(("bowl",), 0.5, 1, quick=True, targets=False), log=lambda _: None)
+    text = run(tmp_path, Config(("bowl",), 0.5, quick=True, targets=False), log=lambda _: None)
     assert (tmp_path / "bench.md").read_text() == text
-    points = json.loads((tmp_path / "bench.json").read_text())["points"]
-    labels = {p["label"] for p in points}
-    assert labels == {"euler MK", "euler classic", "rk4 MK", "rk4 classic", "lawson5 MK",
-                      "lawson5 classic", "adaptive (DP5(4) MK)", "scipy DOP853"}
-    for label in ("rk4 MK", "adaptive (DP5(4) MK)", "scipy DOP853"):
-        line = [p for p in points if p["label"] == label]
-        errors = [p["error_alpha"] for p in line]
-        assert errors[0] > errors[-1] and errors[0] < 1e-3, (label, errors)
-        assert all(p["seconds"] > 0 and p["steps"] > 0 for p in line)
+    bowl = json.loads((tmp_path / "bench.json").read_text())["scenes"]["bowl"]
+    assert bowl["format"] == "rollball-compare" and bowl["t_end"] == 0.5  # rollball compare's own
+    assert {(r["method"], r["munthe_kaas"]) for r in bowl["runs"]} == {(s.method, s.munthe_kaas)
+                                                                        for s in default_runs()}
+    scipy = [p["contact"] for p in bowl["scipy_dop853"]]
+    assert len(scipy) == 2 and scipy[0] > scipy[-1] and scipy[0] < 1e-3
     # classic and Munthe-Kaas share the motion, and differ in R
-    mk, classic = ([p for p in points if p["label"] == f"rk4 {k}"] for k in ("MK", "classic"))
-    assert [p["error_alpha"] for p in mk] == [p["error_alpha"] for p in classic]
-    assert mk[0]["error_R"] < classic[0]["error_R"]
-    assert "| rk4 MK | dt 2e-02 |" in text
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        assert "no figure" in text
-    else:
-        assert (tmp_path / "bench.png").read_bytes()[:4] == b"\x89PNG" and "![work-precision]" in text
+    mk, classic = ([r["error"] for r in bowl["runs"] if r["method"] == "rk4" and r["munthe_kaas"] is k]
+                   for k in (True, False))
+    assert [e["contact"] for e in mk] == [e["contact"] for e in classic]
+    assert mk[0]["orientation"] < classic[0]["orientation"]
+    assert "### bowl" in text and "#### scipy DOP853 on the same equations" in text
+    assert (tmp_path / "bench.png").read_bytes()[:4] == b"\x89PNG" and "![work-precision](bench.png)" in text
 
 
 def test_the_c_step_is_the_same_step():

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from rollball.geometry import fit_ratio, unit_normal
+from rollball import Scene, simulate
+from rollball.examples import scene_path
+from rollball.geometry import fit_ratio, reachable_height, unit_normal
 from rollball.landscape import Landscape
 
 xs, ys = np.meshgrid(np.linspace(-0.5, 0.5, 7), np.linspace(-0.4, 0.6, 5), indexing="ij")
@@ -44,3 +46,12 @@ def test_outside_the_domain_is_nan():
     d = Landscape("log(x)").evaluate(np.array([-1.0, 1.0]), np.array([0.0, 0.0]))
     ratio = fit_ratio(d, 0.1)
     assert np.isnan(ratio[0]) and np.isfinite(ratio[1])
+
+
+@pytest.mark.parametrize("name", ["incline", "flat", "liftoff"])
+def test_reachable_height_is_the_start_energy_over_m_g(name):
+    scene = Scene.load(scene_path(name))   # moving starts, flat one with spin
+    landscape = Landscape(scene.landscape)
+    d = landscape.evaluate(scene.start.x, scene.start.y)
+    energy = simulate(scene, t_end=0.01).energy[0]
+    assert reachable_height(d, scene) == pytest.approx(energy / (scene.ball.mass * scene.gravity), rel=1e-12)

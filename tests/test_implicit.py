@@ -45,14 +45,15 @@ def _step(tab, scene, h, z, R):
     """One collocation step of size h from (z, R): (code, new z, new R, evaluations)."""
     land = landscape_for(scene.landscape)
     p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity)
-    n, s = kernel.MK_SIZE, tab.stages
-    K = np.zeros((tab.k_rows, n))
+    W, _, _ = tab.kernel_arrays()
+    n = kernel.MK_SIZE
+    K = np.zeros((len(W), n))
     pn = np.zeros(kernel.PROBE_SIZE)
     kernel.dynamics(land.compiled, np.zeros(6), p, z, True, K, 0, pn, True)
     zn, Rn = np.zeros(n), np.zeros((3, 3))
     ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)
-    code = collocation_step(land.compiled, np.zeros(6), p, tab.matrix(), s, True, n, h, z, R, K,
-                            tab.k_rows - 1, np.zeros(n), zn, Rn, pn, ints)
+    code = collocation_step(land.compiled, np.zeros(6), p, W, True, n, h, z, R, K, tab.last, np.zeros(n),
+                            zn, Rn, pn, ints)
     zn[5:] = 0.0  # the next step starts from u = 0
     return code, zn, Rn, ints[kernel.I_EVALS]
 

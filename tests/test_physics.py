@@ -123,7 +123,7 @@ def test_too_big_ball_stops_with_does_not_fit():
     assert traj.status is Status.DOES_NOT_FIT
     assert "does not fit" in traj.message and "t = " in traj.message
     assert traj.failure.reason is Reason.NO_FIT and traj.failure.value >= 1.0
-    assert traj.t[-1] < traj.failure.time < scene.duration
+    assert traj.t[-1] <= traj.failure.time < scene.duration
     # every row is a state where the ball still fits: curvature of 4 y^2 is 8 / (1 + 64 y^2)^1.5
     y = traj.contact[:, 1]
     assert (scene.ball.radius * 8 / (1 + 64 * y**2) ** 1.5 < 1).all()

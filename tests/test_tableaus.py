@@ -61,10 +61,12 @@ def test_step_size_exponent_follows_the_error_estimate():
 def test_the_pair():
     assert (DOPRI5.order, DOPRI5.order_hat) == (5, 4)
     assert DOPRI5.weights().b == DOPRI5.b and DOPRI5.weights(embedded=True).b == DOPRI5.b_hat
-    W = DOPRI5.matrix()
-    assert W.shape == (9, 7)
-    assert (W[7] == W[6]).all()  # first same as last: the last stage row is b
-    assert W[8].sum() == pytest.approx(0, abs=1e-16)  # b - b_hat
+    W, E, P = DOPRI5.kernel_arrays()
+    assert W.shape == (7, 7) and E.shape == (1, 7) and P.shape == (7, 4) and DOPRI5.last == 6
+    assert (W[6] == [float(v) for v in DOPRI5.b]).all()  # first same as last: the last stage row is b
+    assert E[0].sum() == pytest.approx(0, abs=1e-16)  # b - b_hat
+    W, E, P = RK4.kernel_arrays()  # the derivative at the new state is one more row
+    assert W.shape == (5, 5) and E.shape == (0, 5) and P.shape == (5, 3) and RK4.last == 4
     with pytest.raises(ValueError, match="b_hat"):
         Tableau("bad", "Bad", 1, (Fraction(0), Fraction(1)), ((Fraction(1),),),
                 (Fraction(1), Fraction(0)), (Fraction(1, 2), Fraction(1, 3)), 1)

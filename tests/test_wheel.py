@@ -1,5 +1,5 @@
 """The installed package carries its data: a wheel built from the sources holds the example
-scenes, the app's icon and the benchmark's C source, and lists the examples from any folder."""
+scenes, the app's icon and help pages and the benchmark's C source, and lists the examples from any folder."""
 
 import shutil
 import subprocess
@@ -31,11 +31,12 @@ def wheel(tmp_path_factory):
     return path
 
 
-def test_wheel_holds_examples_icon_and_c_source(wheel):
+def test_wheel_holds_examples_icon_help_and_c_source(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert {f"rollball/examples/{name}.json" for name in example_names()} <= names
     assert len(example_names()) >= 10
-    assert {"app/icons/rollball.svg", "rollball/bench/step.c", "rollball/examples/__init__.py"} <= names
+    assert {"app/icons/rollball.svg", "rollball/bench/step.c", "rollball/examples/__init__.py",
+            "app/help_pages/model.html", "app/help_pages/plots.html"} <= names
     entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
     text = zipfile.ZipFile(wheel).read(entry_points).decode()
     assert "rollball = rollball.cli:main" in text and "rollball-app = app:main" in text

@@ -1,7 +1,7 @@
 """``rollball bench``: the speed targets and the work-precision report.
 
-``run`` measures (see ``targets`` and ``workprecision``) and writes ``bench.md``,
-``bench.png`` (needs matplotlib: ``pip install rollball[bench]``) and ``bench.json``.
+``run`` measures (see ``targets`` and ``workprecision``, which runs ``rollball.compare`` on
+each scene) and writes ``bench.md``, ``bench.png`` and ``bench.json``.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from ..files import atomic_write_text
+from ..files import atomic_write_bytes, atomic_write_text
 from . import report, targets, workprecision
 
 
@@ -18,13 +18,12 @@ from . import report, targets, workprecision
 class Config:
     scenes: tuple[str, ...]        # example scene names
     t_end: float | None            # None: each scene's own duration
-    repeats: int                   # timed runs per point (their median counts)
-    quick: bool                    # fewer steps, tolerances and repeats
+    quick: bool                    # shorter ladders, fewer tolerances and repeats
     targets: bool = True           # also measure the speed targets
 
 
-FULL = Config(("hills", "bowl", "saddle"), None, 5, quick=False)
-QUICK = Config(("hills", "bowl", "saddle"), 2.0, 3, quick=True)
+FULL = Config(("hills", "bowl", "saddle"), None, quick=False)
+QUICK = Config(("hills", "bowl", "saddle"), 2.0, quick=True)
 
 
 def run(out: Path, config: Config = FULL, log=print) -> str:
@@ -35,13 +34,12 @@ def run(out: Path, config: Config = FULL, log=print) -> str:
         log("speed targets ...")
         measured = targets.measure(config.quick)
     log("work against precision ...")
-    points = workprecision.measure(list(config.scenes), config.t_end, config.quick, config.repeats)
-    text = report.markdown(measured, points, config.t_end, config.quick)
-    if report.figure(points, out / "bench.png"):
-        text += "\n![work-precision](bench.png)\n"
-    else:
-        text += "\n(no figure: matplotlib is not installed; `pip install rollball[bench]`)\n"
+    results = workprecision.measure(list(config.scenes), config.t_end, config.quick, log)
+    text = report.markdown(measured, results, config.t_end, config.quick) + "\n![work-precision](bench.png)\n"
+    image = report.figure(results)
+    scenes = {r.name: {**r.comparison.to_dict(), "scipy_dop853": [asdict(b) for b in r.scipy]} for r in results}
+    atomic_write_bytes(out / "bench.png", image)
     atomic_write_text(out / "bench.md", text)
-    atomic_write_text(out / "bench.json", json.dumps({"targets": measured,
-                                                      "points": [asdict(p) for p in points]}, indent=1))
+    atomic_write_text(out / "bench.json", json.dumps({"targets": measured, "scenes": scenes}, indent=1,
+                                                     allow_nan=False))
     return text

@@ -2,25 +2,8 @@
 
 from __future__ import annotations
 
-import platform
-from pathlib import Path
-
-from .workprecision import Point
-
-
-def machine() -> str:
-    """The processor (from /proc/cpuinfo where there is one), core count and Python."""
-    import os
-
-    model = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{model}, {os.cpu_count()} cores, {platform.system()}, Python {platform.python_version()}"
+from ..comparison_report import draw_work_precision, findings, machine, new_figure, png
+from .workprecision import SceneResult
 
 
 def _targets(t: dict) -> list[str]:
@@ -56,55 +39,41 @@ def _targets(t: dict) -> list[str]:
     return lines
 
 
-def _points(points: list[Point]) -> list[str]:
-    lines = ["## Work against precision", "",
-             "Error at the final time against scipy DOP853 at rtol = atol = 1e-12 on the same equations "
-             "(max over x, y for α; over the entries for R); wall time is the median of the timed runs. "
-             "Adaptive runs and scipy use atol = rtol · 1e-3.", ""]
-    for scene in dict.fromkeys(p.scene for p in points):
-        lines += [f"### {scene}", "", "| method | setting | steps | time (ms) | error α (m) | error R |",
-                  "|---|---|---:|---:|---:|---:|"]
-        lines += [f"| {p.label} | {p.setting} {p.value:.0e} | {p.steps} | {p.seconds * 1e3:.3g} | "
-                  f"{p.error_alpha:.2e} | {p.error_R:.2e} |" for p in points if p.scene == scene]
-        lines.append("")
-    return lines
+def _scene(result: SceneResult) -> list[str]:
+    cmp = result.comparison
+    lines = [f"### {result.name}", "", f"`z = {cmp.scene.landscape}`, to t = {cmp.t_end:g} s.", "",
+             *findings(cmp, heading="####"), "", "#### scipy DOP853 on the same equations", "",
+             "| rtol | evaluations | time (ms) | contact (m) | orientation |", "|---|---:|---:|---:|---:|"]
+    lines += [f"| {b.rtol:.0e} | {b.evaluations} | {b.seconds * 1e3:.3g} | {b.contact:.2e} | "
+              f"{b.orientation:.2e} |" for b in result.scipy]
+    return lines + [""]
 
 
-def markdown(targets: dict | None, points: list[Point], t_end: float | None, quick: bool) -> str:
+def markdown(targets: dict | None, results: list[SceneResult], t_end: float | None, quick: bool) -> str:
     until = "each scene's duration" if t_end is None else f"t = {t_end:g} s"
     lines = ["# RollBall benchmark", "", f"Machine: {machine()}.", "",
              f"Mode: {'quick' if quick else 'full'}; scenes run to {until}.", ""]
     if targets is not None:
         lines += _targets(targets) + [""]
-    lines += _points(points)
+    lines += ["## Work against precision", "",
+              "`rollball compare` on each scene (every method over its ladder of steps or tolerances; "
+              "the full tables are in bench.json), and scipy's DOP853 on the same equations "
+              "(atol = 1e-3 rtol) against the same reference at the same times.", ""]
+    for result in results:
+        lines += _scene(result)
     return "\n".join(lines) + "\n"
 
 
-def figure(points: list[Point], path: Path) -> bool:
-    """Error in α against wall time, one panel per scene; False where matplotlib is missing."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return False
-    scenes = list(dict.fromkeys(p.scene for p in points))
-    fig, axes = plt.subplots(1, len(scenes), figsize=(5.2 * len(scenes), 4.6), squeeze=False)
-    for ax, scene in zip(axes[0], scenes):
-        for label in dict.fromkeys(p.label for p in points):
-            line = [p for p in points if p.scene == scene and p.label == label]
-            style = "k--o" if label.startswith("scipy") else ("-s" if "adaptive" in label else
-                                                              ("-o" if "MK" in label else ":x"))
-            ax.loglog([p.seconds for p in line], [max(p.error_alpha, 1e-16) for p in line], style,
-                      label=label, markersize=4)
-        ax.set_title(scene)
-        ax.set_xlabel("wall time (s)")
-        ax.grid(True, which="major", alpha=0.3)
-    axes[0][0].set_ylabel("error in the contact point at t_end (m)")
-    axes[0][-1].legend(fontsize=7)
+def figure(results: list[SceneResult]) -> bytes:
+    """Contact-point error against compute time, one panel per scene, scipy dashed black."""
+    fig = new_figure(5.2 * len(results), 4.6)
+    axes = fig.subplots(1, len(results), squeeze=False)[0]
+    colors: dict = {}
+    for ax, result in zip(axes, results):
+        draw_work_precision(ax, result.comparison, colors)
+        ax.loglog([b.seconds for b in result.scipy], [max(b.contact, 1e-16) for b in result.scipy], "k--o",
+                  label="scipy DOP853", markersize=4)
+        ax.set_title(result.name)
+    axes[-1].legend(fontsize=7, title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
     fig.suptitle(f"RollBall work-precision — {machine()}", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return png(fig)

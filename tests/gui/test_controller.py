@@ -78,3 +78,18 @@ def test_document_title_and_dirty_flag(hills):
     assert doc.dirty(changed)
     doc.saved(Path("/tmp/mine.json"), changed)
     assert doc.title() == "mine.json[*] — RollBall" and doc.stem == "mine" and not doc.dirty(changed)
+
+
+def test_runs_are_measured_against_a_reference_computed_alongside(qtbot, hills):
+    controller = RunController()
+    controller.speed = math.inf
+    runs = runs_of(hills, dict(method="euler", munthe_kaas=False, t_end=1.5), dict(method="rk4", t_end=1.5))
+    with qtbot.waitSignal(controller.measured, timeout=60_000):
+        controller.start(runs, reference=(hills, 1.5, 1e-3))
+    trajectory, estimate = controller.reference
+    assert trajectory.t[-1] == 1.5 and 0 <= estimate < 1e-9
+    for run in runs:
+        assert set(run.errors) >= {"contact", "energy", "orientation"} and len(run.errors["contact"]) == 1501
+        assert run.seconds > 0
+    assert np.nanmax(runs[0].errors["contact"]) > 1e4 * np.nanmax(runs[1].errors["contact"])
+    controller.shutdown()

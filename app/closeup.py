@@ -1,0 +1,81 @@
+"""A picture-in-picture close-up that follows the ball, so its rotation and any deformation
+of a classic R can be seen whatever the main camera's zoom.
+
+It draws its own fine patch of the landscape around the contact point (resampled as the ball
+moves, with darker lines fixed in the world one ball radius apart, so the ground visibly passes
+under the ball), the ball, and the trail; its camera looks from the main view's direction.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph.opengl as gl
+from PySide6 import QtCore, QtGui
+
+from rollball.geometry import fit_ratio
+
+from .view3d import BACKGROUND, TRAIL_COLOR, ball_mesh, ball_transform, surface_colors
+
+PATCH_RADII = 5.0      # the patch reaches this many ball radii either side of the contact point
+PATCH_CELLS = 40       # grid cells per side of the patch
+DISTANCE_RADII = 9.0   # camera distance from the ball's centre
+LINE_EVERY = 5         # a darker grid line every this many cells (a ball radius apart)
+
+
+class CloseUp(gl.GLViewWidget):
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setBackgroundColor(BACKGROUND)
+        self.setObjectName("closeup")
+        self.landscape = None
+        self.radius = 0.1
+        self.z_span = (0.0, 1.0)
+        self.patch = gl.GLSurfacePlotItem(shader="shaded", smooth=True, glOptions="opaque")
+        self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
+        self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=4.0, antialias=True, mode="line_strip")
+        for item in (self.patch, self.ball, self.trail):
+            self.addItem(item)
+        self.patch.setVisible(False)   # until it has been sampled
+        self._patch_origin = None
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)  # the main view keeps the mouse
+
+    def set_landscape(self, landscape, radius: float, z_span: tuple[float, float]) -> None:
+        """The landscape to sample, the ball's radius, and the heights the colour map spans
+        (the main view's, so colours match)."""
+        self.landscape, self.radius, self.z_span = landscape, radius, z_span
+        self._patch_origin = None
+
+    def show_ball(self, center: np.ndarray, R: np.ndarray, contact: np.ndarray, trail: np.ndarray,
+                  azimuth: float, elevation: float) -> None:
+        """Draw the ball at ``center`` turned by R, touching at ``contact`` (x, y), with the trail
+        points (n, 3), seen from the main camera's direction."""
+        if self.landscape is None:
+            return
+        self._update_patch(contact)
+        self.ball.setTransform(ball_transform(center, R, self.radius))
+        near = np.max(np.abs(trail[:, :2] - contact[:2]), axis=1) <= PATCH_RADII * self.radius if len(trail) else []
+        self.trail.setData(pos=trail[near] if np.count_nonzero(near) >= 2 else np.zeros((0, 3)))
+        self.opts["center"] = QtGui.QVector3D(*map(float, center))
+        self.opts["distance"] = DISTANCE_RADII * self.radius
+        self.opts["azimuth"], self.opts["elevation"] = azimuth, elevation
+        self.update()
+
+    def _update_patch(self, contact) -> None:
+        step = 2 * PATCH_RADII * self.radius / PATCH_CELLS
+        origin = tuple(np.floor((np.asarray(contact[:2]) - PATCH_RADII * self.radius) / step).astype(int))
+        if origin == self._patch_origin:
+            return  # the ball has not crossed a grid line: the same patch
+        self._patch_origin = origin
+        x = (origin[0] + np.arange(PATCH_CELLS + 1)) * step
+        y = (origin[1] + np.arange(PATCH_CELLS + 1)) * step
+        xs, ys = np.meshgrid(x, y, indexing="ij")
+        d = self.landscape.evaluate(xs, ys)
+        z = d[0]
+        colors = surface_colors(z, np.nan_to_num(fit_ratio(d, self.radius), nan=0.0), self.z_span)
+        # darker lines fixed in the world, every LINE_EVERY cells: the ground visibly passes by
+        ix, iy = np.meshgrid(origin[0] + np.arange(PATCH_CELLS + 1), origin[1] + np.arange(PATCH_CELLS + 1),
+                             indexing="ij")
+        colors[(ix % LINE_EVERY == 0) | (iy % LINE_EVERY == 0), :3] *= 0.55
+        finite = np.isfinite(z)
+        self.patch.setData(x=x, y=y, z=np.where(finite, z, z[finite].min() if finite.any() else 0.0), colors=colors)
+        self.patch.setVisible(True)

@@ -1,0 +1,95 @@
+"""Compare mode's plots: each run's true error against the reference over time (contact point
+in m, relative energy; log scales) and its ‖RᵀR − I‖, with one legend naming the runs and the
+reference with its own error estimate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6 import QtCore, QtWidgets
+
+from .plots import FLOOR, MAX_POINTS
+
+PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
+          ("orthogonality", "‖RᵀR − I‖"))
+REFERENCE_PEN = pg.mkPen("#555", width=1, style=QtCore.Qt.PenStyle.DashLine)
+
+
+def _thinned(n: int) -> np.ndarray:
+    """Indices of at most about MAX_POINTS of n rows, the last one included."""
+    stride = max(1, -(-n // MAX_POINTS))
+    return np.r_[np.arange(0, n, stride), n - 1] if n else np.zeros(0, dtype=int)
+
+
+class ErrorPlots(QtWidgets.QWidget):
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        layout = QtWidgets.QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.graphics = pg.GraphicsLayoutWidget()
+        self.graphics.setBackground("w")
+        self.graphics.setMinimumHeight(190)
+        self.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#333", colCount=3, horSpacing=12,
+                                    verSpacing=-6)
+        self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
+        self.plots: dict[str, pg.PlotItem] = {}
+        for col, (key, title) in enumerate(PANELS):
+            plot = self.graphics.addPlot(row=1, col=col)
+            plot.setTitle(title, size="9pt", color="#333")
+            plot.setLabel("bottom", "t", units="s")
+            plot.setLogMode(y=True)
+            plot.showGrid(x=True, y=True, alpha=0.25)
+            plot.setMouseEnabled(x=False, y=False)
+            self.plots[key] = plot
+        self.reference_line = pg.InfiniteLine(angle=0, pen=REFERENCE_PEN)
+        self.reference_label = ""
+        layout.addWidget(self.graphics)
+        self.curves: list[dict[str, pg.PlotDataItem]] = []
+        self.runs = []
+
+    def set_runs(self, runs, t_end: float) -> None:
+        """A curve per run and panel in the run's colour; the legend names them."""
+        for plot in self.plots.values():
+            plot.clear()
+            plot.setXRange(0.0, t_end, padding=0.02)
+            plot.setYRange(np.log10(FLOOR), 0.0, padding=0.0)
+            plot.enableAutoRange(axis="y")
+        self.legend.clear()
+        self.runs = list(runs)
+        self.curves = []
+        for run in self.runs:
+            pen = pg.mkPen(run.color, width=1.5)
+            curves = {key: plot.plot(pen=pen, skipFiniteCheck=True) for key, plot in self.plots.items()}
+            self.legend.addItem(curves["contact"], run.label)
+            self.curves.append(curves)
+        self.plots["contact"].addItem(self.reference_line)
+        self.reference_line.setVisible(False)
+        self.reference_label = "Reference: computing…"
+        self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
+
+    def set_reference(self, method: str, estimate: float) -> None:
+        """Name the reference and its own error; its error is drawn as a floor in the contact plot."""
+        self.legend.removeItem(self.reference_label)
+        self.reference_label = f"Reference: {method}, own error ≈ {estimate:.1g} m"
+        self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
+        self.reference_line.setPos(np.log10(max(estimate, FLOOR)))
+        self.reference_line.setVisible(True)
+
+    def set_visible(self, index: int, visible: bool) -> None:
+        for curve in self.curves[index].values():
+            curve.setVisible(visible)
+
+    def show_time(self, t: float) -> None:
+        """Each run's errors up to time t (the true errors once the reference is known)."""
+        for run, curves in zip(self.runs, self.curves):
+            n = run.index_at(t) + 1 if len(run.buffer) else 0
+            picked = _thinned(n)
+            times = run.buffer.t[picked]
+            curves["orthogonality"].setData(times, np.maximum(run.buffer.orthogonality_error[picked], FLOOR))
+            if run.errors is None:
+                continue
+            for key in ("contact", "energy"):
+                values = run.errors[key][:n][picked] if n else np.zeros(0)
+                known = np.isfinite(values)
+                curves[key].setData(times[known], np.maximum(values[known], FLOOR))

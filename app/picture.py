@@ -1,0 +1,91 @@
+"""Pictures of a run for slides: the 3-D view rendered at any size (not only the window's),
+with the close-up in its corner, an optional caption (formula, method, step, time) and,
+optionally, the plots below it. Used by Save Image and by animation export alike.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from rollball import METHODS, Scene
+
+INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
+CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)
+
+
+def caption_text(scene: Scene, t: float) -> str:
+    """One line saying what is shown: formula, method and step (or tolerance), time."""
+    method = METHODS[scene.integrator.method]
+    if method.adaptive:
+        stepping = f"{method.label}, rtol {scene.integrator.rtol:g}"
+    else:
+        orientation = "Munthe-Kaas" if scene.integrator.munthe_kaas else "classic"
+        stepping = f"{method.label}, {orientation}, h = {scene.integrator.dt:g} s"
+    return f"z = {scene.landscape}   ·   {stepping}   ·   t = {t:.3f} s"
+
+
+def caption_pixels(width: int) -> int:
+    return max(11, round(CAPTION_FRACTION * width))
+
+
+def caption_height(width: int) -> int:
+    """The height of the caption bar under a picture ``width`` pixels wide."""
+    return 2 * caption_pixels(width)
+
+
+def render_view(view, size: tuple[int, int]) -> QtGui.QImage:
+    """A GL view rendered off screen at ``size`` (width, height) with its current camera."""
+    bgra = view.renderToArray((int(size[0]), int(size[1])))
+    rgb = np.ascontiguousarray(bgra[..., 2::-1])
+    image = QtGui.QImage(rgb.data, rgb.shape[1], rgb.shape[0], rgb.strides[0], QtGui.QImage.Format.Format_RGB888)
+    return image.copy()   # owns its pixels once rgb is gone
+
+
+def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
+            plots: QtWidgets.QWidget | None = None) -> QtGui.QImage:
+    """The view at ``size``; ``inset`` (a GL view, e.g. the close-up) drawn in the top right
+    corner; a caption bar under it; the plots widget rendered below at the same width."""
+    width, height = map(int, size)
+    picture = render_view(view, (width, height))
+    text_px = caption_pixels(width)
+    caption_h = caption_height(width) if caption else 0
+    plots_h = round(plots.height() * width / max(1, plots.width())) if plots is not None else 0
+    out = QtGui.QImage(width, height + caption_h + plots_h, QtGui.QImage.Format.Format_RGB888)
+    out.fill(QtGui.QColor("white"))
+    painter = QtGui.QPainter(out)
+    painter.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
+    painter.setRenderHint(QtGui.QPainter.RenderHint.TextAntialiasing)
+    painter.drawImage(0, 0, picture)
+    if inset is not None:
+        w = round(INSET_FRACTION * width)
+        h = round(w * inset.height() / max(1, inset.width()))
+        margin = max(4, width // 100)
+        painter.drawImage(width - w - margin, margin, render_view(inset, (w, h)))
+        painter.setPen(QtGui.QPen(QtGui.QColor("#333333"), max(1, width // 600)))
+        painter.drawRect(width - w - margin, margin, w, h)
+    if caption:
+        font = QtGui.QFont(QtWidgets.QApplication.font())
+        font.setPixelSize(text_px)
+        painter.setFont(font)
+        painter.setPen(QtGui.QColor("#222222"))
+        painter.fillRect(0, height, width, caption_h, QtGui.QColor("#f3f1ea"))
+        painter.drawText(QtCore.QRect(text_px // 2, height, width - text_px, caption_h),
+                         QtCore.Qt.AlignmentFlag.AlignVCenter | QtCore.Qt.AlignmentFlag.AlignLeft, caption)
+    if plots is not None:
+        painter.save()
+        painter.translate(0, height + caption_h)
+        painter.scale(width / max(1, plots.width()), width / max(1, plots.width()))
+        plots.render(painter, QtCore.QPoint(0, 0), QtGui.QRegion(),
+                     QtWidgets.QWidget.RenderFlag.DrawChildren | QtWidgets.QWidget.RenderFlag.DrawWindowBackground)
+        painter.restore()
+    painter.end()
+    return out
+
+
+def rgb_array(image: QtGui.QImage) -> np.ndarray:
+    """An image's pixels as an (height, width, 3) uint8 array (a copy)."""
+    image = image.convertToFormat(QtGui.QImage.Format.Format_RGB888)
+    view = np.frombuffer(image.constBits(), dtype=np.uint8, count=image.sizeInBytes())
+    return view.reshape(image.height(), image.bytesPerLine())[:, : 3 * image.width()].reshape(
+        image.height(), image.width(), 3).copy()

@@ -1,0 +1,247 @@
+"""Analysis → Speed against error: ``rollball.compare`` on the current scene in the background,
+shown as two log-log panels (error against compute time; error against step size with the
+fitted orders), exported in the command line's formats. Clicking a point asks the main window
+to load that method and step (``runChosen``)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import threading
+from pathlib import Path
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6 import QtCore, QtWidgets
+
+from rollball import METHODS, Scene, compare
+from rollball.comparison import Cancelled
+from rollball.files import atomic_write_text
+
+from .compare_runs import COLORS
+
+CSV_NAME = "compare.csv"
+SPEC_COLORS = COLORS + ("#e377c2", "#7f7f7f", "#bcbd22", "#17becf")   # one per method, as the CLI's figure
+ORIENTATION_CEILING = 10.0   # a classic R far off SO(3) would squash the rest of the step panel
+
+
+class CompareThread(QtCore.QThread):
+    """``rollball.compare`` in a thread: ``progress(done, total, text)``, then ``done(comparison)``,
+    ``failed(message)`` or ``cancelled()``."""
+
+    progress = QtCore.Signal(int, int, str)
+    done = QtCore.Signal(object)
+    failed = QtCore.Signal(str)
+    cancelled = QtCore.Signal()
+
+    def __init__(self, scene: Scene, quick: bool, parent=None):
+        super().__init__(parent)
+        self.scene, self.quick = scene, quick
+        self.cancel_event = threading.Event()
+
+    def run(self) -> None:
+        try:
+            result = compare(self.scene, quick=self.quick, progress=self.progress.emit, cancel=self.cancel_event)
+        except Cancelled:
+            self.cancelled.emit()
+        except Exception as error:  # noqa: BLE001 - a refusal or a defect is shown, not raised into Qt
+            self.failed.emit(str(error))
+        else:
+            self.done.emit(result)
+
+    def cancel(self) -> None:
+        self.cancel_event.set()
+        self.wait()
+
+
+def runs_csv(comparison) -> str:
+    """One row per run of ``compare.json``'s runs, its keys as the header (errors flattened to
+    ``error_contact`` and so on), numbers at full precision."""
+    rows = comparison.to_dict()["runs"]
+    flat = [{**{k: v for k, v in row.items() if k != "error"},
+             **{f"error_{k}": v for k, v in row["error"].items()}} for row in rows]
+    out = io.StringIO()
+    if flat:
+        writer = csv.DictWriter(out, fieldnames=list(flat[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: ("" if v is None else repr(v) if isinstance(v, float) else v)
+                          for k, v in row.items()} for row in flat)
+    return out.getvalue()
+
+
+def _tip(x, y, data) -> str:
+    run = data
+    setting = f"h = {run.dt:g} s" if run.dt is not None else f"rtol = {run.rtol:g}"
+    return (f"{run.spec.label}, {setting}\ncontact error {run.error['contact']:.3g} m\n"
+            f"orientation error {run.error['orientation']:.3g}\ncompute time {run.seconds:.3g} s\n"
+            f"{run.steps:,} steps, {run.evaluations:,} evaluations\nclick: load it in the main window")
+
+
+class SpeedWindow(QtWidgets.QWidget):
+    """A window of its own, over the main one."""
+
+    runChosen = QtCore.Signal(object)   # a RunResult: its spec and dt or rtol
+
+    def __init__(self, parent=None):
+        super().__init__(parent, QtCore.Qt.WindowType.Window)
+        self.setWindowTitle("Speed against error — RollBall")
+        self.resize(1100, 560)
+        self.scene: Scene | None = None
+        self.thread: CompareThread | None = None
+        self.comparison = None
+        layout = QtWidgets.QVBoxLayout(self)
+        bar = QtWidgets.QHBoxLayout()
+        self.quick = QtWidgets.QCheckBox("Quick", objectName="quick", checked=True)
+        self.quick.setToolTip("Fewer steps and tolerances per method (about a minute)")
+        self.run_button = QtWidgets.QPushButton("Compute", objectName="compute")
+        self.run_button.clicked.connect(self.run)
+        self.cancel_button = QtWidgets.QPushButton("Cancel", objectName="cancel", enabled=False)
+        self.cancel_button.clicked.connect(self.cancel)
+        self.progress = QtWidgets.QProgressBar(objectName="progress", minimum=0, maximum=1)
+        self.status = QtWidgets.QLabel(objectName="status")
+        self.export_button = QtWidgets.QPushButton("Export…", objectName="export", enabled=False)
+        self.export_button.setToolTip(f"compare.json, compare.md, compare.png (as rollball compare "
+                                      f"--out writes them) and {CSV_NAME}, into a folder")
+        self.export_button.clicked.connect(self.export_dialog)
+        for widget in (self.quick, self.run_button, self.cancel_button, self.progress):
+            bar.addWidget(widget)
+        bar.addWidget(self.status, 1)
+        bar.addWidget(self.export_button)
+        layout.addLayout(bar)
+        plots = QtWidgets.QHBoxLayout()
+        self.time_plot = self._plot("Error against compute time", "compute time", "s", "contact-point error (m)")
+        self.step_plot = self._plot("Error against step size (fitted orders)", "step size h", "s",
+                                    "orientation error ‖R − R_ref‖")
+        plots.addWidget(self.time_plot)
+        plots.addWidget(self.step_plot)
+        layout.addLayout(plots, 1)
+
+    def _plot(self, title: str, x: str, units: str, y: str) -> pg.PlotWidget:
+        plot = pg.PlotWidget(background="w")
+        plot.setTitle(title, size="10pt", color="#333")
+        plot.setLabel("bottom", x, units=units)
+        plot.getAxis("bottom").enableAutoSIPrefix(False)
+        plot.setLabel("left", y)
+        plot.getAxis("left").enableAutoSIPrefix(False)
+        plot.setLogMode(x=True, y=True)
+        plot.showGrid(x=True, y=True, alpha=0.25)
+        plot.addLegend(offset=(10, -10), labelTextSize="8pt", labelTextColor="#333")  # bottom left: empty
+        return plot
+
+    # -- computing -------------------------------------------------------------------
+
+    def compute(self, scene: Scene) -> None:
+        """Compare every method on this scene (the window shows itself)."""
+        self.scene = scene
+        self.show()
+        self.raise_()
+        self.run()
+
+    def run(self) -> None:
+        if self.scene is None or self.thread is not None:
+            return
+        self.thread = CompareThread(self.scene, self.quick.isChecked(), self)
+        self.thread.progress.connect(self._progress)
+        self.thread.done.connect(self._done)
+        self.thread.failed.connect(lambda message: self._ended(f"Cannot compare: {message}"))
+        self.thread.cancelled.connect(lambda: self._ended("Cancelled"))
+        self.progress.setMaximum(0)
+        self.status.setText("Computing the reference…")
+        self.run_button.setEnabled(False)
+        self.cancel_button.setEnabled(True)
+        self.thread.start()
+
+    def cancel(self) -> None:
+        if self.thread is not None:
+            self.thread.cancel()
+
+    def _progress(self, done: int, total: int, text: str) -> None:
+        self.progress.setMaximum(total)
+        self.progress.setValue(done)
+        self.status.setText(text)
+
+    def _ended(self, text: str) -> None:
+        if self.thread is not None:
+            self.thread.wait()
+            self.thread.deleteLater()
+            self.thread = None
+        self.progress.setMaximum(1)
+        self.progress.setValue(1 if self.comparison is not None else 0)
+        self.status.setText(text)
+        self.run_button.setEnabled(True)
+        self.cancel_button.setEnabled(False)
+        self.export_button.setEnabled(self.comparison is not None)
+
+    def _done(self, comparison) -> None:
+        self.comparison = comparison
+        self.show_comparison(comparison)
+        self._ended(comparison.summary())
+
+    # -- drawing ---------------------------------------------------------------------
+
+    def show_comparison(self, comparison) -> None:
+        for plot in (self.time_plot, self.step_plot):
+            plot.clear()
+            plot.plotItem.legend.clear()
+        orders = {order.spec: order for order in comparison.orders}
+        lowest = ORIENTATION_CEILING
+        for spec in comparison.specs:
+            color = SPEC_COLORS[list(METHODS).index(spec.method) % len(SPEC_COLORS)]
+            pen = pg.mkPen(color, width=1.5, style=QtCore.Qt.PenStyle.SolidLine if spec.munthe_kaas
+                           else QtCore.Qt.PenStyle.DotLine)
+            runs = [r for r in comparison.runs if r.spec == spec and r.ok]
+            timed = [r for r in runs if r.error["contact"] > 0]
+            self._series(self.time_plot, timed, [r.seconds for r in timed], [r.error["contact"] for r in timed],
+                         pen, color, spec.label, spec.munthe_kaas)
+            if spec.fixed_step:
+                stepped = [r for r in runs if r.error["orientation"] > 0]
+                order = orders.get(spec)
+                slope = order.orientation if order is not None else None
+                name = spec.label + (f": order {slope:.2f}" if slope is not None else "")
+                self._series(self.step_plot, stepped, [r.dt for r in stepped],
+                             [r.error["orientation"] for r in stepped], pen, color, name, spec.munthe_kaas)
+                lowest = min([lowest] + [r.error["orientation"] for r in stepped])
+        floor = pg.mkPen("#999", width=1, style=QtCore.Qt.PenStyle.DashLine)
+        for plot, key in ((self.time_plot, "contact"), (self.step_plot, "orientation")):
+            line = pg.InfiniteLine(pos=np.log10(comparison.reference.floor(key)), angle=0, pen=floor)
+            plot.addItem(line)
+        self.step_plot.setYRange(np.log10(lowest) - 0.5, np.log10(ORIENTATION_CEILING), padding=0)
+
+    def _series(self, plot, runs, x, y, pen, color, name, munthe_kaas) -> None:
+        """A line per run spec and its runs as points: filled Munthe-Kaas, crosses classic."""
+        if not runs:
+            return
+        plot.plot(x, y, pen=pen, name=name)
+        # a scatter item is placed in the plot's log10 coordinates itself
+        points = pg.ScatterPlotItem(x=np.log10(x), y=np.log10(y), data=runs, brush=pg.mkBrush(color),
+                                    pen=None if munthe_kaas else pg.mkPen(color, width=2),
+                                    symbol="o" if munthe_kaas else "x", size=8, hoverable=True, hoverSize=11,
+                                    tip=_tip)
+        points.sigClicked.connect(lambda item, spots, event: spots and self.runChosen.emit(spots[0].data()))
+        plot.addItem(points)
+
+    # -- export ----------------------------------------------------------------------
+
+    def export_dialog(self) -> None:
+        folder = QtWidgets.QFileDialog.getExistingDirectory(self, "Export the comparison into a folder")
+        if folder:
+            self.export(Path(folder))
+
+    def export(self, folder: Path) -> bool:
+        """The command line's files (compare.json, compare.md, compare.png) and compare.csv."""
+        if self.comparison is None:
+            return False
+        try:
+            self.comparison.save(folder)
+            atomic_write_text(folder / CSV_NAME, runs_csv(self.comparison))
+        except (OSError, ValueError) as error:
+            message = getattr(error, "strerror", None) or str(error)
+            self.status.setText(f"Cannot export to {folder}: {message}")
+            QtWidgets.QMessageBox.warning(self, "Cannot export", f"{folder}: {message}")
+            return False
+        self.status.setText(f"Exported compare.json, compare.md, compare.png and {CSV_NAME} to {folder}")
+        return True
+
+    def closeEvent(self, event) -> None:
+        self.cancel()
+        super().closeEvent(event)

@@ -1,0 +1,575 @@
+"""Speed against error on one scene: which method, at which step or tolerance, gives which
+error, at what cost.
+
+``compare(scene)`` runs every method (or the run specs given) over a ladder of step sizes
+(fixed-step methods) or tolerances (adaptive ones) and measures each run against a
+reference: the most accurate method in ``METHODS`` at a tight tolerance, whose own error
+is estimated against a second, tighter run. As in DiffEqDevTools' ``WorkPrecision``, one
+run measures the error and timed repeats of the same run measure its cost.
+
+All runs are compared with the reference at common recorded times: multiples of
+``record_dt`` (a fixed step is a whole fraction or a whole multiple of it), and the error of
+a run is the maximum over those times, not only at the end.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from . import __version__
+from .scene import Scene
+from .simulation import CHUNK, Simulation
+from .tableaus import ALIASES, METHODS, MethodKind, get_method
+from .trajectory import Status, Trajectory
+
+ERRORS = ("contact", "velocity", "omega", "orientation", "energy")  # keys of every error dict
+FITTED = ("contact", "orientation")   # the errors whose log-log slope against dt is the order
+ERROR_UNITS = {"contact": "m", "velocity": "m/s", "omega": "rad/s", "orientation": "‖R − R_ref‖_F",
+               "energy": "relative"}
+
+REFERENCE_RTOL = 1e-13     # the reference run, and its check one decade tighter
+ATOL_PER_RTOL = 1e-3       # atol = 1e-3 rtol for every adaptive run
+FLOOR_FACTOR = 10.0        # errors below 10x the reference's own error are flagged, not fitted
+CEILING = 1e-2             # fixed-step ladders start at about this contact error
+ASYMPTOTIC = 1e-3          # orders are fitted over errors below this when there are 3 such points
+TARGETS = (1e-6, 1e-10)    # the summary names the cheapest run reaching each
+ROWS_PER_SECOND = 20       # the common times: at least 50 and at most 1000 of them
+MIN_ROWS, MAX_ROWS = 50, 1000
+COARSEST = 10              # the first step tried is t_end / 10
+
+
+@dataclass(frozen=True)
+class Effort:
+    """How much a comparison may spend: full or quick."""
+
+    budget: float           # seconds of computing per run spec (its ladder stops beyond)
+    max_points: int         # ladder points per run spec
+    decades: float          # error decades between ladder points (fixed steps)
+    tolerances: tuple[float, ...]
+    repeats: int            # timed repeats of a short run (at least); their median is its cost
+    short: float            # a run shorter than this (s) is repeated, as often as fits in
+    spread: float           # this many seconds (very short runs are at the mercy of other work)
+
+
+FULL = Effort(budget=12.0, max_points=12, decades=1.0,
+              tolerances=tuple(10.0 ** -k for k in range(3, 13)), repeats=5, short=0.2, spread=0.05)
+QUICK = Effort(budget=2.0, max_points=6, decades=2.0,
+               tolerances=(1e-3, 1e-6, 1e-9, 1e-12), repeats=3, short=0.05, spread=0.02)
+
+
+class Cancelled(Exception):
+    """The caller's cancel event was set: the comparison stopped and returned nothing."""
+
+
+class NothingToCompare(ValueError):
+    """The reference run stopped (the physics ended it) before the first common time."""
+
+
+# -- run specs ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class RunSpec:
+    """A method and how it advances the orientation: ``"rk4"`` (Munthe-Kaas) or ``"rk4/classic"``."""
+
+    method: str
+    munthe_kaas: bool = True
+
+    def __post_init__(self):
+        method = get_method(self.method)  # ValueError listing the valid names
+        object.__setattr__(self, "method", method.name)
+        if not isinstance(self.munthe_kaas, bool):
+            raise ValueError(f"munthe_kaas must be True or False, not {self.munthe_kaas!r}")
+        if not self.munthe_kaas and not method.classic_allowed:
+            raise ValueError(f"{method.name} always advances the orientation by Munthe-Kaas: "
+                             f"{method.name}/classic is not a run; valid runs: {', '.join(valid_specs())}")
+
+    def __str__(self) -> str:
+        return self.method if self.munthe_kaas else f"{self.method}/classic"
+
+    @property
+    def kind(self) -> MethodKind:
+        return METHODS[self.method].kind
+
+    @property
+    def fixed_step(self) -> bool:
+        return METHODS[self.method].fixed_step
+
+    @property
+    def label(self) -> str:
+        """For legends and tables: the method's label and, for fixed steps, the scheme."""
+        method = METHODS[self.method]
+        if not method.classic_allowed:
+            return method.label
+        return f"{method.label} {'Munthe-Kaas' if self.munthe_kaas else 'classic'}"
+
+
+def default_runs() -> list[RunSpec]:
+    """Every method in ``METHODS``, the explicit fixed-step ones both ways."""
+    return [RunSpec(name, mk) for name, method in METHODS.items()
+            for mk in ((True, False) if method.classic_allowed else (True,))]
+
+
+def valid_specs() -> list[str]:
+    return [str(spec) for spec in default_runs()]
+
+
+def parse_runs(text: str) -> list[RunSpec]:
+    """``"euler/classic,rk4,dopri5"`` -> run specs (duplicates dropped); ValueError listing
+    the valid specs for anything else."""
+    specs = []
+    for part in str(text).split(","):
+        part = part.strip()
+        name, slash, scheme = part.partition("/")
+        if name in METHODS or name in ALIASES:
+            if slash and scheme != "classic":
+                raise ValueError(f"unknown run {part!r}: only /classic may follow a method; "
+                                 f"valid runs: {', '.join(valid_specs())}")
+            spec = RunSpec(name, not slash)  # ValueError when the method has no classic scheme
+        else:
+            raise ValueError(f"unknown run {part!r}; valid runs: {', '.join(valid_specs())} "
+                             f"(comma-separated)")
+        if spec not in specs:
+            specs.append(spec)
+    return specs
+
+
+def _specs(runs) -> list[RunSpec]:
+    if runs is None:
+        return default_runs()
+    if isinstance(runs, str):
+        return parse_runs(runs)
+    specs = []
+    for run in runs:
+        if isinstance(run, str):
+            new = parse_runs(run)
+        elif isinstance(run, RunSpec):
+            new = [run]
+        else:
+            raise ValueError(f"a run is a RunSpec or a string like 'rk4/classic', not {run!r}")
+        specs += [spec for spec in new if spec not in specs]
+    if not specs:
+        raise ValueError(f"no runs given; valid runs: {', '.join(valid_specs())}")
+    return specs
+
+
+# -- errors against the reference -----------------------------------------------------------
+
+def _matching_rows(t: np.ndarray, t_ref: np.ndarray) -> np.ndarray:
+    """For every time in t, the index of the reference row at the same time, or -1."""
+    if len(t_ref) == 0:
+        return np.full(len(t), -1)
+    tolerance = 1e-9 * max(1.0, abs(float(t_ref[-1])))
+    j = np.clip(np.searchsorted(t_ref, t), 1, max(1, len(t_ref) - 1))
+    left = np.minimum(j - 1, len(t_ref) - 1)
+    right = np.minimum(j, len(t_ref) - 1)
+    nearest = np.where(np.abs(t_ref[left] - t) <= np.abs(t_ref[right] - t), left, right)
+    return np.where(np.abs(t_ref[nearest] - t) <= tolerance, nearest, -1)
+
+
+def error_series(traj: Trajectory, ref_traj: Trajectory) -> dict[str, np.ndarray]:
+    """The errors of ``traj`` against the reference at each of traj's row times: contact (m),
+    velocity (m/s), omega (rad/s), orientation (‖R − R_ref‖_F), energy (relative to the
+    reference's energy scale). NaN at times the reference did not record (record the
+    reference at ``record_dt`` = a multiple of traj's row spacing)."""
+    index = _matching_rows(traj.t, ref_traj.t)
+    found = index >= 0
+    at = np.where(found, index, 0)
+    series = {
+        "contact": np.linalg.norm(traj.contact - ref_traj.contact[at], axis=1),
+        "velocity": np.linalg.norm(traj.velocity - ref_traj.velocity[at], axis=1),
+        "omega": np.linalg.norm(traj.omega - ref_traj.omega[at], axis=1),
+        "orientation": np.linalg.norm((traj.R - ref_traj.R[at]).reshape(-1, 9), axis=1),
+        "energy": np.abs(traj.energy - ref_traj.energy[at]) / ref_traj.energy_scale,
+    }
+    return {key: np.where(found, value, np.nan) for key, value in series.items()}
+
+
+def _max_errors(traj: Trajectory, ref_traj: Trajectory) -> dict[str, float]:
+    """The maximum of each error over the common times (NaN where there are none)."""
+    series = error_series(traj, ref_traj)
+    out = {}
+    for key in ERRORS:
+        values = series[key][~np.isnan(series[key])]
+        out[key] = float(values.max()) if len(values) else math.nan
+    return out
+
+
+# -- runs ------------------------------------------------------------------------------------
+
+def _advance(run: Simulation, cancel: threading.Event | None) -> float:
+    """Run to the end in chunks (checking ``cancel`` between them); the seconds it took."""
+    seconds = 0.0
+    while not run.done:
+        start = time.perf_counter()
+        run.advance(CHUNK)
+        seconds += time.perf_counter() - start
+        if cancel is not None and cancel.is_set():
+            raise Cancelled()
+    return seconds
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The run every other one is measured against, and its own error."""
+
+    method: str
+    rtol: float
+    atol: float
+    error_estimate: float                 # the largest of error_estimates but energy
+    error_estimates: dict[str, float]     # against a run with a 10x tighter tolerance
+    status: Status
+    message: str
+    steps: int
+    seconds: float
+
+    def floor(self, key: str) -> float:
+        """Errors below this are the reference's own, not the run's."""
+        return FLOOR_FACTOR * self.error_estimates[key]
+
+
+def reference_method() -> str:
+    """The most accurate adaptive method in ``METHODS`` (highest order)."""
+    adaptive = [m for m in METHODS.values() if m.kind is MethodKind.ADAPTIVE]
+    return max(adaptive, key=lambda m: m.order).name
+
+
+def _reference(scene: Scene, t_end: float, record_dt: float, cancel=None) -> tuple[Trajectory, Reference]:
+    method = reference_method()
+    runs = []
+    for rtol in (REFERENCE_RTOL, REFERENCE_RTOL / 10):
+        run = Simulation(scene, method=method, t_end=t_end, rtol=rtol, atol=rtol * ATOL_PER_RTOL,
+                         record_dt=record_dt)
+        seconds = _advance(run, cancel)
+        runs.append((run.trajectory(), seconds))
+    (traj, seconds), (tighter, _) = runs
+    estimates = _max_errors(traj, tighter)
+    estimate = max(v for k, v in estimates.items() if k != "energy")
+    return traj, Reference(method, REFERENCE_RTOL, REFERENCE_RTOL * ATOL_PER_RTOL, estimate, estimates,
+                           traj.status, traj.message, traj.steps, seconds)
+
+
+def record_step(t_end: float) -> float:
+    """The spacing of the common recorded times for a run to t_end."""
+    return t_end / min(MAX_ROWS, max(MIN_ROWS, math.ceil(t_end * ROWS_PER_SECOND)))
+
+
+def reference_run(scene: Scene, t_end: float | None = None,
+                  record_dt: float | None = None) -> tuple[Trajectory, float]:
+    """The reference trajectory (rows at multiples of ``record_dt`` and at t_end) and an
+    estimate of its own error (the largest difference, in m, m/s, rad/s or ‖ΔR‖_F, from a
+    run with a 10x tighter tolerance)."""
+    t_end = scene.duration if t_end is None else t_end
+    traj, ref = _reference(scene, t_end, record_step(t_end) if record_dt is None else record_dt)
+    return traj, ref.error_estimate
+
+
+@dataclass
+class RunResult:
+    """One run of the comparison: its setting, how it ended, its cost and its errors."""
+
+    spec: RunSpec
+    dt: float | None           # fixed-step methods
+    rtol: float | None         # adaptive methods
+    atol: float | None
+    status: Status
+    steps: int
+    rejected: int
+    evaluations: int
+    seconds: float             # compute time of the run alone (median of repeats when short)
+    error: dict[str, float]    # maxima over the common times (NaN where none: see status)
+    below_reference_floor: bool
+    message: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.status is Status.OK
+
+    @property
+    def worst(self) -> float:
+        """The larger of the contact (m) and orientation errors: what the summary ranks by."""
+        return max(self.error["contact"], self.error["orientation"])
+
+    def to_dict(self) -> dict:
+        return {"method": self.spec.method, "munthe_kaas": self.spec.munthe_kaas, "dt": self.dt,
+                "rtol": self.rtol, "atol": self.atol, "status": str(self.status), "steps": self.steps,
+                "rejected": self.rejected, "evaluations": self.evaluations, "seconds": self.seconds,
+                "error": {k: _finite_or_none(v) for k, v in self.error.items()},
+                "below_reference_floor": self.below_reference_floor, "message": self.message}
+
+
+@dataclass(frozen=True)
+class Order:
+    """The fitted slope of log error against log dt for one fixed-step run spec."""
+
+    spec: RunSpec
+    contact: float | None
+    orientation: float | None
+    expected: int
+
+    def to_dict(self) -> dict:
+        return {"method": self.spec.method, "munthe_kaas": self.spec.munthe_kaas,
+                "contact": self.contact, "orientation": self.orientation, "expected": self.expected}
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+class _Runner:
+    """Runs of one comparison: the scene, the reference, the effort, the clock."""
+
+    def __init__(self, scene, t_end, record_dt, ref_traj, reference, effort, cancel):
+        self.scene, self.t_end, self.record_dt = scene, t_end, record_dt
+        self.ref_traj, self.reference, self.effort, self.cancel = ref_traj, reference, effort, cancel
+
+    def grid_step(self, dt: float) -> tuple[float, int]:
+        """The step nearest dt that lands on the common times, and how many steps per row."""
+        if dt >= self.record_dt:
+            j = max(1, round(dt / self.record_dt))
+            return self.record_dt * j, 1
+        k = max(1, round(self.record_dt / dt))
+        return self.record_dt / k, k
+
+    def finer(self, dt: float, ratio: float) -> float:
+        """The step about ratio times smaller than dt that lands on the common times."""
+        finer, _ = self.grid_step(dt / ratio)
+        if finer < dt:
+            return finer
+        if dt > self.record_dt:
+            return dt - self.record_dt
+        return self.record_dt / (round(self.record_dt / dt) + 1)
+
+    def options(self, spec: RunSpec, setting: float) -> dict:
+        if spec.fixed_step:
+            dt, every = self.grid_step(setting)
+            return dict(method=spec.method, munthe_kaas=spec.munthe_kaas, dt=dt, record_every=every)
+        return dict(method=spec.method, rtol=setting, atol=setting * ATOL_PER_RTOL, record_dt=self.record_dt)
+
+    def cost(self, seconds: float) -> float:
+        """What measuring a run of this many seconds costs: the run, and timed repeats when short."""
+        if seconds >= self.effort.short:
+            return seconds
+        return seconds + max(self.effort.repeats * seconds, min(self.effort.spread, 100 * seconds))
+
+    def warm_up(self, spec: RunSpec) -> None:
+        """A short run, so that compiling is not timed."""
+        setting = self.record_dt if spec.fixed_step else 1e-3
+        _advance(Simulation(self.scene, t_end=self.record_dt, **self.options(spec, setting)), self.cancel)
+
+    def run(self, spec: RunSpec, setting: float) -> RunResult:
+        """One untimed-for-error run, then (when short) timed repeats for the cost."""
+        options = self.options(spec, setting)
+        run = Simulation(self.scene, t_end=self.t_end, **options)
+        seconds = _advance(run, self.cancel)
+        traj = run.trajectory()
+        if seconds < self.effort.short and traj.status is Status.OK:
+            times = []
+            repeats = max(self.effort.repeats, min(100, math.ceil(self.effort.spread / max(seconds, 1e-6))))
+            for _ in range(repeats):
+                again = Simulation(self.scene, t_end=self.t_end, **options)
+                times.append(_advance(again, self.cancel))
+            seconds = float(np.median(times))
+        error = _max_errors(traj, self.ref_traj)
+        below = any(error[key] < self.reference.floor(key) for key in FITTED)
+        return RunResult(spec, options.get("dt"), options.get("rtol"), options.get("atol"), traj.status,
+                         traj.steps, traj.rejected, traj.evaluations, seconds, error, below,
+                         traj.message)
+
+
+Report = Callable[[str, int], None]   # (what runs next, ladder points so far)
+
+
+def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunResult]:
+    """Steps from coarse to fine: first a search down to a contact error of about CEILING,
+    then a point every ``effort.decades`` decades of error, until the reference's floor, a
+    run that ends early, the budget or ``max_points``."""
+    effort, order = runner.effort, METHODS[spec.method].order
+    ratio = min(10.0, max(1.5, 10.0 ** (effort.decades / order)))
+    dt, _ = runner.grid_step(runner.t_end / COARSEST)
+    spent, points = 0.0, []
+    while True:
+        report(f"{spec} dt {dt:.3g}", len(points))
+        start = time.perf_counter()
+        result = runner.run(spec, dt)
+        spent += time.perf_counter() - start
+        contact = result.error["contact"]
+        if not points and not (result.ok and contact <= CEILING):  # still searching
+            shrink = 0.25
+            if result.ok and contact > 0:
+                shrink = min(0.5, max(1e-3, 0.8 * (CEILING / contact) ** (1.0 / order)))
+            smaller = runner.finer(dt, 1 / shrink)
+            if spent + runner.cost(result.seconds * dt / smaller) > effort.budget or smaller < runner.t_end * 1e-9:
+                return [result]  # the ladder never started: show how the last try ended
+            dt = smaller
+            continue
+        points.append(result)
+        if not result.ok or result.below_reference_floor or len(points) >= effort.max_points:
+            return points
+        finer = runner.finer(dt, ratio)
+        if spent + runner.cost(result.seconds * dt / finer) > effort.budget:
+            return points
+        dt = finer
+
+
+def _tolerance_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunResult]:
+    """Tolerances from loose to tight, until the reference's floor, a run that ends early,
+    the budget or ``max_points``."""
+    spent, points = 0.0, []
+    for rtol in runner.effort.tolerances[: runner.effort.max_points]:
+        report(f"{spec} rtol {rtol:.0e}", len(points))
+        start = time.perf_counter()
+        result = runner.run(spec, rtol)
+        spent += time.perf_counter() - start
+        points.append(result)
+        # the next tolerance is 10-1000x tighter: its cost grows by a few times at most
+        if not result.ok or result.below_reference_floor or spent + runner.cost(4 * result.seconds) > runner.effort.budget:
+            break
+    return points
+
+
+def _slope(dts: list[float], errors: list[float]) -> float | None:
+    if len(dts) < 2:
+        return None
+    return float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
+
+
+def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Order:
+    """The least-squares slope of log error against log dt, in the contact point and the
+    orientation, over this spec's runs that ended ok with errors above the reference's floor
+    and, where at least three are, below ASYMPTOTIC (coarser steps are often not yet in the
+    range where the error goes as dt^order)."""
+    mine = [r for r in runs if r.spec == spec and r.ok and r.dt is not None]
+    slopes = {}
+    for key in FITTED:
+        used = [r for r in mine if math.isfinite(r.error[key]) and r.error[key] >= reference.floor(key)]
+        small = [r for r in used if r.error[key] <= ASYMPTOTIC]
+        used = small if len(small) >= 3 else used
+        slopes[key] = _slope([r.dt for r in used], [r.error[key] for r in used])
+    return Order(spec, slopes["contact"], slopes["orientation"], METHODS[spec.method].order)
+
+
+# -- the comparison --------------------------------------------------------------------------
+
+@dataclass
+class Comparison:
+    """What ``compare`` measured; ``to_dict`` is DESIGN §7's compare.json, ``save`` writes it
+    with the report (compare.md) and the figure (compare.png)."""
+
+    scene: Scene
+    t_end: float
+    record_dt: float
+    quick: bool
+    machine: str
+    reference: Reference
+    runs: list[RunResult] = field(default_factory=list)
+    orders: list[Order] = field(default_factory=list)
+    reference_trajectory: Trajectory | None = field(default=None, repr=False)  # rows at the common times
+
+    @property
+    def specs(self) -> list[RunSpec]:
+        return list(dict.fromkeys(r.spec for r in self.runs))
+
+    def best(self, target: float) -> RunResult | None:
+        """The fastest run that ended ok with contact and orientation errors at most ``target``."""
+        good = [r for r in self.runs if r.ok and r.worst <= target]
+        return min(good, key=lambda r: r.seconds, default=None)
+
+    def summary(self) -> str:
+        """One line: the cheapest run for each target error, and its cost."""
+        parts = []
+        for target in TARGETS:
+            run = self.best(target)
+            if run is None:
+                parts.append(f"no run reached {target:.0e}")
+            else:
+                parts.append(f"for {target:.0e}: {setting_text(run)} "
+                             f"({_seconds_text(run.seconds)}, {run.steps} steps)")
+        return "fastest " + "; ".join(parts)
+
+    def to_dict(self) -> dict:
+        ref = self.reference
+        best = {}
+        for target in TARGETS:
+            run = self.best(target)
+            best[f"{target:.0e}"] = None if run is None else self.runs.index(run)
+        return {
+            "format": "rollball-compare", "version": 1, "program": f"rollball {__version__}",
+            "scene": self.scene.to_dict(), "t_end": self.t_end, "machine": self.machine,
+            "reference": {"method": ref.method, "rtol": ref.rtol, "error_estimate": ref.error_estimate,
+                          "atol": ref.atol,
+                          "error_estimates": {k: _finite_or_none(v) for k, v in ref.error_estimates.items()},
+                          "status": str(ref.status), "message": ref.message, "steps": ref.steps,
+                          "seconds": ref.seconds},
+            "runs": [r.to_dict() for r in self.runs],
+            "orders": [o.to_dict() for o in self.orders],
+            "record_dt": self.record_dt, "quick": self.quick,
+            "best": best,   # index into runs of the fastest run reaching each error, or null
+        }
+
+    def save(self, directory: str | Path) -> None:
+        """compare.json, compare.md and compare.png in ``directory`` (made if missing), each
+        written atomically; all three are rendered before the first is written."""
+        from . import comparison_report
+
+        comparison_report.save(self, Path(directory))
+
+
+def setting_text(run: RunResult) -> str:
+    return f"{run.spec} dt {run.dt:.3g}" if run.dt is not None else f"{run.spec} rtol {run.rtol:.0e}"
+
+
+def _seconds_text(seconds: float) -> str:
+    return f"{seconds * 1e3:.3g} ms" if seconds < 1 else f"{seconds:.3g} s"
+
+
+def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_end: float | None = None,
+            quick: bool = False, progress: Callable[[int, int, str], None] | None = None,
+            cancel: threading.Event | None = None) -> Comparison:
+    """Run each spec (default: every method, the fixed-step ones Munthe-Kaas and classic) over
+    its ladder on ``scene`` up to ``t_end`` (default: the scene's duration) and measure it
+    against the reference. ``progress(done, total, text)`` is called before each run;
+    setting ``cancel`` raises ``Cancelled`` within one chunk of steps.
+
+    If the reference itself stops early (the ball does not fit, the landscape cannot be
+    evaluated), everything is compared up to the last common time before that.
+    """
+    from .comparison_report import machine
+
+    specs = _specs(runs)
+    t_end = scene.duration if t_end is None else t_end
+    if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (0 < t_end < math.inf):
+        raise ValueError(f"t_end must be a finite number greater than 0, not {t_end!r}")
+    effort = QUICK if quick else FULL
+    total = 2 + len(specs) * effort.max_points
+    report = (lambda done, text: progress(done, total, text)) if progress else (lambda done, text: None)
+
+    report(0, "reference")
+    record_dt = record_step(float(t_end))
+    ref_traj, reference = _reference(scene, float(t_end), record_dt, cancel)
+    if reference.status is not Status.OK:  # compare up to the last common time it reached
+        steps = ref_traj.t / record_dt
+        on_grid = np.abs(steps - np.round(steps)) < 1e-6
+        reached = len(on_grid) if on_grid.all() else int(np.argmin(on_grid))
+        if reached < 2:
+            raise NothingToCompare(f"nothing to compare: the reference run stopped at once ({reference.message})")
+        ref_traj = dataclasses.replace(ref_traj, data=ref_traj.data[:reached])
+        t_end = float(ref_traj.t[-1])
+    runner = _Runner(scene, float(t_end), record_dt, ref_traj, reference, effort, cancel)
+    results: list[RunResult] = []
+    for i, spec in enumerate(specs):
+        first = 2 + i * effort.max_points
+        report(first, f"{spec}: compiling")
+        runner.warm_up(spec)
+        ladder = _fixed_ladder if spec.fixed_step else _tolerance_ladder
+        results += ladder(runner, spec, lambda text, n: report(first + min(n, effort.max_points - 1), text))
+    report(total, "done")
+    orders = [fit_order(spec, results, reference) for spec in specs if spec.fixed_step]
+    return Comparison(scene, float(t_end), record_dt, bool(quick), machine(), reference, results, orders, ref_traj)

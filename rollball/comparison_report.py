@@ -1,0 +1,185 @@
+"""A comparison's files: compare.json (DESIGN §7), compare.md (the readable report) and
+compare.png (error against wall time, and against step size with the fitted slopes)."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import platform
+from pathlib import Path
+
+from .comparison import (ASYMPTOTIC, ERROR_UNITS, ERRORS, FLOOR_FACTOR, TARGETS, Comparison, RunResult, RunSpec,
+                         setting_text)
+from .files import atomic_write_bytes, atomic_write_text
+
+
+def machine() -> str:
+    """The processor (from /proc/cpuinfo where there is one), core count, system and Python."""
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores, {platform.system()}, Python {platform.python_version()}"
+
+
+def _number(value: float | None, fmt: str = ".2e") -> str:
+    return "—" if value is None or value != value else format(value, fmt)
+
+
+def _scene_lines(cmp: Comparison) -> list[str]:
+    s = cmp.scene
+    lines = [f"- landscape: `z = {s.landscape}`"]
+    lines += [f"- ball: radius {s.ball.radius:g} m, mass {s.ball.mass:g} kg; gravity {s.gravity:g} m/s²",
+              f"- start: (x, y) = ({s.start.x:g}, {s.start.y:g}) m, (vx, vy) = ({s.start.vx:g}, "
+              f"{s.start.vy:g}) m/s, spin {s.start.spin:g} rad/s",
+              f"- compared up to t = {cmp.t_end:g} s at {round(cmp.t_end / cmp.record_dt) + 1} common times "
+              f"(every {cmp.record_dt:.3g} s)"]
+    return lines
+
+
+def _table(cmp: Comparison, spec: RunSpec) -> list[str]:
+    fixed = spec.fixed_step
+    header = ("| dt (s) " if fixed else "| rtol ") + "| status | steps | rejected | evaluations | time (ms) | " \
+        + " | ".join(f"{key} ({ERROR_UNITS[key]})" for key in ERRORS) + " |"
+    lines = [header, "|" + "---|" * 5 + "---:|" * (1 + len(ERRORS))]
+    for run in (r for r in cmp.runs if r.spec == spec):
+        setting = f"{run.dt:.3g}" if fixed else f"{run.rtol:.0e}"
+        mark = " *" if run.below_reference_floor else ""
+        lines.append(f"| {setting}{mark} | {run.status} | {run.steps} | {run.rejected} | {run.evaluations} | "
+                     f"{run.seconds * 1e3:.3g} | " + " | ".join(_number(run.error[k]) for k in ERRORS) + " |")
+    stopped = [r for r in cmp.runs if r.spec == spec and not r.ok]
+    if stopped:
+        lines += ["", f"Stopped early: {stopped[-1].message}."]
+    return lines
+
+
+def findings(cmp: Comparison, heading: str = "##") -> list[str]:
+    """The reference, the fastest runs and the fitted orders, as Markdown lines."""
+    ref = cmp.reference
+    lines = [f"{heading} Reference", "",
+             f"{ref.method} at rtol = {ref.rtol:.0e}, atol = {ref.atol:.0e} ({ref.steps} steps, "
+             f"{ref.seconds * 1e3:.3g} ms). Its own error, against a run at a 10× tighter tolerance: "
+             + ", ".join(f"{k} {_number(ref.error_estimates[k], '.1e')}" for k in ERRORS) + ". "
+             f"Errors below {FLOOR_FACTOR:g}× that are marked * and left out of the fitted orders."]
+    if ref.status != "ok":
+        lines += ["", f"The reference stopped early ({ref.message}): every run is compared up to "
+                      f"t = {cmp.t_end:g} s."]
+    lines += ["", f"{heading} Fastest runs", "",
+              "Errors are maxima over the run at the common times; cost is compute time (median of "
+              "repeats for short runs). Ranked by the larger of the contact-point (m) and orientation "
+              "errors.", "", "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
+    for target in TARGETS:
+        best = cmp.best(target)
+        lines.append(f"| {target:.0e} | none reached it | — | — |" if best is None else
+                     f"| {target:.0e} | {setting_text(best)} | {best.seconds * 1e3:.3g} | {best.steps} |")
+    if cmp.orders:
+        lines += ["", f"{heading} Orders", "",
+                  f"Least-squares slope of log error against log dt over the runs that ended ok above the "
+                  f"reference's floor (over those with errors below {ASYMPTOTIC:g} where there are three).",
+                  "", "| run | contact point | orientation | expected |", "|---|---:|---:|---:|"]
+        lines += [f"| {o.spec.label} | {_number(o.contact, '.2f')} | {_number(o.orientation, '.2f')} | "
+                  f"{o.expected} |" for o in cmp.orders]
+    return lines
+
+
+def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
+    title = cmp.scene.description or cmp.scene.landscape
+    lines = [f"# Speed against error: {title}", "", *_scene_lines(cmp), "",
+             f"Machine: {cmp.machine}. Mode: {'quick' if cmp.quick else 'full'}.", "", *findings(cmp)]
+    if figure:
+        lines += ["", f"![error against wall time and against step size]({figure})"]
+    lines += ["", "## Runs"]
+    for spec in cmp.specs:
+        lines += ["", f"### {spec.label} (`{spec}`)", "", *_table(cmp, spec)]
+    return "\n".join(lines) + "\n"
+
+
+def style(spec: RunSpec, colors: dict) -> dict:
+    """Line style of a run spec: a colour per method; solid Munthe-Kaas, dotted classic."""
+    color = colors.setdefault(spec.method, f"C{len(colors) % 10}")
+    if not spec.fixed_step:
+        return dict(color=color, linestyle="-", marker="s")
+    return dict(color=color, linestyle="-" if spec.munthe_kaas else ":", marker="o" if spec.munthe_kaas else "x")
+
+
+def new_figure(width: float, height: float):
+    """A matplotlib Figure drawn without a display (Agg)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height))
+
+
+def png(fig) -> bytes:
+    fig.tight_layout()
+    out = io.BytesIO()
+    fig.savefig(out, format="png", dpi=110)
+    return out.getvalue()
+
+
+def draw_work_precision(ax, cmp: Comparison, colors: dict) -> None:
+    """Contact-point error against compute time, a line per run spec, the floor dashed."""
+    for spec in cmp.specs:
+        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["contact"] > 0]
+        ax.loglog([r.seconds for r in runs], [r.error["contact"] for r in runs], label=spec.label,
+                  markersize=4, **style(spec, colors))
+    ax.axhline(cmp.reference.floor("contact"), color="0.6", linewidth=0.8, linestyle="--")
+    ax.set(xlabel="compute time (s)", ylabel="contact-point error, max over the run (m)")
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def draw_orders(ax, cmp: Comparison, colors: dict) -> None:
+    """Orientation error against step size for the fixed-step specs, with the fitted slopes."""
+    for spec in (s for s in cmp.specs if s.fixed_step):
+        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["orientation"] > 0]
+        line = style(spec, colors)
+        ax.loglog([r.dt for r in runs], [r.error["orientation"] for r in runs], markersize=4, **line)
+        _slope_label(ax, cmp, spec, runs, line["color"])
+    ax.set_ylim(top=10.0)  # a classic R far off SO(3) would squash the rest (‖R − R_ref‖_F ≤ 2√2 on it)
+    ax.axhline(cmp.reference.floor("orientation"), color="0.6", linewidth=0.8, linestyle="--")
+    ax.set(xlabel="step size dt (s)", ylabel="orientation error ‖R − R_ref‖_F, max over the run")
+    ax.grid(True, which="major", alpha=0.3)
+
+
+def figure(cmp: Comparison) -> bytes:
+    """The PNG: contact-point error against compute time (every run spec), and orientation
+    error against step size (fixed-step specs) with the fitted slopes written on the lines."""
+    fig = new_figure(11, 4.8)
+    left, right = fig.subplots(1, 2)
+    colors: dict = {}
+    draw_work_precision(left, cmp, colors)
+    draw_orders(right, cmp, colors)
+    left.set_title("error against time")
+    right.set_title("error against step size (fitted slopes)")
+    left.legend(fontsize=7, title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
+    fig.suptitle(f"{cmp.scene.description or cmp.scene.landscape} — to t = {cmp.t_end:g} s; dashed grey: "
+                 f"{FLOOR_FACTOR:g}× the reference's own error\n{cmp.machine}", fontsize=8)
+    return png(fig)
+
+
+def _slope_label(ax, cmp: Comparison, spec: RunSpec, runs: list[RunResult], color: str) -> None:
+    order = next((o for o in cmp.orders if o.spec == spec), None)
+    if order is None or order.orientation is None or not runs:
+        return
+    middle = runs[len(runs) // 2]
+    ax.annotate(f"{order.orientation:.2f}", (middle.dt, middle.error["orientation"]), color=color,
+                fontsize=8, xytext=(6, -12) if spec.munthe_kaas else (-28, 6), textcoords="offset points",
+                bbox=dict(boxstyle="round,pad=0.15", facecolor="white", edgecolor="none", alpha=0.8))
+
+
+def save(cmp: Comparison, directory: Path) -> None:
+    """Render all three files, then write each atomically (no half-written set on an error)."""
+    text = json.dumps(cmp.to_dict(), indent=1, allow_nan=False)
+    report = markdown(cmp)
+    image = figure(cmp)
+    directory.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(directory / "compare.json", text + "\n")
+    atomic_write_text(directory / "compare.md", report)
+    atomic_write_bytes(directory / "compare.png", image)

@@ -1,0 +1,118 @@
+"""One batch of a sweep: runs lo .. hi-1 of the grid, from scene values to outcomes.
+
+``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
+scenes, computes the initial states for the whole batch at once and runs them all in one
+call of the compiled sweep loop (which releases the GIL). The same batch gives the same
+numbers bit for bit wherever it runs. A process compiles the landscape once, on its
+first batch, and keeps it for the rest.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import kernel
+from ..landscape import landscape_for
+from ..scene import Scene, SceneError
+from ..simulation import initial_momentum, step_count
+from ..tableaus import METHODS, MethodKind, get_method
+from . import kernel as sweep_kernel
+from .grid import KEYS, Grid, value_of, with_values
+
+_COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
+
+
+def sweep_method(scene: Scene):
+    """The scene's method if a sweep can run it (the explicit fixed-step ones), else ValueError."""
+    method = get_method(scene.integrator.method)
+    if method.kind is not MethodKind.FIXED:
+        fixed = ", ".join(m.name for m in METHODS.values() if m.kind is MethodKind.FIXED)
+        raise ValueError(f"sweeps run the explicit fixed-step methods ({fixed}); "
+                         f"this scene's integrator.method is {method.name}")
+    return method
+
+
+@dataclass(frozen=True)
+class Task:
+    """Everything a batch needs, small enough to send to another machine."""
+
+    scene: Scene
+    grid: Grid
+    lo: int
+    hi: int
+
+
+@dataclass
+class Result:
+    lo: int
+    status: np.ndarray      # (runs,) int8 status codes (kernel codes, INVALID)
+    outcomes: np.ndarray    # (runs, len(OUTCOMES))
+    messages: dict          # run index (in the grid) -> why its scene was refused
+
+
+def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
+    """Every sweepable key's value per run: the varied column or the scene's own value."""
+    return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
+            for key in KEYS}
+
+
+def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
+    """Row -> message for the runs whose varied scene is refused, each checked like a scene file.
+
+    Scene constraints tie no start value to another key, so each varied start key is checked
+    value by value, and the other varied keys together, once per distinct combination.
+    """
+    groups = [[k] for k in grid.keys if k.startswith("start.")]
+    rest = [k for k in grid.keys if not k.startswith("start.")]
+    groups += [rest] if rest else []
+    messages: dict[int, str] = {}
+    for group in groups:
+        columns = values[:, [grid.keys.index(k) for k in group]]
+        combos, inverse = np.unique(columns, axis=0, return_inverse=True)
+        for i, combo in enumerate(combos):
+            try:
+                with_values(scene, group, combo)
+            except SceneError as e:
+                for row in np.flatnonzero(inverse.ravel() == i):
+                    messages.setdefault(int(row), str(e))
+    return messages
+
+
+def _landscape(text: str):
+    with _COMPILE_LOCK:
+        return landscape_for(text).compiled
+
+
+def run(task: Task) -> Result:
+    scene, grid = task.scene, task.grid
+    values = grid.values(task.lo, task.hi)
+    runs = len(values)
+    method = sweep_method(scene)
+    messages = validate(scene, grid, values)
+    status = np.full(runs, sweep_kernel.NOT_RUN, dtype=np.int64)
+    status[list(messages)] = sweep_kernel.INVALID
+    c = _columns(scene, grid, values)
+    fn = _landscape(scene.landscape)
+    r, m = c["ball.radius"], c["ball.mass"]
+    with np.errstate(all="ignore"):  # refused runs may hold any value; they are not run
+        z0 = np.empty((runs, kernel.MOTION_SIZE))
+        z0[:, 0], z0[:, 1] = c["start.x"], c["start.y"]
+        d = landscape_for(scene.landscape).evaluate(c["start.x"], c["start.y"])
+        z0[:, 2:5] = initial_momentum(d, c["start.vx"], c["start.vy"], c["start.spin"], r, m).T
+        p = np.ascontiguousarray(kernel.parameters(r, m, c["gravity"]).T)
+    dt, t_end = c["integrator.dt"], c["duration"]
+    n_steps = np.ones(runs, dtype=np.int64)
+    pairs = np.stack([dt, t_end], axis=1)
+    combos, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    for i, (h, t) in enumerate(combos):
+        if h > 0 and t > 0:
+            n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
+    outcomes = np.full((runs, len(sweep_kernel.OUTCOMES)), np.nan)
+    W, _, D = method.kernel_arrays()
+    sweep_kernel.run_batch(fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
+                           status, outcomes, *sweep_kernel.scratch_arrays(W.shape[0]))
+    messages = {task.lo + i: text for i, text in messages.items()}
+    return Result(task.lo, status.astype(np.int8), outcomes, messages)

@@ -1,0 +1,134 @@
+"""What a sweep varies: scene keys, their values, and the full grid of runs over them."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..scene import Scene
+
+# The scene keys a sweep may vary (dotted, as in scene files), with their units.
+KEYS: dict[str, str] = {
+    "start.x": "m",
+    "start.y": "m",
+    "start.vx": "m/s",
+    "start.vy": "m/s",
+    "start.spin": "rad/s",
+    "ball.radius": "m",
+    "ball.mass": "kg",
+    "gravity": "m/s²",
+    "integrator.dt": "s",
+    "duration": "s",
+}
+
+MAX_RUNS = 10_000_000  # a larger grid is refused (its outcomes alone would fill gigabytes)
+
+
+def parse_vary(text: str) -> tuple[str, np.ndarray]:
+    """``KEY=START:STOP:N`` -> (key, N evenly spaced values from START to STOP, both included)."""
+    key, sep, spec = text.partition("=")
+    key = key.strip()
+    if not sep:
+        raise ValueError(f"--vary {text!r}: expected KEY=START:STOP:N")
+    _known(key)
+    parts = spec.split(":")
+    if len(parts) != 3:
+        raise ValueError(f"--vary {text!r}: expected KEY=START:STOP:N, e.g. start.vx=3:6:61")
+    try:
+        lo, hi = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise ValueError(f"--vary {key}: START and STOP must be numbers, not {parts[0]!r}, {parts[1]!r}") from None
+    try:
+        n = int(parts[2])
+    except ValueError:
+        raise ValueError(f"--vary {key}: N must be a whole number, not {parts[2]!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError(f"--vary {key}: START and STOP must be finite numbers")
+    if n < 1:
+        raise ValueError(f"--vary {key}: N must be 1 or more, not {n}")
+    if n > MAX_RUNS:
+        raise ValueError(f"--vary {key}: N = {n:,} values is more than a sweep may run ({MAX_RUNS:,})")
+    return key, (np.array([lo]) if n == 1 else np.linspace(lo, hi, n))
+
+
+def _known(key) -> None:
+    if key not in KEYS:
+        raise ValueError(f"cannot vary {key!r}; the keys a sweep varies: {', '.join(KEYS)}")
+
+
+@dataclasses.dataclass(frozen=True)
+class Grid:
+    """The runs of a sweep: every combination of the varied values, in row-major order of
+    the keys (the last key varies fastest)."""
+
+    keys: tuple[str, ...]
+    axes: tuple[np.ndarray, ...]
+
+    @classmethod
+    def of(cls, vary) -> "Grid":
+        """From a mapping key -> values (or (key, values) pairs); refuses unknown keys, values
+        that are not finite numbers, empty axes, keys given twice and grids over MAX_RUNS."""
+        items = list(vary.items()) if isinstance(vary, dict) else list(vary)
+        if not items:
+            raise ValueError("a sweep needs at least one key to vary")
+        keys, axes = [], []
+        for key, values in items:
+            _known(key)
+            if key in keys:
+                raise ValueError(f"{key} is varied twice")
+            try:
+                array = np.array(values, dtype=float, ndmin=1)
+            except (TypeError, ValueError):
+                raise ValueError(f"{key}: the values must be numbers") from None
+            if array.ndim != 1 or array.size == 0:
+                raise ValueError(f"{key}: needs a flat, non-empty list of values")
+            if not np.all(np.isfinite(array)):
+                raise ValueError(f"{key}: the values must be finite numbers")
+            if any(isinstance(v, bool) for v in np.asarray(values, dtype=object).ravel()):
+                raise ValueError(f"{key}: the values must be numbers, not true/false")
+            keys.append(key)
+            axes.append(array)
+        size = math.prod(len(a) for a in axes)
+        if size > MAX_RUNS:
+            raise ValueError(f"the grid has {size:,} runs, more than a sweep may run ({MAX_RUNS:,})")
+        for a in axes:
+            a.setflags(write=False)
+        return cls(tuple(keys), tuple(axes))
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a) for a in self.axes)
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    def values(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """The varied values of runs lo .. hi-1: shape (runs, keys)."""
+        hi = self.size if hi is None else hi
+        index = np.unravel_index(np.arange(lo, hi), self.shape)
+        return np.stack([a[i] for a, i in zip(self.axes, index)], axis=1)
+
+
+def value_of(scene: Scene, key: str) -> float:
+    """The scene's value of a dotted key."""
+    obj = scene
+    for part in key.split("."):
+        obj = getattr(obj, part)
+    return float(obj)
+
+
+def with_value(scene: Scene, key: str, value: float) -> Scene:
+    """The scene with one dotted key set (validated like a scene file: ``SceneError``)."""
+    group, _, name = key.rpartition(".")
+    if not group:
+        return dataclasses.replace(scene, **{name: value})
+    return dataclasses.replace(scene, **{group: dataclasses.replace(getattr(scene, group), **{name: value})})
+
+
+def with_values(scene: Scene, keys, values) -> Scene:
+    for key, value in zip(keys, values):
+        scene = with_value(scene, key, float(value))
+    return scene

@@ -1,0 +1,137 @@
+"""sweep.png: a map over two varied keys coloured by one outcome, or curves against one key.
+
+Runs without a value of the coloured outcome get a colour of their own that says why (no
+lift-off, does not fit, non-finite, refused scene), and the runs where the ball stopped
+fitting are hatched whatever their colour, so those regions read at a glance.
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from .. import kernel
+from ..files import atomic_write_bytes
+from .grid import KEYS
+from .kernel import INVALID, NOT_RUN, OUTCOMES
+
+UNITS = {"t_reached": "s", "liftoff_time": "s", "x_end": "m", "y_end": "m", "energy_drift": "relative",
+         "min_normal_force": "N", "max_speed": "m/s", "path_length": "m"}
+
+# Colours of the runs that have no value to colour by, with their legend text.
+_CATEGORY = {
+    kernel.OK: ("#d9d9d9", None),                 # the legend text depends on the outcome
+    kernel.DOES_NOT_FIT: ("#202020", "ball does not fit"),
+    kernel.NONFINITE: ("#e7298a", "non-finite"),
+    INVALID: ("#ffffff", "scene refused"),
+    NOT_RUN: ("#f4f4f4", "not run (stopped)"),
+}
+
+
+def label(name: str) -> str:
+    unit = KEYS.get(name) or UNITS.get(name)
+    return f"{name} ({unit})" if unit else name
+
+
+def _edges(centres: np.ndarray) -> np.ndarray:
+    """Cell edges around sorted centres (half-way between neighbours)."""
+    if len(centres) == 1:
+        half = 0.5 * max(abs(centres[0]) * 0.1, 1e-9)
+        return np.array([centres[0] - half, centres[0] + half])
+    mid = 0.5 * (centres[1:] + centres[:-1])
+    return np.concatenate([[2 * centres[0] - mid[0]], mid, [2 * centres[-1] - mid[-1]]])
+
+
+def figure(table, path, color: str = "liftoff_time") -> bool:
+    """Draw the table's figure to ``path`` (atomically); False when there is none to draw:
+    matplotlib missing or more than two varied keys."""
+    if color not in OUTCOMES:
+        raise ValueError(f"cannot colour by {color!r}; the outcomes: {', '.join(OUTCOMES)}")
+    if len(table.keys) > 2:
+        return False
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    if len(table.keys) == 2:
+        fig = _map(plt, table, color)
+    else:
+        fig = _curves(plt, table, color)
+    scene = table.scene
+    title = (f"z = {scene.landscape}, {len(table):,} runs of {scene.duration:g} s, "
+             f"{scene.integrator.method} dt {scene.integrator.dt:g} s{' (stopped early)' if table.partial else ''}\n"
+             f"{table.seconds:.1f} s wall on {table.workers} "
+             f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}")
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.93))
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=130)
+    plt.close(fig)
+    atomic_write_bytes(path, buffer.getvalue())
+    return True
+
+
+def _map(plt, table, color):
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    (kx, ky), (ax_x, ax_y) = table.keys, table.grid.axes
+    shape = table.grid.shape
+    order_x, order_y = np.argsort(ax_x), np.argsort(ax_y)
+    value = table[color].reshape(shape)[np.ix_(order_x, order_y)].T   # rows: y, columns: x
+    codes = table.codes.reshape(shape)[np.ix_(order_x, order_y)].T
+    xe, ye = _edges(ax_x[order_x]), _edges(ax_y[order_y])
+    fig, ax = plt.subplots(figsize=(8.0, 6.0))
+    mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(value), cmap="viridis", shading="flat")
+    fig.colorbar(mesh, ax=ax, label=label(color))
+    handles = []
+    missing = np.isnan(value)
+    for code, (colour, text) in _CATEGORY.items():
+        cells = missing & (codes == code)
+        if not cells.any():
+            continue
+        text = text or ("no lift-off" if color == "liftoff_time" else f"no {color}")
+        ax.pcolormesh(xe, ye, np.ma.masked_where(~cells, np.zeros_like(value)),
+                      cmap=ListedColormap([colour]), shading="flat")
+        handles.append(Patch(facecolor=colour, edgecolor="0.5", label=text))
+    unfit = codes == kernel.DOES_NOT_FIT
+    if unfit.any() and len(ax_x) > 1 and len(ax_y) > 1:
+        ax.contourf(ax_x[order_x], ax_y[order_y], unfit.astype(float), levels=[0.5, 1.5],
+                    colors="none", hatches=["////"])
+        handles.append(Patch(facecolor="none", edgecolor="k", hatch="////", label="does not fit (stopped)"))
+    if handles:
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=4, fontsize=8,
+                  frameon=False)
+    ax.set_xlabel(label(kx))
+    ax.set_ylabel(label(ky))
+    return fig
+
+
+def _curves(plt, table, color):
+    (key,) = table.keys
+    x = table.grid.axes[0]
+    order = np.argsort(x)
+    names = (color,) + tuple(o for o in OUTCOMES if o != color)
+    fig, axes = plt.subplots(2, 4, figsize=(12.0, 6.0), sharex=True)
+    codes = table.codes[order]
+    for ax, name in zip(axes.ravel(), names):
+        y = table[name][order]
+        ax.plot(x[order], y, color="0.6", linewidth=0.8)
+        for code, marker, colour, text in ((kernel.OK, ".", "C0", "ok"),
+                                           (kernel.DOES_NOT_FIT, "x", "k", "does not fit"),
+                                           (kernel.NONFINITE, "v", "#e7298a", "non-finite")):
+            sel = codes == code
+            if sel.any():
+                ax.plot(x[order][sel], y[sel], marker, color=colour, markersize=4, linestyle="none",
+                        label=text)
+        ax.set_title(label(name), fontsize=9)
+        if name == "energy_drift" and np.nanmax(np.abs(y), initial=0.0) > 0:
+            ax.set_yscale("log")
+        ax.tick_params(labelsize=8)
+    for ax in axes[1]:
+        ax.set_xlabel(label(key), fontsize=9)
+    axes[0, 0].legend(fontsize=8)
+    return fig

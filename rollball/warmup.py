@@ -1,0 +1,90 @@
+"""Compiling the integrator before it is needed.
+
+numba compiles the stepping kernel the first time each kind of method runs (seconds to tens
+of seconds with empty caches) and keeps the machine code on disk, so later processes load
+it in well under a second. ``warm_up`` runs every method once on a tiny run so that the
+compiling happens now; ``python -m rollball.warmup`` does it with progress on stderr (the
+setup script calls it). ``compile_notice`` tells a caller when numba starts compiling.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from contextlib import contextmanager
+
+from numba.core import event
+
+from .examples import DEFAULT_EXAMPLE
+from .scene import Scene
+from .simulation import simulate
+from .tableaus import METHODS
+
+
+def variants() -> list[tuple[str, bool]]:
+    """Every (method, munthe_kaas) the kernel runs: each method, and the classic update too
+    where the method allows it. Methods sharing compiled code cost nothing after the first."""
+    return [(name, mk) for name, method in METHODS.items()
+            for mk in ((True, False) if method.classic_allowed else (True,))]
+
+
+def warm_up(progress=None) -> None:
+    """Compile (or load from numba's disk cache) the kernel for every method and the grid
+    evaluation the drawing uses. ``progress(done, total, text)`` is called before each part."""
+    scene = Scene.load(DEFAULT_EXAMPLE)
+    todo = variants()
+    for done, (method, mk) in enumerate(todo):
+        if progress:
+            progress(done, len(todo), f"{method}{'' if mk else ' classic'}")
+        simulate(scene, method=method, munthe_kaas=mk, t_end=0.01)
+    if progress:
+        progress(len(todo), len(todo), "done")
+
+
+class _FirstCompile(event.Listener):
+    def __init__(self, say):
+        self.say, self.said = say, False
+
+    def on_start(self, ev):
+        module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
+        if not self.said and module.split(".")[0] == "rollball":  # not a landscape's callback
+            self.said = True
+            self.say()
+
+    def on_end(self, ev):
+        pass
+
+
+@contextmanager
+def compile_notice(say):
+    """Within the block, call ``say()`` once when numba starts compiling part of RollBall's
+    kernel (nothing is said when everything comes from the disk cache)."""
+    with event.install_listener("numba:compile", _FirstCompile(say)):
+        yield
+
+
+def main() -> int:
+    """Warm up, saying on stderr what is compiled (nothing but a last line when it is cached)."""
+    started = time.perf_counter()
+    compiling, current = False, ""
+
+    def say():
+        nonlocal compiling
+        compiling = True
+        print("rollball: compiling the integrator (first time only; kept on disk) ...", file=sys.stderr)
+        print(f"  {current}", file=sys.stderr, flush=True)
+
+    def progress(done, total, text):
+        nonlocal current
+        current = f"[{done + 1}/{total}] {text}"
+        if compiling and done < total:
+            print(f"  {current}", file=sys.stderr, flush=True)
+
+    with compile_notice(say):
+        warm_up(progress)
+    print(f"rollball: the integrator is ready ({time.perf_counter() - started:.1f} s)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

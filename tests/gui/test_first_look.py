@@ -1,0 +1,99 @@
+"""What a user sees on opening each example, and the headless picture of it."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PySide6 import QtGui
+
+from app.main import screenshot
+from rollball.examples import example_names, scene_path
+
+SIZE = (1024, 700)   # a projector's screen, less the taskbar
+
+
+def _projected(view, point) -> np.ndarray:
+    """Where pyqtgraph's own camera matrices put a point, in view coordinates (-1 to 1)."""
+    w, h = view.width(), view.height()
+    matrix = view.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * view.viewMatrix()
+    p = matrix.map(QtGui.QVector4D(*map(float, point), 1.0))
+    return np.array([p.x() / p.w(), p.y() / p.w()])
+
+
+def _view_image(view) -> np.ndarray:
+    return view.image()[..., :3].astype(int)
+
+
+@pytest.mark.parametrize("name", example_names())
+def test_every_example_opens_in_a_picture_with_the_ball_in_view_and_in_sight(window, tmp_path, name):
+    out = tmp_path / f"{name}.png"
+    assert screenshot(window, scene_path(name), out, None, SIZE) is None
+    image = QtGui.QImage(str(out))
+    assert (image.width(), image.height()) == SIZE
+    view = window.view
+    corner = view.mapTo(window, view.rect().topLeft())
+    pixels = {image.pixel(corner.x() + i, corner.y() + j)
+              for i in range(0, view.width(), 7) for j in range(0, view.height(), 7)}
+    assert len(pixels) > 50, name   # a landscape in colour, not an empty or black view
+
+    x, y = _projected(view, view.ball_center)
+    assert abs(x) < 0.95 and abs(y) < 0.95, (name, x, y)
+    # in sight, not behind a wall: hiding the ball changes the picture where it is projected
+    with_ball = _view_image(view)
+    for item in (view.ball, view.axes, *view.axis_labels):   # labels may stand beyond the frame
+        item.setVisible(False)
+    without = _view_image(view)
+    for item in (view.ball, view.axes, *view.axis_labels):
+        item.setVisible(True)
+    h, w = with_ball.shape[:2]
+    col, row = int((x + 1) / 2 * w), int((1 - y) / 2 * h)
+    patch = (slice(max(row - 3, 0), row + 4), slice(max(col - 3, 0), col + 4))
+    assert np.abs(with_ball[patch] - without[patch]).max() > 40, name
+    # the whole landscape is drawn within the view: nothing of it touches the border
+    border = np.concatenate([without[0], without[-1], without[:, 0], without[:, -1]])
+    assert np.abs(border - without[0, 0]).max() < 10, name
+
+
+def test_the_no_fit_region_is_in_sight_on_opening(qtbot, window):
+    assert window.open_scene(scene_path("too_big"), remember=False)
+    qtbot.wait(20)
+    window.view.ball.setVisible(False)   # its stripes are red too
+    r, g, b = np.moveaxis(_view_image(window.view), -1, 0)
+    window.view.ball.setVisible(True)
+    red = (r > 90) & (r > 2 * g) & (r > 1.8 * b)
+    assert red.sum() > 300   # pixels of the red strip along the valley floor
+
+
+def test_heights_the_ball_cannot_reach_are_cut_away(qtbot, window):
+    assert window.open_scene(scene_path("valley"), remember=False)
+    view = window.view
+    assert view.cap < 3.0   # the walls of 4 y² reach 64 m on this grid; the ball starts below 2 m
+    assert view.bounds[1, 2] <= view.cap and len(view.cut_edge.pos) > 0
+
+
+def _app(*args, env=None):
+    return subprocess.run([sys.executable, "-m", "app", *args], capture_output=True, text=True, timeout=300,
+                          env=env or os.environ)
+
+
+def test_the_command_line_runs_a_scene_and_saves_the_window(tmp_path):
+    out = tmp_path / "bump.png"
+    result = _app("bump", "--screenshot", str(out), "--run-to", "1.0", "--size", "1024x700")
+    assert result.returncode == 0, result.stderr
+    image = QtGui.QImage(str(out))
+    assert (image.width(), image.height()) == (1024, 700)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["nowhere", "--screenshot", "x.png"], "no such scene file or example"),
+    (["hills", "--screenshot", "/nonexistent-folder/x.png"], "cannot write"),
+    (["hills", "--size", "12"], "WIDTHxHEIGHT"),
+    (["hills", "--run-to", "1"], "--run-to needs --screenshot"),
+])
+def test_the_command_line_fails_in_one_line(tmp_path, args, words):
+    result = _app(*args)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert words in lines[-1] and "Traceback" not in result.stderr

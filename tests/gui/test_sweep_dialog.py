@@ -1,0 +1,76 @@
+"""Analysis → Sweep…: a tiny sweep run in the dialog, and a click on the map loads that run's start."""
+
+import numpy as np
+from PySide6 import QtCore
+
+from app.controller import READY
+from app.sweep_dialog import SweepDialog
+
+
+def _open(qtbot, window) -> SweepDialog:
+    window.sweep_action.trigger()
+    dialog = window.findChild(SweepDialog)
+    qtbot.waitExposed(dialog)
+    return dialog
+
+
+def _set_row(row, key, lo, hi, n):
+    row.key.setCurrentIndex(row.key.findData(key))
+    row.lo.setText(str(lo))
+    row.hi.setText(str(hi))
+    row.n.setValue(n)
+
+
+def _run(qtbot, dialog):
+    qtbot.mouseClick(dialog.run_button, QtCore.Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: dialog.thread is None and dialog.table is not None, timeout=60_000)
+
+
+def test_a_sweep_runs_in_the_dialog_and_a_click_loads_its_start(qtbot, window):
+    dialog = _open(qtbot, window)
+    _set_row(dialog.rows[0], "start.vx", -1.0, 1.0, 5)
+    _set_row(dialog.rows[1], "start.spin", -2.0, 2.0, 3)
+    dialog.color.setCurrentIndex(dialog.color.findData("x_end"))
+    _run(qtbot, dialog)
+    table = dialog.table
+    assert len(table) == 15 and not table.partial and dialog.progress.value() == 15
+    shown = dialog.image.image
+    assert shown.shape == (3, 5)                                   # rows: spin, columns: vx
+    np.testing.assert_array_equal(shown[2, 1], table["x_end"][1 * 3 + 2])   # vx = -0.5, spin = 2
+
+    # click the cell of vx = 0.5, spin = -2 as a user does
+    vb = dialog.plot_item.vb
+    pos = dialog.plot.mapFromScene(vb.mapViewToScene(QtCore.QPointF(0.5, -2.0)))
+    qtbot.mouseClick(dialog.plot.viewport(), QtCore.Qt.MouseButton.LeftButton, pos=pos)
+    qtbot.waitUntil(lambda: window.scene.start.vx == 0.5)
+    assert window.scene.start.spin == -2.0
+    assert window.panel.numbers["start.vx"].text() == "0.5"
+    assert window.controller.state == READY and window.start_action.isEnabled()
+    window.undo_action.trigger()                                  # the loaded run is one undo step
+    assert window.scene.start.vx == 0.0
+    dialog.close()
+
+
+def test_one_key_gives_a_curve_and_cancel_stops_the_sweep(qtbot, window):
+    dialog = _open(qtbot, window)
+    dialog.rows[1].enabled.setChecked(False)
+    _set_row(dialog.rows[0], "start.vx", 0.0, 1.0, 3000)
+    assert dialog.color.currentData() == "liftoff_time"
+    qtbot.mouseClick(dialog.run_button, QtCore.Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: dialog.progress.value() > 0, timeout=60_000)
+    qtbot.mouseClick(dialog.cancel_button, QtCore.Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: dialog.thread is None, timeout=60_000)
+    assert dialog.table.partial and "cancelled" in dialog.status.text()
+    assert dialog.note.text() == f"No run has a value to show (no lift-off: {dialog.table.done.sum()})"
+    dialog.color.setCurrentIndex(dialog.color.findData("x_end"))
+    x, y = dialog.curve.getData()
+    assert len(x) == 3000 and np.isfinite(y).sum() == dialog.table.done.sum()
+    dialog.close()
+
+
+def test_bad_ranges_are_said_in_the_dialog(qtbot, window):
+    dialog = _open(qtbot, window)
+    dialog.rows[0].lo.setText("fast")
+    qtbot.mouseClick(dialog.run_button, QtCore.Qt.MouseButton.LeftButton)
+    assert "must be numbers" in dialog.status.text() and dialog.thread is None
+    dialog.close()

@@ -1,0 +1,206 @@
+"""Sweeps: each run ends exactly where ``simulate`` ends the same scene; grid, validation,
+workers, cancellation, the files and the command line."""
+
+import csv
+import json
+import os
+import signal
+import threading
+
+import numpy as np
+import pytest
+
+from rollball import Scene, simulate, sweep
+from rollball.cli import main
+from rollball.examples import EXAMPLES_DIR
+from rollball.sweeps import Grid, parse_vary
+from rollball.sweeps.grid import with_values
+
+LIFTOFF = Scene.load(EXAMPLES_DIR / "liftoff.json")
+
+
+def _outcomes_of(traj):
+    """The sweep's outcomes, computed independently from a full recorded trajectory."""
+    speed = np.linalg.norm(traj.velocity, axis=1)
+    return {"t_reached": traj.t[-1], "liftoff_time": traj.liftoff_time or np.nan,
+            "x_end": traj.contact[-1, 0], "y_end": traj.contact[-1, 1], "energy_drift": traj.energy_drift,
+            "min_normal_force": traj.normal_force.min(), "max_speed": speed.max(),
+            "path_length": np.linalg.norm(np.diff(traj.center, axis=0), axis=1).sum()}
+
+
+@pytest.mark.parametrize("scene, vary", [
+    (LIFTOFF, {"start.vx": [3.0, 4.5, 6.0], "start.spin": [-4.0, 2.0]}),        # with and without lift-off
+    (Scene.load(EXAMPLES_DIR / "too_big.json"), {"ball.radius": [0.05, 0.2]}),   # does not fit
+    (Scene.load(EXAMPLES_DIR / "hills.json"), {"integrator.dt": [0.003, 0.0021], "duration": [0.5, 1.0]}),
+], ids=["liftoff", "too_big", "steps"])
+def test_every_run_ends_where_simulate_ends_it(scene, vary):
+    table = sweep(scene, vary, workers=1)
+    values = table.grid.values()
+    for i in range(len(table)):
+        traj = simulate(with_values(scene, table.keys, values[i]))
+        assert table["status"][i] == str(traj.status)
+        for name, expected in _outcomes_of(traj).items():
+            np.testing.assert_allclose(table[name][i], expected, rtol=1e-12, atol=1e-14, err_msg=name)
+    assert set(table["status"]) == {"ok"} | ({"does_not_fit"} if "ball.radius" in vary else set())
+
+
+def test_a_landscape_undefined_along_the_way_is_nonfinite():
+    scene = Scene(landscape="sqrt(x)", start=LIFTOFF.start.__class__(x=0.5, y=0.0, vx=-3.0), duration=1.0)
+    table = sweep(scene, {"start.x": [0.5, -1.0]}, workers=1)
+    assert list(table["status"]) == ["nonfinite", "nonfinite"]
+    traj = simulate(scene)
+    assert table["t_reached"][0] == traj.t[-1] < 1.0 and table["x_end"][0] == traj.contact[-1, 0]
+    assert np.isnan(table["t_reached"][1])  # the start itself is outside the landscape's domain
+
+
+def test_a_refused_scene_gives_its_row_a_status_and_a_message(tmp_path):
+    table = sweep(LIFTOFF, {"ball.radius": [0.1, -0.1, 0.0], "start.vx": [4.0, 5.0]}, workers=1)
+    assert list(table["status"]) == ["ok"] * 2 + ["invalid"] * 4
+    assert "ball.radius: must be greater than 0" in table.messages[2]
+    assert np.isnan(table.outcomes[2:]).all()
+    table.save(tmp_path)
+    rows = list(csv.DictReader(open(tmp_path / "sweep.csv", encoding="utf-8")))
+    assert rows[3]["status"] == "invalid" and rows[3]["x_end"] == "" and "radius" in rows[3]["message"]
+
+
+def test_grid_is_row_major_with_the_last_key_fastest():
+    grid = Grid.of({"start.vx": [1.0, 2.0], "start.spin": [10.0, 20.0, 30.0]})
+    assert grid.shape == (2, 3) and grid.size == 6
+    np.testing.assert_array_equal(grid.values(), [[1, 10], [1, 20], [1, 30], [2, 10], [2, 20], [2, 30]])
+    np.testing.assert_array_equal(grid.values(4, 6), [[2, 20], [2, 30]])
+
+
+def test_parse_vary_includes_both_ends():
+    key, values = parse_vary("start.vx=3:6:61")
+    assert key == "start.vx" and len(values) == 61 and values[0] == 3.0 and values[-1] == 6.0
+    assert parse_vary("gravity=9.81:1:1")[1].tolist() == [9.81]
+
+
+@pytest.mark.parametrize("text, words", [
+    ("start.z=0:1:3", "cannot vary 'start.z'"),
+    ("landscape=0:1:3", "cannot vary 'landscape'"),
+    ("integrator.method=0:1:3", "cannot vary"),
+    ("start.vx=0:1:0", "N must be 1 or more"),
+    ("start.vx=0:1", "expected KEY=START:STOP:N"),
+    ("start.vx=a:1:3", "must be numbers"),
+    ("start.vx=0:inf:3", "finite"),
+    ("start.vx=0:1:2.5", "whole number"),
+    ("start.vx", "expected KEY=START:STOP:N"),
+])
+def test_bad_vary_is_refused_with_a_message(text, words):
+    with pytest.raises(ValueError, match=words):
+        parse_vary(text)
+
+
+def test_bad_grids_are_refused():
+    with pytest.raises(ValueError, match="more than a sweep may run"):
+        Grid.of({"start.vx": np.zeros(10_000), "start.vy": np.zeros(10_000)})
+    with pytest.raises(ValueError, match="finite"):
+        Grid.of({"start.vx": [1.0, np.nan]})
+    with pytest.raises(ValueError, match="non-empty"):
+        Grid.of({"start.vx": []})
+    with pytest.raises(ValueError, match="varied twice"):
+        Grid.of([("start.vx", [1.0]), ("start.vx", [2.0])])
+    with pytest.raises(ValueError, match="at least one key"):
+        Grid.of({})
+    with pytest.raises(ValueError, match="fixed-step methods"):
+        sweep(Scene(landscape="0", integrator=LIFTOFF.integrator.__class__(method="dopri5")),
+              {"start.vx": [1.0]})
+    with pytest.raises(ValueError, match="not both"):
+        sweep(LIFTOFF, {"start.vx": [1.0]}, workers=1, scheduler="tcp://127.0.0.1:1")
+    with pytest.raises(ValueError, match="workers"):
+        sweep(LIFTOFF, {"start.vx": [1.0]}, workers=0)
+
+
+def test_threads_give_the_same_table_bit_for_bit_and_report_progress():
+    vary = {"start.vx": np.linspace(3, 6, 13), "start.spin": np.linspace(-4, 4, 5)}
+    calls = []
+    one = sweep(LIFTOFF, vary, workers=1)
+    two = sweep(LIFTOFF, vary, workers=2, progress=lambda done, total, text: calls.append((done, total)))
+    np.testing.assert_array_equal(one.codes, two.codes)
+    np.testing.assert_array_equal(one.outcomes, two.outcomes)   # NaN in the same places too
+    assert calls[-1] == (65, 65) and [d for d, _ in calls] == sorted(d for d, _ in calls)
+    assert not two.partial and two.workers == 2
+
+
+def test_cancel_stops_early_and_keeps_the_finished_runs(tmp_path):
+    cancel = threading.Event()
+    table = sweep(LIFTOFF, {"start.vx": np.linspace(3, 6, 400)}, workers=1, cancel=cancel,
+                  progress=lambda done, total, text: cancel.set())
+    done = table.done
+    assert table.partial and 0 < done.sum() < len(table)
+    assert set(table["status"][~done]) == {"not_run"} and set(table["status"][done]) == {"ok"}
+    table.save(tmp_path)
+    info = json.loads((tmp_path / "sweep.json").read_text())
+    assert info["partial"] is True and info["finished"] == done.sum() and info["runs"] == 400
+    assert len((tmp_path / "sweep.csv").read_text().splitlines()) == 1 + done.sum()
+
+
+def test_save_writes_csv_json_and_a_map(tmp_path):
+    vary = {"start.vx": [3.0, 5.0, 7.0], "start.spin": [-1.0, 1.0]}
+    table = sweep(LIFTOFF, vary, workers=1)
+    files = table.save(tmp_path, color="x_end")
+    assert [f.name for f in files] == ["sweep.csv", "sweep.json", "sweep.png"]
+    rows = list(csv.reader(open(tmp_path / "sweep.csv", encoding="utf-8")))
+    assert rows[0] == ["start.vx", "start.spin", "status", "t_reached", "liftoff_time", "x_end", "y_end",
+                       "energy_drift", "min_normal_force", "max_speed", "path_length", "message"]
+    assert len(rows) == 7 and rows[1][:3] == ["3.0", "-1.0", "ok"] and rows[1][4] == ""   # no lift-off
+    assert float(rows[5][4]) == table["liftoff_time"][4]                                  # full precision
+    info = json.loads((tmp_path / "sweep.json").read_text())
+    assert info["format"] == "rollball-sweep" and info["grid"][0] == {"key": "start.vx", "n": 3,
+                                                                       "values": [3.0, 5.0, 7.0]}
+    assert info["scene"]["landscape"] == LIFTOFF.landscape and info["status"] == {"ok": 6}
+    assert (tmp_path / "sweep.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_sweep_writes_the_files(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["sweep", str(EXAMPLES_DIR / "liftoff.json"), "--vary", "start.vx=3:6:4",
+                 "--workers", "2", "--out", str(out)]) == 0
+    line = capsys.readouterr().out
+    assert "4 of 4 runs" in line and "runs/s" in line
+    assert sorted(p.name for p in out.iterdir()) == ["sweep.csv", "sweep.json", "sweep.png"]
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--vary", "start.z=0:1:2"], "cannot vary"),
+    (["--vary", "start.vx=0:1:0"], "N must be 1 or more"),
+    (["--vary", "start.vx=0:1:5000", "--vary", "start.vy=0:1:5000"], "more than a sweep may run"),
+    (["--vary", "start.vx=0:1:2", "--vary", "start.vx=0:1:2"], "varied twice"),
+    (["--vary", "start.vx=0:1:2", "--color", "speed"], "not an outcome"),
+    (["--vary", "start.vx=0:1:2", "--workers", "0"], "must be 1 or more"),
+    (["--vary", "start.vx=0:1:2", "--workers", "1", "--scheduler", "tcp://x:1"], "not allowed with"),
+    ([], "--vary"),
+])
+def test_cli_bad_input_exits_2_with_one_line(args, words, tmp_path, capsys):
+    code = None
+    try:
+        code = main(["sweep", str(EXAMPLES_DIR / "liftoff.json"), "--out", str(tmp_path)] + args)
+    except SystemExit as e:  # argparse usage errors
+        code = e.code
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and "\n" not in err and "Traceback" not in err
+
+
+def test_cli_refuses_an_adaptive_scene(tmp_path, capsys):
+    path = tmp_path / "a.json"
+    Scene(landscape="0", integrator=LIFTOFF.integrator.__class__(method="dopri5")).save(path)
+    assert main(["sweep", str(path), "--vary", "start.vx=0:1:2", "--out", str(tmp_path)]) == 2
+    assert "fixed-step methods" in capsys.readouterr().err
+
+
+def test_ctrl_c_writes_the_finished_runs_marked_partial(tmp_path, capsys):
+    out = tmp_path / "out"
+    timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        code = main(["sweep", str(EXAMPLES_DIR / "liftoff.json"), "--vary", "start.vx=3:6:20000",
+                     "--workers", "1", "--out", str(out)])
+    finally:
+        timer.cancel()
+    assert code == 130
+    info = json.loads((out / "sweep.json").read_text())
+    assert info["partial"] is True and 0 < info["finished"] < 20000
+    assert len((out / "sweep.csv").read_text().splitlines()) == 1 + info["finished"]
+    assert "stopped early" in capsys.readouterr().err

@@ -1,0 +1,32 @@
+"""Compiling ahead of need: every method is warmed, and a compile is announced once."""
+
+from numba import njit
+
+from rollball import METHODS
+from rollball.warmup import compile_notice, variants
+
+
+def _fresh_function(module: str):
+    def add_one(x):
+        return x + 1.0
+    add_one.__module__ = module
+    return njit(add_one)   # a new dispatcher: calling it compiles
+
+
+def test_every_method_is_warmed_with_each_orientation_update_it_allows():
+    warmed = variants()
+    assert {method for method, _ in warmed} == set(METHODS)
+    assert ("rk4", False) in warmed and ("rk4", True) in warmed
+    assert len(set(warmed)) == len(warmed)
+
+
+def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all():
+    said = []
+    with compile_notice(lambda: said.append("compiling")):
+        _fresh_function("rollball_landscape_0123")(1.0)
+        assert said == []
+        _fresh_function("rollball.kernel")(1.0)
+        _fresh_function("rollball.kernel")(2.0)
+    assert said == ["compiling"]
+    _fresh_function("rollball.kernel")(3.0)   # outside the block: nothing more
+    assert said == ["compiling"]
