@@ -177,7 +177,6 @@ class DensePair(MethodInfo):
     order = ORDER
     kind = MethodKind.ADAPTIVE
     stages = STAGES + 1          # with the derivative at the new state ("first same as last")
-    k_rows = ALL_STAGES          # the stages, that derivative and the dense output's stages
     # the combined estimate err5^2 / sqrt(err5^2 + err3^2 / 100) behaves like an estimate of
     # order 7: dop853.f's (and scipy's) step-size exponent -1/8
     error_exponent = -1.0 / 8.0
@@ -214,14 +213,23 @@ class DensePair(MethodInfo):
                     raise ValueError(f"DOP853: the dense output fails the order condition of "
                                      f"the tree {tree} at x^{k + 1} by {float(residual):.3g}")
 
-    def matrix(self) -> np.ndarray:
-        """The pair as the float rows the kernel reads: A (all stages), b, e5, e3, then P
-        transposed (one row per power of x); every row as long as there are stages."""
-        s = len(self.c)
-        pad = lambda row: list(row) + [0] * (s - len(row))  # noqa: E731
-        rows = list(self.A) + [pad(self.b), pad(self.e5), pad(self.e3)] \
-            + [[self.P[i][k] for i in range(s)] for k in range(DENSE_ORDER)]
-        return np.array([[float(v) for v in row] for row in rows])
+    @property
+    def last(self) -> int:
+        """Index of the derivative at the new state among the stage derivatives K."""
+        return STAGES
+
+    interpolation_order = DENSE_ORDER
+
+    def dense_output(self) -> tuple[tuple[Decimal, ...], ...]:
+        """The interpolation matrix P: z(t + x h) = z + h sum_i K_i sum_k P[i][k] x^(k+1)."""
+        return self.P
+
+    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(W, E, P) as kernel.advance_adaptive reads them: W the stage matrix over all
+        sixteen stages (row 12, the derivative at the new state, is b; rows 13 .. 15 the dense
+        output's stages), E the two error estimates over stages 0 .. 12, P the dense output."""
+        floats = lambda rows: np.array([[float(v) for v in row] for row in rows])  # noqa: E731
+        return floats(self.A), floats((self.e5, self.e3)), floats(self.P)
 
 
 def build(c=C, a=A, e5=E5, bhh=BHH, d=D) -> DensePair:

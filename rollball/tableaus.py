@@ -15,6 +15,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from .dop853 import DOP853, DensePair
 from .implicit import GAUSS4, GAUSS6, Collocation
 from .kinds import MethodInfo, MethodKind, cubic_hermite
 
@@ -217,11 +218,11 @@ DOPRI5 = tableau(
 # Every registry entry is a tableau; ``Method`` names that role in signatures.
 # A registry entry: an explicit tableau, an implicit collocation method or DOP853's pair,
 # each with name, label, order, kind (and what follows from it) and ``kernel_arrays``.
-Method = Tableau | Collocation
+Method = Tableau | Collocation | DensePair
 
 # Every method by the name scene files, the command line and the app use, in the order
 # they are listed.
-METHODS: dict[str, Method] = {t.name: t for t in (EULER, RK4, LAWSON5, GAUSS4, GAUSS6, DOPRI5)}
+METHODS: dict[str, Method] = {t.name: t for t in (EULER, RK4, LAWSON5, GAUSS4, GAUSS6, DOPRI5, DOP853)}
 # The explicit fixed-step ones (each also runs classic or Munthe-Kaas).
 TABLEAUS: dict[str, Tableau] = {name: t for name, t in METHODS.items() if t.classic_allowed}
 # Older names still read (scene files of version 1, the command line, the API).
