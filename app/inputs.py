@@ -8,8 +8,6 @@ stays current.
 
 from __future__ import annotations
 
-import math
-
 from PySide6 import QtCore, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
@@ -42,7 +40,6 @@ NUMBER_FIELDS = {
         ("view.step", "Spacing", "m", "Distance between grid lines"),
     ),
 }
-MAX_GRID_POINTS = 401          # per side of the drawn landscape
 DEBOUNCE_MS = 250              # typing pause before a change is applied
 METHODS_PER_LINE = 3           # method buttons per line of the panel
 METHOD_KINDS = {MethodKind.FIXED: "explicit", MethodKind.ADAPTIVE: "adaptive, explicit",
@@ -242,11 +239,7 @@ class ScenePanel(QtWidgets.QWidget):
         try:
             scene = Scene.from_dict(data)
         except SceneError as error:
-            key, _, message = str(error).partition(": ")
-            return None, key, message
-        points = (scene.view.max - scene.view.min) / scene.view.step + 1
-        if points > MAX_GRID_POINTS:
-            return None, "view.step", f"{math.ceil(points):,} grid points per side; at most {MAX_GRID_POINTS}"
+            return None, error.key, error.reason
         return scene, None, None
 
     def _show_errors(self, key: str | None, message: str | None) -> None:

@@ -189,9 +189,10 @@ class Trajectory:
                          f"Munthe-Kaas keeps it one)")
         return notes
 
-    def to_csv(self, path: str | os.PathLike) -> None:
-        """Write the CSV of DESIGN §5 atomically, numbers at full precision."""
-        atomic_write(path, self.write_csv)
+    def to_csv(self, path: str | os.PathLike, keep=()) -> None:
+        """Write the CSV of DESIGN §5 atomically, numbers at full precision (``keep``: paths
+        that must not be overwritten, see ``rollball.files``)."""
+        atomic_write(path, self.write_csv, keep=keep)
 
     def write_csv(self, stream) -> None:
         """Provenance and unit lines (``#``), the header, then the rows with the energy error."""
