@@ -10,10 +10,12 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.controller import PAUSED, READY, RUNNING
 from app.worker import SimulationThread
+
 from .guitools import run_to_end, set_field
 from hostile_corpus import FORMULAS, SCENE_BYTES, SCENE_TEXTS
 from rollball import Scene
 from rollball.examples import EXAMPLES_DIR
+from rollball.text import shown
 
 
 def rss_mb() -> float:
@@ -60,7 +62,7 @@ def test_a_hostile_scene_file_opened_during_a_run_changes_nothing(qtbot, window,
     path = tmp_path / "hostile.json"
     path.write_text(text, encoding="utf-8")
     assert not window.open_scene(path)
-    assert dialogs[-1][0] == "warning" and f"hostile.json: {key}" in dialogs[-1][2]
+    assert dialogs[-1][0] == "warning" and f"hostile.json: {shown(key)}" in dialogs[-1][2]
     assert window.scene == scene and window.controller.state == state and window.controller.thread is not None or window.controller.computed
 
 
