@@ -122,10 +122,10 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
     window = MainWindow()
-    if args.record is None:
-        window.prepare_integrator()   # compiled in the background while the user looks around
     named_file = args.scene is not None and str(path) == args.scene   # not an example's name
     window.open_scene(path, remember=named_file and args.record is None)
+    if args.record is None:
+        window.prepare_integrator()   # compiled in the background while the user looks around
     if args.compare is not None:
         from .compare_runs import CompareRun
 

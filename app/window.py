@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import METHODS, Scene, SceneError, Simulation, Status, __version__
+from rollball import METHODS, RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
 from rollball.trajectory import CONTACT
@@ -56,6 +56,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.drawn_index = -1                # the row the view shows
         self.frames = 0
         self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
+        self.ready_variants: set[RunSpec] = set()         # what it has compiled so far
         self.start_waiting = False                        # Start was pressed meanwhile
 
         self.controller = RunController(self)
@@ -600,15 +601,37 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def prepare_integrator(self, command: list[str] | None = None) -> None:
         """Compile the integrator for every method in a process of its own, from launch (numba
-        keeps the result on disk, where a run finds it). A Start meanwhile waits, saying so with
-        a busy indicator, and the run starts by itself when the integrator is ready."""
-        command = command or [sys.executable, "-m", "rollball.warmup"]
+        keeps the result on disk, where a run finds it), the current scene's method first. A
+        Start meanwhile waits until its method is ready, saying so with a busy indicator, and
+        the run starts by itself."""
+        scene = self.scene
+        first = [] if scene is None else [str(_spec(scene))]
+        command = command or [sys.executable, "-m", "rollball.warmup", *first]
         process = QtCore.QProcess(self)
         process.setProcessChannelMode(QtCore.QProcess.ProcessChannelMode.ForwardedErrorChannel)
+        process.readyReadStandardOutput.connect(self._variant_ready)
         process.finished.connect(self._prepared)
         process.errorOccurred.connect(lambda _error: self._prepared())
-        self.preparing = process
+        self.preparing, self.ready_variants = process, set()
         process.start(command[0], command[1:])
+
+    def _variant_ready(self) -> None:
+        """The warm-up said ``ready METHOD mk|classic``: a start waiting for it goes."""
+        if self.preparing is None:
+            return
+        for line in bytes(self.preparing.readAllStandardOutput()).decode(errors="replace").splitlines():
+            words = line.split()
+            if len(words) == 3 and words[0] == "ready":
+                self.ready_variants.add(RunSpec(words[1], words[2] == "mk"))
+        if self.start_waiting and not self._must_wait():
+            self.start_waiting = False
+            self.start()
+
+    def _must_wait(self) -> bool:
+        """Whether a Start now would compile what the background process is compiling."""
+        scene = self.scene
+        return self.preparing is not None and (self.compare.active or scene is None
+                                               or _spec(scene) not in self.ready_variants)
 
     def _prepared(self) -> None:
         if self.preparing is None:
@@ -625,7 +648,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.state == PAUSED:
             self.toggle_pause()
             return
-        if self.preparing is not None:
+        if self._must_wait():
             self.start_waiting = True
             self.progress.setRange(0, 0)   # busy
             self.show_message("Preparing the integrator (first run only)… the run starts by itself "
@@ -970,6 +993,12 @@ class MainWindow(QtWidgets.QMainWindow):
             self.preparing.kill()
             self.preparing.waitForFinished(2000)
         event.accept()
+
+
+def _spec(scene: Scene) -> RunSpec:
+    """The method and orientation update a run of the scene uses."""
+    method = get_method(scene.integrator.method)
+    return RunSpec(method.name, scene.integrator.munthe_kaas or not method.classic_allowed)
 
 
 def _physics(scene: Scene) -> tuple:

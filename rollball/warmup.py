@@ -28,15 +28,18 @@ def variants() -> list[tuple[str, bool]]:
             for mk in ((True, False) if method.classic_allowed else (True,))]
 
 
-def warm_up(progress=None) -> None:
-    """Compile (or load from numba's disk cache) the kernel for every method and the grid
-    evaluation the drawing uses. ``progress(done, total, text)`` is called before each part."""
+def warm_up(progress=None, first=(), ready=None) -> None:
+    """Compile (or load from numba's disk cache) the kernel for every method, the variants in
+    ``first`` (``(method, munthe_kaas)`` pairs) before the others. ``progress(done, total,
+    text)`` is called before each part, ``ready(method, munthe_kaas)`` after it."""
     scene = Scene.load(DEFAULT_EXAMPLE)
-    todo = variants()
+    todo = [v for v in first if v in variants()] + [v for v in variants() if v not in first]
     for done, (method, mk) in enumerate(todo):
         if progress:
             progress(done, len(todo), f"{method}{'' if mk else ' classic'}")
         simulate(scene, method=method, munthe_kaas=mk, t_end=0.01)
+        if ready:
+            ready(method, mk)
     if progress:
         progress(len(todo), len(todo), "done")
 
@@ -63,8 +66,18 @@ def compile_notice(say):
         yield
 
 
-def main() -> int:
-    """Warm up, saying on stderr what is compiled (nothing but a last line when it is cached)."""
+def main(argv: list[str] | None = None) -> int:
+    """``python -m rollball.warmup [RUNS]``: warm up, the runs named (e.g. ``rk4/classic``)
+    first; say on stderr what is compiled (nothing but a last line when it is cached) and on
+    stdout ``ready METHOD mk|classic`` as each variant becomes ready."""
+    from .comparison import parse_runs
+
+    args = sys.argv[1:] if argv is None else argv
+    try:
+        first = [(spec.method, spec.munthe_kaas) for spec in parse_runs(args[0])] if args else []
+    except ValueError as error:
+        print(f"rollball: {error}", file=sys.stderr)
+        return 2
     started = time.perf_counter()
     compiling, current = False, ""
 
@@ -80,8 +93,11 @@ def main() -> int:
         if compiling and done < total:
             print(f"  {current}", file=sys.stderr, flush=True)
 
+    def ready(method, mk):
+        print(f"ready {method} {'mk' if mk else 'classic'}", flush=True)
+
     with compile_notice(say):
-        warm_up(progress)
+        warm_up(progress, first, ready)
     print(f"rollball: the integrator is ready ({time.perf_counter() - started:.1f} s)", file=sys.stderr)
     return 0
 

@@ -30,3 +30,11 @@ def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all()
     assert said == ["compiling"]
     _fresh_function("rollball.kernel")(3.0)   # outside the block: nothing more
     assert said == ["compiling"]
+
+
+def test_an_unknown_run_to_warm_first_is_refused_in_one_line(capsys):
+    from rollball.warmup import main
+
+    assert main(["rk5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "unknown run 'rk5'" in err and "\n" not in err

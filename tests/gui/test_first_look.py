@@ -156,3 +156,13 @@ def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window):
     run_to_end(qtbot, window)
     text = window.message.text()
     assert text.startswith("Stopped early") and "lift-off at t = " in text
+
+
+def test_start_goes_as_soon_as_its_method_is_ready(qtbot, window):
+    says = "import time; print('ready euler mk', flush=True); time.sleep(0.5); print('ready rk4 mk', flush=True); time.sleep(30)"
+    window.prepare_integrator([sys.executable, "-c", says])
+    window.start()   # hills: rk4 with Munthe-Kaas
+    assert window.state == "ready"
+    qtbot.waitUntil(lambda: window.state != "ready", timeout=20_000)   # long before the process ends
+    assert window.preparing is not None
+    window.preparing.kill()
