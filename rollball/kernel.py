@@ -17,9 +17,16 @@ from __future__ import annotations
 
 import math
 
+import warnings
+
 import numpy as np
 from numba import njit, types
+from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
+
+# The landscape callback is passed between compiled functions as a first-class function, which
+# numba announces on stderr at every compile; the command line keeps stderr to one line.
+warnings.filterwarnings("ignore", message="First-class function type", category=NumbaExperimentalFeatureWarning)
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
