@@ -14,7 +14,7 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
 from rollball.landscape import landscape_for
-from rollball import METHODS
+from rollball import METHODS, MethodKind
 
 # (dotted scene key, label, unit, tooltip), by group
 NUMBER_FIELDS = {
@@ -43,6 +43,9 @@ NUMBER_FIELDS = {
     ),
 }
 DEBOUNCE_MS = 250              # typing pause before a change is applied
+METHODS_PER_LINE = 3           # method buttons per line of the panel
+METHOD_KINDS = {MethodKind.FIXED: "explicit", MethodKind.ADAPTIVE: "adaptive, explicit",
+                MethodKind.IMPLICIT: "implicit, symmetric"}
 
 
 def _get(d: dict, key: str):
@@ -148,16 +151,16 @@ class ScenePanel(QtWidgets.QWidget):
     def _method_rows(self, form: QtWidgets.QFormLayout) -> None:
         self.methods = QtWidgets.QButtonGroup(self)
         row = QtWidgets.QWidget()
-        h = QtWidgets.QHBoxLayout(row)
-        h.setContentsMargins(0, 0, 0, 0)
-        for name, tableau in METHODS.items():
+        grid = QtWidgets.QGridLayout(row)  # a few per line: the panel stays narrow
+        grid.setContentsMargins(0, 0, 0, 0)
+        for i, (name, tableau) in enumerate(METHODS.items()):
             button = QtWidgets.QRadioButton(tableau.label, objectName=f"method.{name}")
-            button.setToolTip(f"{tableau.label}: Runge–Kutta of order {tableau.order}"
+            button.setToolTip(f"{tableau.label}: {METHOD_KINDS[tableau.kind]} Runge–Kutta of order {tableau.order}"
                               + (", step size chosen for the tolerances" if tableau.adaptive else ""))
             button.setProperty("method", name)
             self.methods.addButton(button)
-            h.addWidget(button)
-        h.addStretch(1)
+            grid.addWidget(button, i // METHODS_PER_LINE, i % METHODS_PER_LINE)
+        grid.setColumnStretch(METHODS_PER_LINE, 1)
         self.methods.buttonClicked.connect(self._method_clicked)
         form.addRow("Method", row)
         self.munthe_kaas = QtWidgets.QCheckBox("Munthe-Kaas (R stays a rotation)", objectName="munthe_kaas")

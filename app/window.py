@@ -27,7 +27,7 @@ from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunContr
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
 from .inputs import ScenePanel
-from .picture import caption_height, caption_text, compose, rgb_array
+from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
@@ -511,10 +511,16 @@ class MainWindow(QtWidgets.QMainWindow):
     def picture(self, size: tuple[int, int], caption: bool = False, plots: bool = False) -> QtGui.QImage:
         """The 3-D view at ``size`` as shown (with the close-up when it is on), optionally with a
         caption and the plots."""
-        scene = self.controller.simulation.scene if self.controller.runs else self.scene
-        text = caption_text(scene, self.controller.play_time) if caption and scene else None
         return compose(self.view, size, inset=self.closeup if self.closeup.isVisible() else None,
-                       caption=text, plots=self.plots if plots else None)
+                       caption=self.caption() if caption else None,
+                       plots=self.bottom.currentWidget() if plots else None)
+
+    def caption(self) -> str | None:
+        """What is shown, in one line: formula, method(s) and step, time."""
+        runs = self.controller.runs
+        scene = runs[0].simulation.scene if runs else self.scene
+        methods = [run.label for run in runs] if self.compare.active and runs else None
+        return caption_text(scene, self.controller.play_time, methods) if scene else None
 
     def save_image(self, path: Path, scale: int = 1, caption: bool = False, plots: bool = False) -> bool:
         """The 3-D view as a PNG at ``scale`` times its size on screen, written atomically."""
@@ -571,7 +577,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
             done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
-                          progress)
+                          progress, ACCENTS)
         finally:
             self.seek(shown)
         if not done:
@@ -896,11 +902,11 @@ class MainWindow(QtWidgets.QMainWindow):
                 helps.set_topic(widget, topic)
 
     def _all_actions(self) -> list[QtGui.QAction]:
-        """The menus' actions in menu order (for the shortcuts page)."""
+        """The menus' actions in menu order, then the window's own (for the shortcuts page)."""
         def walk(menu):
             for action in menu.actions():
                 yield from walk(action.menu()) if action.menu() else (action,)
-        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())]
+        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())] + self.actions()
 
     def show_help(self, topic: str) -> None:
         if self.help_window is None:

@@ -263,10 +263,13 @@ def _sweep(args) -> int:
         return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
     done = int(table.done.sum())
     counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
-    where = f"Dask at {table.scheduler}" if table.scheduler else "local threads"
+    where = f"Dask workers at {table.scheduler}" if table.scheduler else "local threads"
     print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
-          f"({done / max(table.seconds, 1e-9):,.0f} runs/s, {table.workers} {where}): {counts}; "
+          f"({done / max(table.seconds, 1e-9):,.0f} runs/s on {table.workers} {where}): {counts}; "
           f"wrote {', '.join(str(f) for f in files)}")
+    if table.error:
+        print(f"rollball: error: {table.error}; sweep.csv holds the {done:,} runs finished", file=sys.stderr)
+        return EXIT_STOPPED
     if table.partial:
         print(f"rollball: stopped early; sweep.csv holds the {done:,} runs finished "
               f"(sweep.json says partial)", file=sys.stderr)

@@ -15,7 +15,7 @@ from . import __version__, kernel
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
 from .scene import CONSTRAINTS, Scene
-from .tableaus import get_method
+from .tableaus import MethodKind, get_method
 from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
 
 MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
@@ -31,7 +31,7 @@ _REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.SECANT
            kernel.R_HEIGHT_JUMP: Reason.HEIGHT_JUMP,
            kernel.R_START_UNDEFINED: Reason.START_UNDEFINED, kernel.R_START_OVERFLOW: Reason.START_OVERFLOW,
            kernel.R_UNDEFINED: Reason.UNDEFINED, kernel.R_ORIENTATION: Reason.ORIENTATION_OVERFLOW,
-           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW}
+           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW, kernel.R_NOT_CONVERGED: Reason.NOT_CONVERGED}
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -284,7 +284,9 @@ class Simulation:
                     self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
-                kernel.ADVANCE[self.munthe_kaas](
+                advance = (kernel.ADVANCE_IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT
+                           else kernel.ADVANCE[self.munthe_kaas])
+                advance(
                     self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
                     chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
                     self._work)
@@ -379,6 +381,9 @@ def describe(failure: Failure, radius: float) -> str:
             return (f"the orientation R overflowed at {where}: the classic matrix update has "
                     f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
         return (f"the rotation of one step overflowed at {where}: the ball spins too fast for the step")
+    if reason is Reason.NOT_CONVERGED:
+        return (f"the implicit stage equations did not converge at {where}: the step dt = {value:.3g} s "
+                f"is too large for this motion; use a smaller dt")
     if reason is Reason.STEP_UNDERFLOW:
         return (f"the adaptive step size fell to {value:.3g} s, below round-off, at {where}: the equations "
                 f"are (nearly) singular there")

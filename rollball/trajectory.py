@@ -64,6 +64,8 @@ class Reason(str, enum.Enum):
                                          # evaluated there, or the step is too large
     ORIENTATION_OVERFLOW = "orientation_overflow"  # only R overflowed (value: 1 classic, 0 Munthe-Kaas)
     STEP_UNDERFLOW = "step_underflow"    # the adaptive step fell below round-off (value: the step)
+    NOT_CONVERGED = "not_converged"      # an implicit step's stage equations did not converge:
+                                         # the step is too large for the motion (value: the step)
 
     def __str__(self) -> str:
         return self.value
