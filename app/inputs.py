@@ -194,6 +194,7 @@ class ScenePanel(QtWidgets.QWidget):
         try:
             self.formula.setText(scene.landscape)
             self.description.setText(scene.description)
+            self.description.setCursorPosition(0)   # its beginning, not its end
             for key, edit in self.numbers.items():
                 edit.setText(format_number(_get(data, key)))
             for button in self.methods.buttons():
@@ -220,7 +221,7 @@ class ScenePanel(QtWidgets.QWidget):
 
     def read(self) -> tuple[Scene | None, str | None, str | None]:
         """(scene, None, None) from the fields, or (None, offending key, message)."""
-        text = self.formula.text()
+        text = self.formula.text().strip()   # a space typed at either end changes nothing
         try:
             landscape_for(text)
         except FormulaError as error:
