@@ -212,6 +212,7 @@ class ScenePanel(QtWidgets.QWidget):
         try:
             self.formula.setText(scene.landscape)
             self.description.setText(scene.description)
+            self.description.setCursorPosition(0)   # its beginning, not its end
             for key, edit in self.numbers.items():
                 edit.setText(format_number(_get(data, key)))
             for button in self.methods.buttons():
@@ -235,7 +236,7 @@ class ScenePanel(QtWidgets.QWidget):
         """Validate the fields now; emit ``sceneChanged`` if they make a new valid scene. A
         formula not checked yet is checked in the background first (None meanwhile)."""
         self._timer.stop()
-        text = self.formula.text()
+        text = self._formula_text()
         if text not in self._checked:
             self._check_formula(text)
             return None
@@ -269,12 +270,15 @@ class ScenePanel(QtWidgets.QWidget):
     def _formula_checked(self, text: str, problem: str | None) -> None:
         self._checked[text] = problem
         self._checking = None
-        if self.formula.text() == text or self.formula.text() not in self._checked:
+        if self._formula_text() == text or self._formula_text() not in self._checked:
             self.apply()
+
+    def _formula_text(self) -> str:
+        return self.formula.text().strip()  # a space typed at either end changes nothing
 
     def read(self) -> tuple[Scene | None, str | None, str | None]:
         """(scene, None, None) from the fields, or (None, offending key, message)."""
-        text = self.formula.text()
+        text = self._formula_text()
         problem = self._checked.get(text)
         if problem is None and text not in self._checked:
             try:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from importlib import resources
 from pathlib import Path
 
@@ -55,6 +56,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.shown_scene: Scene | None = None   # what the view and the run belong to
         self.drawn_index = -1                # the row the view shows
         self.frames = 0
+        self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
+        self.start_waiting = False                        # Start was pressed meanwhile
 
         self.controller = RunController(self)
         self.controller.stateChanged.connect(lambda _state: self._update_controls())
@@ -312,6 +315,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.state_label.setFixedWidth(150)  # text changes must not re-lay out the window
         self.message = QtWidgets.QLabel(objectName="message")
         self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+        self.message.setWordWrap(True)   # a long message takes a second line rather than being cut
         self.statusBar().addWidget(self.message, 1)
         self.statusBar().addPermanentWidget(self.state_label)
 
@@ -391,6 +395,9 @@ class MainWindow(QtWidgets.QMainWindow):
                 notes.append("grey: the landscape is undefined there")
             if facts["cut"]:
                 notes.append("cut level where the ball's energy cannot take it")
+            if facts["coarse"]:
+                notes.append("the grid spacing is too coarse for this landscape, the drawing is misleading: "
+                             "choose a smaller area or spacing")
             self.show_message("; ".join(notes).capitalize())
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
@@ -489,8 +496,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def export_csv(self, path: Path) -> bool:
         simulation = self.controller.simulation
-        if simulation is None or not self.controller.computed:
-            return False
+        if simulation is None or not (self.controller.computed or self.state == STOPPED):
+            return False   # what a stopped run computed is exported as it stands
         trajectory = simulation.trajectory()
         keep = [self.document.path] if self.document.path else []  # never over the scene file
         if not self._write("export trajectory", path, lambda target: trajectory.to_csv(target, keep=keep)):
@@ -594,10 +601,39 @@ class MainWindow(QtWidgets.QMainWindow):
     def state(self) -> str:
         return self.controller.state
 
+    def prepare_integrator(self, command: list[str] | None = None) -> None:
+        """Compile the integrator for every method in a process of its own, from launch (numba
+        keeps the result on disk, where a run finds it). A Start meanwhile waits, saying so with
+        a busy indicator, and the run starts by itself when the integrator is ready."""
+        command = command or [sys.executable, "-m", "rollball.warmup"]
+        process = QtCore.QProcess(self)
+        process.setProcessChannelMode(QtCore.QProcess.ProcessChannelMode.ForwardedErrorChannel)
+        process.finished.connect(self._prepared)
+        process.errorOccurred.connect(lambda _error: self._prepared())
+        self.preparing = process
+        process.start(command[0], command[1:])
+
+    def _prepared(self) -> None:
+        if self.preparing is None:
+            return
+        self.preparing.deleteLater()
+        self.preparing = None
+        self.progress.setRange(0, 1000)
+        if self.start_waiting:
+            self.start_waiting = False
+            self.start()
+
     def start(self) -> None:
         """Start from t = 0 (or resume when paused)."""
         if self.state == PAUSED:
             self.toggle_pause()
+            return
+        if self.preparing is not None:
+            self.start_waiting = True
+            self.progress.setRange(0, 0)   # busy
+            self.show_message("Preparing the integrator (first run only)… the run starts by itself "
+                              "when it is ready")
+            self._update_controls()
             return
         self.panel.apply()
         scene = self.scene
@@ -674,10 +710,14 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.state not in (RUNNING, PAUSED):
             return
         self.controller.stop()
-        self.show_message(f"Stopped at t = {self.controller.play_time:.4g} s")
+        t, liftoff = self.controller.play_time, self.controller.simulation.liftoff_time
+        self.show_message(f"Stopped at t = {t:.4g} s" + (self._liftoff_note() if liftoff is not None and liftoff <= t
+                                                         else "") + " (what was computed can be exported)")
 
     def reset(self) -> None:
         """Back to the start of the current scene; the computed run is dropped."""
+        self.start_waiting = False
+        self.progress.setRange(0, 1000)
         self.controller.reset()
         self.drawn_index = -1
         self.view.set_runs(None)
@@ -698,11 +738,12 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
+        liftoff = self._liftoff_note()   # every event of the run stays in its last word
         if status is Status.OK:
             warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
-            self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
+            self.show_message(f"Finished: {text}" + liftoff + warnings, warning=bool(warnings or liftoff))
         else:
-            self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
+            self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}" + liftoff, warning=True)
 
     def _liftoff_note(self) -> str:
         t = self.controller.simulation.liftoff_time
@@ -721,7 +762,9 @@ class MainWindow(QtWidgets.QMainWindow):
         """The ball at its start position, before any run."""
         s, r = scene.start, scene.ball.radius
         d = self.landscape.evaluate(s.x, s.y)
-        if not np.all(np.isfinite(d)):
+        valid = bool(np.all(np.isfinite(d)))
+        self.view.ball.setVisible(valid)   # no ball left hanging where the start was
+        if not valid:
             self.show_message(f"The landscape cannot be evaluated at the start point ({s.x:g}, {s.y:g})",
                               warning=True)
             return
@@ -743,7 +786,7 @@ class MainWindow(QtWidgets.QMainWindow):
         for k, (run, i) in enumerate(zip(runs, indices)):
             if len(run.buffer):
                 row = run.buffer.rows[i]
-                trail = run.buffer.trail(i, lift=0.004 * self.view.extent)
+                trail = run.buffer.trail(i, lift=0.3)   # 0.3 r above the contact point
                 self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
                 self.view.set_trail(trail, k)
                 if k == followed:
@@ -774,7 +817,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
-        self.export_action.setEnabled(computed and self.controller.simulation is not None)
+        self.export_action.setEnabled((computed or state == STOPPED) and self.controller.simulation is not None)
         self.animation_action.setEnabled(bool(self.controller.runs))
         self.revert_action.setEnabled(self.dirty)
         for action in (self.back_action, self.forward_action, self.first_action, self.last_action):
@@ -784,7 +827,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.timeline.set_available(self.controller.end_time)
             self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
-        self.state_label.setText(words[state] if computed or state in (READY, STOPPED, FINISHED)
+        self.state_label.setText("Preparing…" if self.start_waiting
+                                 else words[state] if computed or state in (READY, STOPPED, FINISHED)
                                  else f"{words[state]} (computing…)")
 
     def _follow(self, on: bool) -> None:
@@ -930,6 +974,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
+        if self.preparing is not None:
+            self.preparing.kill()
+            self.preparing.waitForFinished(2000)
         event.accept()
 
 
