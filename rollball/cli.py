@@ -1,7 +1,10 @@
 """The ``rollball`` command line.
 
 Exit status: 0 when a run reached its end (a lift-off is a warning), 1 when the physics
-stopped it early (the trajectory up to there is still written), 2 for bad input or usage.
+stopped it early (the trajectory up to there is still written), 2 for bad input or usage,
+141 when the reader of the output went away (``rollball examples | head -1``), as for
+programs that SIGPIPE ends. Messages are one line on stderr; user-controlled text in them
+(file names, JSON keys) is escaped.
 """
 
 from __future__ import annotations
@@ -9,15 +12,19 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from pathlib import Path
 
 from . import __version__
 from .examples import EXAMPLES_DIR, example_scenes, scene_path
+from .files import write_target
 from .scene import SceneError
 from .sweeps.grid import KEYS as SWEEP_KEYS
 from .tableaus import METHODS, MethodKind, get_method
+from .text import shown
 
-EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT, EXIT_BROKEN_PIPE = 0, 1, 2, 141
+STDOUT = "-"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -36,6 +43,8 @@ def _positive_float(text: str) -> float:
 
 
 def _positive_int(text: str) -> int:
+    if len(text.strip()) > 30:
+        raise argparse.ArgumentTypeError(f"number too large ({len(text)} characters)")
     try:
         value = int(text)
     except ValueError:
@@ -43,6 +52,12 @@ def _positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be 1 or more: {text!r}")
     return value
+
+
+def _output_file(text: str) -> str:
+    if text == "":
+        raise argparse.ArgumentTypeError("empty file name (use - for standard output)")
+    return text
 
 
 def _method(text: str) -> str:
@@ -85,7 +100,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--record-dt", type=_positive_float, metavar="T",
                      help="record at multiples of T seconds and at the end (adaptive; "
                           "default: every accepted step)")
-    sim.add_argument("--csv", metavar="OUT.csv", help="write the trajectory as CSV")
+    sim.add_argument("--csv", metavar="OUT.csv", type=_output_file,
+                     help="write the trajectory as CSV (- for standard output; the summary then "
+                          "goes to standard error)")
 
     sweep = commands.add_parser(
         "sweep", help="run a scene over a grid of values: one row of outcomes per run",
@@ -145,9 +162,9 @@ def _load_scene(name: str):
     try:
         return Scene.load(scene_path(name))
     except FileNotFoundError as e:
-        return _fail(str(e))
+        return _fail(f"{shown(e.filename or name)}: {e.strerror}" if e.strerror else str(e))
     except (SceneError, OSError) as e:
-        return _fail(f"{name}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
+        return _fail(f"{shown(name)}: {e.strerror if isinstance(e, OSError) and e.strerror else e}")
 
 
 def _simulate(args) -> int:
@@ -159,6 +176,12 @@ def _simulate(args) -> int:
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
+    to_stdout = args.csv == STDOUT
+    if args.csv and not to_stdout:
+        try:  # before the run: a refused target must not cost the run
+            write_target(args.csv, keep=[scene_path(args.scene)])
+        except OSError as e:
+            return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     try:
         with compile_notice(lambda: print("rollball: compiling the integrator, first run only ...",
                                           file=sys.stderr, flush=True)):
@@ -170,14 +193,17 @@ def _simulate(args) -> int:
     liftoff = ("no lift-off" if traj.liftoff_time is None
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
     warnings = "".join(f", WARNING: {note}" for note in traj.warnings())
-    print(f"{args.scene}: {traj.steps} steps ({traj.rejected} rejected, {traj.evaluations} evaluations), "
+    print(f"{shown(args.scene)}: {traj.steps} steps ({traj.rejected} rejected, {traj.evaluations} evaluations), "
           f"status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}")
-    if args.csv:
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}",
+          file=sys.stderr if to_stdout else sys.stdout)
+    if to_stdout:
+        traj.write_csv(sys.stdout)
+    elif args.csv:
         try:
-            traj.to_csv(args.csv)
+            traj.to_csv(args.csv, keep=[scene_path(args.scene)])
         except OSError as e:
-            return _fail(f"cannot write {args.csv}: {e.strerror or e}")
+            return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
 
 
@@ -195,7 +221,7 @@ def _sweep(args) -> int:
     except ValueError as e:
         return _fail(str(e))
     if args.color not in OUTCOMES:
-        return _fail(f"--color {args.color}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
+        return _fail(f"--color {shown(args.color)}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
@@ -203,9 +229,9 @@ def _sweep(args) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        return _fail(f"cannot write to {out}: {e.strerror or e}")
+        return _fail(f"cannot write to {shown(out)}: {e.strerror or e}")
     if not os.access(out, os.W_OK):
-        return _fail(f"cannot write to {out}: permission denied")
+        return _fail(f"cannot write to {shown(out)}: permission denied")
 
     cancel = threading.Event()
 
@@ -234,13 +260,16 @@ def _sweep(args) -> int:
     try:
         files = table.save(out, args.color)
     except OSError as e:
-        return _fail(f"cannot write to {out}: {e.strerror or e}")
+        return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
     done = int(table.done.sum())
     counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
-    where = f"Dask at {table.scheduler}" if table.scheduler else "local threads"
+    where = f"Dask workers at {table.scheduler}" if table.scheduler else "local threads"
     print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
-          f"({done / max(table.seconds, 1e-9):,.0f} runs/s, {table.workers} {where}): {counts}; "
+          f"({done / max(table.seconds, 1e-9):,.0f} runs/s on {table.workers} {where}): {counts}; "
           f"wrote {', '.join(str(f) for f in files)}")
+    if table.error:
+        print(f"rollball: error: {table.error}; sweep.csv holds the {done:,} runs finished", file=sys.stderr)
+        return EXIT_STOPPED
     if table.partial:
         print(f"rollball: stopped early; sweep.csv holds the {done:,} runs finished "
               f"(sweep.json says partial)", file=sys.stderr)
@@ -271,17 +300,17 @@ def _compare(args) -> int:
         try:
             result = compare(scene, runs=runs, t_end=args.t_end, quick=args.quick, progress=progress)
         except NothingToCompare as e:
-            print(f"rollball: {args.scene}: {e}", file=sys.stderr)
+            print(f"rollball: {shown(args.scene)}: {e}", file=sys.stderr)
             return EXIT_STOPPED
         except ValueError as e:  # includes FormulaError
             return _fail(str(e))
     try:
         result.save(args.out)
     except OSError as e:
-        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
     stopped = sum(not r.ok for r in result.runs)
     note = f"; {stopped} runs stopped early (see compare.md)" if stopped else ""
-    print(f"{args.scene}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
+    print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
     return EXIT_OK
 
 
@@ -289,7 +318,7 @@ def _examples() -> int:
     examples = example_scenes()
     width = max(len(path.stem) for path, _ in examples)
     for path, scene in examples:
-        print(f"{path.stem:<{width}}  {scene.description}")
+        print(f"{path.stem:<{width}}  {shown(scene.description)}")
     print(f"\nRun one by name (rollball simulate hills); the files are in {EXAMPLES_DIR}")
     return EXIT_OK
 
@@ -305,7 +334,7 @@ def _bench(args) -> int:
     try:
         print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
     except OSError as e:
-        return _fail(f"cannot write to {args.out}: {e.strerror or e}")
+        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
     return EXIT_OK
 
 
@@ -314,26 +343,35 @@ def _fail(message: str) -> int:
     return EXIT_BAD_INPUT
 
 
+def _warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as one line of its own (the summary stays one line)."""
+    print(f"rollball: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+
+COMMANDS = {"simulate": _simulate, "compare": _compare, "sweep": _sweep,
+            "examples": lambda args: _examples(), "bench": _bench}
+INTERRUPTED = {"simulate": "rollball: interrupted", "compare": "rollball: interrupted (nothing written)"}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command == "simulate":
+    if args.command not in COMMANDS:
+        parser.print_help()
+        return EXIT_BAD_INPUT
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning
+        # overflowing or undefined numbers in derived columns are reported by the run's status
+        warnings.filterwarnings("ignore", category=RuntimeWarning)
         try:
-            return _simulate(args)
+            code = COMMANDS[args.command](args)
+            sys.stdout.flush()
         except KeyboardInterrupt:
-            print("rollball: interrupted", file=sys.stderr)
+            if args.command not in INTERRUPTED:
+                raise
+            print(INTERRUPTED[args.command], file=sys.stderr)
             return 130
-    if args.command == "compare":
-        try:
-            return _compare(args)
-        except KeyboardInterrupt:
-            print("rollball: interrupted (nothing written)", file=sys.stderr)
-            return 130
-    if args.command == "sweep":
-        return _sweep(args)
-    if args.command == "examples":
-        return _examples()
-    if args.command == "bench":
-        return _bench(args)
-    parser.print_help()
-    return EXIT_BAD_INPUT
+        except BrokenPipeError:  # the reader left (| head): stop quietly, as SIGPIPE would
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return EXIT_BROKEN_PIPE
+    return code

@@ -25,6 +25,7 @@ X, Y = sp.symbols("x y", real=True)
 
 MAX_LENGTH = 1000
 MAX_DEPTH = 40
+MAX_ARGUMENTS = 16  # of min and max
 LARGEST_CONSTANT = 1e300
 
 CONSTANTS = {"x": X, "y": Y, "pi": sp.pi, "e": sp.E}
@@ -254,6 +255,8 @@ class _Parser:
         self.depth -= 1
         if arity is None and len(args) < 2:
             raise FormulaError(f"{tok.text} takes two or more arguments", tok.position)
+        if arity is None and len(args) > MAX_ARGUMENTS:  # sympy compares every pair, and again per derivative
+            raise FormulaError(f"{tok.text} takes at most {MAX_ARGUMENTS} arguments", tok.position)
         if arity is not None and len(args) != arity:
             plural = "argument" if arity == 1 else "arguments"
             raise FormulaError(f"{tok.text} takes {arity} {plural}, not {len(args)}", tok.position)

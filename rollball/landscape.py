@@ -17,6 +17,8 @@ import os
 import re
 import sys
 import tempfile
+import types
+import warnings
 from functools import lru_cache
 from pathlib import Path
 
@@ -27,6 +29,13 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from .files import atomic_write_text
 from .formula import X, Y, FormulaError, check_constants, parse_formula
+from .text import shown
+
+# The work budget of a formula: its derivatives may hold about this many nodes (operations,
+# functions, numbers, variables), as estimated before each round of differentiation and as
+# counted after. Differentiating, simplifying and compiling that much takes a few seconds; a
+# product of 17 factors sin(k*x + y) (180 characters) is about this large.
+MAX_DERIVATIVE_NODES = 100_000
 
 # Compiled callbacks by generated source: the same formula is compiled once per process.
 _COMPILED: dict[str, object] = {}
@@ -52,7 +61,7 @@ class _Printer(PythonCodePrinter):
 _PRINTER = _Printer({"standard": "python3", "strict": True})
 _GENERATED_NAMES = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 _SAFE_NAMES = {"def", "landscape", "x", "y", "out", "math", "abs", "min", "max",
-               "if", "else"} | {n for n in dir(math) if not n.startswith("_")}
+               "if", "else", "and", "or", "not"} | {n for n in dir(math) if not n.startswith("_")}
 
 
 def _without_delta(expr: sp.Expr) -> sp.Expr:
@@ -61,17 +70,50 @@ def _without_delta(expr: sp.Expr) -> sp.Expr:
     return expr.replace(lambda a: isinstance(a, sp.DiracDelta), lambda a: sp.S.Zero)
 
 
+def _sizes(exprs, var=None) -> tuple[int, int]:
+    """(nodes of the expression trees, estimated nodes of their derivatives by ``var``), without
+    building the derivatives: the product rule copies a product once per factor that depends on
+    ``var``, the chain rule a function call (or power) once or twice per argument. Generous,
+    so the shapes that explode (long products, nested calls) are caught before sympy works."""
+    size, dsize, depends = {}, {}, {}
+    for expr in exprs:
+        for node in sp.postorder_traversal(expr):  # children before their parent
+            if node in size:
+                continue
+            args = node.args
+            size[node] = 1 + sum(size[a] for a in args)
+            depends[node] = node == var or any(depends[a] for a in args)
+            if not depends[node] or not args:
+                dsize[node] = int(depends[node])
+            elif isinstance(node, sp.Add):
+                dsize[node] = 1 + sum(dsize[a] for a in args)
+            elif isinstance(node, sp.Mul):
+                dsize[node] = 1 + sum(size[node] - size[a] + dsize[a] for a in args if depends[a])
+            else:  # powers and functions: f'(args) (about the call's size per argument) times args'
+                copies = 2 * len(args)
+                dsize[node] = 1 + sum(copies * size[node] + dsize[a] for a in args if depends[a])
+    return sum(size[e] for e in exprs), sum(dsize[e] for e in exprs)
+
+
 class Landscape:
-    """A parsed, differentiated landscape formula. Raises ``FormulaError`` for bad text."""
+    """A parsed, differentiated landscape formula. Raises ``FormulaError`` for bad text, or for
+    a formula whose derivatives would exceed ``MAX_DERIVATIVE_NODES`` (checked before each
+    round of differentiation, so a refusal comes within a second or two)."""
 
     def __init__(self, text: str):
         self.text = text
         self.expr = parse_formula(text)
         f = self.expr
         try:
+            # sympy builds first derivatives slowest, node by node: a tenth of the budget
+            self._within_budget(_sizes([f], X)[1] + _sizes([f], Y)[1], MAX_DERIVATIVE_NODES // 10)
             fx, fy = sp.diff(f, X), sp.diff(f, Y)
+            self._within_budget(_sizes([fx], X)[1] + _sizes([fx, fy], Y)[1])
             exprs = (f, fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
             self.derivatives = tuple(_without_delta(e) for e in exprs)
+            self._within_budget(_sizes(self.derivatives[3:])[0])
+        except FormulaError:
+            raise
         except (ValueError, TypeError, ArithmeticError) as e:
             raise FormulaError(f"cannot differentiate the formula ({e})") from None
         for e in self.derivatives:
@@ -80,6 +122,12 @@ class Landscape:
 
     def __repr__(self) -> str:
         return f"Landscape({self.text!r})"
+
+    @staticmethod
+    def _within_budget(nodes: int, budget: int = MAX_DERIVATIVE_NODES) -> None:
+        if nodes > budget:
+            raise FormulaError(f"formula too complex to differentiate (its derivatives would have about "
+                               f"{nodes:,} operations, at most {budget:,})")
 
     def _generate_source(self) -> str:
         """Python source of ``landscape(x, y, out)`` filling out[0:6] with f and its derivatives."""
@@ -142,16 +190,43 @@ def cache_dir() -> Path:
     return _CACHE_DIR
 
 
+class CacheWarning(UserWarning):
+    """The cache folder cannot be used; formulas are compiled without it."""
+
+
+_CACHE_BROKEN = False  # the cache failed once: this process compiles without it (and said so)
+
+
 def _compile(source: str):
     """Compile generated source as a numba cfunc, cached on disk by numba: the source is
     written to a module named by its hash, so a formula seen in an earlier run loads in
-    milliseconds. The file is rewritten unless it holds exactly this source."""
+    milliseconds. The file is rewritten unless it holds exactly this source. The cache is
+    only an optimisation: where it cannot be written (full disk, no permission) the formula
+    is compiled in memory, and a ``CacheWarning`` says so once."""
+    global _CACHE_BROKEN
     from numba import cfunc
 
     from .kernel import LANDSCAPE_SIGNATURE
 
     text = "import math\n\n\n" + source
     name = "landscape_" + hashlib.sha256(text.encode()).hexdigest()[:24]
+    module = None
+    if not _CACHE_BROKEN:
+        try:
+            return _compile_cached(text, name, cfunc, LANDSCAPE_SIGNATURE)
+        except (OSError, RuntimeError) as error:  # numba: RuntimeError "cannot cache function"
+            if isinstance(error, RuntimeError) and "cache" not in str(error):
+                raise
+            _CACHE_BROKEN = True
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            warnings.warn(f"the cache folder {shown(str(cache_dir()))} cannot be used ({reason}); "
+                          f"formulas are compiled without it from now on", CacheWarning, stacklevel=2)
+    module = types.ModuleType(f"rollball_{name}")
+    exec(compile(text, f"<{name}>", "exec"), module.__dict__)  # our generated code, checked, not user text
+    return cfunc(LANDSCAPE_SIGNATURE, error_model="numpy", cache=False)(module.landscape)
+
+
+def _compile_cached(text: str, name: str, cfunc, signature):
     path = cache_dir() / f"{name}.py"
     try:
         current = path.read_text(encoding="utf-8")
@@ -162,7 +237,7 @@ def _compile(source: str):
     spec = importlib.util.spec_from_file_location(f"rollball_{name}", path)
     module = sys.modules[spec.name] = importlib.util.module_from_spec(spec)  # numba's cache looks it up
     spec.loader.exec_module(module)  # our generated code, checked above, not user text
-    return cfunc(LANDSCAPE_SIGNATURE, error_model="numpy", cache=True)(module.landscape)
+    return cfunc(signature, error_model="numpy", cache=True)(module.landscape)
 
 
 @lru_cache(maxsize=64)

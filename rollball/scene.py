@@ -8,26 +8,40 @@ refusal is a ``SceneError`` whose message starts with the offending key.
 from __future__ import annotations
 
 import dataclasses
+import decimal
 import json
 import math
 import numbers
 import os
+import sys
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .files import atomic_write_text
+from .files import atomic_write_text, open_regular
 from .formula import FormulaError
 from .landscape import landscape_for
 from .tableaus import METHODS, get_method
+from .text import shown
 
 FORMAT = "rollball-scene"
 VERSION = 2
 MAX_FILE_SIZE = 1 << 20
+MIN_RTOL = 10 * sys.float_info.epsilon   # tighter relative tolerances are below round-off
+MAX_GRID_POINTS = 401   # per side of the drawn landscape (the app draws it; the core refuses more)
+SMALLEST = sys.float_info.min   # the smallest normal positive float
 
 
 class SceneError(ValueError):
-    """A scene that cannot be accepted; the message names the key."""
+    """A scene that cannot be accepted. ``key``: the offending dotted key ("scene" for the
+    document as a whole); ``reason``: why. The message is "key: reason", the key escaped
+    when it is not plain printable text (it may come from a hostile file)."""
+
+    def __init__(self, key: str, reason: str | None = None):
+        if reason is None:  # one "key: reason" text
+            key, _, reason = key.partition(": ")
+        self.key, self.reason = key, reason
+        super().__init__(f"{shown(key)}: {reason}")
 
 
 @dataclass(frozen=True)
@@ -65,8 +79,18 @@ def _positive(v):
     return None if v > 0 else "must be greater than 0"
 
 
+def _normal_positive(v):
+    return None if v >= SMALLEST else "must be a normal positive float (greater than 2.2e-308)"
+
+
 def _not_negative(v):
     return None if v >= 0 else "must not be negative"
+
+
+def _tolerance(v):
+    if not v > 0:
+        return "must be greater than 0"
+    return None if v >= MIN_RTOL else f"must be at least {MIN_RTOL:.3g} (10 × the rounding error of a double)"
 
 
 def _known_method(v):
@@ -93,8 +117,8 @@ CONSTRAINTS = {
     "ball.mass": _positive,
     "integrator.method": _known_method,
     "integrator.dt": _positive,
-    "integrator.rtol": _positive,
-    "integrator.atol": _positive,
+    "integrator.rtol": _tolerance,
+    "integrator.atol": _normal_positive,
     "duration": _positive,
     "view.step": _positive,
 }
@@ -114,13 +138,14 @@ class Scene:
     def __post_init__(self):
         _check(self, "")
         if self.view.min >= self.view.max:
-            raise SceneError("view.min: must be less than view.max")
+            raise SceneError("view.min", "must be less than view.max")
         method = get_method(self.integrator.method)
         if method.name != self.integrator.method:  # an alias: keep the method's own name
             object.__setattr__(self.integrator, "method", method.name)
         if not (method.classic_allowed or self.integrator.munthe_kaas):
-            raise SceneError(f"integrator.munthe_kaas: {method.name} always uses Munthe-Kaas "
+            raise SceneError("integrator.munthe_kaas", f"{method.name} always uses Munthe-Kaas "
                              "(must be true)")
+        _check_derived(self)
 
     # -- dictionaries and files -------------------------------------------------------
 
@@ -130,21 +155,21 @@ class Scene:
     @classmethod
     def from_dict(cls, data) -> "Scene":
         if not isinstance(data, dict):
-            raise SceneError(f"scene: must be a JSON object, not {_kind(data)}")
+            raise SceneError("scene", f"must be a JSON object, not {_kind(data)}")
         if "format" not in data:
-            raise SceneError(f"format: missing (a RollBall scene has \"format\": \"{FORMAT}\")")
+            raise SceneError("format", f"missing (a RollBall scene has \"format\": \"{FORMAT}\")")
         if data["format"] != FORMAT:
-            raise SceneError(f"format: must be \"{FORMAT}\"")
+            raise SceneError("format", f"must be \"{FORMAT}\"")
         if "version" not in data:
-            raise SceneError("version: missing")
+            raise SceneError("version", "missing")
         version = data["version"]
         if type(version) is not int or version < 1:
-            raise SceneError("version: must be a positive whole number")
+            raise SceneError("version", "must be a positive whole number")
         if version > VERSION:
-            raise SceneError(f"version: {version} is newer than this RollBall understands "
-                             f"(it reads versions 1 to {VERSION})")
+            raise SceneError("version", f"{version} is newer than this RollBall understands "
+                                        f"(it reads versions 1 to {VERSION})")
         if "landscape" not in data:
-            raise SceneError("landscape: missing")
+            raise SceneError("landscape", "missing")
         body = {k: v for k, v in data.items() if k not in ("format", "version")}
         for step in MIGRATIONS[version - 1:]:
             body = step(body)
@@ -157,29 +182,34 @@ class Scene:
         except SceneError:
             raise
         except RecursionError:
-            raise SceneError("scene: nested too deeply") from None
+            raise SceneError("scene", "nested too deeply") from None
         except ValueError as e:
-            raise SceneError(f"scene: not valid JSON ({e})") from None
+            if "int_max_str_digits" in str(e):  # Python's guard against quadratic int parsing
+                raise SceneError("scene", f"a number has more than {sys.get_int_max_str_digits()} "
+                                          "digits") from None
+            raise SceneError("scene", f"not valid JSON ({e})") from None
         return cls.from_dict(data)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "Scene":
-        """Read a scene file; raises ``SceneError`` (or ``OSError`` if it cannot be read)."""
-        with open(path, "rb") as stream:
+        """Read a scene file; raises ``SceneError`` (or ``OSError`` if it cannot be read, or is
+        not a regular file: a named pipe or a device is refused before it is opened)."""
+        with open_regular(path) as stream:
             raw = stream.read(MAX_FILE_SIZE + 1)
         if len(raw) > MAX_FILE_SIZE:
-            raise SceneError(f"scene: file is larger than {MAX_FILE_SIZE} bytes")
+            raise SceneError("scene", f"file is larger than {MAX_FILE_SIZE} bytes")
         try:
             text = raw.decode("utf-8-sig")
         except UnicodeDecodeError:
-            raise SceneError("scene: not a UTF-8 text file") from None
+            raise SceneError("scene", "not a UTF-8 text file") from None
         return cls.loads(text)
 
     def dumps(self) -> str:
         return json.dumps(self.to_dict(), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write the scene atomically: an existing file is replaced whole or not at all."""
+        """Write the scene atomically: an existing file is replaced whole or not at all (and
+        read-only or special files are refused; see ``rollball.files``)."""
         atomic_write_text(Path(path), self.dumps())
 
 
@@ -204,19 +234,20 @@ _HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integr
 
 
 def _kind(value) -> str:
-    return {dict: "an object", list: "an array", str: "text", bool: "true/false",
-            type(None): "null"}.get(type(value), "a number")
+    kinds = {dict: "an object", list: "an array", str: "text", bool: "true/false", type(None): "null",
+             int: "a number", float: "a number"}
+    return kinds.get(type(value)) or f"a {type(value).__name__}"
 
 
 def _refuse_constant(name):
-    raise SceneError(f"scene: {name} is not a number JSON allows")
+    raise SceneError("scene", f"{name} is not a number JSON allows")
 
 
 def _no_duplicates(pairs):
     data = {}
     for key, value in pairs:
         if key in data:
-            raise SceneError(f"{key}: appears twice")
+            raise SceneError(key, "appears twice")
         data[key] = value
     return data
 
@@ -226,20 +257,20 @@ def _build(cls, data: dict, prefix: str):
     names = {f.name for f in dataclasses.fields(cls)}
     for key in data:
         if key not in names:
-            raise SceneError(f"{prefix}{key}: unknown key")
+            raise SceneError(f"{prefix}{key}", "unknown key")
     values = {}
     for key, value in data.items():
         kind = hints[key]
         if dataclasses.is_dataclass(kind):
             if not isinstance(value, dict):
-                raise SceneError(f"{prefix}{key}: must be an object, not {_kind(value)}")
+                raise SceneError(f"{prefix}{key}", f"must be an object, not {_kind(value)}")
             value = _build(kind, value, f"{prefix}{key}.")
         values[key] = value
     try:
         return cls(**values)
     except TypeError:  # a required key is missing
         missing = [f.name for f in dataclasses.fields(cls) if f.name not in values]
-        raise SceneError(f"{prefix}{missing[0]}: missing") from None
+        raise SceneError(f"{prefix}{missing[0]}", "missing") from None
 
 
 def _check(obj, prefix: str) -> None:
@@ -249,25 +280,56 @@ def _check(obj, prefix: str) -> None:
         key, value, kind = prefix + f.name, getattr(obj, f.name), hints[f.name]
         if dataclasses.is_dataclass(kind):
             if not isinstance(value, kind):
-                raise SceneError(f"{key}: must be an object")
+                raise SceneError(key, "must be an object")
             _check(value, key + ".")
             continue
         if kind is float:
-            if isinstance(value, bool) or not isinstance(value, numbers.Real):
-                raise SceneError(f"{key}: must be a number, not {_kind(value)}")
+            if isinstance(value, bool) or not isinstance(value, (numbers.Real, decimal.Decimal)):
+                raise SceneError(key, f"must be a number, not {_kind(value)}")
             try:
                 number = float(value)
             except OverflowError:
-                raise SceneError(f"{key}: number is too large") from None
+                raise SceneError(key, "number is too large") from None
             if not math.isfinite(number):
-                raise SceneError(f"{key}: must be a finite number")
+                raise SceneError(key, "must be a finite number")
             if type(value) is not float:  # int, numpy numbers: stored as a plain float
                 object.__setattr__(obj, f.name, number)
             value = number
         elif kind is bool and type(value) is not bool:
-            raise SceneError(f"{key}: must be true or false, not {_kind(value)}")
+            raise SceneError(key, f"must be true or false, not {_kind(value)}")
         elif kind is str and type(value) is not str:
-            raise SceneError(f"{key}: must be text, not {_kind(value)}")
+            raise SceneError(key, f"must be text, not {_kind(value)}")
         problem = CONSTRAINTS.get(key, lambda v: None)(value)
         if problem:
-            raise SceneError(f"{key}: {problem} (got {value!r})" if kind is float else f"{key}: {problem}")
+            raise SceneError(key, f"{problem} (got {value!r})" if kind is float else problem)
+
+
+def _finite(*factors: float) -> bool:
+    product = 1.0
+    for factor in factors:
+        product *= factor
+    return math.isfinite(product)
+
+
+def _check_derived(scene: Scene) -> None:
+    """What the physics and the drawing need beyond each value on its own: the quantities the
+    equations divide by or add up must be normal floats (no underflow to 0, no overflow)."""
+    r, m, g, s = scene.ball.radius, scene.ball.mass, scene.gravity, scene.start
+    if not SMALLEST <= r * r < math.inf:
+        raise SceneError("ball.radius", f"r² must be a normal positive float (got r = {r!r})")
+    inertia = m * r * r
+    if not SMALLEST <= inertia < math.inf:
+        raise SceneError("ball.mass", f"m r² must be a normal positive float (got m = {m!r}, r = {r!r})")
+    if not _finite(m, g, r):
+        raise SceneError("gravity", f"m g₀ r overflows (got g₀ = {g!r})")
+    speed2 = s.vx * s.vx + s.vy * s.vy
+    if not _finite(m, speed2, 2.0):
+        raise SceneError("start.vx" if abs(s.vx) >= abs(s.vy) else "start.vy",
+                         "the kinetic energy m v² overflows")
+    if not _finite(inertia, s.spin, s.spin, 2.0):
+        raise SceneError("start.spin", "the kinetic energy m r² spin² overflows")
+    v = scene.view
+    points = (v.max - v.min) / v.step + 1
+    if not points <= MAX_GRID_POINTS:  # also catches an overflowing (infinite) span
+        shown_points = f"{math.ceil(points):,}" if math.isfinite(points) else "too many"
+        raise SceneError("view.step", f"{shown_points} grid points per side; at most {MAX_GRID_POINTS}")

@@ -2,22 +2,27 @@
 
 from __future__ import annotations
 
+import decimal
 import math
+import numbers
 import operator
+import os
+import threading
 
 import numpy as np
 
 from . import __version__, kernel
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
-from .scene import Scene
-from .tableaus import get_method
+from .scene import CONSTRAINTS, Scene
+from .tableaus import MethodKind, get_method
 from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
 
 # 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
 # recording every adaptive step grows its buffer by doubling up to the limit, holding the
 # old and the new buffer for a moment (1.4 GB at the last doubling).
 MAX_ROWS = 5_000_000
+MAX_STEPS = 2 ** 53    # beyond this, step counts and k·dt are no longer exact in a double
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
 AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
@@ -29,12 +34,16 @@ _REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.SECANT
            kernel.R_HEIGHT_JUMP: Reason.HEIGHT_JUMP,
            kernel.R_START_UNDEFINED: Reason.START_UNDEFINED, kernel.R_START_OVERFLOW: Reason.START_OVERFLOW,
            kernel.R_UNDEFINED: Reason.UNDEFINED, kernel.R_ORIENTATION: Reason.ORIENTATION_OVERFLOW,
-           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW}
+           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW, kernel.R_NOT_CONVERGED: Reason.NOT_CONVERGED}
 
 
 def step_count(dt: float, t_end: float) -> int:
-    """Steps of size dt to reach t_end; the last one is shortened when dt does not divide t_end."""
+    """Steps of size dt to reach t_end; the last one is shortened when dt does not divide t_end.
+    Raises ``ValueError`` when there would be more than ``MAX_STEPS``."""
     q = t_end / dt
+    if not q <= MAX_STEPS:  # also an overflow to inf
+        raise ValueError(f"t_end / dt = {q:.3g} steps is too many (at most {MAX_STEPS:.3g}): "
+                         f"use a larger dt or a shorter t_end")
     n = round(q)
     if n >= 1 and abs(q - n) <= 1e-9 * q:
         return n
@@ -53,13 +62,29 @@ def recording(scene: Scene, *, method: str | None = None, dt: float | None = Non
     return {"record_every": record_every or max(1, math.ceil(steps / AUTO_ROWS))}
 
 
-def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{name} must be a number, not {value!r}")
-    value = float(value)
+def _positive(name: str, value, key: str | None = None) -> float:
+    """A finite number > 0 (and whatever the scene rule for ``key`` adds) as a float."""
+    if isinstance(value, bool) or not isinstance(value, (numbers.Real, decimal.Decimal)):
+        raise ValueError(f"{name} must be a number, not {type(value).__name__}")
+    try:
+        value = float(value)
+    except OverflowError:
+        raise ValueError(f"{name} is too large") from None
     if not (math.isfinite(value) and value > 0):
         raise ValueError(f"{name} must be a finite number greater than 0, not {value!r}")
+    problem = CONSTRAINTS[key](value) if key else None
+    if problem:
+        raise ValueError(f"{name} {problem}, not {value!r}")
     return value
+
+
+def _scene(scene) -> Scene:
+    """A Scene, or the path of a scene file (loaded)."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        return Scene.load(scene)
+    raise TypeError(f"pass a Scene (or a scene file's path), not {type(scene).__name__}")
 
 
 def initial_momentum(d: np.ndarray, vx, vy, spin, r, m) -> np.ndarray:
@@ -97,12 +122,16 @@ class Simulation:
     first step tried, the orientation always Munthe-Kaas); rows are recorded at multiples
     of ``record_dt`` and at ``t_end``, or at every accepted step when ``record_dt`` is None.
     Fixed-step methods record every ``record_every``-th step instead.
+
+    ``scene`` may also be a scene file's path. One thread at a time may call ``advance``: a
+    second thread calling it meanwhile gets a ``RuntimeError`` (``cancel`` and the read-only
+    properties are safe from any thread).
     """
 
     def __init__(self, scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
                  dt: float | None = None, t_end: float | None = None, record_every: int = 1,
                  rtol: float | None = None, atol: float | None = None, record_dt: float | None = None):
-        self.scene = scene
+        self.scene = scene = _scene(scene)
         self.tableau = get_method(scene.integrator.method if method is None else method)
         self.adaptive = self.tableau.adaptive
         classic_allowed = self.tableau.classic_allowed
@@ -115,14 +144,16 @@ class Simulation:
         self.munthe_kaas = mk
         self.dt = _positive("dt", scene.integrator.dt if dt is None else dt)
         self.t_end = _positive("t_end", scene.duration if t_end is None else t_end)
-        self.rtol = _positive("rtol", scene.integrator.rtol if rtol is None else rtol)
-        self.atol = _positive("atol", scene.integrator.atol if atol is None else atol)
+        if not self.adaptive and (rtol is not None or atol is not None):
+            raise ValueError("rtol and atol are for the adaptive method; fixed steps use dt")
+        self.rtol = _positive("rtol", scene.integrator.rtol if rtol is None else rtol, "integrator.rtol")
+        self.atol = _positive("atol", scene.integrator.atol if atol is None else atol, "integrator.atol")
         try:
             every = operator.index(record_every)
         except TypeError:
-            raise ValueError(f"record_every must be a whole number, not {record_every!r}") from None
-        if isinstance(record_every, bool) or every < 1:
-            raise ValueError(f"record_every must be 1 or more, not {record_every!r}")
+            raise ValueError(f"record_every must be a whole number, not {type(record_every).__name__}") from None
+        if isinstance(record_every, bool) or not 1 <= every <= MAX_STEPS:
+            raise ValueError(f"record_every must be from 1 to {MAX_STEPS:.3g}")
         if self.adaptive and every != 1:
             raise ValueError("record_every counts fixed steps; with an adaptive method use record_dt")
         if record_dt is not None and not self.adaptive:
@@ -130,16 +161,20 @@ class Simulation:
         self.record_every = every
         self.record_dt = None if record_dt is None else _positive("record_dt", record_dt)
         if self.adaptive:
+            if self.dt <= kernel.MIN_STEP:
+                raise ValueError(f"dt (the first step tried) must be greater than {kernel.MIN_STEP:g} s: "
+                                 f"smaller steps are lost in round-off")
             self.n_steps = None  # not known in advance: see ``progress``
-            n_rows = (FIRST_ROWS if self.record_dt is None
-                      else 2 + math.ceil(self.t_end / self.record_dt * (1 + 1e-12)))
+            rows = FIRST_ROWS if self.record_dt is None else 2 + self.t_end / self.record_dt * (1 + 1e-12)
         else:
             self.n_steps = step_count(self.dt, self.t_end)
-            n_rows = 1 + self.n_steps // every + (1 if self.n_steps % every else 0)
-        if n_rows > MAX_ROWS:
-            raise ValueError(f"this run would record {n_rows:,} rows (at most {MAX_ROWS:,}): "
+            rows = 1 + self.n_steps // every + (1 if self.n_steps % every else 0)
+        if not rows <= MAX_ROWS:  # also an overflow to inf
+            raise ValueError(f"this run would record {rows:,.0f} rows (at most {MAX_ROWS:,}): "
                              + ("use a larger record_dt" if self.adaptive
                                 else "record every N-th step with a larger N"))
+        n_rows = math.ceil(rows)
+        self._busy = threading.Lock()
 
         self.landscape = landscape_for(scene.landscape)
         self._fn = self.landscape.compiled
@@ -215,7 +250,21 @@ class Simulation:
         return self._rows[: self._ints[kernel.I_ROWS]]
 
     def advance(self, max_steps: int | None = None) -> np.ndarray:
-        """Run up to ``max_steps`` more steps (all remaining if None); return the new rows."""
+        """Run up to ``max_steps`` more steps (a whole number >= 1; all remaining if None);
+        return the new rows. Raises ``RuntimeError`` if another thread is advancing this run."""
+        if max_steps is not None:
+            if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
+                raise ValueError(f"max_steps must be a whole number of 1 or more, not {max_steps!r}")
+            max_steps = int(max_steps)
+        if not self._busy.acquire(blocking=False):
+            raise RuntimeError("this Simulation is being advanced by another thread; "
+                               "advance one Simulation from one thread at a time")
+        try:
+            return self._advance(max_steps)
+        finally:
+            self._busy.release()
+
+    def _advance(self, max_steps: int | None) -> np.ndarray:
         if self.done:
             return self._rows[:0]
         first = int(self._ints[kernel.I_ROWS])
@@ -240,7 +289,9 @@ class Simulation:
                     self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
-                kernel.ADVANCE[self.munthe_kaas](
+                advance = (kernel.ADVANCE_IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT
+                           else kernel.ADVANCE[self.munthe_kaas])
+                advance(
                     self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
                     chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
                     self._work)
@@ -339,6 +390,9 @@ def describe(failure: Failure, radius: float) -> str:
             return (f"the orientation R overflowed at {where}: the classic matrix update has "
                     f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
         return (f"the rotation of one step overflowed at {where}: the ball spins too fast for the step")
+    if reason is Reason.NOT_CONVERGED:
+        return (f"the implicit stage equations did not converge at {where}: the step dt = {value:.3g} s "
+                f"is too large for this motion; use a smaller dt")
     if reason is Reason.STEP_UNDERFLOW:
         return (f"the adaptive step size fell to {value:.3g} s, below round-off, at {where}: the equations "
                 f"are (nearly) singular there")
@@ -346,7 +400,7 @@ def describe(failure: Failure, radius: float) -> str:
             f"there (outside its domain or at a pole) or the step is too large")
 
 
-def simulate(scene: Scene, *, method: str | None = None, munthe_kaas: bool | None = None,
+def simulate(scene: Scene | str | os.PathLike, *, method: str | None = None, munthe_kaas: bool | None = None,
              dt: float | None = None, t_end: float | None = None, record_every: int = 1,
              rtol: float | None = None, atol: float | None = None,
              record_dt: float | None = None) -> Trajectory:
@@ -357,6 +411,7 @@ def simulate(scene: Scene, *, method: str | None = None, munthe_kaas: bool | Non
     step tried), ``t_end`` (s), ``rtol``/``atol`` (adaptive). Fixed steps: ``record_every``
     keeps every N-th step; adaptive: rows at multiples of ``record_dt`` (s) or, if None,
     at every accepted step. Row 0 is the initial state and the last row the end of the run.
+    ``scene`` may also be a scene file's path.
     """
     run = Simulation(scene, method=method, munthe_kaas=munthe_kaas, dt=dt, t_end=t_end,
                      record_every=record_every, rtol=rtol, atol=atol, record_dt=record_dt)

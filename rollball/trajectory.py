@@ -65,6 +65,8 @@ class Reason(str, enum.Enum):
                                          # evaluated there, or the step is too large
     ORIENTATION_OVERFLOW = "orientation_overflow"  # only R overflowed (value: 1 classic, 0 Munthe-Kaas)
     STEP_UNDERFLOW = "step_underflow"    # the adaptive step fell below round-off (value: the step)
+    NOT_CONVERGED = "not_converged"      # an implicit step's stage equations did not converge:
+                                         # the step is too large for the motion (value: the step)
 
     def __str__(self) -> str:
         return self.value
@@ -188,9 +190,10 @@ class Trajectory:
                          f"Munthe-Kaas keeps it one)")
         return notes
 
-    def to_csv(self, path: str | os.PathLike) -> None:
-        """Write the CSV of DESIGN §5 atomically, numbers at full precision."""
-        atomic_write(path, self.write_csv)
+    def to_csv(self, path: str | os.PathLike, keep=()) -> None:
+        """Write the CSV of DESIGN §5 atomically, numbers at full precision (``keep``: paths
+        that must not be overwritten, see ``rollball.files``)."""
+        atomic_write(path, self.write_csv, keep=keep)
 
     def write_csv(self, stream) -> None:
         """Provenance and unit lines (``#``), the header, then the rows with the energy error."""

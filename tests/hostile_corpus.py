@@ -1,8 +1,10 @@
 """Hostile and broken input, declared as data: each entry is (input, the expected message fragment).
 
-Formulas must be refused with a ``FormulaError`` containing the fragment, within 0.5 s, without
-any text being evaluated. Scene texts must be refused with a ``SceneError`` whose message starts
-with the key given.
+Formulas must be refused with a ``FormulaError`` containing the fragment, quickly, without
+any text being evaluated; ``DERIVATIONS`` parse but would cost unbounded work to differentiate
+and must be refused by the work budget within a few seconds. Scene texts must be refused with a
+``SceneError`` whose ``key`` is the key given (the message starts with it, escaped when it is
+not printable). ``RUNS`` are command lines that must end with exit 2 and one line.
 """
 
 # -- formulas: group -> [(text, fragment of the FormulaError message)] --------------------------------
@@ -126,8 +128,25 @@ FORMULAS = {
         ("cosh(cosh(cosh(cosh(9))))", "constant value of cosh is too large at 11"),
         ("x + exp(exp(300)*exp(300)*exp(300)*exp(300))", "too large"),
         ("tan(pi/2)", "constant value of tan is too large at 1"),
+        ("max(" + ",".join(f"sin({k}*x)" for k in range(1, 90)) + ")", "max takes at most 16 arguments at 1"),
+        ("min(" + ",".join(f"x*{k}+y" for k in range(1, 18)) + ")", "min takes at most 16 arguments at 1"),
     ],
 }
+
+# -- formulas that parse but explode when differentiated: (text, fragment) ------------------------------
+
+_TOO_COMPLEX = "formula too complex to differentiate"
+DERIVATIONS = [
+    ("*".join(f"sin({k}*x+y)" for k in range(1, 84)), _TOO_COMPLEX),        # 986 characters
+    ("*".join(f"sin({k}*x+y)" for k in range(1, 19)), _TOO_COMPLEX),        # 212 characters
+    ("*".join(f"(x+{k}*y)" for k in range(1, 91)), _TOO_COMPLEX),
+    ("*".join(f"exp({k}*x*y)*cos(x-{k}*y)" for k in range(1, 30)), _TOO_COMPLEX),
+    ("^".join(["x"] * 39), _TOO_COMPLEX),                                  # power tower
+    ("exp(sin(" * 19 + "x*y" + "))" * 19, _TOO_COMPLEX),
+    ("(" * 38 + "x+y" + "".join(f")^2+{'x' if i % 2 else 'y'}" for i in range(38)), _TOO_COMPLEX),
+    ("min(" + ",".join(f"sin({k}*x)" for k in range(1, 17)) + ")", _TOO_COMPLEX),
+    ("atan2(" * 30 + "x" + ", x*y)" * 30, _TOO_COMPLEX),
+]
 
 # -- scene files: group -> [(text, the key the SceneError message starts with)] ------------------------
 
@@ -160,6 +179,39 @@ SCENE_TEXTS = {
         (_scene('"landscape": "x", "gravity": 1e999'), "gravity"),
         (_scene('"landscape": "x", "start": {"x": -1e999}'), "start.x"),
         (_scene('"landscape": "x", "start": {"x": ' + "9" * 400 + "}"), "start.x"),
+        (_scene('"landscape": "x", "start": {"x": ' + "9" * 5000 + "}"), "scene"),
+        (_scene('"landscape": "x", "gravity": 0.' + "0" * 5000 + "1}"), "scene"),
+        (_scene('"landscape": "x", "duration": -' + "1" * 4400 + "}"), "scene"),
+    ],
+    "derived quantities": [
+        (_scene('"landscape": "x", "ball": {"radius": 1e-170}'), "ball.radius"),      # r² underflows
+        (_scene('"landscape": "x", "ball": {"radius": 1e-160}'), "ball.radius"),      # r² subnormal
+        (_scene('"landscape": "x", "ball": {"radius": 1e300}'), "ball.radius"),       # r² overflows
+        (_scene('"landscape": "x", "ball": {"mass": 5e-324}'), "ball.mass"),          # m r² underflows
+        (_scene('"landscape": "x", "ball": {"mass": 1e-300, "radius": 1e-5}'), "ball.mass"),
+        (_scene('"landscape": "x", "ball": {"mass": 1e300, "radius": 1e10}'), "ball.mass"),
+        (_scene('"landscape": "x", "gravity": 1e308, "ball": {"radius": 100}'), "gravity"),
+        (_scene('"landscape": "x", "start": {"vx": 1e200}'), "start.vx"),
+        (_scene('"landscape": "x", "start": {"vy": -3e160}'), "start.vy"),
+        (_scene('"landscape": "x", "start": {"spin": 1e300}'), "start.spin"),
+        (_scene('"landscape": "x", "integrator": {"rtol": 1e-300}'), "integrator.rtol"),
+        (_scene('"landscape": "x", "integrator": {"rtol": 1e-16}'), "integrator.rtol"),
+        (_scene('"landscape": "x", "integrator": {"atol": 5e-324}'), "integrator.atol"),
+    ],
+    "grids": [
+        (_scene('"landscape": "x", "view": {"step": 0.0005}'), "view.step"),
+        (_scene('"landscape": "x", "view": {"min": -1, "max": 1, "step": 0.004}'), "view.step"),
+        (_scene('"landscape": "x", "view": {"min": -1e300, "max": 1e300}'), "view.step"),
+        (_scene('"landscape": "x", "view": {"min": -1.7e308, "max": 1.7e308, "step": 1e308}'), "view.step"),
+        (_scene('"landscape": "x", "view": {"min": 0, "max": 1e-300, "step": 5e-324}'), "view.step"),
+    ],
+    "keys that would act on a terminal": [
+        (_scene('"landscape": "x", "a\\nrollball: fake line": 1'), "a\nrollball: fake line"),
+        (_scene('"landscape": "x", "\\u001b[2J": 1'), "\x1b[2J"),
+        (_scene('"landscape": "x", "\\u001b]0;pwned\\u0007": 1'), "\x1b]0;pwned\x07"),
+        (_scene('"landscape": "x", "ball": {"\\u009b31m": 1}'), "ball.\x9b31m"),
+        (_scene('"landscape": "x", "x\\u202egnp.exe": 1'), "x\u202egnp.exe"),
+        (_scene('"landscape": "x", "x\\u202egnp.exe": 1, "x\\u202egnp.exe": 2'), "x\u202egnp.exe"),
     ],
     "wrong types": [
         (_scene('"landscape": 5'), "landscape"),

@@ -63,7 +63,8 @@ SCENES = st.builds(
     start=st.builds(Start, FINITE, FINITE, FINITE, FINITE, FINITE),
     integrator=st.builds(Integrator, st.sampled_from(sorted(TABLEAUS)), st.booleans(), POSITIVE),
     duration=POSITIVE,
-    view=st.tuples(FINITE, FINITE, POSITIVE).filter(lambda v: v[0] < v[1]).map(lambda v: View(*v)),
+    view=st.tuples(FINITE, st.floats(min_value=1e-3, max_value=1e6), st.integers(1, 399))  # <= 401 points
+           .map(lambda v: View(v[0], v[0] + v[1], v[1] / v[2])),
 )
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from rollball import Reason, Status, simulate
 from rollball.examples import EXAMPLES_DIR
-from rollball.scene import Scene
+from rollball.scene import Scene, SceneError
 
 G = 9.81
 COMBOS = [(m, mk) for m in ("euler", "rk4", "lawson5") for mk in (True, False)]
@@ -164,7 +164,13 @@ def test_classic_euler_orientation_overflow_is_named(scene_factory):
 
 
 def test_overflowing_start_blames_the_start_values_not_the_landscape(scene_factory):
-    for scene in (scene_factory("0", vx=1e300), scene_factory("0", radius=1e300)):
+    # values that overflow on their own are refused by the scene rules, naming the key
+    for options, key in ((dict(vx=1e300), "start.vx"), (dict(radius=1e300), "ball.radius")):
+        with pytest.raises(SceneError) as info:
+            scene_factory("0", **options)
+        assert info.value.key == key
+    # a start speed that overflows only with the landscape's slope (vz = f_x vx) stops the run
+    for scene in (scene_factory("1e200*x", vx=1e100), scene_factory("1e200*x*y", y=1.0, vx=1e120)):
         traj = simulate(scene, t_end=0.1)
         assert traj.status is Status.NONFINITE and len(traj) == 0
         assert traj.failure.reason is Reason.START_OVERFLOW

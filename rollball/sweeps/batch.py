@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -73,12 +74,20 @@ def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
         columns = values[:, [grid.keys.index(k) for k in group]]
         combos, inverse = np.unique(columns, axis=0, return_inverse=True)
         for i, combo in enumerate(combos):
-            try:
-                with_values(scene, group, combo)
-            except SceneError as e:
+            refusal = _refusal(scene, tuple(group), tuple(float(v) for v in combo))
+            if refusal:
                 for row in np.flatnonzero(inverse.ravel() == i):
-                    messages.setdefault(int(row), str(e))
+                    messages.setdefault(int(row), refusal)
     return messages
+
+
+@lru_cache(maxsize=1 << 16)  # batches of a grid share most values: each is checked once per process
+def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
+    try:
+        with_values(scene, keys, values)
+    except SceneError as e:
+        return str(e)
+    return None
 
 
 def _landscape(text: str):

@@ -67,7 +67,8 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
     fastest. Local by default, on ``workers`` threads (default: every core); with
     ``scheduler`` (a Dask address, ``tcp://host:8786``) on that cluster instead.
     progress(done, total, text) is called as batches finish; setting ``cancel`` stops the
-    sweep after the batches under way, and the table is then ``partial``. Raises
+    sweep after the batches under way, and the table is then ``partial``; so is a sweep whose
+    batch failed on a cluster (``table.error`` says why). Raises
     ValueError for a bad grid, a method a sweep cannot run, or bad ``workers``.
     """
     grid = Grid.of(vary)
@@ -97,7 +98,7 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
         _run_local(_tasks(scene, grid, table.workers), table.workers, take, cancel)
     else:
         table.scheduler = str(scheduler)
-        table.workers = _run_dask(scene, grid, str(scheduler), take, cancel)
+        table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel)
     table.seconds = time.perf_counter() - started
     from ..bench.report import machine
     table.machine = machine()
@@ -144,10 +145,13 @@ def _run_dask(scene: Scene, grid: Grid, address: str, take, cancel: threading.Ev
         workers = len(client.scheduler_info()["workers"])
         threads = sum(client.nthreads().values()) or 1
         futures = client.map(batch.run, _tasks(scene, grid, threads), pure=False)
-        queue = as_completed(futures)
-        for future in queue:
-            take(future.result())
+        for future in as_completed(futures):
+            try:
+                take(future.result())
+            except Exception as error:  # e.g. KilledWorker: the batch took down workers repeatedly
+                client.cancel(futures)
+                return workers, f"a batch failed on the cluster ({type(error).__name__}: {error})"
             if cancel.is_set():
                 client.cancel(futures)
                 break
-    return workers
+    return workers, None

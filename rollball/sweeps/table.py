@@ -42,6 +42,7 @@ class SweepTable:
     workers: int | None = None         # local threads, or the cluster's workers
     scheduler: str | None = None       # Dask scheduler address, or None for a local sweep
     machine: str = ""
+    error: str | None = None           # why a sweep on a cluster stopped early
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -100,7 +101,7 @@ class SweepTable:
             "format": FORMAT, "version": VERSION, "program": f"rollball {__version__}",
             "scene": self.scene.to_dict(),
             "grid": [{"key": k, "n": len(a), "values": a.tolist()} for k, a in zip(self.grid.keys, self.grid.axes)],
-            "runs": len(self), "finished": done, "partial": self.partial,
+            "runs": len(self), "finished": done, "partial": self.partial, "error": self.error,
             "outcomes": list(OUTCOMES), "status": self.counts(),
             "method": self.scene.integrator.method,
             "machine": self.machine, "workers": self.workers, "scheduler": self.scheduler,

@@ -6,16 +6,17 @@ from PySide6 import QtCore, QtWidgets
 from app.main import prepare_qt
 from app.preferences import Preferences
 from app.window import MainWindow
-from rollball import Scene, simulate
 from rollball.examples import EXAMPLES_DIR
+from rollball.warmup import warm_up
 
 prepare_qt()  # before pytest-qt creates the QApplication
 
 
 @pytest.fixture(scope="session", autouse=True)
 def compiled_kernel():
-    """Compile (or load) the kernel once, before anything in a window is timed."""
-    simulate(Scene.load(EXAMPLES_DIR / "hills.json"), t_end=0.01)
+    """Compile (or load) the kernel of every method once, before anything in a window is timed:
+    with empty caches a method's first run compiles for tens of seconds on a busy machine."""
+    warm_up()
 
 
 @pytest.fixture
