@@ -70,8 +70,8 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
         lines += ["", f"The reference stopped early ({ref.message}): every run is compared up to "
                       f"t = {cmp.t_end:g} s."]
     lines += ["", f"{heading} Fastest runs", "",
-              "Errors are maxima over the run at the common times; cost is compute time (median of "
-              "repeats for short runs). Ranked by the larger of the contact-point (m) and orientation "
+              "Errors are maxima over the run at the common times; cost is compute time (processor "
+              "time of the run, the median of repeats for short runs). Ranked by the larger of the contact-point (m) and orientation "
               "errors.", "", "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
     for target in TARGETS:
         best = cmp.best(target)
@@ -88,11 +88,11 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
 
 
 def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
-    title = cmp.scene.description or cmp.scene.landscape
-    lines = [f"# Speed against error: {title}", "", *_scene_lines(cmp), "",
+    lines = ["# Speed against error", "", *([cmp.scene.description, ""] if cmp.scene.description else []),
+             *_scene_lines(cmp), "",
              f"Machine: {cmp.machine}. Mode: {'quick' if cmp.quick else 'full'}.", "", *findings(cmp)]
     if figure:
-        lines += ["", f"![error against wall time and against step size]({figure})"]
+        lines += ["", f"![error against compute time and against step size]({figure})"]
     lines += ["", "## Runs"]
     for spec in cmp.specs:
         lines += ["", f"### {spec.label} (`{spec}`)", "", *_table(cmp, spec)]

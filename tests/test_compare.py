@@ -127,7 +127,7 @@ def test_quick_command_line_on_the_hills_writes_three_files(tmp_path, capsys):
              if mk or m.classic_allowed}
     assert {(o["method"], o["munthe_kaas"]) for o in doc["orders"]} == fixed
     text = (tmp_path / "compare.md").read_text()
-    assert "![error against wall time and against step size](compare.png)" in text
+    assert "![error against compute time and against step size](compare.png)" in text
     assert all(f"`{s}`" in text for s in rollball.comparison.default_runs())
     assert (tmp_path / "compare.png").read_bytes()[:4] == b"\x89PNG"
 
