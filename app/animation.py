@@ -21,7 +21,8 @@ from rollball.files import atomic_write
 FORMATS = {".mp4": "MP4 video", ".gif": "GIF animation"}
 DEFAULT_FPS = 30
 MAX_FPS = 120
-GIF_MAX_FPS = 50            # GIF stores delays in hundredths of a second
+GIF_COLORS = 256
+SHADES = (0.35, 0.55, 0.75, 0.9, 1.0)   # shaded surfaces show an accent colour at these brightnesses
 
 
 def frame_times(t0: float, t1: float, fps: float) -> np.ndarray:
@@ -39,6 +40,18 @@ def even_size(width: int, height: int) -> tuple[int, int]:
     return width - width % 2, height - height % 2
 
 
+def gif_palette(first, accents: np.ndarray):
+    """One palette for a whole GIF: the first frame's colours plus shades of the accents."""
+    from PIL import Image
+
+    shades = (np.outer(SHADES, np.ones(3))[None, :, :] * accents[:, None, :]).reshape(-1, 3)
+    extra = np.round(255 * np.clip(shades, 0, 1)).astype(int)
+    base = first.quantize(GIF_COLORS - len(extra), dither=Image.Dither.NONE)
+    palette = Image.new("P", (1, 1))
+    palette.putpalette(base.getpalette()[: 3 * (GIF_COLORS - len(extra))] + extra.ravel().tolist())
+    return palette
+
+
 def format_of(path: str | os.PathLike) -> str:
     suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
@@ -50,9 +63,11 @@ class AnimationWriter:
     """Write frames of one size to ``path`` (.mp4 or .gif) at ``fps`` frames per second of video.
 
     Use ``add(frame)`` for each (height, width, 3 or 4) uint8 frame, then ``finish()``;
-    ``abort()`` (or an exception inside a ``with`` block) drops everything written."""
+    ``abort()`` (or an exception inside a ``with`` block) drops everything written. ``accents``:
+    colours (RGB in 0..1) that may appear after the first frame and must keep their hue in a GIF
+    (trail, markers, the ball's stripes); each is kept in several shades."""
 
-    def __init__(self, path: str | os.PathLike, size: tuple[int, int], fps: float):
+    def __init__(self, path: str | os.PathLike, size: tuple[int, int], fps: float, accents=()):
         self.path = Path(path)
         self.kind = format_of(path)
         self.size = even_size(*size) if self.kind == ".mp4" else (int(size[0]), int(size[1]))
@@ -60,6 +75,7 @@ class AnimationWriter:
             raise ValueError(f"frame size {size[0]}×{size[1]} is too small")
         self.fps = float(fps)
         self.frames = 0
+        self.accents = np.asarray(accents, dtype=float).reshape(-1, 3)
         self._staging = tempfile.TemporaryDirectory(prefix="rollball-animation-")
         self._file = Path(self._staging.name) / f"animation{self.kind}"
         if self.kind == ".mp4":
@@ -73,6 +89,7 @@ class AnimationWriter:
             import imageio.v3 as iio
 
             self._encoder = iio.imopen(self._file, "w", plugin="pillow", extension=".gif")
+            self._palette = None
 
     def add(self, frame: np.ndarray) -> None:
         w, h = self.size
@@ -82,8 +99,16 @@ class AnimationWriter:
         if self.kind == ".mp4":
             self._encoder.send(rgb)
         else:
+            # One palette for all frames, from the first, without dithering: the parts that do not
+            # change stay identical from frame to frame, so GIF stores only what moved.
+            from PIL import Image
+
+            picture = Image.fromarray(rgb)
+            if self._palette is None:
+                self._palette = gif_palette(picture, self.accents)
+            indexed = picture.quantize(palette=self._palette, dither=Image.Dither.NONE).convert("RGB")
             # delays in whole hundredths of a second: say so with a duration that GIF can hold
-            self._encoder.write(rgb, duration=10 * round(100 / self.fps), loop=0)
+            self._encoder.write(np.asarray(indexed), duration=10 * round(100 / self.fps), loop=0)
         self.frames += 1
 
     def finish(self) -> Path:
@@ -112,11 +137,11 @@ class AnimationWriter:
 
 
 def record(path: str | os.PathLike, times: np.ndarray, fps: float, size: tuple[int, int], show, frame,
-           progress=None) -> bool:
+           progress=None, accents=()) -> bool:
     """Write one frame per time: ``show(t)`` puts that moment in place, ``frame()`` returns it as
     an RGB array of ``size``. ``progress(done, total)`` is called after every frame; when it
     returns False the export is cancelled, nothing is written and False is returned."""
-    with AnimationWriter(path, size, fps) as writer:
+    with AnimationWriter(path, size, fps, accents) as writer:
         for k, t in enumerate(times):
             show(float(t))
             writer.add(frame())

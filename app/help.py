@@ -50,7 +50,7 @@ def shortcuts_html(actions) -> str:
         name = action.text().replace("&", "").rstrip("…")
         rows.append(f"<tr><td><b>{html.escape(' or '.join(keys))}</b></td><td>{html.escape(name)}</td>"
                     f"<td style='color:#555'>{html.escape(action.statusTip())}</td></tr>")
-    return ("<html><body><h1>Keyboard shortcuts</h1><p>Taken from the menus as they are now.</p>"
+    return ("<html><body><h1>Keyboard shortcuts</h1><p>Taken from the window's menus and keys as they are now.</p>"
             "<table cellpadding='4'>" + "".join(rows) + "</table>"
             "<p>F1 over a readout, a plot or a field opens the help where it is explained.</p></body></html>")
 

@@ -122,6 +122,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
     window = MainWindow()
+    if args.record is None:
+        window.prepare_integrator()   # compiled in the background while the user looks around
     named_file = args.scene is not None and str(path) == args.scene   # not an example's name
     window.open_scene(path, remember=named_file and args.record is None)
     if args.compare is not None:

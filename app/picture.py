@@ -10,14 +10,22 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import METHODS, Scene
 
+from .view3d import BALL_STRIPES, LIFTOFF_COLOR, NO_FIT_COLOR, TRAIL_COLOR
+
+# colours of the view that must stay recognisable in a GIF's palette
+ACCENTS = (TRAIL_COLOR[:3], LIFTOFF_COLOR[:3], NO_FIT_COLOR[:3], *BALL_STRIPES, (0.97, 0.97, 0.97))
+MAX_TEXTURE = 4096          # pixels per side of one off-screen rendering pass
 INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
 CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)
 
 
-def caption_text(scene: Scene, t: float) -> str:
-    """One line saying what is shown: formula, method and step (or tolerance), time."""
+def caption_text(scene: Scene, t: float, methods: list[str] | None = None) -> str:
+    """One line saying what is shown: formula, method and step (or tolerance) — or the labels of
+    the runs compared — and the time."""
     method = METHODS[scene.integrator.method]
-    if method.adaptive:
+    if methods:
+        stepping = "; ".join(methods)
+    elif method.adaptive:
         stepping = f"{method.label}, rtol {scene.integrator.rtol:g}"
     else:
         orientation = "Munthe-Kaas" if scene.integrator.munthe_kaas else "classic"
@@ -36,7 +44,11 @@ def caption_height(width: int) -> int:
 
 def render_view(view, size: tuple[int, int]) -> QtGui.QImage:
     """A GL view rendered off screen at ``size`` (width, height) with its current camera."""
-    bgra = view.renderToArray((int(size[0]), int(size[1])))
+    width, height = int(size[0]), int(size[1])
+    side = max(width, height) + 2
+    # one off-screen pass when it fits in a texture (pyqtgraph's default tiles 1024-pixel squares)
+    tiles = {"textureSize": side, "padding": 1} if side <= MAX_TEXTURE else {"textureSize": MAX_TEXTURE}
+    bgra = view.renderToArray((width, height), **tiles)
     rgb = np.ascontiguousarray(bgra[..., 2::-1])
     image = QtGui.QImage(rgb.data, rgb.shape[1], rgb.shape[0], rgb.strides[0], QtGui.QImage.Format.Format_RGB888)
     return image.copy()   # owns its pixels once rgb is gone
@@ -67,6 +79,9 @@ def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
     if caption:
         font = QtGui.QFont(QtWidgets.QApplication.font())
         font.setPixelSize(text_px)
+        while text_px > 7 and QtGui.QFontMetrics(font).horizontalAdvance(caption) > width - text_px:
+            text_px -= 1   # a narrow picture: a smaller caption rather than a cut one
+            font.setPixelSize(text_px)
         painter.setFont(font)
         painter.setPen(QtGui.QColor("#222222"))
         painter.fillRect(0, height, width, caption_h, QtGui.QColor("#f3f1ea"))

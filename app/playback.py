@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from rollball import COLUMNS, Trajectory
-from rollball.trajectory import CONTACT, T
+from rollball.trajectory import CENTER, CONTACT, T
 
 ROW = len(COLUMNS)
 EXTRA = 3   # contact height, relative energy error, orthogonality error
@@ -84,13 +84,15 @@ class RunBuffer:
         return max(0, int(np.searchsorted(self.t, t, side="right")) - 1)
 
     def trail(self, index: int, max_points: int = 20_000, lift: float = 0.0) -> np.ndarray:
-        """Contact points of rows 0..index (thinned to about max_points), raised by ``lift``."""
+        """Contact points of rows 0..index (thinned to about max_points), raised along the
+        normal by ``lift`` times the radius: the drawn surface, flat between its grid points,
+        lies above the true one in valleys, and would hide a trail drawn on the true one."""
         stride = max(1, -(-(index + 1) // max_points))
         picked = np.r_[np.arange(0, index + 1, stride), index] if self.n else np.zeros(0, dtype=int)
         points = np.empty((len(picked), 3))
         points[:, :2] = self._data[picked, CONTACT]
-        points[:, 2] = self._data[picked, ROW] + lift
-        return points
+        points[:, 2] = self._data[picked, ROW]
+        return points + lift * (self._data[picked, CENTER] - points)
 
     def point_at(self, t: float) -> np.ndarray:
         """The contact point at time t, interpolated between recorded rows."""

@@ -87,7 +87,7 @@ def surface_colors(z: np.ndarray, fit: np.ndarray, span: tuple[float, float] | N
 
 def grid_lines(axis: np.ndarray, z: np.ndarray, lift: float, cap: float = np.inf) -> np.ndarray:
     """Segments (pairs of points) along every k-th grid line of the surface, raised by ``lift``;
-    none wholly above ``cap`` (where the surface is cut away)."""
+    none reaching above ``cap`` (where the surface is cut away)."""
     n = len(axis)
     k = max(1, -(-n // MAX_GRID_LINES))
     picked = np.arange(0, n, k)
@@ -97,9 +97,25 @@ def grid_lines(axis: np.ndarray, z: np.ndarray, lift: float, cap: float = np.inf
     along_x = points[:, picked].swapaxes(0, 1)  # lines of constant y
     lines = np.concatenate([along_y, along_x])
     pairs = np.stack([lines[:, :-1], lines[:, 1:]], axis=2).reshape(-1, 2, 3)
-    pairs = pairs[pairs[:, :, 2].min(axis=1) <= cap]
-    pairs[:, :, 2] = np.minimum(pairs[:, :, 2], cap) + lift
+    pairs = pairs[pairs[:, :, 2].max(axis=1) <= cap]
+    pairs[:, :, 2] += lift
     return pairs.reshape(-1, 3)
+
+
+def too_coarse(landscape, axis: np.ndarray, z: np.ndarray) -> bool:
+    """Whether the grid is too coarse to show the landscape: in the middle of many cells (a
+    tenth of them) the landscape differs from what the drawing shows there by more than 5 % of
+    its height range (hills narrower than the spacing come out as noise; a few cells at a
+    singular edge do not count)."""
+    mid = (axis[:-1] + axis[1:]) / 2
+    xs, ys = np.meshgrid(mid, mid, indexing="ij")
+    between = landscape.evaluate(xs, ys)[0]
+    drawn = (z[:-1, :-1] + z[1:, :-1] + z[:-1, 1:] + z[1:, 1:]) / 4
+    with np.errstate(invalid="ignore"):
+        error = np.abs(between - drawn)
+    finite = np.isfinite(error) & np.isfinite(z[:-1, :-1])
+    span = np.ptp(z[np.isfinite(z)]) if np.isfinite(z).any() else 0.0
+    return bool(finite.any() and span > 0 and np.percentile(error[finite], 90) > 0.05 * span)
 
 
 def height_cap(lowest: float, reachable: float, radius: float) -> float:
@@ -109,11 +125,24 @@ def height_cap(lowest: float, reachable: float, radius: float) -> float:
 
 
 def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float) -> gl.MeshData:
-    """The grid as triangles, without those wholly above ``cap``; heights above it are
-    lowered to it, so the surface ends in a level cut."""
+    """The grid as triangles, without those wholly above ``cap``, so the surface ends in a level
+    cut: a point above it slides towards its lowest neighbour (of eight) to where the surface
+    crosses the cap (or, with no neighbour below, is lowered onto it)."""
     n = len(axis)
     xs, ys = np.meshgrid(axis, axis, indexing="ij")
-    vertexes = np.stack([xs, ys, np.minimum(z, cap)], axis=-1).reshape(-1, 3)
+    vertexes = np.stack([xs, ys, np.minimum(z, cap)], axis=-1)
+    padded = np.pad(z, 1, constant_values=np.inf)
+    steps = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j])   # the eight neighbours
+    neighbours = np.stack([padded[1 + i:n + 1 + i, 1 + j:n + 1 + j] for i, j in steps])
+    lowest = np.argmin(neighbours, axis=0)
+    low = np.take_along_axis(neighbours, lowest[None], axis=0)[0]
+    slide = (z > cap) & (low < cap)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(slide, (z - cap) / (z - low), 0.0)
+    step = axis[1] - axis[0] if n > 1 else 0.0
+    vertexes[..., 0] += w * steps[lowest, 0] * step
+    vertexes[..., 1] += w * steps[lowest, 1] * step
+    vertexes = vertexes.reshape(-1, 3)
     index = np.arange(n * n).reshape(n, n)
     a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[:-1, 1:].ravel(), index[1:, 1:].ravel()
     faces = np.concatenate([np.stack([a, d, b], axis=1), np.stack([a, c, d], axis=1)])   # as GLSurfacePlotItem winds them
@@ -188,7 +217,7 @@ class SceneView(gl.GLViewWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.setBackgroundColor(BACKGROUND)
-        self.setMinimumSize(480, 360)
+        self.setMinimumSize(440, 280)   # the window fits 1024x700 with a two-line message
         self.follow = False
         self.framed = False                   # the camera is as reset_camera left it
         self.surface: gl.GLMeshItem | None = None
@@ -266,7 +295,7 @@ class SceneView(gl.GLViewWidget):
             self.removeItem(item)
             self.addItem(item)
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
-                "cut": bool(shown.max() > self.cap)}
+                "cut": bool(shown.max() > self.cap), "coarse": too_coarse(landscape, axis, z)}
 
     def height_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The drawn surface's height at points, interpolated bilinearly on the grid (-inf
@@ -346,16 +375,16 @@ class SceneView(gl.GLViewWidget):
             end[k] = hi
             segments += [start, end]
             out = away * ([0.0, 1.0, 0.0] if k == 0 else [1.0, 0.0, 0.0])   # ticks point outwards
-            if k == 2 and hi - lo < 0.03 * horizontal:
+            if k == 2 and hi - lo < 0.05 * horizontal:
                 break   # a flat landscape: no height axis
-            step = nice_step(hi - lo, 6 if k < 2 else 4)
+            step = nice_step(hi - lo, 6 if k < 2 else 5)
             corner = (ox, oy)[k] if k < 2 else None
             for value in np.arange(np.ceil(lo / step) * step, hi + 1e-9 * step, step):
                 at = start.copy()
                 at[k] = value
                 segments += [at, at + out]
                 if corner is None or abs(value - corner) > 0.5 * step:   # the corner is the height axis's
-                    labels.append((at + 2.5 * out, f"{value:g}"))
+                    labels.append((at + 2.5 * out, f"{value if abs(value) > 1e-9 * step else 0.0:g}"))
             labels.append((end + 6 * out, "xyz"[k] + " (m)"))
         self.axes.setData(pos=np.array(segments))
         for item in self.axis_labels:

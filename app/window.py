@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from importlib import resources
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from rollball.trajectory import CONTACT
 from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
+from rollball.text import shown
 from rollball.trajectory import CENTER, R, T
 
 from . import help as helps
@@ -26,7 +28,7 @@ from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunContr
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
 from .inputs import ScenePanel
-from .picture import caption_height, caption_text, compose, rgb_array
+from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
@@ -54,6 +56,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.shown_scene: Scene | None = None   # what the view and the run belong to
         self.drawn_index = -1                # the row the view shows
         self.frames = 0
+        self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
+        self.start_waiting = False                        # Start was pressed meanwhile
 
         self.controller = RunController(self)
         self.controller.stateChanged.connect(lambda _state: self._update_controls())
@@ -311,6 +315,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.state_label.setFixedWidth(150)  # text changes must not re-lay out the window
         self.message = QtWidgets.QLabel(objectName="message")
         self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+        self.message.setWordWrap(True)   # a long message takes a second line rather than being cut
         self.statusBar().addWidget(self.message, 1)
         self.statusBar().addPermanentWidget(self.state_label)
 
@@ -323,10 +328,11 @@ class MainWindow(QtWidgets.QMainWindow):
     def open_scene(self, path, remember: bool = True) -> bool:
         """Load a scene file; on failure say why and keep the current scene."""
         path = Path(path)
-        try:
+        try:  # a named pipe or a device is refused before it is opened (it would block)
             scene = Scene.load(path)
         except (SceneError, OSError) as error:
-            self._warn("Cannot open scene", f"{path.name}: {error}")
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            self._warn("Cannot open scene", f"{shown(path.name)}: {reason}")
             if remember:
                 self.preferences.remove_recent(str(path.resolve()))
             return False
@@ -389,6 +395,9 @@ class MainWindow(QtWidgets.QMainWindow):
                 notes.append("grey: the landscape is undefined there")
             if facts["cut"]:
                 notes.append("cut level where the ball's energy cannot take it")
+            if facts["coarse"]:
+                notes.append("the grid spacing is too coarse for this landscape, the drawing is misleading: "
+                             "choose a smaller area or spacing")
             self.show_message("; ".join(notes).capitalize())
         self.plots.set_duration(scene.duration)
         run_changed = old is None or _physics(old) != _physics(scene)
@@ -474,7 +483,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             write(path)
         except OSError as error:
-            self._warn(f"Cannot {what}", f"{path}: {error.strerror or error}. Nothing was changed.")
+            self._warn(f"Cannot {what}", f"{shown(path)}: {error.strerror or error}. Nothing was changed.")
             return False
         self.preferences.set_last_folder(path)
         return True
@@ -487,10 +496,11 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def export_csv(self, path: Path) -> bool:
         simulation = self.controller.simulation
-        if simulation is None or not self.controller.computed:
-            return False
+        if simulation is None or not (self.controller.computed or self.state == STOPPED):
+            return False   # what a stopped run computed is exported as it stands
         trajectory = simulation.trajectory()
-        if not self._write("export trajectory", path, trajectory.to_csv):
+        keep = [self.document.path] if self.document.path else []  # never over the scene file
+        if not self._write("export trajectory", path, lambda target: trajectory.to_csv(target, keep=keep)):
             return False
         self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
         return True
@@ -508,10 +518,16 @@ class MainWindow(QtWidgets.QMainWindow):
     def picture(self, size: tuple[int, int], caption: bool = False, plots: bool = False) -> QtGui.QImage:
         """The 3-D view at ``size`` as shown (with the close-up when it is on), optionally with a
         caption and the plots."""
-        scene = self.controller.simulation.scene if self.controller.runs else self.scene
-        text = caption_text(scene, self.controller.play_time) if caption and scene else None
         return compose(self.view, size, inset=self.closeup if self.closeup.isVisible() else None,
-                       caption=text, plots=self.plots if plots else None)
+                       caption=self.caption() if caption else None,
+                       plots=self.bottom.currentWidget() if plots else None)
+
+    def caption(self) -> str | None:
+        """What is shown, in one line: formula, method(s) and step, time."""
+        runs = self.controller.runs
+        scene = runs[0].simulation.scene if runs else self.scene
+        methods = [run.label for run in runs] if self.compare.active and runs else None
+        return caption_text(scene, self.controller.play_time, methods) if scene else None
 
     def save_image(self, path: Path, scale: int = 1, caption: bool = False, plots: bool = False) -> bool:
         """The 3-D view as a PNG at ``scale`` times its size on screen, written atomically."""
@@ -568,7 +584,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
             done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
-                          progress)
+                          progress, ACCENTS)
         finally:
             self.seek(shown)
         if not done:
@@ -585,15 +601,46 @@ class MainWindow(QtWidgets.QMainWindow):
     def state(self) -> str:
         return self.controller.state
 
+    def prepare_integrator(self, command: list[str] | None = None) -> None:
+        """Compile the integrator for every method in a process of its own, from launch (numba
+        keeps the result on disk, where a run finds it). A Start meanwhile waits, saying so with
+        a busy indicator, and the run starts by itself when the integrator is ready."""
+        command = command or [sys.executable, "-m", "rollball.warmup"]
+        process = QtCore.QProcess(self)
+        process.setProcessChannelMode(QtCore.QProcess.ProcessChannelMode.ForwardedErrorChannel)
+        process.finished.connect(self._prepared)
+        process.errorOccurred.connect(lambda _error: self._prepared())
+        self.preparing = process
+        process.start(command[0], command[1:])
+
+    def _prepared(self) -> None:
+        if self.preparing is None:
+            return
+        self.preparing.deleteLater()
+        self.preparing = None
+        self.progress.setRange(0, 1000)
+        if self.start_waiting:
+            self.start_waiting = False
+            self.start()
+
     def start(self) -> None:
         """Start from t = 0 (or resume when paused)."""
         if self.state == PAUSED:
             self.toggle_pause()
             return
+        if self.preparing is not None:
+            self.start_waiting = True
+            self.progress.setRange(0, 0)   # busy
+            self.show_message("Preparing the integrator (first run only)… the run starts by itself "
+                              "when it is ready")
+            self._update_controls()
+            return
         self.panel.apply()
         scene = self.scene
         if scene is None:
+            self._warn("Cannot start", f"There is no valid scene to run: {self.panel.error_text}")
             return
+        stale = self.panel.error_text  # the fields as typed do not make a scene: say what runs
         self.reset()
         if self.compare.active:
             try:
@@ -604,8 +651,9 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         try:
             simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
-        except ValueError as error:
-            self._warn("Cannot start", str(error))
+        except Exception as error:  # every refusal is said, whatever raised it
+            self._warn("Cannot start", str(error) if isinstance(error, ValueError)
+                       else f"{type(error).__name__}: {error}")
             return
         if simulation.adaptive:
             note = f"Running adaptive steps to t = {scene.duration:g} s"
@@ -616,7 +664,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots.set_duration(scene.duration)
         self.timeline.set_span(simulation.t_end)
         self.controller.start([Run(simulation, self.landscape)])
-        self.show_message(note)
+        self.show_message(note + (f" of the last valid scene (not the fields: {stale})" if stale else ""),
+                          warning=bool(stale))
 
     def show_speed_against_error(self) -> None:
         """Compare every method on the current scene, in a window of its own."""
@@ -661,10 +710,14 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.state not in (RUNNING, PAUSED):
             return
         self.controller.stop()
-        self.show_message(f"Stopped at t = {self.controller.play_time:.4g} s")
+        t, liftoff = self.controller.play_time, self.controller.simulation.liftoff_time
+        self.show_message(f"Stopped at t = {t:.4g} s" + (self._liftoff_note() if liftoff is not None and liftoff <= t
+                                                         else "") + " (what was computed can be exported)")
 
     def reset(self) -> None:
         """Back to the start of the current scene; the computed run is dropped."""
+        self.start_waiting = False
+        self.progress.setRange(0, 1000)
         self.controller.reset()
         self.drawn_index = -1
         self.view.set_runs(None)
@@ -685,11 +738,12 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         simulation = self.controller.simulation
         status, text = simulation.status, simulation.message()
+        liftoff = self._liftoff_note()   # every event of the run stays in its last word
         if status is Status.OK:
             warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
-            self.show_message(f"Finished: {text}" + self._liftoff_note() + warnings, warning=bool(warnings))
+            self.show_message(f"Finished: {text}" + liftoff + warnings, warning=bool(warnings or liftoff))
         else:
-            self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}", warning=True)
+            self.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}" + liftoff, warning=True)
 
     def _liftoff_note(self) -> str:
         t = self.controller.simulation.liftoff_time
@@ -708,7 +762,9 @@ class MainWindow(QtWidgets.QMainWindow):
         """The ball at its start position, before any run."""
         s, r = scene.start, scene.ball.radius
         d = self.landscape.evaluate(s.x, s.y)
-        if not np.all(np.isfinite(d)):
+        valid = bool(np.all(np.isfinite(d)))
+        self.view.ball.setVisible(valid)   # no ball left hanging where the start was
+        if not valid:
             self.show_message(f"The landscape cannot be evaluated at the start point ({s.x:g}, {s.y:g})",
                               warning=True)
             return
@@ -730,7 +786,7 @@ class MainWindow(QtWidgets.QMainWindow):
         for k, (run, i) in enumerate(zip(runs, indices)):
             if len(run.buffer):
                 row = run.buffer.rows[i]
-                trail = run.buffer.trail(i, lift=0.004 * self.view.extent)
+                trail = run.buffer.trail(i, lift=0.3)   # 0.3 r above the contact point
                 self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
                 self.view.set_trail(trail, k)
                 if k == followed:
@@ -761,7 +817,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
-        self.export_action.setEnabled(computed and self.controller.simulation is not None)
+        self.export_action.setEnabled((computed or state == STOPPED) and self.controller.simulation is not None)
         self.animation_action.setEnabled(bool(self.controller.runs))
         self.revert_action.setEnabled(self.dirty)
         for action in (self.back_action, self.forward_action, self.first_action, self.last_action):
@@ -772,7 +828,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
         doing = "compiling…" if self.controller.compiling else "computing…"
-        self.state_label.setText(words[state] if computed or state in (READY, STOPPED, FINISHED)
+        self.state_label.setText("Preparing…" if self.start_waiting
+                                 else words[state] if computed or state in (READY, STOPPED, FINISHED)
                                  else f"{words[state]} ({doing})")
 
     def _follow(self, on: bool) -> None:
@@ -799,8 +856,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.message.setStyleSheet("color: #b03a00; font-weight: bold;" if warning else "")
 
     def _warn(self, title: str, text: str) -> None:
+        """Say it in the status bar and in a dialog, as plain text (a file's text is never markup)."""
         self.show_message(text, warning=True)
-        QtWidgets.QMessageBox.warning(self, title, text)
+        QtWidgets.QMessageBox.warning(self, title, _plain(text))
 
     def show_about(self) -> None:
         QtWidgets.QMessageBox.about(self, "About RollBall",
@@ -889,11 +947,11 @@ class MainWindow(QtWidgets.QMainWindow):
                 helps.set_topic(widget, topic)
 
     def _all_actions(self) -> list[QtGui.QAction]:
-        """The menus' actions in menu order (for the shortcuts page)."""
+        """The menus' actions in menu order, then the window's own (for the shortcuts page)."""
         def walk(menu):
             for action in menu.actions():
                 yield from walk(action.menu()) if action.menu() else (action,)
-        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())]
+        return [a for top in self.menuBar().actions() if top.menu() for a in walk(top.menu())] + self.actions()
 
     def show_help(self, topic: str) -> None:
         if self.help_window is None:
@@ -917,7 +975,15 @@ class MainWindow(QtWidgets.QMainWindow):
             self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
+        if self.preparing is not None:
+            self.preparing.kill()
+            self.preparing.waitForFinished(2000)
         event.accept()
+
+
+def _plain(text: str) -> str:
+    """Text that a message box cannot take for rich text (it guesses from tags like <b>)."""
+    return text.replace("<", "\u2039").replace(">", "\u203a") if QtGui.Qt.mightBeRichText(text) else text
 
 
 def _physics(scene: Scene) -> tuple:

@@ -249,6 +249,7 @@ def reference_method() -> str:
 
 def _reference(scene: Scene, t_end: float, record_dt: float, cancel=None) -> tuple[Trajectory, Reference]:
     method = reference_method()
+    _advance(Simulation(scene, method=method, t_end=record_dt, record_dt=record_dt), cancel)  # compiled
     runs = []
     for rtol in (REFERENCE_RTOL, REFERENCE_RTOL / 10):
         run = Simulation(scene, method=method, t_end=t_end, rtol=rtol, atol=rtol * ATOL_PER_RTOL,

@@ -17,9 +17,16 @@ from __future__ import annotations
 
 import math
 
+import warnings
+
 import numpy as np
 from numba import njit, types
+from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
+
+# The landscape callback is passed between compiled functions as a first-class function, which
+# numba announces on stderr at every compile; the command line keeps stderr to one line.
+warnings.filterwarnings("ignore", message="First-class function type", category=NumbaExperimentalFeatureWarning)
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
@@ -74,6 +81,7 @@ R_ORIENTATION = 6          # only the orientation overflowed (value: 1 classic, 
 R_STEP_UNDERFLOW = 7       # the adaptive step size fell below round-off (value: the step)
 R_KINK = 8                 # a kink or cusp of a valley (value: the angle the normal turns, rad)
 R_HEIGHT_JUMP = 9          # the height jumps (value: the jump, m)
+R_NOT_CONVERGED = 10       # an implicit step's stage equations did not converge (value: the step)
 
 ROW_SIZE = 23  # t, x, y, c(3), c'(3), omega(3), R(9), energy, normal force
 
@@ -378,9 +386,186 @@ def trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     return 0
 
 
+# What a step reports (trial_step and collocation_step alike): 0 done, 1 the motion is not
+# finite, 2 only the orientation is not, 3 an implicit step's stage equations did not converge.
+STEP_NOT_CONVERGED = 3
+
+
+# -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
+#
+# An s-stage Gauss method solves K_i = z'(z + h sum_j a_ij K_j) at every step. The iteration
+# lives here, beside the explicit stage loop, so that numba's disk cache (which watches only
+# the file a function is defined in) recompiles it whenever what it inlines changes.
+
+# The stage iteration is converged once the scaled change of the stage values is at
+# round-off (or the error it predicts at the rate seen is below EPSILON), or once it has
+# stopped shrinking (no new smallest change in STALL iterations) below NOISE (round-off
+# fluctuations); it fails when it stops shrinking above NOISE (it diverges) or has not
+# converged after MAX_ITERATIONS.
+EPSILON = 2.0 ** -52
+ROUND_OFF = 4.0 * EPSILON
+NOISE = 1e-13
+STALL = 3
+MAX_ITERATIONS = 60
+
+
+@JIT
+def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
+    arguments and codes of trial_step (the orientation always Munthe-Kaas: mk is True).
+
+    The stage equations are solved in two parts, since u does not act on (alpha, v): first
+    the motion, evaluating the right-hand side with u = 0 (so that its u-part is omega),
+    then the increments u at the stages from those omegas, which needs no evaluations.
+
+    W (``Collocation.kernel_arrays``) holds a_ij at W[1+i, 1+j], b_i at W[last, 1+i] and the
+    extrapolation of the starting values in rows s+1 .. 2s. K[0] holds z'(z); K[1 .. s] hold
+    the stage derivatives (on entry those of the previous step, extrapolated with K[0] after
+    the first step; on return this step's); K[s+1 .. 2s] is scratch (on return its u-part
+    holds omega at the stages); K[last] = K[2s+1] and pn receive the full evaluation at zn.
+    Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the motion is not finite),
+    2 (only the orientation is not) or STEP_NOT_CONVERGED.
+    """
+    s = (last - 1) // 2
+    new = s + 1
+    # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
+    for i in range(s):
+        for q in range(5):
+            acc = K[0, q]
+            if ints[I_STEPS] > 0:
+                acc *= W[new + i, 0]
+                for j in range(s):
+                    acc += W[new + i, 1 + j] * K[1 + j, q]
+            K[new + i, q] = acc
+    for i in range(s):
+        for q in range(5):
+            K[1 + i, q] = K[new + i, q]
+    for q in range(5, n):
+        Y[q] = 0.0
+    code = _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn)
+    if code == 0:
+        code = _increments(s, h, K, W)
+    if code != 0:
+        return code
+    for q in range(n):
+        zn[q] = z[q]
+    for i in range(s):
+        c = h * W[last, 1 + i]
+        for q in range(n):
+            zn[q] += c * K[1 + i, q]
+    rodrigues(zn, R, Rn)
+    if not _finite(zn, 0, 5):
+        return 1
+    if not (_finite(zn, 5, n) and _finite_matrix(Rn)):
+        return 2
+    dynamics(fn, d, p, zn, True, K, last, pn, True)
+    ints[I_EVALS] += 1
+    if not (_finite_row(K, last, 0, 5) and _finite(pn, 0, PROBE_SIZE)):
+        return 1
+    if not _finite_row(K, last, 5, n):
+        return 2
+    return 0
+
+
+@JIT
+def _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn):
+    """Fixed-point iteration for the (alpha, v) parts of the stage derivatives K[1 .. s]."""
+    new = s + 1
+    best, stalled, previous = np.inf, 0, np.inf
+    for _ in range(MAX_ITERATIONS):
+        for i in range(s):
+            for q in range(5):
+                Y[q] = z[q]
+            for j in range(s):
+                c = h * W[1 + i, 1 + j]
+                for q in range(5):
+                    Y[q] += c * K[1 + j, q]
+            dynamics(fn, d, p, Y, True, K, new + i, pn, False)
+        ints[I_EVALS] += s
+        change = max(_scaled_change(s, h, z, K, 0, 2), _scaled_change(s, h, z, K, 2, 5))
+        for i in range(s):
+            for q in range(5):
+                K[1 + i, q] = K[new + i, q]
+        if change != change:  # the stages left the landscape's domain
+            return 1
+        # done when the change, or the error it predicts at the rate seen (Hairer, Lubich and
+        # Wanner VIII.6: change * rate / (1 - rate)), is at round-off
+        rate = change / previous  # (0 at the first iteration, which predicts nothing)
+        if change <= ROUND_OFF or (0.0 < rate < 1.0 and change * rate <= EPSILON * (1.0 - rate)):
+            return 0
+        previous = change
+        # a change passes from alpha to v and back, so it need not shrink at every
+        # iteration: only STALL iterations without a new smallest change end the iteration
+        if change < best:
+            best, stalled = change, 0
+        else:
+            stalled += 1
+            if stalled == STALL:  # at round-off, or not contracting
+                return 0 if change <= NOISE else STEP_NOT_CONVERGED
+    return STEP_NOT_CONVERGED
+
+
+@JIT
+def _increments(s, h, K, W):
+    """The u-parts of K[1 .. s]: U_i = h sum_j a_ij dexp^-1_(U_j)(omega_j), iterated from U = 0
+    (omega_j in the u-part of K[s+1+j]); no right-hand-side evaluations."""
+    new = s + 1
+    for i in range(s):
+        for q in range(5, 8):
+            K[1 + i, q] = K[new + i, q]  # dexp^-1 at U = 0
+    best, stalled = np.inf, 0
+    for _ in range(MAX_ITERATIONS):
+        change, size = 0.0, 0.0
+        for i in range(s):
+            u1, u2, u3 = 0.0, 0.0, 0.0
+            for j in range(s):
+                c = h * W[1 + i, 1 + j]
+                u1 += c * K[1 + j, 5]
+                u2 += c * K[1 + j, 6]
+                u3 += c * K[1 + j, 7]
+            k1, k2, k3 = dexpinv(u1, u2, u3, K[new + i, 5], K[new + i, 6], K[new + i, 7])
+            change = max(change, abs(k1 - K[1 + i, 5]), abs(k2 - K[1 + i, 6]), abs(k3 - K[1 + i, 7]))
+            size = max(size, abs(k1), abs(k2), abs(k3))
+            # (Gauss-Seidel: later stages see this one's new value at once)
+            K[1 + i, 5], K[1 + i, 6], K[1 + i, 7] = k1, k2, k3
+        if not change <= size * 1e300:
+            return 2
+        if change <= ROUND_OFF * size:
+            return 0
+        if change < best:
+            best, stalled = change, 0
+        else:
+            stalled += 1
+            if stalled == STALL:
+                return 0 if change <= NOISE * size else STEP_NOT_CONVERGED
+    return STEP_NOT_CONVERGED
+
+
+@JIT
+def _scaled_change(s, h, z, K, lo, hi):
+    """The largest change h |K_new - K_old| of a stage value in z[lo:hi] (alpha or v), relative
+    to the size of that part of the state plus how far the stages move it; nan if an
+    iterate is not finite."""
+    scale = 0.0
+    for q in range(lo, hi):
+        scale = max(scale, abs(z[q]))
+        for i in range(s):
+            scale = max(scale, abs(h * K[s + 1 + i, q]))
+    worst = 0.0
+    for q in range(lo, hi):
+        for i in range(s):
+            delta = abs(h * (K[s + 1 + i, q] - K[1 + i, q]))
+            if not delta < np.inf:
+                return np.nan
+            if delta > 0.0:  # (a part at rest whose stages still move: a large change)
+                worst = max(worst, delta / scale if scale > 0.0 else 1.0)
+    return worst
+
+
 # The same, compiled once as functions of their own, for the paths that run once per run or
 # per event (inlining them there too would only add compile time).
 trial_step_once = COLD(trial_step.py_func)
+collocation_step_once = COLD(collocation_step.py_func)
 
 
 @COLD
@@ -618,8 +803,8 @@ def looks(r, z, probe, zn, pn):
 
 
 @JIT
-def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, zn, pn, ints, info, segment, Ye, Re,
-                pe, sa, sb, sm):
+def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, segment, Ye,
+                Re, pe, sa, sb, sm, implicit):
     """The validity checks and events of a finished step from t to t + h, located on its dense
     output. Returns -1 while the run may go on; otherwise the run stops (status and reason
     set) and the result is theta, the last valid point of the step (0 <= theta < 1).
@@ -638,13 +823,13 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, zn, pn, ints,
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     if not (fit_end or sharp or jumpy or raced or force_end):
         return -1.0  # the usual step: nothing to look at closer
-    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe,
-                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2)
+    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2, implicit)
 
 
 @COLD
-def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa, sb, sm,
-                 fit_end, sharp, jumpy, raced, force_end, bend, chord2):
+def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, sa, sb, sm,
+                 fit_end, sharp, jumpy, raced, force_end, bend, chord2, implicit):
     """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
     n, mk = shape_of(z)
     r = p[0]
@@ -685,6 +870,15 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye,
                 stop, valid = b, a
             elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
                 info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
+                approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
+                         sm, info[F_LIFTOFF:F_LIFT_Y + 1], implicit)
+                # the run goes on with the whole step, taken again (the approach used its buffers)
+                if implicit:
+                    collocation_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                else:
+                    trial_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                ints[I_DENSE] = -1
+                dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
             _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
             stop, valid = b, a
@@ -707,45 +901,68 @@ REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a s
 
 
 @COLD
-def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
-                 Ye, sa, sb, sm):
-    """A run stopped inside a step: its last valid state, at t + theta h, is the last row.
+def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb, sm,
+             event, implicit):
+    """Reach the last valid state before a break inside a step from t to t + h, first guessed
+    at theta (a fraction of the step) from the step's dense output.
 
-    The dense output of a step across a kink, a jump or the edge of the no-fit region is
-    spoiled by the stages beyond it, so that state is computed by a step of theta h from the
-    step's start instead; while such a step still crosses (its ends' looks say so), the stop
-    is located again on its own, less spoiled, dense output (and its time and place updated)
-    and the step shortened to before it. Failing that, the step's start is the last row."""
+    The dense output of a step across a kink, a jump or the edge of the no-fit region (kind
+    KINK, JUMP or FIT_EVENT) is spoiled by the stages beyond it, so the state is computed by a
+    step of theta h from the step's start instead; while such a step still crosses (its ends'
+    looks say so), the break is located again on its own, less spoiled, dense output and the
+    step shortened to before it; a clean step's dense output, continued a little past its end,
+    times a kink or jump. event = (time, x, y) of the break is updated on the way. Returns the
+    theta of the clean step (zn, Rn, pn hold its end), or 0 when none was found.
+    """
     n, mk = shape_of(z)
     r = p[0]
     for _ in range(REFINE_STEPS):
         hs = theta * h
-        if not (hs > 0.0) or trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints) != 0:
+        if not hs > 0.0:
+            break
+        if implicit:  # (the implicit methods' own step: ``implicit`` is True for them)
+            bad = collocation_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        else:
+            bad = trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        if bad != 0:
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
         if not (fit_end or sharp or jumpy):
-            record(rows, ints[I_ROWS], t + hs, zn, Rn, pn, p)
-            ints[I_ROWS] += 1
-            kind = KINK if ints[I_REASON] == R_KINK else JUMP if ints[I_REASON] == R_HEIGHT_JUMP else -1
-            if kind >= 0 and theta < 1.0:  # the break is beyond this clean step: its dense output,
-                # continued a little past its end, says when the motion before it reaches it
+            if kind != FIT_EVENT and theta < 1.0:
                 a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 1.0, min(1.0 / theta, 2.0))
                 if size > 0.0:
-                    info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
-            return
+                    event[0], event[1], event[2] = t + b * hs, sb[0], sb[1]
+            return theta
         a, b, size = 0.0, 0.0, 0.0
-        if sharp or jumpy:
-            a, b, size = locate_break(KINK if sharp else JUMP, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 0.0, 1.0)
-        if size > 0.0 and (ints[I_REASON] == R_KINK or ints[I_REASON] == R_HEIGHT_JUMP):
-            info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
-        elif fit_end and ints[I_REASON] == R_NO_FIT:
-            gb = pn[PROBE_FIT] - 1.0
-            a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
-                          probe[PROBE_FIT] - 1.0, 1.0, gb, ints)
-            surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
-            info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sa[0], sa[1]
+        if kind == FIT_EVENT:
+            if fit_end:
+                a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
+                              probe[PROBE_FIT] - 1.0, 1.0, pn[PROBE_FIT] - 1.0, ints)
+                surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
+                event[0], event[1], event[2] = t + b * hs, sa[0], sa[1]
+        elif sharp or jumpy:
+            a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+            if size > 0.0:
+                event[0], event[1], event[2] = t + b * hs, sb[0], sb[1]
         theta *= a if a > 0.0 else 0.5
-    record_last(rows, ints, t, z, R, probe, p)
+    return 0.0
+
+
+@COLD
+def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
+                 Ye, sa, sb, sm, implicit=False):
+    """A run stopped inside a step: its last valid state, reached by ``approach`` (or else the
+    step's start), is the last row; the stop's time and place are refined on the way."""
+    reason = ints[I_REASON]
+    kind = JUMP if reason == R_HEIGHT_JUMP else FIT_EVENT if reason == R_NO_FIT else KINK
+    event = info[F_FAIL_T:F_FAIL_Y + 1]
+    theta = approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
+                     sm, event, implicit)
+    if theta > 0.0:
+        record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
+        ints[I_ROWS] += 1
+    else:
+        record_last(rows, ints, t, z, R, probe, p)
 
 
 def work_size(n: int) -> int:
@@ -767,9 +984,11 @@ def scratch(work, n):
             work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
 
 
-def _fixed_steps(mk: bool):
-    """The fixed-step loop for one orientation scheme: with mk and the state size n
-    constants of the compiled code, the stage loops unroll as in hand-written C."""
+def _fixed_steps(mk: bool, implicit: bool):
+    """The fixed-step loop for one orientation scheme and one kind of step: with mk, the
+    state size n and the step (trial_step for the explicit tableaus, collocation_step for
+    the implicit ones) constants of the compiled code, the stage loops unroll as in
+    hand-written C."""
     n = state_size(mk)
 
     @JIT
@@ -796,17 +1015,23 @@ def _fixed_steps(mk: bool):
             t0 = (k - 1) * dt
             h = t_end - t0 if final else dt
             t = t_end if final else k * dt
-            bad = trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            if implicit:
+                bad = collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            else:
+                bad = trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
             if bad:
-                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
-                      0.0 if mk else 1.0)
+                if bad == STEP_NOT_CONVERGED:
+                    _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+                else:
+                    _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
+                          0.0 if mk else 1.0)
                 record_last(rows, ints, t0, z, R, probe, p)
                 return
-            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, zn, pn, ints, info, True,
-                                Ye, Re, pe, sa, sb, sm)
+            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                                True, Ye, Re, pe, sa, sb, sm, implicit)
             if valid >= 0.0:
                 record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
-                             Rn, pn, Ye, sa, sb, sm)
+                             Rn, pn, Ye, sa, sb, sm, implicit)
                 return
             accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
             ints[I_STEPS] = k
@@ -820,8 +1045,10 @@ def _fixed_steps(mk: bool):
     return advance
 
 
-# advance(fn, W, P, p, ...) by scheme: ADVANCE[munthe_kaas]
-ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
+# advance(fn, W, P, p, ...) of the explicit tableaus by scheme: ADVANCE[munthe_kaas]; of the
+# implicit ones (always Munthe-Kaas): ADVANCE_IMPLICIT
+ADVANCE = {mk: _fixed_steps(mk, False) for mk in (True, False)}
+ADVANCE_IMPLICIT = _fixed_steps(True, True)
 
 
 @JIT
@@ -877,8 +1104,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             record_last(rows, ints, t, z, R, probe, p)
             break
         t_new = t_end if land else t + hs
-        valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, zn, pn, ints, info, False,
-                            Ye, Re, pe, sa, sb, sm)
+        valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                            False, Ye, Re, pe, sa, sb, sm, False)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
         while record_dt > 0.0:  # the rows inside the step, from its dense output
             t_row = ints[I_ROWS] * record_dt

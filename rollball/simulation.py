@@ -15,10 +15,13 @@ from . import __version__, kernel
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
 from .scene import CONSTRAINTS, Scene
-from .tableaus import get_method
+from .tableaus import MethodKind, get_method
 from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
 
-MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
+# 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
+# recording every adaptive step grows its buffer by doubling up to the limit, holding the
+# old and the new buffer for a moment (1.4 GB at the last doubling).
+MAX_ROWS = 5_000_000
 MAX_STEPS = 2 ** 53    # beyond this, step counts and k·dt are no longer exact in a double
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
@@ -31,7 +34,7 @@ _REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.SECANT
            kernel.R_HEIGHT_JUMP: Reason.HEIGHT_JUMP,
            kernel.R_START_UNDEFINED: Reason.START_UNDEFINED, kernel.R_START_OVERFLOW: Reason.START_OVERFLOW,
            kernel.R_UNDEFINED: Reason.UNDEFINED, kernel.R_ORIENTATION: Reason.ORIENTATION_OVERFLOW,
-           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW}
+           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW, kernel.R_NOT_CONVERGED: Reason.NOT_CONVERGED}
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -273,10 +276,12 @@ class Simulation:
             chunk = int(min(remaining, CHUNK))
             if self.adaptive:
                 if self._ints[kernel.I_ROWS] >= len(self._rows) - 2:
-                    if len(self._rows) >= MAX_ROWS:  # give up rather than fill the memory
-                        self.status = Status.ABORTED
+                    if len(self._rows) >= MAX_ROWS:  # stop rather than fill the memory
+                        self.status = Status.ROW_LIMIT
                         break
-                    self._rows = np.concatenate([self._rows, np.empty_like(self._rows)])
+                    grown = np.empty((min(2 * len(self._rows), MAX_ROWS), kernel.ROW_SIZE))
+                    grown[: len(self._rows)] = self._rows
+                    self._rows = grown
                 before = self.steps + self.rejected
                 kernel.advance_adaptive(
                     self._fn, self._W, self._E, self._P, self._p, self._error_kind,
@@ -284,7 +289,9 @@ class Simulation:
                     self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
-                kernel.ADVANCE[self.munthe_kaas](
+                advance = (kernel.ADVANCE_IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT
+                           else kernel.ADVANCE[self.munthe_kaas])
+                advance(
                     self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
                     chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
                     self._work)
@@ -328,6 +335,9 @@ class Simulation:
             return f"reached t = {self.t_end:g} s in {self.steps} steps{rejected}"
         if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"
+        if status is Status.ROW_LIMIT:
+            return (f"row limit reached: {len(self.rows):,} rows (every step) by t = {self.time:.6g} s of "
+                    f"{self.t_end:g} s; use record_dt to record at fixed times instead")
         return f"running: t = {self.time:.6g} s"
 
     def trajectory(self) -> Trajectory:
@@ -347,7 +357,8 @@ class Simulation:
                        f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}"),
             "status": f"{status}: {message}",
         }
-        return Trajectory(self.rows.copy(), status=status, message=message,
+        # rows are only ever appended: the trajectory can share them instead of copying
+        return Trajectory(self.rows, status=status, message=message,
                           liftoff=self.liftoff, steps=self.steps, rejected=self.rejected,
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)
@@ -379,6 +390,9 @@ def describe(failure: Failure, radius: float) -> str:
             return (f"the orientation R overflowed at {where}: the classic matrix update has "
                     f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
         return (f"the rotation of one step overflowed at {where}: the ball spins too fast for the step")
+    if reason is Reason.NOT_CONVERGED:
+        return (f"the implicit stage equations did not converge at {where}: the step dt = {value:.3g} s "
+                f"is too large for this motion; use a smaller dt")
     if reason is Reason.STEP_UNDERFLOW:
         return (f"the adaptive step size fell to {value:.3g} s, below round-off, at {where}: the equations "
                 f"are (nearly) singular there")

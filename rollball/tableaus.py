@@ -10,22 +10,14 @@ aliases of older scene files and turns an unknown name into a clear ``ValueError
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass, replace
 from fractions import Fraction
 
 import numpy as np
 
-
-class MethodKind(str, enum.Enum):
-    """How a method steps (scene files, the command line and the app list methods by it)."""
-
-    FIXED = "fixed"        # explicit, fixed step; the orientation classic or Munthe-Kaas
-    ADAPTIVE = "adaptive"  # embedded pair with rtol/atol step-size control; Munthe-Kaas only
-    IMPLICIT = "implicit"  # implicit, fixed step, symmetric; Munthe-Kaas only
-
-    def __str__(self) -> str:
-        return self.value
+from .dop853 import DOP853, DensePair
+from .implicit import GAUSS4, GAUSS6, Collocation
+from .kinds import MethodInfo, MethodKind, cubic_hermite
 
 
 def _fractions(values) -> tuple[Fraction, ...]:
@@ -33,7 +25,7 @@ def _fractions(values) -> tuple[Fraction, ...]:
 
 
 @dataclass(frozen=True)
-class Tableau:
+class Tableau(MethodInfo):
     """An explicit Runge–Kutta method: nodes ``c``, stage rows ``a`` and weights ``b``.
 
     ``a`` lists the strictly-lower-triangular rows, one per stage after the first,
@@ -92,20 +84,6 @@ class Tableau:
         return MethodKind.ADAPTIVE if self.b_hat is not None else MethodKind.FIXED
 
     @property
-    def adaptive(self) -> bool:
-        return self.kind is MethodKind.ADAPTIVE
-
-    @property
-    def fixed_step(self) -> bool:
-        """Steps of the size dt (explicit fixed-step and implicit methods)."""
-        return self.kind is not MethodKind.ADAPTIVE
-
-    @property
-    def classic_allowed(self) -> bool:
-        """Whether the orientation may also be integrated as a plain matrix (``munthe_kaas=False``)."""
-        return self.kind is MethodKind.FIXED
-
-    @property
     def error_exponent(self) -> float:
         """-1 / (q + 1) for an embedded error estimate of order q: the step-size rule's exponent."""
         if self.order_hat is None:
@@ -141,11 +119,7 @@ class Tableau:
         e_0, 3 b - 2 e_0 - e_last and e_0 + e_last - 2 b."""
         if self.dense is not None:
             return self.dense
-        rows = self.last + 1
-        b = self.b + (0,) * (rows - self.stages)
-        e0 = [Fraction(int(i == 0)) for i in range(rows)]
-        e1 = [Fraction(int(i == self.last)) for i in range(rows)]
-        return tuple((e0[i], 3 * b[i] - 2 * e0[i] - e1[i], e0[i] + e1[i] - 2 * b[i]) for i in range(rows))
+        return cubic_hermite(self.b + (Fraction(0),) * (self.last + 1 - self.stages), self.last)
 
     @property
     def interpolation_order(self) -> int:
@@ -242,11 +216,13 @@ DOPRI5 = tableau(
 )
 
 # Every registry entry is a tableau; ``Method`` names that role in signatures.
-Method = Tableau
+# A registry entry: an explicit tableau, an implicit collocation method or DOP853's pair,
+# each with name, label, order, kind (and what follows from it) and ``kernel_arrays``.
+Method = Tableau | Collocation | DensePair
 
 # Every method by the name scene files, the command line and the app use, in the order
 # they are listed.
-METHODS: dict[str, Method] = {t.name: t for t in (EULER, RK4, LAWSON5, DOPRI5)}
+METHODS: dict[str, Method] = {t.name: t for t in (EULER, RK4, LAWSON5, GAUSS4, GAUSS6, DOPRI5, DOP853)}
 # The explicit fixed-step ones (each also runs classic or Munthe-Kaas).
 TABLEAUS: dict[str, Tableau] = {name: t for name, t in METHODS.items() if t.classic_allowed}
 # Older names still read (scene files of version 1, the command line, the API).
@@ -254,8 +230,8 @@ ALIASES: dict[str, str] = {"adaptive": "dopri5"}
 
 
 def get_method(name) -> Method:
-    """The method of a name in ``METHODS`` or ``ALIASES`` (a ``Tableau`` is passed through)."""
-    if isinstance(name, Tableau):
+    """The method of a name in ``METHODS`` or ``ALIASES`` (a method itself is passed through)."""
+    if isinstance(name, MethodInfo):
         return name
     try:
         return METHODS[ALIASES.get(name, name)]

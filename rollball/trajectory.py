@@ -44,6 +44,7 @@ class Status(str, enum.Enum):
     DOES_NOT_FIT = "does_not_fit"  # the ball no longer fits a valley: the model breaks down
     NONFINITE = "nonfinite"        # the landscape or the state could not be evaluated
     ABORTED = "aborted"            # the caller cancelled
+    ROW_LIMIT = "row_limit"        # recording every step filled the row limit before the end
 
     def __str__(self) -> str:
         return self.value
@@ -64,6 +65,8 @@ class Reason(str, enum.Enum):
                                          # evaluated there, or the step is too large
     ORIENTATION_OVERFLOW = "orientation_overflow"  # only R overflowed (value: 1 classic, 0 Munthe-Kaas)
     STEP_UNDERFLOW = "step_underflow"    # the adaptive step fell below round-off (value: the step)
+    NOT_CONVERGED = "not_converged"      # an implicit step's stage equations did not converge:
+                                         # the step is too large for the motion (value: the step)
 
     def __str__(self) -> str:
         return self.value

@@ -8,12 +8,12 @@ import mpmath
 import numpy as np
 import pytest
 from conftest import make_scene
-from test_tableaus import rooted_trees, size, density
 
 from rollball import METHODS, Scene, Status, simulate
 from rollball.examples import EXAMPLES_DIR
 from rollball.kernel import DEXPINV_SERIES, dexpinv
 from rollball.landscape import landscape_for
+from rollball.order_conditions import density, rooted_trees, size
 from rollball.reference import reference_rhs, reference_solution
 from rollball.simulation import initial_state
 from rollball.tableaus import Tableau
@@ -79,7 +79,11 @@ def continuous_condition(method, tree):
     return got == want
 
 
-@pytest.mark.parametrize("method", METHODS.values(), ids=list(METHODS))
+# the explicit tableaus (the implicit ones: test_implicit; DOP853 checks its own when built)
+TABLEAUS = {name: m for name, m in METHODS.items() if isinstance(m, Tableau)}
+
+
+@pytest.mark.parametrize("method", TABLEAUS.values(), ids=list(TABLEAUS))
 def test_dense_output_has_its_declared_order(method):
     order = method.interpolation_order
     assert order >= min(method.order, 3)
@@ -90,7 +94,7 @@ def test_dense_output_has_its_declared_order(method):
 
 
 def test_dense_output_ends_at_the_step():
-    for method in METHODS.values():
+    for method in TABLEAUS.values():
         P = method.dense_output()
         b = method.b + (0,) * (len(P) - method.stages)
         assert [sum(row) for row in P] == list(b)
@@ -167,8 +171,9 @@ def liftoff_times():
 @pytest.mark.parametrize("name", list(LIFTOFF_SCENES))
 def test_liftoff_time_is_located_on_the_dense_output(name, liftoff_times):
     scene, t_ref = LIFTOFF_SCENES[name], liftoff_times[name]
-    rk4 = simulate(scene, method="rk4", dt=1e-2, record_every=10)
-    assert abs(rk4.liftoff_time - t_ref) < 2e-6, (rk4.liftoff_time, t_ref)
+    for method in ("rk4", "gauss4"):  # (a cubic Hermite dense output: error O(h^4))
+        fixed = simulate(scene, method=method, dt=1e-2, record_every=10)
+        assert abs(fixed.liftoff_time - t_ref) < 2e-6, (method, fixed.liftoff_time, t_ref)
     dopri = simulate(scene, method="dopri5", rtol=1e-10, atol=1e-13, record_dt=0.01)
     assert abs(dopri.liftoff_time - t_ref) < 1e-7, (dopri.liftoff_time, t_ref)
     assert not dopri.liftoff.kink
@@ -181,7 +186,7 @@ def test_liftoff_time_is_located_on_the_dense_output(name, liftoff_times):
 
 
 @pytest.mark.parametrize("method, options", [("rk4", dict(dt=1e-3)), ("lawson5", dict(dt=1e-2)),
-                                             ("dopri5", dict(record_dt=0.01))])
+                                             ("gauss4", dict(dt=1e-2)), ("dopri5", dict(record_dt=0.01))])
 def test_a_jump_in_height_stops_the_run_where_it_is(method, options):
     """atan2's branch cut on the negative x axis: the height jumps by 0.2 pi there. Rolling
     straight down the y direction at x = -1 from y = 0.5, the ball reaches y = 0 at t = 0.5 s
@@ -193,7 +198,7 @@ def test_a_jump_in_height_stops_the_run_where_it_is(method, options):
     assert abs(traj.failure.value) == pytest.approx(0.2 * math.pi, rel=1e-6)
     assert abs(traj.failure.y) < 1e-6 and traj.failure.x < 0
     assert traj.energy_drift < 1e-4 and traj.t[-1] <= traj.failure.time
-    assert abs(traj.contact[-1, 1]) < 1e-3 and traj.contact[-1, 1] > 0  # the last row: just before
+    assert 0 < traj.contact[-1, 1] < 5e-3  # the last row: just before (within a part of a step)
 
 
 @pytest.mark.parametrize("formula, jump", [("x/abs(x)", 2.0), ("-0.3*abs(x)/x", -0.6)])
@@ -210,9 +215,8 @@ def test_steps_in_height_across_a_flat_floor(formula, jump):
 @pytest.mark.parametrize("h", [1e-2, 1e-3, 1e-4])
 def test_a_roof_is_a_liftoff_at_the_crest(h):
     """The roof min(2y, -y): a ball rolling up its side z = 2y crosses the crest y = 0, where the
-    real ball leaves the surface: a lift-off at the kink, and the run goes on. The time is read
-    from the dense output of the step across the crest, which the stages beyond it spoil: it is
-    good to a tenth of a step (the stops are refined further, see test_hard_cases)."""
+    real ball leaves the surface: a lift-off at the kink, at the exact time (located by clean
+    shortened steps, as the stops are), and the run goes on."""
     traj = simulate(make_scene("min(2*y, -y)", x=0.0, y=-0.5, vy=2.0, duration=0.6, dt=h))
     assert traj.status is Status.OK
     assert traj.liftoff is not None and traj.liftoff.kink
@@ -220,7 +224,7 @@ def test_a_roof_is_a_liftoff_at_the_crest(h):
     # up the plane z = 2y the contact point decelerates at (5/7) g sin(a) cos(a) = (2/7) g along y
     a = 2 / 7 * 9.81
     t_crest = (2.0 - math.sqrt(4.0 - a)) / a
-    assert traj.liftoff.time == pytest.approx(t_crest, abs=0.1 * h)
+    assert traj.liftoff.time == pytest.approx(t_crest, abs=1e-12)
 
 
 def test_the_crest_of_a_saddle_roof_is_a_liftoff():

@@ -147,6 +147,31 @@ def peak_memory(steps: int) -> float:
     return rss
 
 
+XVFB = ["xvfb-run", "-a", "-s", "-screen 0 1400x900x24 +extension GLX +render"]
+
+
+def app_responsiveness() -> dict:
+    """The window's longest event-loop gap while 10⁶ steps are computed and played, measured in
+    a child process (``python -m app.responsiveness``; under Xvfb when there is no display), or
+    why it could not be measured. The core imports no Qt: the app does this in its own process."""
+    import shutil
+
+    command = [sys.executable, "-m", "app.responsiveness"]
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        if shutil.which("xvfb-run") is None:
+            return {"error": "no display and no xvfb-run"}
+        command = XVFB + command
+    try:
+        result = subprocess.run(command, capture_output=True, text=True, timeout=900)
+    except (OSError, subprocess.TimeoutExpired) as error:
+        return {"error": str(error)}
+    lines = result.stdout.strip().splitlines()
+    if result.returncode != 0 or not lines:
+        last = (result.stderr.strip().splitlines() or ["no output"])[-1]
+        return {"error": f"exit {result.returncode}: {last}"}
+    return json.loads(lines[-1])
+
+
 def measure(quick: bool) -> dict:
     repeats = 3 if quick else 7
     return {
@@ -156,6 +181,7 @@ def measure(quick: bool) -> dict:
         "latency": new_formula_latency(5 if quick else 15),
         "cold": cold_start(),
         "memory": peak_memory(10_000_000),
+        "app": app_responsiveness(),
     }
 
 

@@ -6,10 +6,12 @@ import sys
 
 import numpy as np
 import pytest
-from PySide6 import QtGui
+from PySide6 import QtCore, QtGui
 
 from app.main import screenshot
 from rollball.examples import example_names, scene_path
+
+from .guitools import run_to_end, set_field
 
 SIZE = (1024, 700)   # a projector's screen, less the taskbar
 
@@ -97,3 +99,60 @@ def test_the_command_line_fails_in_one_line(tmp_path, args, words):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert words in lines[-1] and "Traceback" not in result.stderr
+
+
+def test_start_while_the_integrator_is_prepared_waits_visibly_then_runs(qtbot, window):
+    window.prepare_integrator([sys.executable, "-c", "import time; time.sleep(2)"])
+    window.start()
+    assert window.state == "ready" and "Preparing the integrator (first run only)" in window.message.text()
+    assert window.progress.maximum() == 0 and window.state_label.text() == "Preparing…"   # busy
+    qtbot.waitUntil(lambda: window.state != "ready", timeout=20_000)
+    assert window.state in ("running", "finished") and window.progress.maximum() == 1000
+    assert window.preparing is None
+
+
+def test_reset_while_waiting_for_the_integrator_cancels_the_start(qtbot, window):
+    window.prepare_integrator([sys.executable, "-c", "import time; time.sleep(1)"])
+    window.start()
+    window.reset()
+    qtbot.waitUntil(lambda: window.preparing is None, timeout=20_000)
+    qtbot.wait(100)
+    assert window.state == "ready"
+
+
+def test_a_grid_too_coarse_for_the_landscape_is_said(qtbot, window):
+    set_field(qtbot, window, "view.min", "-1000")
+    set_field(qtbot, window, "view.max", "1000")
+    set_field(qtbot, window, "view.step", "5")
+    qtbot.waitUntil(lambda: window.scene.view.step == 5)
+    assert "too coarse" in window.message.text()
+
+
+def test_typing_in_a_text_field_neither_fires_shortcuts_nor_resets_the_run(qtbot, window):
+    window.start()
+    window.toggle_pause()
+    field = window.panel.formula
+    field.setFocus()
+    qtbot.keyClicks(field, " ")
+    qtbot.keyClick(field, QtCore.Qt.Key.Key_F)
+    qtbot.keyClick(field, QtCore.Qt.Key.Key_Backspace)
+    qtbot.wait(600)   # past the fields' settling delay
+    assert field.text().endswith(" ") and window.state == "paused"   # typed, and the run stays
+    assert not window.follow_action.isChecked()
+
+
+def test_what_a_stopped_run_computed_can_be_exported(qtbot, window, tmp_path):
+    window.start()
+    qtbot.waitUntil(lambda: len(window.controller.buffer) > 10, timeout=20_000)
+    window.stop()
+    assert window.export_action.isEnabled() and "can be exported" in window.message.text()
+    out = tmp_path / "stopped.csv"
+    assert window.export_csv(out)
+    assert len(out.read_text().splitlines()) > 10
+
+
+def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window):
+    assert window.open_scene(scene_path("cylinder"), remember=False)
+    run_to_end(qtbot, window)
+    text = window.message.text()
+    assert text.startswith("Stopped early") and "lift-off at t = " in text

@@ -180,7 +180,8 @@ def test_help_pages_teach_and_the_shortcuts_page_lists_every_shortcut(qtbot, win
         assert words in text
     window.keys_help_action.trigger()
     keys = browser.toPlainText()
-    for action in (window.undo_action, window.presentation_action, window.animation_action, window.back_action):
+    for action in (window.undo_action, window.presentation_action, window.animation_action, window.back_action,
+                   window.leave_action):
         assert action.shortcut().toString(QtGui.QKeySequence.SequenceFormat.NativeText) in keys
         assert action.text().replace("&", "").rstrip("…") in keys
     window.plots_help_action.trigger()
@@ -205,3 +206,28 @@ def test_headless_record_writes_the_video_and_exits_0(tmp_path):
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and ".mp4 or .gif" in bad.stderr
     assert not (tmp_path / "x.avi").exists()
+
+
+def test_arrow_and_home_keys_still_edit_text_in_a_field(qtbot, window):
+    set_field(qtbot, window, "duration", "0.5")
+    run_to_end(qtbot, window)
+    window.seek(0.25)
+    edit = window.panel.formula
+    edit.setFocus()
+    edit.setCursorPosition(3)
+    for key in (QtCore.Qt.Key.Key_Left, QtCore.Qt.Key.Key_Home, QtCore.Qt.Key.Key_End):
+        qtbot.keyClick(edit, key)
+    assert edit.cursorPosition() == len(edit.text())
+    assert window.controller.play_time == 0.25
+
+
+def test_compare_mode_records_every_ball(qtbot, window, tmp_path):
+    from .test_compare import compare_to_end
+
+    set_field(qtbot, window, "duration", "1")
+    compare_to_end(qtbot, window, "euler/classic,rk4")
+    path = tmp_path / "compare.gif"
+    assert window.export_animation(path, fps=5, size=(160, 120))
+    assert frames_of(path).shape == (6, 120, 160, 3)
+    assert window.picture((160, 120), caption=True).height() > 120
+    assert all(run.label in window.caption() for run in window.controller.runs)
