@@ -8,6 +8,8 @@ stays current.
 
 from __future__ import annotations
 
+import threading
+
 from PySide6 import QtCore, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
@@ -63,15 +65,28 @@ def format_number(value: float) -> str:
     return repr(float(value))  # shortest text that reads back as the same number
 
 
+CHECKING = "checking…"
+ERROR_STYLE, CHECKING_STYLE = "color: #c0392b;", "color: #555;"
+
+
 class ScenePanel(QtWidgets.QWidget):
-    """Fields for a scene. ``sceneChanged`` carries each new valid scene (after a typing pause)."""
+    """Fields for a scene. ``sceneChanged`` carries each new valid scene (after a typing pause).
+
+    A new formula is parsed, differentiated and compiled in a background thread (that can take
+    seconds): meanwhile the field says "checking…", the window stays responsive and the last
+    valid scene stays current; ``checking`` is True until the result is in.
+    """
 
     sceneChanged = QtCore.Signal(object)
+    _formulaChecked = QtCore.Signal(str, object)  # from the checking thread: text, refusal or None
 
     def __init__(self, parent=None):
         super().__init__(parent)
         self._scene: Scene | None = None
         self._filling = False
+        self._checked: dict[str, str | None] = {}  # formula -> why it is refused (None: ready)
+        self._checking: str | None = None          # the formula being checked in the background
+        self._formulaChecked.connect(self._formula_checked)
         self.numbers: dict[str, QtWidgets.QLineEdit] = {}
         self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
         self._timer.timeout.connect(self.apply)
@@ -91,7 +106,8 @@ class ScenePanel(QtWidgets.QWidget):
                 form.addRow("Record", self._record_field())
             layout.addWidget(group)
         self.error = QtWidgets.QLabel(wordWrap=True, objectName="fieldError")
-        self.error.setStyleSheet("color: #c0392b;")
+        self.error.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+        self.error.setStyleSheet(ERROR_STYLE)
         self.error.hide()
         layout.addWidget(self.error)
         layout.addStretch(1)
@@ -107,7 +123,8 @@ class ScenePanel(QtWidgets.QWidget):
         self.formula.setPlaceholderText("e.g. 0.5*sin(x)*cos(y)")
         self.formula.textEdited.connect(self._edited)
         self.formula_error = QtWidgets.QLabel(wordWrap=True, objectName="formulaError")
-        self.formula_error.setStyleSheet("color: #c0392b;")
+        self.formula_error.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+        self.formula_error.setStyleSheet(ERROR_STYLE)
         self.formula_error.hide()
         self.description = QtWidgets.QLineEdit(objectName="description")
         self.description.setPlaceholderText("Description (shown in the Examples menu)")
@@ -189,6 +206,7 @@ class ScenePanel(QtWidgets.QWidget):
         """Show a scene in the fields (no ``sceneChanged``)."""
         self._timer.stop()
         self._scene = scene
+        self._checked[scene.landscape] = None  # a Scene's formula is valid and derived
         data = scene.to_dict()
         self._filling = True
         try:
@@ -209,9 +227,19 @@ class ScenePanel(QtWidgets.QWidget):
         if not self._filling:
             self._timer.start()
 
+    @property
+    def checking(self) -> bool:
+        """A formula is being checked in the background."""
+        return self._checking is not None
+
     def apply(self) -> Scene | None:
-        """Validate the fields now; emit ``sceneChanged`` if they make a new valid scene."""
+        """Validate the fields now; emit ``sceneChanged`` if they make a new valid scene. A
+        formula not checked yet is checked in the background first (None meanwhile)."""
         self._timer.stop()
+        text = self._formula_text()
+        if text not in self._checked:
+            self._check_formula(text)
+            return None
         scene, key, message = self.read()
         self._show_errors(key, message)
         if scene is not None and scene != self._scene:
@@ -219,13 +247,46 @@ class ScenePanel(QtWidgets.QWidget):
             self.sceneChanged.emit(scene)
         return scene
 
+    def _check_formula(self, text: str) -> None:
+        self._show_errors(None, None)
+        self.formula_error.setStyleSheet(CHECKING_STYLE)
+        self.formula_error.setText(CHECKING)
+        self.formula_error.show()
+        if self._checking is None:  # one check at a time; the latest text follows it
+            self._checking = text
+            threading.Thread(target=self._check_in_background, args=(text,), daemon=True,
+                             name="formula check").start()
+
+    def _check_in_background(self, text: str) -> None:
+        try:
+            landscape_for(text).compiled  # noqa: B018 - parse, differentiate and compile
+            problem = None
+        except FormulaError as error:
+            problem = str(error)
+        except Exception as error:  # e.g. numba refusing generated code
+            problem = f"cannot compile the formula ({type(error).__name__}: {error})"
+        self._formulaChecked.emit(text, problem)  # queued to the GUI thread
+
+    def _formula_checked(self, text: str, problem: str | None) -> None:
+        self._checked[text] = problem
+        self._checking = None
+        if self._formula_text() == text or self._formula_text() not in self._checked:
+            self.apply()
+
+    def _formula_text(self) -> str:
+        return self.formula.text().strip()  # a space typed at either end changes nothing
+
     def read(self) -> tuple[Scene | None, str | None, str | None]:
         """(scene, None, None) from the fields, or (None, offending key, message)."""
-        text = self.formula.text().strip()   # a space typed at either end changes nothing
-        try:
-            landscape_for(text)
-        except FormulaError as error:
-            return None, "landscape", str(error)
+        text = self._formula_text()
+        problem = self._checked.get(text)
+        if problem is None and text not in self._checked:
+            try:
+                landscape_for(text)
+            except FormulaError as error:
+                problem = str(error)
+        if problem is not None:
+            return None, "landscape", problem
         data = (self._scene or Scene(landscape="0")).to_dict()
         data["landscape"] = text
         data["description"] = self.description.text()
@@ -247,6 +308,7 @@ class ScenePanel(QtWidgets.QWidget):
         for name, edit in self.numbers.items():
             edit.setStyleSheet("border: 1px solid #c0392b;" if name == key else "")
         self.formula.setStyleSheet("border: 1px solid #c0392b;" if key == "landscape" else "")
+        self.formula_error.setStyleSheet(ERROR_STYLE)
         self.formula_error.setVisible(key == "landscape")
         self.error.setVisible(key is not None and key != "landscape")
         if key == "landscape":

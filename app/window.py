@@ -17,6 +17,7 @@ from rollball.trajectory import CONTACT
 from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
+from rollball.text import shown
 from rollball.trajectory import CENTER, R, T
 
 from . import help as helps
@@ -328,10 +329,11 @@ class MainWindow(QtWidgets.QMainWindow):
     def open_scene(self, path, remember: bool = True) -> bool:
         """Load a scene file; on failure say why and keep the current scene."""
         path = Path(path)
-        try:
+        try:  # a named pipe or a device is refused before it is opened (it would block)
             scene = Scene.load(path)
         except (SceneError, OSError) as error:
-            self._warn("Cannot open scene", f"{path.name}: {error}")
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            self._warn("Cannot open scene", f"{shown(path.name)}: {reason}")
             if remember:
                 self.preferences.remove_recent(str(path.resolve()))
             return False
@@ -482,7 +484,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             write(path)
         except OSError as error:
-            self._warn(f"Cannot {what}", f"{path}: {error.strerror or error}. Nothing was changed.")
+            self._warn(f"Cannot {what}", f"{shown(path)}: {error.strerror or error}. Nothing was changed.")
             return False
         self.preferences.set_last_folder(path)
         return True
@@ -498,7 +500,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if simulation is None or not (self.controller.computed or self.state == STOPPED):
             return False   # what a stopped run computed is exported as it stands
         trajectory = simulation.trajectory()
-        if not self._write("export trajectory", path, trajectory.to_csv):
+        keep = [self.document.path] if self.document.path else []  # never over the scene file
+        if not self._write("export trajectory", path, lambda target: trajectory.to_csv(target, keep=keep)):
             return False
         self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
         return True
@@ -658,7 +661,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.panel.apply()
         scene = self.scene
         if scene is None:
+            self._warn("Cannot start", f"There is no valid scene to run: {self.panel.error_text}")
             return
+        stale = self.panel.error_text  # the fields as typed do not make a scene: say what runs
         self.reset()
         if self.compare.active:
             try:
@@ -669,8 +674,9 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         try:
             simulation = Simulation(scene, **recording(scene, record_every=self.panel.record_every.value()))
-        except ValueError as error:
-            self._warn("Cannot start", str(error))
+        except Exception as error:  # every refusal is said, whatever raised it
+            self._warn("Cannot start", str(error) if isinstance(error, ValueError)
+                       else f"{type(error).__name__}: {error}")
             return
         if simulation.adaptive:
             note = f"Running adaptive steps to t = {scene.duration:g} s"
@@ -681,7 +687,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots.set_duration(scene.duration)
         self.timeline.set_span(simulation.t_end)
         self.controller.start([Run(simulation, self.landscape)])
-        self.show_message(note)
+        self.show_message(note + (f" of the last valid scene (not the fields: {stale})" if stale else ""),
+                          warning=bool(stale))
 
     def show_speed_against_error(self) -> None:
         """Compare every method on the current scene, in a window of its own."""
@@ -843,9 +850,10 @@ class MainWindow(QtWidgets.QMainWindow):
             self.timeline.set_available(self.controller.end_time)
             self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
+        doing = "compiling…" if self.controller.compiling else "computing…"
         self.state_label.setText("Preparing…" if self.start_waiting
                                  else words[state] if computed or state in (READY, STOPPED, FINISHED)
-                                 else f"{words[state]} (computing…)")
+                                 else f"{words[state]} ({doing})")
 
     def _follow(self, on: bool) -> None:
         self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=self.compare.followed)
@@ -871,8 +879,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.message.setStyleSheet("color: #b03a00; font-weight: bold;" if warning else "")
 
     def _warn(self, title: str, text: str) -> None:
+        """Say it in the status bar and in a dialog, as plain text (a file's text is never markup)."""
         self.show_message(text, warning=True)
-        QtWidgets.QMessageBox.warning(self, title, text)
+        QtWidgets.QMessageBox.warning(self, title, _plain(text))
 
     def show_about(self) -> None:
         QtWidgets.QMessageBox.about(self, "About RollBall",
@@ -999,6 +1008,11 @@ def _spec(scene: Scene) -> RunSpec:
     """The method and orientation update a run of the scene uses."""
     method = get_method(scene.integrator.method)
     return RunSpec(method.name, scene.integrator.munthe_kaas or not method.classic_allowed)
+
+
+def _plain(text: str) -> str:
+    """Text that a message box cannot take for rich text (it guesses from tags like <b>)."""
+    return text.replace("<", "\u2039").replace(">", "\u203a") if QtGui.Qt.mightBeRichText(text) else text
 
 
 def _physics(scene: Scene) -> tuple:

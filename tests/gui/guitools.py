@@ -18,4 +18,10 @@ def set_field(qtbot, window, key, text):
     edit = window.panel.formula if key == "landscape" else window.panel.numbers[key]
     edit.selectAll()
     qtbot.keyClicks(edit, text)
+    apply_fields(qtbot, window)
+
+
+def apply_fields(qtbot, window):
+    """End the typing pause now and wait for a formula's background check, if any."""
     window.panel.apply()
+    qtbot.waitUntil(lambda: not window.panel.checking, timeout=60_000)

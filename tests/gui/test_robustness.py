@@ -1,6 +1,7 @@
 """The app at the edges: many runs, scenes changed under a run, hostile text pasted or opened."""
 
 import gc
+import os
 import threading
 from pathlib import Path
 
@@ -11,7 +12,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from app.controller import PAUSED, READY, RUNNING
 from app.worker import SimulationThread
 
-from .guitools import run_to_end, set_field
+from .guitools import apply_fields, run_to_end, set_field
 from hostile_corpus import FORMULAS, SCENE_BYTES, SCENE_TEXTS
 from rollball import Scene
 from rollball.examples import EXAMPLES_DIR
@@ -87,7 +88,7 @@ def test_pasting_hostile_formulas_shows_the_refusal_and_keeps_the_landscape(qtbo
         field.clear()
         field.setFocus()
         qtbot.keySequence(field, QtGui.QKeySequence.StandardKey.Paste)
-        window.panel.apply()
+        apply_fields(qtbot, window)
         if field.text() != text:  # a line edit drops what it cannot hold (newlines)
             continue
         assert fragment in window.panel.error_text, text
@@ -136,3 +137,82 @@ def test_pause_survives_a_finished_computation(qtbot, window):
     assert window.controller.state == PAUSED and window.export_action.isEnabled()
     window.toggle_pause()
     assert window.controller.state == RUNNING
+
+
+def test_a_formula_is_checked_off_the_gui_thread(qtbot, window, monkeypatch):
+    """While a slow formula is derived and compiled the field says so, the event loop keeps
+    running and the last valid scene stays; then the new landscape is taken."""
+    import app.inputs
+
+    release = threading.Event()
+    real = app.inputs.landscape_for
+
+    def slow(text):
+        release.wait(30)  # as long as the test wants: the check must not block the window
+        return real(text)
+
+    monkeypatch.setattr(app.inputs, "landscape_for", slow)
+    scene = window.scene
+    field = window.panel.formula
+    field.selectAll()
+    qtbot.keyClicks(field, "0.3*sin(x)*cos(2*y)")
+    window.panel.apply()
+    assert window.panel.checking and window.panel.error_text == "checking…"
+    ticks = []
+    timer = QtCore.QTimer(interval=10)
+    timer.timeout.connect(lambda: ticks.append(1))
+    timer.start()
+    qtbot.waitUntil(lambda: len(ticks) >= 5, timeout=10_000)  # the GUI thread is free
+    timer.stop()
+    assert window.scene == scene and window.panel.checking
+    release.set()
+    qtbot.waitUntil(lambda: not window.panel.checking, timeout=60_000)
+    assert window.scene.landscape == "0.3*sin(x)*cos(2*y)" and window.panel.error_text == ""
+
+
+def test_a_formula_too_complex_is_refused_in_the_field(qtbot, window):
+    scene = window.scene
+    set_field(qtbot, window, "landscape", "*".join(f"sin({k}*x+y)" for k in range(1, 40)))
+    assert "formula too complex to differentiate" in window.panel.error_text
+    assert window.scene == scene
+
+
+def test_every_refusal_on_start_is_shown(qtbot, window, dialogs):
+    set_field(qtbot, window, "duration", "1e300")
+    set_field(qtbot, window, "integrator.dt", "1e-10")
+    window.start()
+    assert dialogs[-1][:2] == ("warning", "Cannot start") and "too many" in dialogs[-1][2]
+    assert window.controller.state == READY
+
+
+@pytest.mark.parametrize("kind", ["fifo", "grid", "folder"])
+def test_opening_a_refused_file_says_why_and_changes_nothing(qtbot, window, dialogs, tmp_path, kind, capfd):
+    path = tmp_path / "scene.json"
+    if kind == "fifo":
+        os.mkfifo(path)  # File > Open must not block on it
+    elif kind == "folder":
+        path.mkdir()
+    else:  # 12,001 grid points per side: gigabytes to draw
+        path.write_text('{"format": "rollball-scene", "version": 2, "landscape": "x", "view": {"step": 0.0005}}')
+    scene = window.scene
+    assert not window.open_scene(path)
+    words = {"fifo": "is a named pipe", "grid": "view.step: 12,001 grid points", "folder": "is a folder"}[kind]
+    assert dialogs[-1][:2] == ("warning", "Cannot open scene") and words in dialogs[-1][2]
+    assert window.scene == scene and not window.isWindowModified()
+    assert "Traceback" not in capfd.readouterr().err
+
+
+def test_markup_in_a_file_is_shown_as_text(qtbot, window, dialogs, tmp_path):
+    path = tmp_path / "scene.json"
+    path.write_text('{"format": "rollball-scene", "version": 2, "landscape": "x", "<b>big</b>": 1}')
+    assert not window.open_scene(path)
+    assert "<b>" not in dialogs[-1][2] and "big" in dialogs[-1][2]
+
+
+def test_export_never_overwrites_the_open_scene(qtbot, window, dialogs, tmp_path):
+    path = tmp_path / "mine.json"
+    assert window.save_to(path)
+    text = path.read_text()
+    run_to_end(qtbot, window)
+    assert not window.export_csv(path)
+    assert "scene being run" in dialogs[-1][2] and path.read_text() == text

@@ -1,6 +1,7 @@
 """The desktop app, driven as a user drives it: fields, methods, run controls, files, the GL view."""
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -302,6 +303,18 @@ def test_the_event_loop_keeps_serving_during_a_million_step_run(qtbot, window):
     print(f"\n10^6 steps: {len(gaps)} ticks, longest gap {1000 * gaps.max():.0f} ms, "
           f"median {1000 * np.median(gaps):.0f} ms")
     assert len(ticks) >= 2 and gaps.max() < 5.0
+
+
+def test_the_bench_measures_the_app_responsiveness():
+    """``rollball bench`` reports the figure the test above does not judge: a child process
+    (the core imports no Qt) with the real window and a 10⁶-step run."""
+    from rollball.bench import report, targets
+
+    app = targets.app_responsiveness()
+    assert app.get("steps") == 1_000_000 and app["ticks"] >= 2, app
+    assert 0 < app["median_gap_ms"] <= app["longest_gap_ms"] < math.inf
+    assert f"**{app['longest_gap_ms']:.0f} ms**" in report._app_line(app)
+    assert "not measured (no display" in report._app_line({"error": "no display and no xvfb-run"})
 
 
 def test_preferences_remember_geometry_and_recent_files(qtbot, window, preferences, tmp_path):
