@@ -409,7 +409,7 @@ STALL = 3
 MAX_ITERATIONS = 60
 
 
-@JIT
+@COLD  # compiled once (not into each loop): a call costs nothing beside its iterations
 def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
     arguments and codes of trial_step (the orientation always Munthe-Kaas: mk is True).
@@ -565,7 +565,6 @@ def _scaled_change(s, h, z, K, lo, hi):
 # The same, compiled once as functions of their own, for the paths that run once per run or
 # per event (inlining them there too would only add compile time).
 trial_step_once = COLD(trial_step.py_func)
-collocation_step_once = COLD(collocation_step.py_func)
 
 
 @COLD
@@ -874,7 +873,7 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                          sm, info[F_LIFTOFF:F_LIFT_Y + 1], implicit)
                 # the run goes on with the whole step, taken again (the approach used its buffers)
                 if implicit:
-                    collocation_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                    collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
                 else:
                     trial_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
                 ints[I_DENSE] = -1
@@ -921,7 +920,7 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
         if not hs > 0.0:
             break
         if implicit:  # (the implicit methods' own step: ``implicit`` is True for them)
-            bad = collocation_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+            bad = collocation_step(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         else:
             bad = trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad != 0:
@@ -984,19 +983,19 @@ def scratch(work, n):
             work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
 
 
-def _fixed_steps(mk: bool, implicit: bool):
-    """The fixed-step loop for one orientation scheme and one kind of step: with mk, the
-    state size n and the step (trial_step for the explicit tableaus, collocation_step for
-    the implicit ones) constants of the compiled code, the stage loops unroll as in
-    hand-written C."""
+def _fixed_steps(mk: bool):
+    """The fixed-step loop for one orientation scheme: with mk and the state size n
+    constants of the compiled code, the stage loops unroll as in hand-written C."""
     n = state_size(mk)
 
     @JIT
-    def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
+    def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
+                implicit):
         """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
         W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
-        evaluations on the dense output). On the first call (no rows yet) the initial state is
+        evaluations on the dense output). ``implicit``: the steps are collocation_step's (the
+        Gauss methods, Munthe-Kaas only), not trial_step's; one compiled loop serves both. On the first call (no rows yet) the initial state is
         checked and recorded. The run stops early, with ints[I_STATUS] set, where the state
         turns non-finite or a check fails; the last valid state is then the last row.
         """
@@ -1045,10 +1044,8 @@ def _fixed_steps(mk: bool, implicit: bool):
     return advance
 
 
-# advance(fn, W, P, p, ...) of the explicit tableaus by scheme: ADVANCE[munthe_kaas]; of the
-# implicit ones (always Munthe-Kaas): ADVANCE_IMPLICIT
-ADVANCE = {mk: _fixed_steps(mk, False) for mk in (True, False)}
-ADVANCE_IMPLICIT = _fixed_steps(True, True)
+# advance(fn, W, P, p, ...) by scheme: ADVANCE[munthe_kaas]
+ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
 
 
 @JIT
