@@ -2,7 +2,7 @@
 back in sync on one clock. A QObject without widgets, so it is tested without a window or GL.
 
 States: ``ready`` (nothing started), ``running`` (playing; the worker may still be computing:
-see ``computed``), ``paused``, ``finished`` (played to the end), ``stopped`` (the user stopped
+see ``computed``, and before that compiling a method's kernel: see ``compiling``), ``paused``, ``finished`` (played to the end), ``stopped`` (the user stopped
 it; what was computed stays). Signals tell the window what to show:
 
 - ``stateChanged(state)`` whenever the state or ``computed`` changes,
@@ -70,6 +70,7 @@ class RunController(QtCore.QObject):
         self.thread: SimulationThread | None = None
         self.state = READY
         self.computed = False          # the worker has finished every run
+        self.compiling = False         # the worker is compiling a kernel (no rows yet)
         self.play_time = 0.0
         self.speed = 1.0               # simulated seconds per wall-clock second (inf: as computed)
         self.reference: tuple[Trajectory, float] | None = None   # trajectory, its error estimate
@@ -122,6 +123,8 @@ class RunController(QtCore.QObject):
         self.thread.rowsReady.connect(lambda index, block: runs is self.runs and self._rows_ready(index, block),
                                       QtCore.Qt.ConnectionType.QueuedConnection)
         self.thread.failed.connect(self.failed)
+        self.thread.compiling.connect(lambda: runs is self.runs and self._set_compiling(True),
+                                      QtCore.Qt.ConnectionType.QueuedConnection)
         self.thread.finished.connect(self._computed)
         self._set_state(RUNNING)
         self._last_tick = time.perf_counter()
@@ -173,7 +176,7 @@ class RunController(QtCore.QObject):
         """Drop the runs: back to ready at t = 0."""
         self._stop_worker()
         self.timer.stop()
-        self.runs, self.computed, self.play_time = [], False, 0.0
+        self.runs, self.computed, self.compiling, self.play_time = [], False, False, 0.0
         self.reference, self._reference_thread = None, None
         self._set_state(READY)
 
@@ -195,13 +198,19 @@ class RunController(QtCore.QObject):
 
     def _rows_ready(self, index: int, block) -> None:
         self.runs[index].buffer.append(block)
+        self._set_compiling(False)
+
+    def _set_compiling(self, on: bool) -> None:
+        if on != self.compiling:
+            self.compiling = on
+            self.stateChanged.emit(self.state)
 
     def _take_seconds(self) -> None:
         for run, seconds in zip(self.runs, self.thread.seconds):
             run.seconds = seconds
 
     def _computed(self) -> None:
-        self.computed = True
+        self.computed, self.compiling = True, False
         if self.thread is not None:
             self._take_seconds()
             self.thread.deleteLater()

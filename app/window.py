@@ -827,9 +827,10 @@ class MainWindow(QtWidgets.QMainWindow):
             self.timeline.set_available(self.controller.end_time)
             self._show_events()
         words = {READY: "Ready", RUNNING: "Running", PAUSED: "Paused", FINISHED: "Finished", STOPPED: "Stopped"}
+        doing = "compiling…" if self.controller.compiling else "computing…"
         self.state_label.setText("Preparing…" if self.start_waiting
                                  else words[state] if computed or state in (READY, STOPPED, FINISHED)
-                                 else f"{words[state]} (computing…)")
+                                 else f"{words[state]} ({doing})")
 
     def _follow(self, on: bool) -> None:
         self.view.set_follow(on, self.scene.ball.radius if on and self.scene else None, index=self.compare.followed)

@@ -12,6 +12,8 @@ import time
 
 from PySide6 import QtCore
 
+from rollball.warmup import compile_notice
+
 CHUNK_SECONDS = 0.04
 MIN_STEPS, MAX_STEPS = 256, 1 << 20
 
@@ -28,6 +30,7 @@ class SimulationThread(QtCore.QThread):
 
     rowsReady = QtCore.Signal(int, object)
     failed = QtCore.Signal(str)
+    compiling = QtCore.Signal()      # numba has started compiling a kernel (first run of a method)
 
     def __init__(self, simulations, derives, parent=None, warm_ups=()):
         super().__init__(parent)
@@ -37,26 +40,30 @@ class SimulationThread(QtCore.QThread):
         self.seconds = [0.0] * len(self.simulations)
 
     def run(self) -> None:
-        sims = self.simulations
-        steps = [4096] * len(sims)
         try:
-            for warm_up in self.warm_ups:
-                warm_up.advance()
-            while not self.isInterruptionRequested():
-                pending = [i for i, sim in enumerate(sims) if not sim.done]
-                if not pending:
-                    break
-                i = min(pending, key=lambda k: sims[k].progress)
-                started = time.perf_counter()
-                rows = sims[i].advance(steps[i])
-                elapsed = time.perf_counter() - started
-                self.seconds[i] += elapsed
-                if len(rows):
-                    self.rowsReady.emit(i, self.derives[i](rows))
-                scale = CHUNK_SECONDS / max(elapsed, 1e-6)
-                steps[i] = int(min(MAX_STEPS, max(MIN_STEPS, steps[i] * min(4.0, max(0.25, scale)))))
+            with compile_notice(self.compiling.emit):
+                self._compute()
         except Exception as error:  # a defect in the core must not take the window down
             self.failed.emit(f"{type(error).__name__}: {error}")
+
+    def _compute(self) -> None:
+        sims = self.simulations
+        steps = [4096] * len(sims)
+        for warm_up in self.warm_ups:
+            warm_up.advance()
+        while not self.isInterruptionRequested():
+            pending = [i for i, sim in enumerate(sims) if not sim.done]
+            if not pending:
+                break
+            i = min(pending, key=lambda k: sims[k].progress)
+            started = time.perf_counter()
+            rows = sims[i].advance(steps[i])
+            elapsed = time.perf_counter() - started
+            self.seconds[i] += elapsed
+            if len(rows):
+                self.rowsReady.emit(i, self.derives[i](rows))
+            scale = CHUNK_SECONDS / max(elapsed, 1e-6)
+            steps[i] = int(min(MAX_STEPS, max(MIN_STEPS, steps[i] * min(4.0, max(0.25, scale)))))
 
     def stop(self) -> None:
         """Cancel the runs and wait for the thread to end (at most about one chunk)."""

@@ -17,9 +17,16 @@ from __future__ import annotations
 
 import math
 
+import warnings
+
 import numpy as np
 from numba import njit, types
+from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
+
+# The landscape callback is passed between compiled functions as a first-class function, which
+# numba announces on stderr at every compile; the command line keeps stderr to one line.
+warnings.filterwarnings("ignore", message="First-class function type", category=NumbaExperimentalFeatureWarning)
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
@@ -402,7 +409,7 @@ STALL = 3
 MAX_ITERATIONS = 60
 
 
-@JIT
+@COLD  # compiled once (not into each loop): a call costs nothing beside its iterations
 def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
     arguments and codes of trial_step (the orientation always Munthe-Kaas: mk is True).
@@ -558,7 +565,6 @@ def _scaled_change(s, h, z, K, lo, hi):
 # The same, compiled once as functions of their own, for the paths that run once per run or
 # per event (inlining them there too would only add compile time).
 trial_step_once = COLD(trial_step.py_func)
-collocation_step_once = COLD(collocation_step.py_func)
 
 
 @COLD
@@ -796,8 +802,8 @@ def looks(r, z, probe, zn, pn):
 
 
 @JIT
-def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, zn, pn, ints, info, segment, Ye, Re,
-                pe, sa, sb, sm):
+def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, segment, Ye,
+                Re, pe, sa, sb, sm, implicit):
     """The validity checks and events of a finished step from t to t + h, located on its dense
     output. Returns -1 while the run may go on; otherwise the run stops (status and reason
     set) and the result is theta, the last valid point of the step (0 <= theta < 1).
@@ -816,13 +822,13 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, zn, pn, ints,
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     if not (fit_end or sharp or jumpy or raced or force_end):
         return -1.0  # the usual step: nothing to look at closer
-    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe,
-                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2)
+    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2, implicit)
 
 
 @COLD
-def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa, sb, sm,
-                 fit_end, sharp, jumpy, raced, force_end, bend, chord2):
+def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, sa, sb, sm,
+                 fit_end, sharp, jumpy, raced, force_end, bend, chord2, implicit):
     """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
     n, mk = shape_of(z)
     r = p[0]
@@ -863,6 +869,15 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye,
                 stop, valid = b, a
             elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
                 info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
+                approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
+                         sm, info[F_LIFTOFF:F_LIFT_Y + 1], implicit)
+                # the run goes on with the whole step, taken again (the approach used its buffers)
+                if implicit:
+                    collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                else:
+                    trial_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                ints[I_DENSE] = -1
+                dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
             _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
             stop, valid = b, a
@@ -885,15 +900,19 @@ REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a s
 
 
 @COLD
-def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
-                 Ye, sa, sb, sm, implicit=False):
-    """A run stopped inside a step: its last valid state, at t + theta h, is the last row.
+def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb, sm,
+             event, implicit):
+    """Reach the last valid state before a break inside a step from t to t + h, first guessed
+    at theta (a fraction of the step) from the step's dense output.
 
-    The dense output of a step across a kink, a jump or the edge of the no-fit region is
-    spoiled by the stages beyond it, so that state is computed by a step of theta h from the
-    step's start instead; while such a step still crosses (its ends' looks say so), the stop
-    is located again on its own, less spoiled, dense output (and its time and place updated)
-    and the step shortened to before it. Failing that, the step's start is the last row."""
+    The dense output of a step across a kink, a jump or the edge of the no-fit region (kind
+    KINK, JUMP or FIT_EVENT) is spoiled by the stages beyond it, so the state is computed by a
+    step of theta h from the step's start instead; while such a step still crosses (its ends'
+    looks say so), the break is located again on its own, less spoiled, dense output and the
+    step shortened to before it; a clean step's dense output, continued a little past its end,
+    times a kink or jump. event = (time, x, y) of the break is updated on the way. Returns the
+    theta of the clean step (zn, Rn, pn hold its end), or 0 when none was found.
+    """
     n, mk = shape_of(z)
     r = p[0]
     for _ in range(REFINE_STEPS):
@@ -901,35 +920,48 @@ def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, 
         if not hs > 0.0:
             break
         if implicit:  # (the implicit methods' own step: ``implicit`` is True for them)
-            bad = collocation_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+            bad = collocation_step(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         else:
             bad = trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad != 0:
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
         if not (fit_end or sharp or jumpy):
-            record(rows, ints[I_ROWS], t + hs, zn, Rn, pn, p)
-            ints[I_ROWS] += 1
-            kind = KINK if ints[I_REASON] == R_KINK else JUMP if ints[I_REASON] == R_HEIGHT_JUMP else -1
-            if kind >= 0 and theta < 1.0:  # the break is beyond this clean step: its dense output,
-                # continued a little past its end, says when the motion before it reaches it
+            if kind != FIT_EVENT and theta < 1.0:
                 a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 1.0, min(1.0 / theta, 2.0))
                 if size > 0.0:
-                    info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
-            return
+                    event[0], event[1], event[2] = t + b * hs, sb[0], sb[1]
+            return theta
         a, b, size = 0.0, 0.0, 0.0
-        if sharp or jumpy:
-            a, b, size = locate_break(KINK if sharp else JUMP, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 0.0, 1.0)
-        if size > 0.0 and (ints[I_REASON] == R_KINK or ints[I_REASON] == R_HEIGHT_JUMP):
-            info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sb[0], sb[1]
-        elif fit_end and ints[I_REASON] == R_NO_FIT:
-            gb = pn[PROBE_FIT] - 1.0
-            a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
-                          probe[PROBE_FIT] - 1.0, 1.0, gb, ints)
-            surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
-            info[F_FAIL_T], info[F_FAIL_X], info[F_FAIL_Y] = t + b * hs, sa[0], sa[1]
+        if kind == FIT_EVENT:
+            if fit_end:
+                a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
+                              probe[PROBE_FIT] - 1.0, 1.0, pn[PROBE_FIT] - 1.0, ints)
+                surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
+                event[0], event[1], event[2] = t + b * hs, sa[0], sa[1]
+        elif sharp or jumpy:
+            a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+            if size > 0.0:
+                event[0], event[1], event[2] = t + b * hs, sb[0], sb[1]
         theta *= a if a > 0.0 else 0.5
-    record_last(rows, ints, t, z, R, probe, p)
+    return 0.0
+
+
+@COLD
+def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
+                 Ye, sa, sb, sm, implicit=False):
+    """A run stopped inside a step: its last valid state, reached by ``approach`` (or else the
+    step's start), is the last row; the stop's time and place are refined on the way."""
+    reason = ints[I_REASON]
+    kind = JUMP if reason == R_HEIGHT_JUMP else FIT_EVENT if reason == R_NO_FIT else KINK
+    event = info[F_FAIL_T:F_FAIL_Y + 1]
+    theta = approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
+                     sm, event, implicit)
+    if theta > 0.0:
+        record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
+        ints[I_ROWS] += 1
+    else:
+        record_last(rows, ints, t, z, R, probe, p)
 
 
 def work_size(n: int) -> int:
@@ -951,19 +983,19 @@ def scratch(work, n):
             work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
 
 
-def _fixed_steps(mk: bool, implicit: bool):
-    """The fixed-step loop for one orientation scheme and one kind of step: with mk, the
-    state size n and the step (trial_step for the explicit tableaus, collocation_step for
-    the implicit ones) constants of the compiled code, the stage loops unroll as in
-    hand-written C."""
+def _fixed_steps(mk: bool):
+    """The fixed-step loop for one orientation scheme: with mk and the state size n
+    constants of the compiled code, the stage loops unroll as in hand-written C."""
     n = state_size(mk)
 
     @JIT
-    def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work):
+    def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
+                implicit):
         """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
         W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
-        evaluations on the dense output). On the first call (no rows yet) the initial state is
+        evaluations on the dense output). ``implicit``: the steps are collocation_step's (the
+        Gauss methods, Munthe-Kaas only), not trial_step's; one compiled loop serves both. On the first call (no rows yet) the initial state is
         checked and recorded. The run stops early, with ints[I_STATUS] set, where the state
         turns non-finite or a check fails; the last valid state is then the last row.
         """
@@ -994,8 +1026,8 @@ def _fixed_steps(mk: bool, implicit: bool):
                           0.0 if mk else 1.0)
                 record_last(rows, ints, t0, z, R, probe, p)
                 return
-            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, zn, pn, ints, info, True,
-                                Ye, Re, pe, sa, sb, sm)
+            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                                True, Ye, Re, pe, sa, sb, sm, implicit)
             if valid >= 0.0:
                 record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                              Rn, pn, Ye, sa, sb, sm, implicit)
@@ -1012,10 +1044,8 @@ def _fixed_steps(mk: bool, implicit: bool):
     return advance
 
 
-# advance(fn, W, P, p, ...) of the explicit tableaus by scheme: ADVANCE[munthe_kaas]; of the
-# implicit ones (always Munthe-Kaas): ADVANCE_IMPLICIT
-ADVANCE = {mk: _fixed_steps(mk, False) for mk in (True, False)}
-ADVANCE_IMPLICIT = _fixed_steps(True, True)
+# advance(fn, W, P, p, ...) by scheme: ADVANCE[munthe_kaas]
+ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
 
 
 @JIT
@@ -1071,8 +1101,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             record_last(rows, ints, t, z, R, probe, p)
             break
         t_new = t_end if land else t + hs
-        valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, zn, pn, ints, info, False,
-                            Ye, Re, pe, sa, sb, sm)
+        valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                            False, Ye, Re, pe, sa, sb, sm, False)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
         while record_dt > 0.0:  # the rows inside the step, from its dense output
             t_row = ints[I_ROWS] * record_dt

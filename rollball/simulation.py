@@ -18,7 +18,10 @@ from .scene import CONSTRAINTS, Scene
 from .tableaus import MethodKind, get_method
 from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
 
-MAX_ROWS = 5_000_000   # 23 doubles a row: about 0.9 GB
+# 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
+# recording every adaptive step grows its buffer by doubling up to the limit, holding the
+# old and the new buffer for a moment (1.4 GB at the last doubling).
+MAX_ROWS = 5_000_000
 MAX_STEPS = 2 ** 53    # beyond this, step counts and k·dt are no longer exact in a double
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
@@ -273,10 +276,12 @@ class Simulation:
             chunk = int(min(remaining, CHUNK))
             if self.adaptive:
                 if self._ints[kernel.I_ROWS] >= len(self._rows) - 2:
-                    if len(self._rows) >= MAX_ROWS:  # give up rather than fill the memory
-                        self.status = Status.ABORTED
+                    if len(self._rows) >= MAX_ROWS:  # stop rather than fill the memory
+                        self.status = Status.ROW_LIMIT
                         break
-                    self._rows = np.concatenate([self._rows, np.empty_like(self._rows)])
+                    grown = np.empty((min(2 * len(self._rows), MAX_ROWS), kernel.ROW_SIZE))
+                    grown[: len(self._rows)] = self._rows
+                    self._rows = grown
                 before = self.steps + self.rejected
                 kernel.advance_adaptive(
                     self._fn, self._W, self._E, self._P, self._p, self._error_kind,
@@ -284,12 +289,10 @@ class Simulation:
                     self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
                 chunk = self.steps + self.rejected - before
             else:
-                advance = (kernel.ADVANCE_IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT
-                           else kernel.ADVANCE[self.munthe_kaas])
-                advance(
+                kernel.ADVANCE[self.munthe_kaas](
                     self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
                     chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
-                    self._work)
+                    self._work, self.tableau.kind is MethodKind.IMPLICIT)
             remaining -= chunk
             code = int(self._ints[kernel.I_STATUS])
             if code != kernel.RUNNING:
@@ -330,6 +333,9 @@ class Simulation:
             return f"reached t = {self.t_end:g} s in {self.steps} steps{rejected}"
         if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"
+        if status is Status.ROW_LIMIT:
+            return (f"row limit reached: {len(self.rows):,} rows (every step) by t = {self.time:.6g} s of "
+                    f"{self.t_end:g} s; use record_dt to record at fixed times instead")
         return f"running: t = {self.time:.6g} s"
 
     def trajectory(self) -> Trajectory:
@@ -349,7 +355,8 @@ class Simulation:
                        f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}"),
             "status": f"{status}: {message}",
         }
-        return Trajectory(self.rows.copy(), status=status, message=message,
+        # rows are only ever appended: the trajectory can share them instead of copying
+        return Trajectory(self.rows, status=status, message=message,
                           liftoff=self.liftoff, steps=self.steps, rejected=self.rejected,
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)

@@ -44,6 +44,7 @@ class Status(str, enum.Enum):
     DOES_NOT_FIT = "does_not_fit"  # the ball no longer fits a valley: the model breaks down
     NONFINITE = "nonfinite"        # the landscape or the state could not be evaluated
     ABORTED = "aborted"            # the caller cancelled
+    ROW_LIMIT = "row_limit"        # recording every step filled the row limit before the end
 
     def __str__(self) -> str:
         return self.value

@@ -198,7 +198,7 @@ def test_a_jump_in_height_stops_the_run_where_it_is(method, options):
     assert abs(traj.failure.value) == pytest.approx(0.2 * math.pi, rel=1e-6)
     assert abs(traj.failure.y) < 1e-6 and traj.failure.x < 0
     assert traj.energy_drift < 1e-4 and traj.t[-1] <= traj.failure.time
-    assert abs(traj.contact[-1, 1]) < 1e-3 and traj.contact[-1, 1] > 0  # the last row: just before
+    assert 0 < traj.contact[-1, 1] < 5e-3  # the last row: just before (within a part of a step)
 
 
 @pytest.mark.parametrize("formula, jump", [("x/abs(x)", 2.0), ("-0.3*abs(x)/x", -0.6)])
@@ -215,9 +215,8 @@ def test_steps_in_height_across_a_flat_floor(formula, jump):
 @pytest.mark.parametrize("h", [1e-2, 1e-3, 1e-4])
 def test_a_roof_is_a_liftoff_at_the_crest(h):
     """The roof min(2y, -y): a ball rolling up its side z = 2y crosses the crest y = 0, where the
-    real ball leaves the surface: a lift-off at the kink, and the run goes on. The time is read
-    from the dense output of the step across the crest, which the stages beyond it spoil: it is
-    good to a tenth of a step (the stops are refined further, see test_hard_cases)."""
+    real ball leaves the surface: a lift-off at the kink, at the exact time (located by clean
+    shortened steps, as the stops are), and the run goes on."""
     traj = simulate(make_scene("min(2*y, -y)", x=0.0, y=-0.5, vy=2.0, duration=0.6, dt=h))
     assert traj.status is Status.OK
     assert traj.liftoff is not None and traj.liftoff.kink
@@ -225,7 +224,7 @@ def test_a_roof_is_a_liftoff_at_the_crest(h):
     # up the plane z = 2y the contact point decelerates at (5/7) g sin(a) cos(a) = (2/7) g along y
     a = 2 / 7 * 9.81
     t_crest = (2.0 - math.sqrt(4.0 - a)) / a
-    assert traj.liftoff.time == pytest.approx(t_crest, abs=0.1 * h)
+    assert traj.liftoff.time == pytest.approx(t_crest, abs=1e-12)
 
 
 def test_the_crest_of_a_saddle_roof_is_a_liftoff():

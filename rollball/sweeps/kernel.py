@@ -98,8 +98,8 @@ def run_batch(fn, W, D, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, 
             if bad:
                 ints[I_STATUS] = NONFINITE
                 break
-            valid = step_events(fn, d, p, W, False, n, t0, h, z, R, K, last, D, probe, zn, pn, ints, info,
-                                True, Ye, Re, pe, sa, sb, sm)
+            valid = step_events(fn, d, p, W, False, n, t0, h, z, R, K, last, D, probe, Y, zn, Rn, pn, ints,
+                                info, True, Ye, Re, pe, sa, sb, sm, False)
             if valid >= 0.0:  # the last valid state inside the step, as simulate finds it
                 ints[I_ROWS] = 0
                 record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, D, probe, rows, ints, info, Y, zn, Rn,

@@ -93,3 +93,23 @@ def test_runs_are_measured_against_a_reference_computed_alongside(qtbot, hills):
         assert run.seconds > 0
     assert np.nanmax(runs[0].errors["contact"]) > 1e4 * np.nanmax(runs[1].errors["contact"])
     controller.shutdown()
+
+
+def test_a_kernel_being_compiled_is_a_state_of_its_own(qtbot, hills, monkeypatch):
+    from contextlib import contextmanager
+
+    import app.worker
+
+    @contextmanager
+    def compiles_at_once(say):   # as numba's compile event would, before the first rows
+        say()
+        yield
+    monkeypatch.setattr(app.worker, "compile_notice", compiles_at_once)
+    controller = RunController()
+    seen = []
+    controller.stateChanged.connect(lambda state: seen.append((state, controller.compiling)))
+    with qtbot.waitSignal(controller.finished, timeout=30_000):
+        controller.speed = math.inf
+        controller.start(runs_of(hills, dict(method="rk4", t_end=0.5)))
+    assert (RUNNING, True) in seen and seen[-1] == (FINISHED, False)
+    assert seen.index((RUNNING, True)) < len(seen) - 1 and not controller.compiling
