@@ -25,8 +25,10 @@ from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
 
 # The landscape callback is passed between compiled functions as a first-class function, which
-# numba announces on stderr at every compile; the command line keeps stderr to one line.
-warnings.filterwarnings("ignore", message="First-class function type", category=NumbaExperimentalFeatureWarning)
+# numba announces on stderr at every compile (its text wrapped in terminal highlighting codes);
+# the command line and the setup script keep stderr to their own lines.
+warnings.filterwarnings("ignore", message=r"(\x1b\[[0-9;]*m)*First-class function type",
+                        category=NumbaExperimentalFeatureWarning)
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 

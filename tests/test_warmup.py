@@ -1,5 +1,8 @@
 """Compiling ahead of need: every method is warmed, and a compile is announced once."""
 
+import subprocess
+import sys
+
 from numba import njit
 
 from rollball import METHODS
@@ -38,3 +41,16 @@ def test_an_unknown_run_to_warm_first_is_refused_in_one_line(capsys):
     assert main(["rk5"]) == 2
     err = capsys.readouterr().err.strip()
     assert "unknown run 'rk5'" in err and "\n" not in err
+
+
+
+
+def test_numbas_first_class_function_notice_is_kept_off_stderr_even_when_highlighted():
+    # numba wraps the text in terminal highlighting codes; pytest resets warning filters per test,
+    # so the check runs in a process of its own
+    code = ("import warnings, rollball.kernel\n"
+            "from numba.core.errors import NumbaExperimentalFeatureWarning as N\n"
+            "warnings.warn('\\x1b[1m\\x1b[1mFirst-class function type feature is experimental\\x1b[0m', N)\n"
+            "warnings.warn('First-class function type feature is experimental', N)\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and "First-class" not in result.stderr
