@@ -8,8 +8,9 @@ path decides what happens:
 - an existing regular file is replaced whole or not at all, keeping its permissions
   (and its owner and group where the system allows it);
 - a symbolic link is written *through*: the file it names is replaced, the link stays;
-- a read-only file (no write permission bit set, whoever runs the program; root too),
-  a folder, a named pipe, a device or a socket is refused, and nothing is written;
+- a read-only file or a file in a read-only folder (no write permission bit set, whoever
+  runs the program; root too), a folder, a named pipe, a device or a socket is refused,
+  and nothing is written;
 - a path given in ``keep`` (the scene being run) is refused too.
 
 A refusal or a failing write (missing folder, full disk) raises ``OSError`` naming the
@@ -60,6 +61,12 @@ def write_target(path: str | os.PathLike, keep: Iterable[str | os.PathLike] = ()
     if os.fspath(path) == "":
         raise _refuse(path, "empty file name", errno.ENOENT)
     target = Path(os.path.realpath(path))
+    try:
+        folder = target.parent.stat().st_mode
+    except OSError:  # a missing folder: the write fails naming the file
+        folder = None
+    if folder is not None and stat.S_ISDIR(folder) and not folder & 0o222:
+        raise _refuse(path, "is in a read-only folder; nothing was written", errno.EACCES)
     try:
         info = target.stat()
     except FileNotFoundError:
