@@ -375,6 +375,13 @@ def trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
         for a in range(3):
             for c in range(3):
                 Rn[a, c] = zn[5 + 3 * a + c]
+    return end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
+
+
+@JIT
+def end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints):
+    """The new state zn, Rn of a step checked, then evaluated in full into K[last] and pn
+    (counted in ints[I_EVALS]). Returns the step's report (below): 0, 1 or 2."""
     if not _finite(zn, 0, 5):
         return 1
     if orientation and not (_finite(zn, 5, n) and _finite_matrix(Rn)):
@@ -456,17 +463,7 @@ def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
         for q in range(n):
             zn[q] += c * K[1 + i, q]
     rodrigues(zn, R, Rn)
-    if not _finite(zn, 0, 5):
-        return 1
-    if not (_finite(zn, 5, n) and _finite_matrix(Rn)):
-        return 2
-    dynamics(fn, d, p, zn, True, K, last, pn, True)
-    ints[I_EVALS] += 1
-    if not (_finite_row(K, last, 0, 5) and _finite(pn, 0, PROBE_SIZE)):
-        return 1
-    if not _finite_row(K, last, 5, n):
-        return 2
-    return 0
+    return end_of_step(fn, d, p, True, n, True, zn, Rn, K, last, pn, ints)
 
 
 @JIT
