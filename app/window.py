@@ -10,15 +10,14 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import METHODS, RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method
+from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
-from rollball.trajectory import CONTACT
 from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.text import shown
-from rollball.trajectory import CENTER, R, T
+from rollball.trajectory import CENTER, CONTACT, R
 
 from . import help as helps
 from .animation import DEFAULT_FPS, frame_times, record

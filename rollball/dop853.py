@@ -20,7 +20,7 @@ from decimal import Decimal, localcontext
 import numpy as np
 
 from .kinds import MethodInfo, MethodKind
-from .order_conditions import ElementaryWeights, density, residuals, rooted_trees, size
+from .order_conditions import ElementaryWeights, residuals, size
 
 C = (
     "0.0",

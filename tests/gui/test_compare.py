@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from app.compare_runs import COLORS, CompareRun, preset, reference_spacing
+from app.compare_runs import COLORS, CompareRun, reference_spacing
 from app.controller import FINISHED
 from rollball import METHODS, parse_runs
 from rollball.comparison import reference_method

@@ -13,7 +13,6 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.controller import FINISHED, PAUSED
 from app.timeline import STEPS
-from rollball import Scene
 from rollball.examples import EXAMPLES_DIR
 
 from .guitools import run_to_end, set_field
