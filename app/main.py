@@ -32,6 +32,18 @@ def prepare_qt() -> None:
         QtGui.QSurfaceFormat.setDefaultFormat(fmt)
 
 
+def application():
+    """The QApplication (made once, after ``prepare_qt``), collecting garbage on its own thread."""
+    from PySide6 import QtWidgets
+
+    from .garbage import collect_on_gui_thread
+
+    prepare_qt()
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    collect_on_gui_thread()
+    return app
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
@@ -99,10 +111,9 @@ def main(argv: list[str] | None = None) -> int:
                 os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.environ.get("QT_QPA_PLATFORM")):
             fail("no display to draw on: run under xvfb-run, or set DISPLAY")
 
-    from PySide6 import QtCore, QtWidgets
+    from PySide6 import QtCore
 
-    prepare_qt()
-    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    app = application()
     app.setOrganizationName("RollBall")
     app.setApplicationName("RollBall")
 

@@ -21,17 +21,16 @@ TICK_MS = 5
 
 
 def measure() -> dict:
-    from PySide6 import QtCore, QtWidgets
+    from PySide6 import QtCore
 
     from rollball import Scene
     from rollball.examples import DEFAULT_EXAMPLE
 
-    from .main import prepare_qt
+    from .main import application
     from .preferences import Preferences
     from .window import MainWindow
 
-    prepare_qt()
-    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    app = application()
     with tempfile.TemporaryDirectory() as folder:  # the user's preferences are not touched
         settings = QtCore.QSettings(f"{folder}/preferences.ini", QtCore.QSettings.Format.IniFormat)
         window = MainWindow(Preferences(settings))

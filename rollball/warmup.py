@@ -2,13 +2,14 @@
 
 numba compiles the stepping kernel the first time each kind of method runs (seconds to tens
 of seconds with empty caches) and keeps the machine code on disk, so later processes load
-it in well under a second. ``warm_up`` runs every method once on a tiny run so that the
-compiling happens now; ``python -m rollball.warmup`` does it with progress on stderr (the
+it in well under a second. ``warm_up`` runs every method once on a tiny run, and a tiny
+sweep (the sweep loop is compiled code of its own), so that the compiling happens now; ``python -m rollball.warmup`` does it with progress on stderr (the
 setup script calls it). ``compile_notice`` tells a caller when numba starts compiling.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from contextlib import contextmanager
@@ -18,6 +19,7 @@ from numba.core import event
 from .examples import DEFAULT_EXAMPLE
 from .scene import Scene
 from .simulation import simulate
+from .sweeps import sweep
 from .tableaus import METHODS
 
 
@@ -34,14 +36,18 @@ def warm_up(progress=None, first=(), ready=None) -> None:
     text)`` is called before each part, ``ready(method, munthe_kaas)`` after it."""
     scene = Scene.load(DEFAULT_EXAMPLE)
     todo = [v for v in first if v in variants()] + [v for v in variants() if v not in first]
+    total = len(todo) + 1
     for done, (method, mk) in enumerate(todo):
         if progress:
-            progress(done, len(todo), f"{method}{'' if mk else ' classic'}")
+            progress(done, total, f"{method}{'' if mk else ' classic'}")
         simulate(scene, method=method, munthe_kaas=mk, t_end=0.01)
         if ready:
             ready(method, mk)
     if progress:
-        progress(len(todo), len(todo), "done")
+        progress(len(todo), total, "sweeps")
+    sweep(dataclasses.replace(scene, duration=0.01), {"start.vx": [scene.start.vx]}, workers=1)
+    if progress:
+        progress(total, total, "done")
 
 
 class _FirstCompile(event.Listener):

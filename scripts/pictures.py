@@ -9,9 +9,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from PySide6 import QtCore, QtGui, QtWidgets
+from PySide6 import QtCore, QtGui
 
-from app.main import prepare_qt, screenshot
+from app.main import application, screenshot
 from app.preferences import Preferences
 from app.window import MainWindow
 from rollball.examples import example_scenes, scene_path
@@ -31,8 +31,7 @@ def png(image: QtGui.QImage) -> bytes:
 
 
 def main() -> int:
-    prepare_qt()
-    app = QtWidgets.QApplication(sys.argv[:1])
+    app = application()
     with tempfile.TemporaryDirectory() as folder:
         settings = QtCore.QSettings(str(Path(folder) / "preferences.ini"), QtCore.QSettings.Format.IniFormat)
         window = MainWindow(Preferences(settings))

@@ -6,7 +6,8 @@ import sys
 from numba import njit
 
 from rollball import METHODS
-from rollball.warmup import compile_notice, variants
+from rollball.sweeps import kernel as sweep_kernel
+from rollball.warmup import compile_notice, variants, warm_up
 
 
 def _fresh_function(module: str):
@@ -21,6 +22,17 @@ def test_every_method_is_warmed_with_each_orientation_update_it_allows():
     assert {method for method, _ in warmed} == set(METHODS)
     assert ("rk4", False) in warmed and ("rk4", True) in warmed
     assert len(set(warmed)) == len(warmed)
+
+
+def test_the_warm_up_reports_each_part_and_readies_the_sweep_loop_too():
+    parts, ready = [], []
+    warm_up(lambda done, total, text: parts.append((done, total, text)), [("lawson5", False)],
+            lambda method, mk: ready.append((method, mk)))
+    total = len(variants()) + 1
+    assert parts[0] == (0, total, "lawson5 classic") and ready[0] == ("lawson5", False)
+    assert parts[-2:] == [(total - 1, total, "sweeps"), (total, total, "done")]
+    assert sorted(ready) == sorted(variants())
+    assert sweep_kernel.run_batch.signatures   # compiled, or loaded from the disk cache
 
 
 def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all():

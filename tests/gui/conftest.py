@@ -3,6 +3,7 @@
 import pytest
 from PySide6 import QtCore, QtWidgets
 
+from app.garbage import collect_anywhere, collect_on_gui_thread
 from app.main import prepare_qt
 from app.preferences import Preferences
 from app.window import MainWindow
@@ -17,6 +18,15 @@ def compiled_kernel():
     """Compile (or load) the kernel of every method once, before anything in a window is timed:
     with empty caches a method's first run compiles for tens of seconds on a busy machine."""
     warm_up()
+
+
+@pytest.fixture(scope="package", autouse=True)
+def garbage_on_gui_thread(qapp):
+    """As in the app: cycles are collected on the GUI thread only (``app.garbage``); the tests
+    outside this folder get Python's automatic collection back."""
+    collect_on_gui_thread()
+    yield
+    collect_anywhere()
 
 
 @pytest.fixture
