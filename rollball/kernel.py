@@ -326,7 +326,7 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
-    evaluate(fn, d, p, z, mk, K, 0, probe)
+    dynamics(fn, d, p, z, mk, K, 0, probe, True)
     ints[I_EVALS] += 1
     ints[I_DENSE] = -1
     record(rows, 0, 0.0, z, R, probe, p)
@@ -353,29 +353,51 @@ def combine(n, z, h, W, row, K, s, out):
                 out[q] += c * K[i, q]
 
 
-@JIT
-def trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
-    """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
-
-    W holds the method (see ``Tableau.kernel_arrays``): rows 1 .. last-1 the stage
-    coefficients, row ``last`` the weights b. Stages 1 .. last-1 fill K[1 .. last-1];
-    zn = z + h sum b_i K_i; then the full evaluation at zn (before u is reset) goes to
-    K[last] and pn. Returns whether the new state is finite: 0 = yes, 1 = the motion is
-    not, 2 = only the orientation is not. Counts its evaluations in ints[I_EVALS].
-    """
-    for i in range(1, last):
-        combine(n, z, h, W, i, K, i, Y)
-        dynamics(fn, d, p, Y, mk, K, i, pn, False)
-    ints[I_EVALS] += last - 1
-    combine(n, z, h, W, last, K, last, zn)
+def _trial_step(n: int, mk: bool):
+    """The explicit step for one state layout: with n and mk constants of the compiled code,
+    its stage loops unroll as in hand-written C."""
     orientation = n > MOTION_SIZE
-    if orientation and mk:
-        rodrigues(zn, R, Rn)
-    elif orientation:
-        for a in range(3):
-            for c in range(3):
-                Rn[a, c] = zn[5 + 3 * a + c]
-    return end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
+
+    @COLD
+    def trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+        """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
+
+        W holds the method (see ``Tableau.kernel_arrays``): rows 1 .. last-1 the stage
+        coefficients, row ``last`` the weights b. Stages 1 .. last-1 fill K[1 .. last-1];
+        zn = z + h sum b_i K_i; then the full evaluation at zn (before u is reset) goes to
+        K[last] and pn. Returns whether the new state is finite: 0 = yes, 1 = the motion is
+        not, 2 = only the orientation is not. Counts its evaluations in ints[I_EVALS].
+        """
+        for i in range(1, last):
+            combine(n, z, h, W, i, K, i, Y)
+            dynamics(fn, d, p, Y, mk, K, i, pn, False)
+        ints[I_EVALS] += last - 1
+        combine(n, z, h, W, last, K, last, zn)
+        if orientation and mk:
+            rodrigues(zn, R, Rn)
+        elif orientation:
+            for a in range(3):
+                for c in range(3):
+                    Rn[a, c] = zn[5 + 3 * a + c]
+        return end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
+
+    return trial_step
+
+
+trial_step_mk = _trial_step(MK_SIZE, True)
+trial_step_classic = _trial_step(CLASSIC_SIZE, False)
+trial_step_motion = _trial_step(MOTION_SIZE, False)
+
+
+@JIT
+def trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """The explicit step (``_trial_step``) for z's layout: MK_SIZE, CLASSIC_SIZE or MOTION_SIZE."""
+    n = z.shape[0]
+    if n == MK_SIZE:
+        return trial_step_mk(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == CLASSIC_SIZE:
+        return trial_step_classic(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return trial_step_motion(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
 @JIT
@@ -399,6 +421,18 @@ def end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints):
 # finite, 2 only the orientation is not, 3 an implicit step's stage equations did not converge.
 STEP_NOT_CONVERGED = 3
 
+# How a method steps (``take_step``). Floats, like the event kinds below: numba compiles a
+# function anew for every constant bool or int passed to it.
+EXPLICIT, IMPLICIT = 0.0, 1.0
+
+
+@JIT
+def take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """One step of the method: collocation_step (``stepping`` IMPLICIT) or trial_step (EXPLICIT)."""
+    if stepping == IMPLICIT:
+        return collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+
 
 # -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
 #
@@ -419,9 +453,9 @@ MAX_ITERATIONS = 60
 
 
 @COLD  # compiled once (not into each loop): a call costs nothing beside its iterations
-def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
+def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
-    arguments and codes of trial_step (the orientation always Munthe-Kaas: mk is True).
+    arguments and codes of trial_step (the orientation always Munthe-Kaas).
 
     The stage equations are solved in two parts, since u does not act on (alpha, v): first
     the motion, evaluating the right-hand side with u = 0 (so that its u-part is omega),
@@ -435,6 +469,7 @@ def collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints):
     Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the motion is not finite),
     2 (only the orientation is not) or STEP_NOT_CONVERGED.
     """
+    n = MK_SIZE
     s = (last - 1) // 2
     new = s + 1
     # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
@@ -559,11 +594,6 @@ def _scaled_change(s, h, z, K, lo, hi):
             if delta > 0.0:  # (a part at rest whose stages still move: a large change)
                 worst = max(worst, delta / scale if scale > 0.0 else 1.0)
     return worst
-
-
-# The same, compiled once as functions of their own, for the paths that run once per run or
-# per event (inlining them there too would only add compile time).
-trial_step_once = COLD(trial_step.py_func)
 
 
 @COLD
@@ -802,7 +832,7 @@ def looks(r, z, probe, zn, pn):
 
 @JIT
 def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, segment, Ye,
-                Re, pe, sa, sb, sm, implicit):
+                Re, pe, sa, sb, sm, stepping):
     """The validity checks and events of a finished step from t to t + h, located on its dense
     output. Returns -1 while the run may go on; otherwise the run stops (status and reason
     set) and the result is theta, the last valid point of the step (0 <= theta < 1).
@@ -822,12 +852,12 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     if not (fit_end or sharp or jumpy or raced or force_end):
         return -1.0  # the usual step: nothing to look at closer
     return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
-                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2, implicit)
+                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2, stepping)
 
 
 @COLD
 def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, sa, sb, sm,
-                 fit_end, sharp, jumpy, raced, force_end, bend, chord2, implicit):
+                 fit_end, sharp, jumpy, raced, force_end, bend, chord2, stepping):
     """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
     n, mk = shape_of(z)
     r = p[0]
@@ -869,12 +899,9 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
             elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
                 info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
                 approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
-                         sm, info[F_LIFTOFF:F_LIFT_Y + 1], implicit)
+                         sm, info[F_LIFTOFF:F_LIFT_Y + 1], stepping)
                 # the run goes on with the whole step, taken again (the approach used its buffers)
-                if implicit:
-                    collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
-                else:
-                    trial_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
                 ints[I_DENSE] = -1
                 dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
@@ -900,7 +927,7 @@ REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a s
 
 @COLD
 def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb, sm,
-             event, implicit):
+             event, stepping):
     """Reach the last valid state before a break inside a step from t to t + h, first guessed
     at theta (a fraction of the step) from the step's dense output.
 
@@ -918,10 +945,7 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
         hs = theta * h
         if not hs > 0.0:
             break
-        if implicit:  # (the implicit methods' own step: ``implicit`` is True for them)
-            bad = collocation_step(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        else:
-            bad = trial_step_once(fn, d, p, W, mk, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = take_step(stepping, fn, d, p, W, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad != 0:
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
@@ -948,14 +972,14 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
 
 @COLD
 def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
-                 Ye, sa, sb, sm, implicit=False):
+                 Ye, sa, sb, sm, stepping):
     """A run stopped inside a step: its last valid state, reached by ``approach`` (or else the
     step's start), is the last row; the stop's time and place are refined on the way."""
     reason = ints[I_REASON]
     kind = JUMP if reason == R_HEIGHT_JUMP else FIT_EVENT if reason == R_NO_FIT else KINK
     event = info[F_FAIL_T:F_FAIL_Y + 1]
     theta = approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
-                     sm, event, implicit)
+                     sm, event, stepping)
     if theta > 0.0:
         record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
         ints[I_ROWS] += 1
@@ -989,13 +1013,13 @@ def _fixed_steps(mk: bool):
 
     @JIT
     def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
-                implicit):
+                stepping):
         """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
         W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
-        evaluations on the dense output). ``implicit``: the steps are collocation_step's (the
-        Gauss methods, Munthe-Kaas only), not trial_step's; one compiled loop serves both. On the first call (no rows yet) the initial state is
-        checked and recorded. The run stops early, with ints[I_STATUS] set, where the state
+        evaluations on the dense output). ``stepping``: IMPLICIT for collocation_step's steps (the
+        Gauss methods, Munthe-Kaas only), EXPLICIT for trial_step's; one compiled loop serves both.
+        On the first call (no rows yet) the initial state is checked and recorded. The run stops early, with ints[I_STATUS] set, where the state
         turns non-finite or a check fails; the last valid state is then the last row.
         """
         last = W.shape[0] - 1
@@ -1013,10 +1037,7 @@ def _fixed_steps(mk: bool):
             t0 = (k - 1) * dt
             h = t_end - t0 if final else dt
             t = t_end if final else k * dt
-            if implicit:
-                bad = collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
-            else:
-                bad = trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            bad = take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
             if bad:
                 if bad == STEP_NOT_CONVERGED:
                     _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
@@ -1026,10 +1047,10 @@ def _fixed_steps(mk: bool):
                 record_last(rows, ints, t0, z, R, probe, p)
                 return
             valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
-                                True, Ye, Re, pe, sa, sb, sm, implicit)
+                                True, Ye, Re, pe, sa, sb, sm, stepping)
             if valid >= 0.0:
                 record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
-                             Rn, pn, Ye, sa, sb, sm, implicit)
+                             Rn, pn, Ye, sa, sb, sm, stepping)
                 return
             accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
             ints[I_STEPS] = k
@@ -1084,7 +1105,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        bad = trial_step(fn, d, p, W, True, n, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = trial_step(fn, d, p, W, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         err = math.inf if bad else error_norm(E, err_kind, K, last, n, z, zn, hs, rtol, atol)
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
             ints[I_REJECTED] += 1
@@ -1101,7 +1122,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         t_new = t_end if land else t + hs
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
-                            False, Ye, Re, pe, sa, sb, sm, False)
+                            False, Ye, Re, pe, sa, sb, sm, EXPLICIT)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
         while record_dt > 0.0:  # the rows inside the step, from its dense output
             t_row = ints[I_ROWS] * record_dt
@@ -1119,7 +1140,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             ints[I_ROWS] += 1
         if valid >= 0.0:
             record_valid(fn, d, p, W, t, hs, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
-                         Rn, pn, Ye, sa, sb, sm)
+                         Rn, pn, Ye, sa, sb, sm, EXPLICIT)
             break
         if record_dt == 0.0:
             record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)

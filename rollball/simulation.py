@@ -292,7 +292,7 @@ class Simulation:
                 kernel.ADVANCE[self.munthe_kaas](
                     self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
                     chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
-                    self._work, self.tableau.kind is MethodKind.IMPLICIT)
+                    self._work, kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
             remaining -= chunk
             code = int(self._ints[kernel.I_STATUS])
             if code != kernel.RUNNING:

@@ -16,8 +16,8 @@ import numpy as np
 
 from .. import kernel
 # The narrow seam to the main kernel: these names and nothing else.
-from ..kernel import (F_LIFTOFF, I_ROWS, I_STATUS, JIT, MOTION_SIZE, NONFINITE, OK, RUNNING, accept,
-                      record, record_valid, scratch, start, step_events, trial_step)
+from ..kernel import (EXPLICIT, F_LIFTOFF, I_ROWS, I_STATUS, JIT, MOTION_SIZE, NONFINITE, OK, RUNNING,
+                      accept, record, record_valid, scratch, start, step_events, trial_step)
 from ..trajectory import CENTER, ENERGY, NORMAL_FORCE, VELOCITY
 
 # One row of outcomes per run, in this order (the status is kept apart, as a code).
@@ -94,16 +94,16 @@ def run_batch(fn, W, D, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, 
             t0 = (k - 1) * dt
             h = t_end - t0 if final else dt
             t = t_end if final else k * dt
-            bad = trial_step(fn, d, p, W, False, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            bad = trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
             if bad:
                 ints[I_STATUS] = NONFINITE
                 break
             valid = step_events(fn, d, p, W, False, n, t0, h, z, R, K, last, D, probe, Y, zn, Rn, pn, ints,
-                                info, True, Ye, Re, pe, sa, sb, sm, False)
+                                info, True, Ye, Re, pe, sa, sb, sm, EXPLICIT)
             if valid >= 0.0:  # the last valid state inside the step, as simulate finds it
                 ints[I_ROWS] = 0
                 record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, D, probe, rows, ints, info, Y, zn, Rn,
-                             pn, Ye, sa, sb, sm)
+                             pn, Ye, sa, sb, sm, EXPLICIT)
                 if ints[I_ROWS] == 1:
                     _take_row(row, False, acc)
                     t_reached, x_end, y_end = row[0], row[1], row[2]
