@@ -42,6 +42,9 @@ JIT = njit(cache=True, nogil=True, error_model="numpy", inline="always", fastmat
 # What runs once per run, per recorded row or per event is compiled once as a function of its
 # own instead (inlining it into every loop would multiply the compile time, not the speed).
 COLD = njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
+# The explicit step is compiled once per state layout and inlined by LLVM into its callers
+# (forceinline): a call per step would cost a fifth of an RK4 step.
+STEP = njit(cache=True, nogil=True, error_model="numpy", forceinline=True, fastmath={"contract"}, _nrt=False)
 
 
 @intrinsic
@@ -358,7 +361,7 @@ def _trial_step(n: int, mk: bool):
     its stage loops unroll as in hand-written C."""
     orientation = n > MOTION_SIZE
 
-    @COLD
+    @STEP
     def trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
         """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
 
@@ -1006,66 +1009,58 @@ def scratch(work, n):
             work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
 
 
-def _fixed_steps(mk: bool):
-    """The fixed-step loop for one orientation scheme: with mk and the state size n
-    constants of the compiled code, the stage loops unroll as in hand-written C."""
-    n = state_size(mk)
+@JIT
+def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
+            stepping):
+    """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
-    @JIT
-    def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
-                stepping):
-        """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
+    W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
+    evaluations on the dense output). ``stepping``: IMPLICIT for collocation_step's steps (the
+    Gauss methods, Munthe-Kaas only), EXPLICIT for trial_step's. One compiled loop serves every
+    fixed-step method and both orientation schemes (read from the state's length). On the first
+    call (no rows yet) the initial state is checked and recorded. The run stops early, with
+    ints[I_STATUS] set, where the state turns non-finite or a check fails; the last valid state
+    is then the last row.
+    """
+    n, mk = shape_of(z)
+    last = W.shape[0] - 1
+    d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
 
-        W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
-        evaluations on the dense output). ``stepping``: IMPLICIT for collocation_step's steps (the
-        Gauss methods, Munthe-Kaas only), EXPLICIT for trial_step's; one compiled loop serves both.
-        On the first call (no rows yet) the initial state is checked and recorded. The run stops early, with ints[I_STATUS] set, where the state
-        turns non-finite or a check fails; the last valid state is then the last row.
-        """
-        last = W.shape[0] - 1
-        d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
+    if ints[I_ROWS] == 0:
+        start(fn, d, p, z, R, K, probe, rows, ints, info)
+        if ints[I_STATUS] != RUNNING:
+            return
 
-        if ints[I_ROWS] == 0:
-            start(fn, d, p, z, R, K, probe, rows, ints, info)
-            if ints[I_STATUS] != RUNNING:
-                return
-
-        k0 = ints[I_STEPS]
-        k_stop = min(n_steps, k0 + max_steps)
-        for k in range(k0 + 1, k_stop + 1):
-            final = k == n_steps
-            t0 = (k - 1) * dt
-            h = t_end - t0 if final else dt
-            t = t_end if final else k * dt
-            bad = take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
-            if bad:
-                if bad == STEP_NOT_CONVERGED:
-                    _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
-                else:
-                    _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
-                          0.0 if mk else 1.0)
-                record_last(rows, ints, t0, z, R, probe, p)
-                return
-            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
-                                True, Ye, Re, pe, sa, sb, sm, stepping)
-            if valid >= 0.0:
-                record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
-                             Rn, pn, Ye, sa, sb, sm, stepping)
-                return
-            accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
-            ints[I_STEPS] = k
-            if k - ints[I_LAST_RECORDED] == every or final:  # (no division in the loop)
-                record(rows, ints[I_ROWS], t, z, R, probe, p)
-                ints[I_ROWS] += 1
-                ints[I_LAST_RECORDED] = k
-        if ints[I_STEPS] == n_steps:
-            ints[I_STATUS] = OK
-
-    return advance
-
-
-# advance(fn, W, P, p, ...) by scheme: ADVANCE[munthe_kaas]
-ADVANCE = {mk: _fixed_steps(mk) for mk in (True, False)}
+    k0 = ints[I_STEPS]
+    k_stop = min(n_steps, k0 + max_steps)
+    for k in range(k0 + 1, k_stop + 1):
+        final = k == n_steps
+        t0 = (k - 1) * dt
+        h = t_end - t0 if final else dt
+        t = t_end if final else k * dt
+        bad = take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+        if bad:
+            if bad == STEP_NOT_CONVERGED:
+                _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+            else:
+                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
+                      0.0 if mk else 1.0)
+            record_last(rows, ints, t0, z, R, probe, p)
+            return
+        valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                            True, Ye, Re, pe, sa, sb, sm, stepping)
+        if valid >= 0.0:
+            record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                         Rn, pn, Ye, sa, sb, sm, stepping)
+            return
+        accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
+        ints[I_STEPS] = k
+        if k - ints[I_LAST_RECORDED] == every or final:  # (no division in the loop)
+            record(rows, ints[I_ROWS], t, z, R, probe, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = k
+    if ints[I_STEPS] == n_steps:
+        ints[I_STATUS] = OK
 
 
 @JIT
