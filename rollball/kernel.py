@@ -33,17 +33,29 @@ warnings.filterwarnings("ignore", message=r"(\x1b\[[0-9;]*m)*First-class functio
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
 # numpy's error model: a division by zero gives inf/nan (caught by the checks) instead of
-# a branch and an exception on every division. The helpers are inlined into the loops that
-# call them (numba's own inlining), which keeps the step as cheap as hand-written C.
-# Nothing in it allocates, so it runs without numba's reference counting (_nrt=False): the
-# counting of arrays handed between the inlined helpers would cost as much as a stage.
+# a branch and an exception on every division. Nothing here allocates, so it runs without
+# numba's reference counting (_nrt=False): the counting of arrays handed between the helpers
+# would cost as much as a stage.
+#
+# What is inlined where, and why (the cold compile is the first Start's wait; the step's speed
+# is the ratio to hand-written C):
+# - JIT, numba's own inlining (the helper's code is copied into every caller before typing):
+#   the small per-stage and per-step helpers (dynamics, combine, rodrigues, the finiteness
+#   checks, step_events, accept, record, ...). Each copy costs compile time, so JIT helpers
+#   are kept small and called from few places.
+# - STEP, compiled once as a function of its own and inlined by LLVM (forceinline) into the
+#   loops that call it: the explicit step, one per state layout (``_trial_step``), which holds
+#   most of the code. Inlined by numba it was copied into every loop; called, a step cost a
+#   fifth more.
+# - COLD, compiled once and called: what runs once per run, per recorded row or per event
+#   (start, the event location, the last valid state), and the implicit step, whose stage
+#   iteration outweighs a call.
+# One signature each: a constant bool or int passed to a compiled function makes numba compile
+# it anew for that constant, so flags passed to COLD functions are floats (EXPLICIT/IMPLICIT,
+# the event kinds) or read from the arrays (shape_of).
 JIT = njit(cache=True, nogil=True, error_model="numpy", inline="always", fastmath={"contract"},
            _nrt=False)
-# What runs once per run, per recorded row or per event is compiled once as a function of its
-# own instead (inlining it into every loop would multiply the compile time, not the speed).
 COLD = njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
-# The explicit step is compiled once per state layout and inlined by LLVM into its callers
-# (forceinline): a call per step would cost a fifth of an RK4 step.
 STEP = njit(cache=True, nogil=True, error_model="numpy", forceinline=True, fastmath={"contract"}, _nrt=False)
 
 

@@ -1,5 +1,7 @@
 """Compiling ahead of need: every method is warmed, and a compile is announced once."""
 
+import json
+import os
 import subprocess
 import sys
 
@@ -66,3 +68,40 @@ def test_numbas_first_class_function_notice_is_kept_off_stderr_even_when_highlig
             "warnings.warn('First-class function type feature is experimental', N)\n")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0 and "First-class" not in result.stderr
+
+
+_COUNT_COMPILES = """
+import json, sys
+from numba.core import event
+compiled = {}
+class Count(event.Listener):
+    def on_start(self, ev):
+        func = ev.data["dispatcher"].py_func
+        if func.__module__.startswith("rollball."):
+            name = f"{func.__module__}.{func.__qualname__}"
+            compiled.setdefault(name, []).append(id(ev.data["dispatcher"]))
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Count())
+from rollball.warmup import warm_up
+warm_up()
+print(json.dumps(compiled))
+"""
+
+
+def test_a_cold_warm_up_compiles_each_kernel_function_once(tmp_path):
+    # The cold compile is the first Start's wait. Each compiled function once: a constant bool
+    # or int passed to one would compile it again for that constant, and a helper numba
+    # inlines is not compiled on its own at all. The explicit step is one function per state
+    # layout. (Empty caches: a process of its own, compiling everything, ~30 s.)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "ROLLBALL_CACHE_DIR": str(tmp_path / "ours")}
+    result = subprocess.run([sys.executable, "-c", _COUNT_COMPILES], capture_output=True, text=True, env=env,
+                            timeout=900)
+    assert result.returncode == 0, result.stderr
+    compiled = json.loads(result.stdout.strip().splitlines()[-1])
+    assert {name: len(ids) for name, ids in compiled.items() if len(ids) != len(set(ids))} == {}
+    steps = compiled.pop("rollball.kernel._trial_step.<locals>.trial_step")
+    assert len(steps) == len(set(steps)) == 3  # MK_SIZE, CLASSIC_SIZE, MOTION_SIZE
+    assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive",
+            "rollball.sweeps.kernel.run_batch"} <= set(compiled)
+    assert "rollball.kernel.dynamics" not in compiled and len(compiled) <= 20
