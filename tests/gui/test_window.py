@@ -53,7 +53,8 @@ def test_a_bad_formula_is_explained_and_the_last_landscape_stays(qtbot, window):
     ("ball.radius", "-0.1", "Radius: must be greater than 0"),
     ("ball.mass", "heavy", "Mass: not a number"),
     ("integrator.dt", "0", "Step size: must be greater than 0"),
-    ("view.max", "-5", "Min: must be less than view.max"),
+    ("view.max", "-5", "Max: Min (-4 m) must be less than Max"),
+    ("view.min", "5", "Min: must be less than Max"),
     ("view.step", "0.0001", "grid points per side"),
     ("start.x", "nan", "x: must be a finite number"),
 ])
