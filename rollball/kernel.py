@@ -68,8 +68,9 @@ PROBE_SIZE = 10
 I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE, I_HELD = range(10)
 # F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
 # F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
-F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(10)
-INTS_SIZE, INFO_SIZE = 10, 10
+# F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
+F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD = range(11)
+INTS_SIZE, INFO_SIZE = 10, 11
 
 # Status codes (see trajectory.Status).
 RUNNING, OK, DOES_NOT_FIT, NONFINITE = 0, 1, 2, 3
@@ -642,7 +643,7 @@ BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state ra
 # stages of a step across it are garbage and its ends may both fit. A step whose contact point
 # raced (moved more than twice what its ends' speeds explain), whose stages raced (a stage's
 # contact velocity off the ends' by more than STAGE_RACE times their size) or that nears the
-# edge (1 - r*kappa shrinking so fast that, as a square root, it reaches 0 within a step) is
+# edge (the trend of 1 - r*kappa at its or the last step's ends reaches 0 within a step) is
 # taken again in sub-steps that approach the edge geometrically (``fold_search``).
 STAGE_RACE = 3.0
 FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
@@ -828,9 +829,10 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     fit_end, sharp, jumpy, bend, chord2 = looks(p[0], z, probe, zn, pn)
     raced = segment and contact_raced(h, z, zn, K, 0, last)
     raced |= stages_raced(K, last)
-    # nearing: (1 - r*kappa)^2 falls linearly in time near the edge; it would reach 0 within a step
-    u0, u1 = 1.0 - probe[PROBE_FIT], 1.0 - pn[PROBE_FIT]
-    raced |= u1 < u0 and 2.0 * u1 * u1 < u0 * u0
+    # nearing: the edge is less than a step ahead of this step's end, or of the last step's
+    fold = fold_ahead(t, h, probe, pn)
+    raced |= fold < t + 2.0 * h or info[F_FOLD] < t + 2.0 * h  # (nan before the first step)
+    info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     if not (fit_end or sharp or jumpy or raced or force_end):
         return -1.0  # the usual step: nothing to look at closer
@@ -906,6 +908,18 @@ def contact_raced(h, z, zn, K, first, last):
     dx, dy = zn[0] - z[0], zn[1] - z[1]
     speed = max(K[first, 0] ** 2 + K[first, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
     return dx * dx + dy * dy > 4.0 * h * h * speed
+
+
+@JIT
+def fold_ahead(t, h, probe, pn):
+    """When the contact point, from t to t + h with probes probe and pn, reaches the edge of the
+    no-fit region if 1 - r*kappa goes on falling: the earlier of the straight extrapolations
+    of 1 - r*kappa and of its square (the square falls linearly near the edge); inf when it
+    does not fall."""
+    u0, u1 = 1.0 - probe[PROBE_FIT], 1.0 - pn[PROBE_FIT]
+    if not u1 < u0:
+        return math.inf
+    return t + h + h * min(u1 / (u0 - u1), u1 * u1 / (u0 * u0 - u1 * u1))
 
 
 @JIT
@@ -1153,6 +1167,13 @@ def _fixed_steps(mk: bool):
                 bad = collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
             else:
                 bad = trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
+                valid = fold_search(fn, d, p, W, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
+                                    pe, implicit)
+                if valid >= 0.0:
+                    record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                                 Rn, pn, Ye, sa, sb, sm, implicit)
+                    return
             if bad:
                 if bad == STEP_NOT_CONVERGED:
                     _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
