@@ -44,6 +44,10 @@ SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), 
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
 CSV_FILTER = "CSV files (*.csv);;All files (*)"
 LIFTOFF_COLOR, STOP_COLOR = "#ff8c00", "#c0392b"   # markers on the time slider
+START_WORDS = {READY: ("Start", "Start the run from t = 0"),                # what Start does, by state
+               PAUSED: ("Resume", "Resume playback from where it was paused"),
+               FINISHED: ("Restart", "Run again from t = 0"),
+               STOPPED: ("Restart", "Run again from t = 0")}
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -162,8 +166,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.redo_action.setStatusTip("Redo the change undone last")
         self.quit_action = self._action("&Quit", self.close, keys.Quit, "Quit RollBall")
         self.start_action = self._action("Start", self.start, "F5", "Start the run from t = 0")
-        self.pause_action = self._action("Pause", self.toggle_pause, "Space", "Pause or resume playback",
+        self.pause_action = self._action("Pause", self.toggle_pause, "Space", "Pause playback (again: resume)",
                                          name="pause")
+        self.pause_action.setCheckable(True)   # held down while paused; Start says Resume meanwhile
         self.step_action = self._action("Step", self.step_frame, "F6", "Advance one frame")
         self.stop_action = self._action("Stop", self.stop, "Shift+F5", "Stop the computation here")
         self.reset_action = self._action("Reset", self.reset, "Ctrl+R", "Back to t = 0")
@@ -306,7 +311,7 @@ class MainWindow(QtWidgets.QMainWindow):
         spacer.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Preferred)
         bar.addWidget(spacer)
         self.progress = QtWidgets.QProgressBar(objectName="progress", minimum=0, maximum=1000)
-        self.progress.setFixedWidth(220)
+        self.progress.setFixedWidth(150)   # the whole toolbar fits a 1024-pixel window
         self.progress.setFormat("%p %")
         bar.addWidget(self.progress)
 
@@ -831,11 +836,13 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _update_controls(self) -> None:
         state, computed = self.state, self.controller.computed
+        text, tip = START_WORDS.get(state, START_WORDS[READY])
         self.start_action.setEnabled(state != RUNNING)
-        self.start_action.setText("Resume" if state == PAUSED else ("Restart" if state in (FINISHED, STOPPED)
-                                                                   else "Start"))
+        self.start_action.setText(text)
+        self.start_action.setStatusTip(tip)
+        self.start_action.setToolTip(f"{tip} ({self.start_action.shortcut().toString()})")
         self.pause_action.setEnabled(state in (RUNNING, PAUSED))
-        self.pause_action.setText("Resume" if state == PAUSED else "Pause")
+        self.pause_action.setChecked(state == PAUSED)
         self.step_action.setEnabled(state in (READY, PAUSED, RUNNING))
         self.stop_action.setEnabled(state in (RUNNING, PAUSED))
         self.reset_action.setEnabled(state != READY)
