@@ -104,4 +104,5 @@ def test_a_cold_warm_up_compiles_each_kernel_function_once(tmp_path):
     assert len(steps) == len(set(steps)) == 3  # MK_SIZE, CLASSIC_SIZE, MOTION_SIZE
     assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive",
             "rollball.sweeps.kernel.run_batch"} <= set(compiled)
-    assert "rollball.kernel.dynamics" not in compiled and len(compiled) <= 20
+    # the per-stage helpers are inlined by numba, not compiled alone; few functions in all
+    assert "rollball.kernel.dynamics" not in compiled and len(compiled) <= 25
