@@ -647,7 +647,8 @@ BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state ra
 # taken again in sub-steps that approach the edge geometrically (``fold_search``).
 STAGE_RACE = 3.0
 FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
-FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is crossed)
+FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is
+JUMP_TOL = 1e-6        # crossed once the sub-steps are this short)
 FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
 FORCE_EVENT, FIT_EVENT = 0.0, 1.0
@@ -988,28 +989,30 @@ def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, in
     ts, grow, edge = 0.0, 0.25, -1.0
     for _ in range(FOLD_TRIES):
         reach = fold_time(fn, d, r, Zs, K, ps) / h
-        hs = min(grow, 0.5 * reach, 1.0 - ts)
-        if hs <= FOLD_TOL:  # at the edge
+        if 0.5 * reach <= FOLD_TOL:  # at the edge
             edge = min(ts + reach, 1.0)
             break
+        hs = min(grow, 0.5 * reach, 1.0 - ts)
         if implicit:
             bad = collocation_step(fn, d, p, W, mk, n, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         else:
             bad = trial_step_once(fn, d, p, W, mk, n, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
         good = bad == 0 and u1 >= 0.5 * u0 and not contact_raced(hs * h, Zs, zn, K, 0, last)
-        if not good and hs > FOLD_TOL:
-            grow = 0.25 * hs
-            continue
-        if not good and (u0 < FOLD_NEAR or (bad == 0 and u1 <= 0.0)):
-            edge = min(ts + hs, 1.0)
-            break
-        if bad != 0:  # not finite however short, away from the edge: the step stands
-            break
-        # (else a jump of the curvature, where the ball still fits, is crossed)
+        if not good:
+            near = u0 < FOLD_NEAR or (bad == 0 and u1 <= 0.0)
+            if hs > (FOLD_TOL if near else JUMP_TOL):
+                grow = 0.1 * hs
+                continue
+            if near:
+                edge = min(ts + hs, 1.0)
+                break
+            if bad != 0:  # not finite however short, away from the edge: the step stands
+                break
+            # (else a jump of the curvature, where the ball still fits, is crossed)
         # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
         ts += hs
-        grow = 2.0 * hs
+        grow = 8.0 * hs  # (near the edge ``fold_time`` bounds the sub-steps, not this)
         for q in range(n):
             Zs[q] = zn[q]
             K[0, q] = K[last, q]
