@@ -312,7 +312,7 @@ class MainWindow(QtWidgets.QMainWindow):
         spacer.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Preferred)
         bar.addWidget(spacer)
         self.progress = QtWidgets.QProgressBar(objectName="progress", minimum=0, maximum=1000)
-        self.progress.setFixedWidth(220)
+        self.progress.setFixedWidth(150)   # the whole toolbar fits a 1024-pixel window
         self.progress.setFormat("%p %")
         bar.addWidget(self.progress)
 
