@@ -9,17 +9,11 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from .plots import FLOOR, MAX_POINTS
+from .plots import FLOOR, DecadeAxis, cache_axes, fit_decades, thinned
 
 PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
           ("orthogonality", "‖RᵀR − I‖"))
 REFERENCE_PEN = pg.mkPen("#555", width=1, style=QtCore.Qt.PenStyle.DashLine)
-
-
-def _thinned(n: int) -> np.ndarray:
-    """Indices of at most about MAX_POINTS of n rows, the last one included."""
-    stride = max(1, -(-n // MAX_POINTS))
-    return np.r_[np.arange(0, n, stride), n - 1] if n else np.zeros(0, dtype=int)
 
 
 class ErrorPlots(QtWidgets.QWidget):
@@ -35,15 +29,17 @@ class ErrorPlots(QtWidgets.QWidget):
         self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
         self.plots: dict[str, pg.PlotItem] = {}
         for col, (key, title) in enumerate(PANELS):
-            plot = self.graphics.addPlot(row=1, col=col)
+            plot = self.graphics.addPlot(row=1, col=col, axisItems={"left": DecadeAxis()})
             plot.setTitle(title, size="9pt", color="#333")
             plot.setLabel("bottom", "t", units="s")
             plot.setLogMode(y=True)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)
+            cache_axes(plot)
             self.plots[key] = plot
         self.reference_line = pg.InfiniteLine(angle=0, pen=REFERENCE_PEN)
         self.reference_label = ""
+        self.estimate: float | None = None   # the reference's own error, once known
         layout.addWidget(self.graphics)
         self.curves: list[dict[str, pg.PlotDataItem]] = []
         self.runs = []
@@ -53,8 +49,7 @@ class ErrorPlots(QtWidgets.QWidget):
         for plot in self.plots.values():
             plot.clear()
             plot.setXRange(0.0, t_end, padding=0.02)
-            plot.setYRange(np.log10(FLOOR), 0.0, padding=0.0)
-            plot.enableAutoRange(axis="y")
+            fit_decades(plot, np.array([FLOOR, 1.0]))
         self.legend.clear()
         self.runs = list(runs)
         self.curves = []
@@ -65,6 +60,7 @@ class ErrorPlots(QtWidgets.QWidget):
             self.curves.append(curves)
         self.plots["contact"].addItem(self.reference_line)
         self.reference_line.setVisible(False)
+        self.estimate = None
         self.reference_label = "Reference: computing…"
         self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
 
@@ -75,16 +71,18 @@ class ErrorPlots(QtWidgets.QWidget):
         self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
         self.reference_line.setPos(np.log10(max(estimate, FLOOR)))
         self.reference_line.setVisible(True)
+        self.estimate = estimate
 
     def set_visible(self, index: int, visible: bool) -> None:
         for curve in self.curves[index].values():
             curve.setVisible(visible)
+        self._fit()
 
     def show_time(self, t: float) -> None:
         """Each run's errors up to time t (the true errors once the reference is known)."""
         for run, curves in zip(self.runs, self.curves):
             n = run.index_at(t) + 1 if len(run.buffer) else 0
-            picked = _thinned(n)
+            picked = thinned(n)
             times = run.buffer.t[picked]
             curves["orthogonality"].setData(times, np.maximum(run.buffer.orthogonality_error[picked], FLOOR))
             if run.errors is None:
@@ -93,3 +91,13 @@ class ErrorPlots(QtWidgets.QWidget):
                 values = run.errors[key][:n][picked] if n else np.zeros(0)
                 known = np.isfinite(values)
                 curves[key].setData(times[known], np.maximum(values[known], FLOOR))
+        self._fit()
+
+    def _fit(self) -> None:
+        """Each panel shows the whole decades of its visible curves (and the reference's floor)."""
+        for key, plot in self.plots.items():
+            shown = [curves[key].getOriginalDataset()[1] for curves in self.curves if curves[key].isVisible()]
+            shown = [values for values in shown if values is not None and len(values)]
+            if key == "contact" and self.estimate is not None:
+                shown.append(np.array([max(self.estimate, FLOOR)]))
+            fit_decades(plot, np.concatenate(shown) if shown else np.array([FLOOR, 1.0]))

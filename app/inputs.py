@@ -2,8 +2,9 @@
 
 The fields are declared once (``NUMBER_FIELDS``); the panel turns them into a ``Scene`` through
 the core's own validation, so the app accepts exactly what a scene file accepts. A field
-that does not make a valid scene is marked and explained in place, and the last valid scene
-stays current.
+that does not make a valid scene is marked, and explained right under it with the label the
+user sees; the last valid scene stays current. When values are refused only together (Max
+below Min), the field whose change broke the scene is the one marked.
 """
 
 from __future__ import annotations
@@ -65,12 +66,39 @@ def format_number(value: float) -> str:
     return repr(float(value))  # shortest text that reads back as the same number
 
 
+LABELS = {key: label for fields in NUMBER_FIELDS.values() for key, label, _, _ in fields} | {"landscape": "Formula"}
+UNITS = {key: unit for fields in NUMBER_FIELDS.values() for key, _, unit, _ in fields}
 CHECKING = "checking…"
 ERROR_STYLE, CHECKING_STYLE = "color: #c0392b;", "color: #555;"
+MARKED_STYLE = "QLineEdit { border: 2px solid #c0392b; background: #fdecea; }"
+MARKED_LABEL_STYLE = "color: #c0392b; font-weight: bold;"
+
+
+def labelled(text: str) -> str:
+    """A core message with its dotted scene keys ("view.max") as the labels the user sees."""
+    for key, label in LABELS.items():
+        if "." in key:
+            text = text.replace(key, label)
+    return text
+
+
+def _number(text: str) -> float:
+    """A field's number; the minus sign of typeset text (U+2212) is a minus too."""
+    return float(text.strip().replace("\u2212", "-"))
+
+
+def _message_label(name: str) -> QtWidgets.QLabel:
+    label = QtWidgets.QLabel(wordWrap=True, objectName=name)
+    label.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+    label.setStyleSheet(ERROR_STYLE)
+    label.hide()
+    return label
 
 
 class ScenePanel(QtWidgets.QWidget):
     """Fields for a scene. ``sceneChanged`` carries each new valid scene (after a typing pause).
+    A field that keeps the fields from making a scene is ``marked`` (its key), with
+    ``error_text`` shown right under it.
 
     A new formula is parsed, differentiated and compiled in a background thread (that can take
     seconds): meanwhile the field says "checking…", the window stays responsive and the last
@@ -88,11 +116,17 @@ class ScenePanel(QtWidgets.QWidget):
         self._checking: str | None = None          # the formula being checked in the background
         self._formulaChecked.connect(self._formula_checked)
         self.numbers: dict[str, QtWidgets.QLineEdit] = {}
+        self.messages: dict[str, QtWidgets.QLabel] = {}      # under each field, by key
+        self.row_labels: dict[str, QtWidgets.QLabel] = {}    # the form's label of each number field
+        self._edits: list[str] = []                          # keys typed into, the latest last
+        self.marked: str | None = None                       # the key of the field marked
         self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
         self._timer.timeout.connect(self.apply)
 
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(6, 6, 6, 6)
+        self.error = _message_label("fieldError")   # a refusal that names no field of the panel
+        layout.addWidget(self.error)
         layout.addWidget(self._landscape_group())
         for title, fields in NUMBER_FIELDS.items():
             group = QtWidgets.QGroupBox(title)
@@ -101,15 +135,11 @@ class ScenePanel(QtWidgets.QWidget):
             if title == "Integrator":
                 self._method_rows(form)
             for key, label, unit, tip in fields:
-                form.addRow(label, self._number_field(key, unit, tip))
+                self.row_labels[key] = QtWidgets.QLabel(label)
+                form.addRow(self.row_labels[key], self._number_field(key, unit, tip))
             if title == "Integrator":
                 form.addRow("Record", self._record_field())
             layout.addWidget(group)
-        self.error = QtWidgets.QLabel(wordWrap=True, objectName="fieldError")
-        self.error.setTextFormat(QtCore.Qt.TextFormat.PlainText)
-        self.error.setStyleSheet(ERROR_STYLE)
-        self.error.hide()
-        layout.addWidget(self.error)
         layout.addStretch(1)
 
     # -- building ---------------------------------------------------------------------
@@ -121,31 +151,34 @@ class ScenePanel(QtWidgets.QWidget):
         self.formula.setToolTip("x, y, pi, e, numbers, + - * / ^ and sin cos tan asin acos atan atan2 "
                                 "sinh cosh tanh exp log sqrt abs min max …")
         self.formula.setPlaceholderText("e.g. 0.5*sin(x)*cos(y)")
-        self.formula.textEdited.connect(self._edited)
-        self.formula_error = QtWidgets.QLabel(wordWrap=True, objectName="formulaError")
-        self.formula_error.setTextFormat(QtCore.Qt.TextFormat.PlainText)
-        self.formula_error.setStyleSheet(ERROR_STYLE)
-        self.formula_error.hide()
+        self.formula.textEdited.connect(lambda: self._edited("landscape"))
+        self.formula_error = self.messages["landscape"] = _message_label("formulaError")
         self.description = QtWidgets.QLineEdit(objectName="description")
         self.description.setPlaceholderText("Description (shown in the Examples menu)")
-        self.description.textEdited.connect(self._edited)
+        self.description.textEdited.connect(lambda: self._edited())
         box.addWidget(self.formula)
         box.addWidget(self.formula_error)
         box.addWidget(self.description)
         return group
 
     def _number_field(self, key: str, unit: str, tip: str) -> QtWidgets.QWidget:
+        """The field with its unit beside it and its message (hidden while it is valid) under it."""
         edit = QtWidgets.QLineEdit(objectName=key)
         edit.setToolTip(tip)
-        edit.textEdited.connect(self._edited)
+        edit.textEdited.connect(lambda: self._edited(key))
         self.numbers[key] = edit
         row = QtWidgets.QWidget()
-        h = QtWidgets.QHBoxLayout(row)
-        h.setContentsMargins(0, 0, 0, 0)
+        v = QtWidgets.QVBoxLayout(row)
+        v.setContentsMargins(0, 0, 0, 0)
+        v.setSpacing(1)
+        h = QtWidgets.QHBoxLayout()
         h.addWidget(edit, 1)
         units = QtWidgets.QLabel(unit)
         units.setMinimumWidth(42)
         h.addWidget(units)
+        v.addLayout(h)
+        self.messages[key] = _message_label(f"{key}.error")
+        v.addWidget(self.messages[key])
         return row
 
     def _method_rows(self, form: QtWidgets.QFormLayout) -> None:
@@ -166,7 +199,7 @@ class ScenePanel(QtWidgets.QWidget):
         self.munthe_kaas = QtWidgets.QCheckBox("Munthe-Kaas (R stays a rotation)", objectName="munthe_kaas")
         self.munthe_kaas.setToolTip("Lie-group integration of the orientation. Off: R is integrated as a plain "
                                     "matrix, as in 2011, and the drawn ball deforms.")
-        self.munthe_kaas.clicked.connect(self._edited)
+        self.munthe_kaas.clicked.connect(lambda: self._edited())
         form.addRow("", self.munthe_kaas)
 
     def _method_clicked(self, *_):
@@ -206,6 +239,7 @@ class ScenePanel(QtWidgets.QWidget):
         """Show a scene in the fields (no ``sceneChanged``)."""
         self._timer.stop()
         self._scene = scene
+        self._edits = []
         self._checked[scene.landscape] = None  # a Scene's formula is valid and derived
         data = scene.to_dict()
         self._filling = True
@@ -223,9 +257,12 @@ class ScenePanel(QtWidgets.QWidget):
             self._filling = False
         self._show_errors(None, None)
 
-    def _edited(self, *_):
-        if not self._filling:
-            self._timer.start()
+    def _edited(self, key: str | None = None) -> None:
+        if self._filling:
+            return
+        if key is not None:
+            self._edits = [k for k in self._edits if k != key] + [key]
+        self._timer.start()
 
     @property
     def checking(self) -> bool:
@@ -292,35 +329,77 @@ class ScenePanel(QtWidgets.QWidget):
         data["description"] = self.description.text()
         for key, edit in self.numbers.items():
             try:
-                value = float(edit.text().strip())
+                value = _number(edit.text())
             except ValueError:
-                return None, key, "not a number" if edit.text().strip() else "missing"
+                return None, key, f"{LABELS[key]}: " + ("not a number" if edit.text().strip() else "missing")
             _set(data, key, value)
         data["integrator"]["method"] = self.method()
         data["integrator"]["munthe_kaas"] = self.munthe_kaas.isChecked()
         try:
             scene = Scene.from_dict(data)
         except SceneError as error:
-            return None, error.key, error.reason
+            return None, *self._blame(data, error)
+        self._edits = []
         return scene, None, None
 
+    def _blame(self, data: dict, error: SceneError) -> tuple[str, str]:
+        """(key, message) of the field to mark for a refused scene: the field typed into last
+        whose new value alone breaks the last valid scene (Max = −5 under Min = −4 marks Max,
+        though the core names Min), else the field the core names."""
+        if self._scene is not None:
+            valid = self._scene.to_dict()
+            for key in reversed(self._edits):
+                if key not in self.numbers or _get(data, key) == _get(valid, key):
+                    continue
+                alone = self._scene.to_dict()
+                _set(alone, key, _get(data, key))
+                try:
+                    Scene.from_dict(alone)
+                except SceneError as refusal:
+                    error = refusal
+                    if refusal.key != key:   # refused together with a field left as it was
+                        return key, self._together(key, refusal, alone)
+                    break
+        return error.key, f"{LABELS.get(error.key, error.key)}: {labelled(error.reason)}"
+
+    @staticmethod
+    def _together(key: str, error: SceneError, data: dict) -> str:
+        """The message on ``key`` for a refusal the core gives to another field."""
+        other, reason = error.key, labelled(error.reason)
+        if reason.startswith("must") and other in UNITS:   # "Max: Min (−4 m) must be less than Max"
+            reason = f"{LABELS[other]} ({_get(data, other):g} {UNITS[other]}".rstrip() + f") {reason}"
+        return f"{LABELS[key]}: {reason}"
+
     def _show_errors(self, key: str | None, message: str | None) -> None:
-        for name, edit in self.numbers.items():
-            edit.setStyleSheet("border: 1px solid #c0392b;" if name == key else "")
-        self.formula.setStyleSheet("border: 1px solid #c0392b;" if key == "landscape" else "")
-        self.formula_error.setStyleSheet(ERROR_STYLE)
-        self.formula_error.setVisible(key == "landscape")
-        self.error.setVisible(key is not None and key != "landscape")
+        """Mark the field ``key`` (None: none) and show ``message`` right under it."""
+        self.marked = key
+        fields = {"landscape": self.formula, **self.numbers}
+        for name, edit in fields.items():
+            edit.setStyleSheet(MARKED_STYLE if name == key else "")
+        for name, label in self.row_labels.items():
+            label.setStyleSheet(MARKED_LABEL_STYLE if name == key else "")
+        shown_at = self.messages.get(key, self.error) if key is not None else None
+        for label in (*self.messages.values(), self.error):
+            label.setStyleSheet(ERROR_STYLE)
+            label.setVisible(label is shown_at)
         if key == "landscape":
-            self.formula_error.setText(f"{message} — the last valid landscape is still shown")
-        elif key is not None:
-            label = next((f[1] for fields in NUMBER_FIELDS.values() for f in fields if f[0] == key), key)
-            self.error.setText(f"{label}: {message}")
+            message = f"{message} — the last valid landscape is still shown"
+        if shown_at is not None:
+            shown_at.setText(message)
+            QtCore.QTimer.singleShot(0, self, lambda: self._scroll_to(shown_at))   # once laid out
+
+    def _scroll_to(self, label: QtWidgets.QLabel) -> None:
+        """The message in sight, when the panel is in a scroll area."""
+        parent = self.parentWidget()
+        while parent is not None and not isinstance(parent, QtWidgets.QScrollArea):
+            parent = parent.parentWidget()
+        if parent is not None:
+            parent.ensureWidgetVisible(label, 0, 8)
 
     @property
     def error_text(self) -> str:
         """The message currently shown (empty when the fields are valid)."""
-        for label in (self.formula_error, self.error):
+        for label in (*self.messages.values(), self.error):
             if not label.isHidden():
                 return label.text()
         return ""

@@ -1,6 +1,13 @@
-"""Small live plots against time: relative energy error and ‖RᵀR − I‖ (log scale), normal force."""
+"""Small live plots against time: relative energy error and ‖RᵀR − I‖ (log scale), normal force.
+
+Log scales show whole decades, labelled only at powers of ten (10⁻⁸) and only as many as fit the
+axis' length in its font: pyqtgraph's own log ticks label every 2·10ⁿ … 9·10ⁿ when the data span
+a decade or two, and those labels pile up on a short axis.
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pyqtgraph as pg
@@ -8,25 +15,118 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball.trajectory import NORMAL_FORCE
 
+from .help import TOPIC
+
 FLOOR = 1e-17       # log plots show exact zeros at this level
 MAX_POINTS = 2000   # per curve; longer runs are thinned for drawing
 TITLE_POINTS = 9    # plot titles at font scale 1
+LABEL_PITCH = 1.6   # labels on a log axis at least this many text heights apart
+DECADE_STEPS = (1, 2, 3, 5, 10, 20, 50)   # decades from one label to the next, smallest that fits
+MINOR_PIXELS = 40   # a decade at least this long shows minor ticks at 2·10ⁿ … 9·10ⁿ
+SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def power_of_ten(exponent: float) -> str:
+    """10⁻⁸ for -8."""
+    return "10" + str(round(exponent)).translate(SUPERSCRIPT)
+
+
+def decade_range(values: np.ndarray) -> tuple[int, int]:
+    """The whole decades (log10 units) holding the finite positive values, at least one decade."""
+    finite = values[np.isfinite(values) & (values > 0)]
+    if len(finite) == 0:
+        return round(math.log10(FLOOR)), 0
+    low = math.floor(math.log10(max(float(finite.min()), FLOOR)))
+    high = math.ceil(math.log10(float(finite.max())))
+    return low, max(high, low + 1)
+
+
+def fit_decades(plot, values: np.ndarray) -> None:
+    """Show the whole decades holding ``values`` on a log plot's y axis; the range is only set
+    when it changes, so an update that stays within it does not lay the axis out again."""
+    low, high = decade_range(values)
+    if list(plot.viewRange()[1]) != [low, high]:
+        plot.setYRange(low, high, padding=0.0)
+
+
+def cache_axes(plot) -> None:
+    """Keep each axis (ticks, labels, grid lines) as a picture in screen pixels, drawn again only
+    when the axis changes: a curve or cursor that moves then repaints without drawing text and
+    grid anew (with software rendering a plot update costs about a fifth of what it did)."""
+    for side in ("left", "bottom"):
+        plot.getAxis(side).setCacheMode(QtWidgets.QGraphicsItem.CacheMode.DeviceCoordinateCache)
+
+
+def thinned(n: int) -> np.ndarray:
+    """Indices of at most about MAX_POINTS of n rows, the last one included."""
+    stride = max(1, -(-n // MAX_POINTS))
+    return np.r_[np.arange(0, n, stride), n - 1] if n else np.zeros(0, dtype=int)
+
+
+class DecadeAxis(pg.AxisItem):
+    """A log axis with labels only at powers of ten, spaced to fit: every decade, or every 2nd,
+    3rd, 5th, … when the axis is short for its span; unlabelled ticks at the other decades and,
+    where a decade is long enough, at 2·10ⁿ … 9·10ⁿ. Labels at the two ends may reach half a text
+    height past the axis, so a range of whole decades is labelled at both ends."""
+
+    def __init__(self, orientation: str = "left", **options):
+        super().__init__(orientation, **options)
+        self.setStyle(maxTextLevel=0)
+
+    def text_height(self) -> float:
+        return QtGui.QFontMetricsF(self.style["tickFont"] or QtGui.QFont()).height()
+
+    def tickValues(self, minVal, maxVal, size):  # noqa: N802 (pyqtgraph's names)
+        low, high = sorted((minVal, maxVal))
+        if not (math.isfinite(low) and math.isfinite(high)) or high - low <= 0:
+            return []
+        exponents = range(math.ceil(low - 1e-9), math.floor(high + 1e-9) + 1)
+        per_decade = size / (high - low)                  # pixels
+        pitch = LABEL_PITCH * self.text_height()          # pixels from one label to the next, at least
+        step = next((s for s in DECADE_STEPS if s * per_decade >= pitch), math.ceil(pitch / per_decade))
+        labelled = [k for k in exponents if k % step == 0]
+        if len(labelled) < 2 and len(exponents) >= 2 and (exponents[-1] - exponents[0]) * per_decade >= pitch:
+            labelled = [exponents[0], exponents[-1]]      # a short axis: its two ends, as they fit
+        levels = [(float(step), [float(k) for k in labelled]),
+                  (1.0, [float(k) for k in exponents if k not in labelled])]
+        if per_decade >= MINOR_PIXELS:
+            mantissas = np.log10(np.arange(2, 10))
+            minor = [k + m for k in range(math.floor(low), math.ceil(high)) for m in mantissas]
+            levels.append((None, [v for v in minor if low <= v <= high]))
+        return levels
+
+    def tickStrings(self, values, scale, spacing):  # noqa: N802
+        return [power_of_ten(v) for v in values]
+
+    def boundingRect(self):  # noqa: N802
+        rect = super().boundingRect()
+        margin = self.text_height() / 2 + 1
+        return rect.adjusted(0, -margin, 0, margin) if self.orientation in ("left", "right") \
+            else rect.adjusted(-margin, 0, margin, 0)
 
 
 class LivePlots(QtWidgets.QWidget):
+    """Three plots in one graphics view: in a window composed with OpenGL, every widget that
+    repaints costs a share of the frame, so the plots are one widget, not three."""
+
     def __init__(self, parent=None):
         super().__init__(parent)
         layout = QtWidgets.QHBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
+        self.graphics = pg.GraphicsLayoutWidget()
+        self.graphics.setBackground("w")
+        self.graphics.scene().sigMouseMoved.connect(self._hovered)
+        layout.addWidget(self.graphics)
+        self.setMinimumSize(3 * 150, 150)   # three side by side in a 1024-pixel window
         self.curves = {}
-        self.plots = []
+        self.plots: list[pg.PlotItem] = []
         self.cursors = []
         for name, title, units, log in (
             ("energy", "|E − E₀| / E₀", "", True),
             ("orthogonality", "‖RᵀR − I‖", "", True),
             ("force", "Normal force F·N", "N", False),
         ):
-            plot = pg.PlotWidget(background="w")
+            plot = self.graphics.addPlot(row=0, col=len(self.plots), axisItems={"left": DecadeAxis()} if log else None)
             plot.setObjectName(f"plot.{name}")
             plot.setProperty("plotTitle", title)
             plot.setTitle(title, size=f"{TITLE_POINTS}pt", color="#333")
@@ -37,7 +137,7 @@ class LivePlots(QtWidgets.QWidget):
             plot.setLogMode(y=log)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)
-            plot.setMinimumSize(150, 150)   # three side by side in a 1024-pixel window
+            cache_axes(plot)
             if name == "force":
                 plot.addItem(pg.InfiniteLine(pos=0.0, angle=0, pen=pg.mkPen("#c0392b", style=QtCore.Qt.PenStyle.DashLine)))
             cursor = pg.InfiniteLine(pos=0.0, angle=90, pen=pg.mkPen("#555", width=1))
@@ -46,9 +146,14 @@ class LivePlots(QtWidgets.QWidget):
             self.cursors.append(cursor)
             self.plots.append(plot)
             self.curves[name] = plot.plot(pen=pg.mkPen("#1f5fa8", width=1), skipFiniteCheck=True)
-            layout.addWidget(plot)
         self.scale = 1.0
         self.show_run(None, 0)
+
+    def _hovered(self, pos: QtCore.QPointF) -> None:
+        """The view takes the help topic of the plot under the mouse, for F1 (``app.help``)."""
+        for plot in self.plots:
+            if plot.sceneBoundingRect().contains(pos):
+                self.graphics.setProperty(TOPIC, plot.property(TOPIC))
 
     def set_cursor(self, t: float | None) -> None:
         """A vertical line at the shown time t (None: none)."""
@@ -82,17 +187,14 @@ class LivePlots(QtWidgets.QWidget):
         if buffer is None or len(buffer) == 0:
             for curve in self.curves.values():
                 curve.setData([], [])
-            for plot in self.plots[:2]:  # empty: show the range errors live in (log10 units)
-                plot.setYRange(np.log10(FLOOR), 0.0, padding=0.0)
-            self.autoscaled = False
+            for plot in self.plots[:2]:  # empty: show the range errors live in
+                fit_decades(plot, np.array([FLOOR, 1.0]))
             return
-        if not self.autoscaled:  # data: the y axes follow it
-            for plot in self.plots:
-                plot.enableAutoRange(axis="y")
-            self.autoscaled = True
-        stride = max(1, -(-(index + 1) // MAX_POINTS))
-        picked = np.r_[np.arange(0, index + 1, stride), index]
+        picked = thinned(index + 1)
         t = buffer.t[picked]
-        self.curves["energy"].setData(t, np.maximum(np.abs(buffer.energy_error[picked]), FLOOR))
-        self.curves["orthogonality"].setData(t, np.maximum(buffer.orthogonality_error[picked], FLOOR))
+        for plot, name, values in ((self.plots[0], "energy", np.abs(buffer.energy_error[picked])),
+                                   (self.plots[1], "orthogonality", buffer.orthogonality_error[picked])):
+            values = np.maximum(values, FLOOR)
+            self.curves[name].setData(t, values)
+            fit_decades(plot, values)
         self.curves["force"].setData(t, buffer.rows[picked, NORMAL_FORCE])

@@ -64,11 +64,13 @@ PROBE_SIZE = 10
 
 # Integer run counters (``ints``) and float run facts (``info``).
 # I_DENSE: the step whose extra dense-output stages K holds (they are computed on demand).
-I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE = range(9)
+# I_HELD: 1 once a stopped step's last valid state is already in zn, Rn, pn (``fold_search``).
+I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE, I_HELD = range(10)
 # F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
 # F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
-F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H = range(10)
-INTS_SIZE, INFO_SIZE = 9, 10
+# F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
+F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD = range(11)
+INTS_SIZE, INFO_SIZE = 10, 11
 
 # Status codes (see trajectory.Status).
 RUNNING, OK, DOES_NOT_FIT, NONFINITE = 0, 1, 2, 3
@@ -638,7 +640,17 @@ BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by 
                        # to 1 + |f|), across 2^-48 of a step is a kink or a jump...
 BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
                        # 1e50 m samples a smooth landscape too coarsely to tell
-SEGMENT_SAMPLES = 8    # fit checks inside a fixed step whose contact point raced
+# The edge of the no-fit region is a fold of the centre surface: there the contact point's
+# speed grows without bound (as 1 / (1 - r*kappa)) and reaches the edge in finite time, so the
+# stages of a step across it are garbage and its ends may both fit. A step whose contact point
+# raced (moved more than twice what its ends' speeds explain), whose stages raced (a stage's
+# contact velocity off the ends' by more than STAGE_RACE times their size) or that nears the
+# edge (the trend of 1 - r*kappa at its or the last step's ends reaches 0 within a step) is
+# taken again in sub-steps that approach the edge geometrically (``fold_search``).
+STAGE_RACE = 3.0
+FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
+FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is crossed)
+FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
 FORCE_EVENT, FIT_EVENT = 0.0, 1.0
 KINK, JUMP = 0.0, 1.0
@@ -809,17 +821,20 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     output. Returns -1 while the run may go on; otherwise the run stops (status and reason
     set) and the result is theta, the last valid point of the step (0 <= theta < 1).
 
-    Stops: r*kappa reaches 1 (at the step's end, or, with ``segment``, at samples inside a
-    step whose contact point raced); a kink or cusp of a valley; a jump in height. A convex
+    Stops: r*kappa reaches 1 (at the step's end, or inside a step that raced or nears the
+    edge of the no-fit region, where ``fold_search`` takes it again in sub-steps; ``segment``:
+    fixed steps, whose contact point may race); a kink or cusp of a valley; a jump in height. A convex
     kink (a ridge) is a lift-off there, and F.N turning negative is one: the first is kept.
     A step bending more sharply than the curvatures at its ends explain is searched for a
     kink; one whose secant curvature says r*kappa >= 1 stops the run even where smooth.
     """
     fit_end, sharp, jumpy, bend, chord2 = looks(p[0], z, probe, zn, pn)
-    dx, dy = zn[0] - z[0], zn[1] - z[1]
-    speed = max(K[0, 0] ** 2 + K[0, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
-    raced = dx * dx + dy * dy > 4.0 * h * h * speed
-    raced &= segment
+    raced = segment and contact_raced(h, z, zn, K, 0, last)
+    raced |= stages_raced(K, last)
+    # nearing: the edge is less than a step ahead of this step's end, or of the last step's
+    fold = fold_ahead(t, h, probe, pn)
+    raced |= fold < t + 2.0 * h or info[F_FOLD] < t + 2.0 * h  # (nan before the first step)
+    info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     if not (fit_end or sharp or jumpy or raced or force_end):
         return -1.0  # the usual step: nothing to look at closer
@@ -836,27 +851,22 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
     dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
 
     stop, valid = 2.0, 0.0
-    # the ball no longer fits: where along the step r*kappa reached 1. A step that raced
-    # across a thin no-fit region is sampled along the straight line between its contact
-    # points (its dense output, pulled by the huge speeds near the edge, may bend around it).
-    lo, hi = 0.0, 1.0 if fit_end else -1.0
-    if raced and not fit_end:
-        interpolate(z, h, P, K, 1.0, Ye)  # the step's end contact point
-        zn0, zn1 = Ye[0], Ye[1]
-        for j in range(1, SEGMENT_SAMPLES + 1):
-            theta = j / (SEGMENT_SAMPLES + 1.0)
-            fn(z[0] + theta * (zn0 - z[0]), z[1] + theta * (zn1 - z[1]), data_pointer(d))
-            iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
-            if not r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] < 1.0:
-                hi = theta
-                break
-            lo = theta
-    if hi > 0.0:
-        a, b = lo, hi
-        gb = event_value(FIT_EVENT, fn, d, p, z, R, h, P, K, hi, Ye, Re, pe, sa)
+    # the ball no longer fits: where along the step r*kappa reached 1. The step is taken again
+    # in sub-steps (its own stages may have jumped the edge, its dense output bent around it)
+    if raced or fit_end:
+        edge = fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+                           implicit)
+        if edge >= 0.0:
+            stop, valid = edge, edge
+        else:  # no edge: the step stands, taken again (the search used its buffers)
+            retake(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints, implicit)
+            dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+    if fit_end and stop > 1.0:  # the sub-steps all fit: locate the edge on the step's dense output
+        gb = event_value(FIT_EVENT, fn, d, p, z, R, h, P, K, 1.0, Ye, Re, pe, sa)
+        a, b = 0.0, 1.0
         if gb >= 0.0:  # the dense output agrees: locate the edge on it
             a, b = locate(FIT_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
-                          probe[PROBE_FIT] - 1.0, hi, gb, ints)
+                          probe[PROBE_FIT] - 1.0, 1.0, gb, ints)
         surface_at(fn, d, r, z, h, P, K, b, Ye, sa)
         _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + b * h, sa[0], sa[1], max(sa[6], 1.0))
         stop, valid = b, a
@@ -873,11 +883,7 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                 approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
                          sm, info[F_LIFTOFF:F_LIFT_Y + 1], implicit)
                 # the run goes on with the whole step, taken again (the approach used its buffers)
-                if implicit:
-                    collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
-                else:
-                    trial_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
-                ints[I_DENSE] = -1
+                retake(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints, implicit)
                 dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
             _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
@@ -895,6 +901,146 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
         interpolate(z, h, P, K, b, Ye)
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, Ye[0], Ye[1], 0.0
     return valid if stop <= 1.0 else -1.0
+
+
+@JIT
+def contact_raced(h, z, zn, K, first, last):
+    """The contact point moved from z to zn by more than twice what its speeds at the step's
+    ends (K[first], K[last]) explain."""
+    dx, dy = zn[0] - z[0], zn[1] - z[1]
+    speed = max(K[first, 0] ** 2 + K[first, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
+    return dx * dx + dy * dy > 4.0 * h * h * speed
+
+
+@JIT
+def fold_ahead(t, h, probe, pn):
+    """When the contact point, from t to t + h with probes probe and pn, reaches the edge of the
+    no-fit region if 1 - r*kappa goes on falling: the earlier of the straight extrapolations
+    of 1 - r*kappa and of its square (the square falls linearly near the edge); inf when it
+    does not fall."""
+    u0, u1 = 1.0 - probe[PROBE_FIT], 1.0 - pn[PROBE_FIT]
+    if not u1 < u0:
+        return math.inf
+    return t + h + h * min(u1 / (u0 - u1), u1 * u1 / (u0 * u0 - u1 * u1))
+
+
+@JIT
+def stages_raced(K, last):
+    """A stage's contact velocity is off the step's start's by more than STAGE_RACE times the
+    larger of the ends' (the stages felt a fold of the centre surface the ends do not show)."""
+    speed = max(K[0, 0] ** 2 + K[0, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
+    spread = 0.0
+    for i in range(1, last):
+        spread = max(spread, (K[i, 0] - K[0, 0]) ** 2 + (K[i, 1] - K[0, 1]) ** 2)
+    return spread > STAGE_RACE * STAGE_RACE * speed
+
+
+@COLD
+def retake(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints, implicit):
+    """Take the step from z again (after a search inside it used the step's buffers)."""
+    if implicit:
+        collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    else:
+        trial_step_once(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    ints[I_DENSE] = -1
+
+
+@COLD
+def fold_time(fn, d, r, Zs, K, ps):
+    """How long until the contact point, at Zs with velocity K[0] and probe ps, reaches the edge
+    of the no-fit region, if 1 - r*kappa keeps falling as the square root it is near there:
+    (1 - r*kappa) / (2 d(r*kappa)/dt), the rate from a difference along the velocity; inf
+    when r*kappa is not growing."""
+    k1, k2 = K[0, 0], K[0, 1]
+    speed = math.sqrt(k1 * k1 + k2 * k2)
+    if not speed > 0.0:
+        return math.inf
+    delta = 1e-7 * (1.0 + max(abs(Zs[0]), abs(Zs[1])))
+    fn(Zs[0] + delta * k1 / speed, Zs[1] + delta * k2 / speed, data_pointer(d))
+    iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+    rate = (r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] - ps[PROBE_FIT]) / delta * speed
+    return (1.0 - ps[PROBE_FIT]) / (2.0 * rate) if rate > 0.0 else math.inf
+
+
+@COLD
+def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Zs, Rs, ps, implicit):
+    """Take the step from t to t + h again in sub-steps that each stay within half the time
+    ``fold_time`` gives to the edge of the no-fit region (a fold of the centre surface, which
+    the contact point reaches at unbounded speed) and are accepted only where they are
+    finite, their contact point does not race and they keep at least half of 1 - r*kappa.
+    Towards the edge the sub-steps shrink geometrically; the edge is where they fall below
+    FOLD_TOL of the step.
+
+    Returns -1 when the sub-steps reach the step's end (no edge; zn, Rn, pn, K spoilt: take
+    the step again). Otherwise the run stops (DOES_NOT_FIT at the edge, ints[I_HELD] set)
+    and the result is the fraction of the step of the last valid sub-state, which zn, Rn,
+    pn hold. Zs, Rs, ps: scratch for the sub-state.
+    """
+    n, mk = shape_of(z)
+    r = p[0]
+    spare = K.shape[0] - 1
+    for q in range(n):
+        Zs[q] = z[q]
+        K[spare, q] = K[0, q]
+    for a in range(3):
+        for c in range(3):
+            Rs[a, c] = R[a, c]
+    for q in range(PROBE_SIZE):
+        ps[q] = probe[q]
+    ts, grow, edge = 0.0, 0.25, -1.0
+    for _ in range(FOLD_TRIES):
+        reach = fold_time(fn, d, r, Zs, K, ps) / h
+        hs = min(grow, 0.5 * reach, 1.0 - ts)
+        if hs <= FOLD_TOL:  # at the edge
+            edge = min(ts + reach, 1.0)
+            break
+        if implicit:
+            bad = collocation_step(fn, d, p, W, mk, n, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
+        else:
+            bad = trial_step_once(fn, d, p, W, mk, n, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
+        u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
+        good = bad == 0 and u1 >= 0.5 * u0 and not contact_raced(hs * h, Zs, zn, K, 0, last)
+        if not good and hs > FOLD_TOL:
+            grow = 0.25 * hs
+            continue
+        if not good and (u0 < FOLD_NEAR or (bad == 0 and u1 <= 0.0)):
+            edge = min(ts + hs, 1.0)
+            break
+        if bad != 0:  # not finite however short, away from the edge: the step stands
+            break
+        # (else a jump of the curvature, where the ball still fits, is crossed)
+        # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
+        ts += hs
+        grow = 2.0 * hs
+        for q in range(n):
+            Zs[q] = zn[q]
+            K[0, q] = K[last, q]
+        if mk and n > MOTION_SIZE:
+            for q in range(3):
+                Zs[5 + q] = 0.0
+                K[0, 5 + q] = pn[PROBE_OMEGA + q]
+        for a in range(3):
+            for c in range(3):
+                Rs[a, c] = Rn[a, c]
+        for q in range(PROBE_SIZE):
+            ps[q] = pn[q]
+        if ts >= 1.0 - FOLD_TOL:
+            break
+    for q in range(n):
+        K[0, q] = K[spare, q]
+    ints[I_DENSE] = -1
+    if edge < 0.0:
+        return -1.0
+    for q in range(n):
+        zn[q] = Zs[q]
+    for a in range(3):
+        for c in range(3):
+            Rn[a, c] = Rs[a, c]
+    for q in range(PROBE_SIZE):
+        pn[q] = ps[q]
+    ints[I_HELD] = 1
+    _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + edge * h, Zs[0], Zs[1], max(ps[PROBE_FIT], 1.0))
+    return ts
 
 
 REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a stop
@@ -953,6 +1099,10 @@ def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, 
                  Ye, sa, sb, sm, implicit=False):
     """A run stopped inside a step: its last valid state, reached by ``approach`` (or else the
     step's start), is the last row; the stop's time and place are refined on the way."""
+    if ints[I_HELD] == 1:  # the last valid state is known already (``fold_search``)
+        record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
+        ints[I_ROWS] += 1
+        return
     reason = ints[I_REASON]
     kind = JUMP if reason == R_HEIGHT_JUMP else FIT_EVENT if reason == R_NO_FIT else KINK
     event = info[F_FAIL_T:F_FAIL_Y + 1]
@@ -1019,6 +1169,13 @@ def _fixed_steps(mk: bool):
                 bad = collocation_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
             else:
                 bad = trial_step(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
+                valid = fold_search(fn, d, p, W, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
+                                    pe, implicit)
+                if valid >= 0.0:
+                    record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                                 Rn, pn, Ye, sa, sb, sm, implicit)
+                    return
             if bad:
                 if bad == STEP_NOT_CONVERGED:
                     _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)

@@ -11,6 +11,7 @@ from rollball.reference import reference_solution
 from rollball.trajectory import CONTACT
 
 from .guitools import FASTEST, set_field
+from .test_plots import assert_legible
 
 SPECS = "euler/classic,rk4,dopri5"
 
@@ -53,12 +54,18 @@ def test_the_legend_names_every_run_and_the_reference(compared):
     assert 0 < estimate < 1e-9 and reference.t[-1] == 2.0
 
 
-def test_error_plots_hold_data_for_every_run_and_euler_is_worst(compared):
+def test_error_plots_hold_data_for_every_run_and_euler_is_worst(qtbot, compared):
     for k, curves in enumerate(compared.compare.error_plots.curves):
         for key, curve in curves.items():
             t, y = curve.xData, curve.yData
             assert len(t) > 50 and t[-1] == 2.0, (k, key)
             assert np.all(np.isfinite(y)) and np.all(y > 0)
+    for key, plot in compared.compare.error_plots.plots.items():   # whole decades, labelled legibly
+        low, high = plot.viewRange()[1]
+        data = np.concatenate([curves[key].yData for curves in compared.compare.error_plots.curves]
+                              + [[compared.controller.reference[1]]] * (key == "contact"))   # its floor too
+        assert low == np.floor(np.log10(data.min())) and high == np.ceil(np.log10(data.max()))
+        assert_legible(qtbot, plot.getAxis("left"))
     euler, rk4, _ = (run.errors["contact"] for run in compared.controller.runs)
     assert np.nanmax(euler) > 1e4 * np.nanmax(rk4)
     # the classic Euler run's error at the end, measured against scipy's DOP853 instead

@@ -53,7 +53,8 @@ def test_a_bad_formula_is_explained_and_the_last_landscape_stays(qtbot, window):
     ("ball.radius", "-0.1", "Radius: must be greater than 0"),
     ("ball.mass", "heavy", "Mass: not a number"),
     ("integrator.dt", "0", "Step size: must be greater than 0"),
-    ("view.max", "-5", "Min: must be less than view.max"),
+    ("view.max", "-5", "Max: Min (-4 m) must be less than Max"),
+    ("view.min", "5", "Min: must be less than Max"),
     ("view.step", "0.0001", "grid points per side"),
     ("start.x", "nan", "x: must be a finite number"),
 ])
@@ -95,6 +96,32 @@ def test_start_pause_step_stop_reset(qtbot, window):
     window.reset()
     assert window.controller.state == READY and window.controller.buffer is None and window.controller.play_time == 0.0
     assert window.readouts["t"].text() == "0 s"
+
+
+def test_start_and_pause_say_what_they_do_in_each_state(qtbot, window):
+    bar = window.findChild(QtWidgets.QToolBar, "runToolbar")
+
+    def shown():   # (text, enabled, held down) of the Start and Pause buttons on the toolbar
+        return [(b.text(), b.isEnabled(), b.isChecked())
+                for b in map(bar.widgetForAction, (window.start_action, window.pause_action))]
+
+    assert shown() == [("Start", True, False), ("Pause", False, False)]
+    window.start_action.trigger()
+    assert window.state == RUNNING and shown() == [("Start", False, False), ("Pause", True, False)]
+    window.pause_action.trigger()
+    assert window.state == PAUSED and shown() == [("Resume", True, False), ("Pause", True, True)]
+    window.pause_action.trigger()   # pressed again: playback resumes
+    assert window.state == RUNNING and shown()[1] == ("Pause", True, False)
+    window.activateWindow()
+    qtbot.waitActive(window)
+    window.view.setFocus()   # not a text field, where Space types a space
+    qtbot.waitUntil(window.view.hasFocus)
+    qtbot.keyClick(window, QtCore.Qt.Key.Key_Space)   # the shortcut pauses too
+    assert window.state == PAUSED and shown()[1] == ("Pause", True, True)
+    window.start_action.trigger()   # Resume
+    assert window.state == RUNNING and shown()[1] == ("Pause", True, False)
+    run_to_end(qtbot, window)
+    assert shown() == [("Restart", True, False), ("Pause", False, False)]
 
 
 def test_step_from_ready_starts_paused(qtbot, window):
