@@ -1,6 +1,7 @@
 """The numbers under the 3-D view: time, energy, its error, ‖RᵀR − I‖, normal force, speed.
 
-One row of values per run; with several runs each row starts with the run's colour and name.
+One row of values per run; with several runs each row starts with the run's colour and name,
+shortened with "…" when the window is narrow (whole in its tooltip).
 """
 
 from __future__ import annotations
@@ -12,17 +13,60 @@ from rollball.trajectory import ENERGY, NORMAL_FORCE, T, VELOCITY
 
 QUANTITIES = (("t", "Time t"), ("energy", "Energy E"), ("drift", "(E − E₀)/E₀"), ("orth", "‖RᵀR − I‖"),
               ("force", "Normal force F·N"), ("speed", "Speed |ċ|"))
+FORMATS = {"t": "{:.4f} s", "energy": "{:.8g} J", "drift": "{:.2e}", "orth": "{:.2e}", "force": "{:.5g} N",
+           "speed": "{:.5g} m/s"}
+WIDEST = {"t": 99.0, "energy": -0.12345678, "drift": -1e-10, "orth": 1e-10, "force": -0.12345,
+          "speed": 0.12345}   # a value as wide as each readout usually shows
+SHORTEST_NAME = 14   # characters of a run's name kept, at least, before the "…" ("● RK4 Munthe-K…")
 
 
-def _value_label(name: str) -> QtWidgets.QLabel:
-    label = QtWidgets.QLabel("—", objectName=name)
-    label.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-    label.setMinimumWidth(96)   # six of them fit a 1024-pixel window beside the scene fields
-    font = label.font()
-    font.setFamily("monospace")
-    font.setStyleHint(QtGui.QFont.StyleHint.Monospace)
-    label.setFont(font)
-    return label
+class _Value(QtWidgets.QLabel):
+    """A value in a monospace font, as wide as its ``WIDEST`` text at least: values that come
+    and go as the ball moves do not re-lay out the window."""
+
+    def __init__(self, name: str, key: str):
+        super().__init__("—", objectName=name)
+        self.widest = FORMATS[key].format(WIDEST[key])
+        self.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
+        font = self.font()
+        font.setFamily("monospace")
+        font.setStyleHint(QtGui.QFont.StyleHint.Monospace)
+        self.setFont(font)
+
+    def _at_least(self, size: QtCore.QSize) -> QtCore.QSize:
+        width = self.fontMetrics().horizontalAdvance(self.widest) + 2 * self.margin() + 4
+        return QtCore.QSize(max(size.width(), width), size.height())
+
+    def sizeHint(self) -> QtCore.QSize:
+        return self._at_least(super().sizeHint())
+
+    def minimumSizeHint(self) -> QtCore.QSize:
+        return self._at_least(QtCore.QSize(0, super().minimumSizeHint().height()))
+
+
+class _Name(QtWidgets.QLabel):
+    """A run's colour and name, shortened with "…" to the width it is given (whole in its tooltip)."""
+
+    def __init__(self, text: str, color: str, name: str):
+        super().__init__(text, objectName=name)
+        self.setToolTip(text)
+        self.setStyleSheet(f"color: {color}; font-weight: bold;")
+
+    def minimumSizeHint(self) -> QtCore.QSize:
+        hint = super().minimumSizeHint()
+        short = self.fontMetrics().horizontalAdvance(self.text()[:SHORTEST_NAME] + "…")
+        return QtCore.QSize(min(hint.width(), short), hint.height())
+
+    def paintEvent(self, event) -> None:
+        rect = self.contentsRect()
+        text = self.fontMetrics().elidedText(self.text(), QtCore.Qt.TextElideMode.ElideRight, rect.width())
+        painter = QtGui.QPainter(self)
+        self.style().drawItemText(painter, rect, int(self.alignment()), self.palette(), self.isEnabled(), text,
+                                  self.foregroundRole())
+
+    @property
+    def elided(self) -> bool:
+        return self.fontMetrics().horizontalAdvance(self.text()) > self.contentsRect().width()
 
 
 class Readouts(QtWidgets.QWidget):
@@ -54,14 +98,13 @@ class Readouts(QtWidgets.QWidget):
         for r, run in enumerate(runs):
             if run is not None:
                 name, color = run
-                tag = QtWidgets.QLabel(f"● {name}", objectName=f"readout.run{r}")
-                tag.setStyleSheet(f"color: {color}; font-weight: bold;")
+                tag = _Name(f"● {name}", color, f"readout.run{r}")
                 self.grid.addWidget(tag, r + 1, 0)
                 self.names.append(tag)
             if r < len(self.rows):
                 continue
             prefix = "readout." if r == 0 else f"readout{r}."
-            row = {key: _value_label(prefix + key) for key, _ in QUANTITIES}
+            row = {key: _Value(prefix + key, key) for key, _ in QUANTITIES}
             for i, label in enumerate(row.values()):
                 self.grid.addWidget(label, r + 1, i + 1)
             self.rows.append(row)
@@ -76,10 +119,9 @@ class Readouts(QtWidgets.QWidget):
 
     def show_row(self, r: int, buffer, i: int) -> None:
         """Run r's values at row i of its ``RunBuffer``."""
-        labels, row = self.rows[r], buffer.rows[i]
-        labels["t"].setText(f"{row[T]:.4f} s")
-        labels["energy"].setText(f"{row[ENERGY]:.8g} J")
-        labels["drift"].setText(f"{buffer.energy_error[i]:.2e}")
-        labels["orth"].setText(f"{buffer.orthogonality_error[i]:.2e}")
-        labels["force"].setText(f"{row[NORMAL_FORCE]:.5g} N")
-        labels["speed"].setText(f"{np.linalg.norm(row[VELOCITY]):.5g} m/s")
+        row = buffer.rows[i]
+        values = {"t": row[T], "energy": row[ENERGY], "drift": buffer.energy_error[i],
+                  "orth": buffer.orthogonality_error[i], "force": row[NORMAL_FORCE],
+                  "speed": np.linalg.norm(row[VELOCITY])}
+        for key, label in self.rows[r].items():
+            label.setText(FORMATS[key].format(values[key]))

@@ -20,12 +20,12 @@ def summary_values(run) -> list[str]:
     """A run's column: what is known so far (errors once the reference is)."""
     sim = run.simulation
     values = [str(sim.status) if sim.status else "running", "…", "…", "…", f"{sim.steps:,}",
-              f"{sim.evaluations:,}", f"{run.seconds:.3g}" if sim.done else "…"]
+              f"{sim.evaluations:,}", f"{run.seconds:.2g}" if sim.done else "…"]
     if run.errors is not None:
         contact, energy = run.errors["contact"], run.errors["energy"]
         known = np.isfinite(contact)
-        values[1:4] = ([f"{contact[known][-1]:.2e}", f"{contact[known].max():.2e}",
-                        f"{np.nanmax(energy):.2e}"] if known.any() else ["—"] * 3)
+        values[1:4] = ([f"{contact[known][-1]:.1e}", f"{contact[known].max():.1e}",   # 2 digits: narrow columns
+                        f"{np.nanmax(energy):.1e}"] if known.any() else ["—"] * 3)
     return values
 
 
@@ -38,6 +38,8 @@ class SummaryTable(QtWidgets.QTableWidget):
         self.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.horizontalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         self.verticalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
+        # the dock takes the width every run's column needs, where the window has it
+        self.setSizeAdjustPolicy(QtWidgets.QAbstractScrollArea.SizeAdjustPolicy.AdjustToContents)
         self.runs = []
 
     def set_runs(self, runs) -> None:
