@@ -10,6 +10,7 @@ setup script calls it). ``compile_notice`` tells a caller when numba starts comp
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import time
 from contextlib import contextmanager
@@ -100,7 +101,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {current}", file=sys.stderr, flush=True)
 
     def ready(method, mk):
-        print(f"ready {method} {'mk' if mk else 'classic'}", flush=True)
+        try:
+            print(f"ready {method} {'mk' if mk else 'classic'}", flush=True)
+        except BrokenPipeError:   # the app that asked is gone (closed or killed): stop, quietly
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # nothing left to flush
+            raise SystemExit(0) from None
 
     with compile_notice(say):
         warm_up(progress, first, ready)
