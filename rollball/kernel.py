@@ -579,7 +579,9 @@ def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
 
     Each estimate is h (E K)_q per state component q, weighed by scale_q = atol + rtol
     max(|z_q|, |zn_q|) for alpha (m) and v, and by atol + rtol for the rotation increment u:
-    its angle in radians is held to the tolerance as R's entries, of size 1, would be.
+    its angle in radians is held to the tolerance as R's entries, of size 1, would be. Where the
+    ball's rotation axis turns, u's local error is ~1e4 times alpha's (m) at any step size, so u
+    sets the step; weighing v or u otherwise changes the step count, not that ratio (README).
     kind 0: one estimate (E row 0), RMS over the state (Hairer's DOPRI5). kind 1: two
     estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
     as Hairer's DOP853 does.
