@@ -10,7 +10,6 @@ setup script calls it). ``compile_notice`` tells a caller when numba starts comp
 from __future__ import annotations
 
 import dataclasses
-import os
 import sys
 import time
 from contextlib import contextmanager
@@ -101,11 +100,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {current}", file=sys.stderr, flush=True)
 
     def ready(method, mk):
-        try:
-            print(f"ready {method} {'mk' if mk else 'classic'}", flush=True)
-        except BrokenPipeError:   # the app that asked is gone (closed or killed): stop, quietly
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # nothing left to flush
-            raise SystemExit(0) from None
+        print(f"ready {method} {'mk' if mk else 'classic'}", flush=True)
 
     with compile_notice(say):
         warm_up(progress, first, ready)
