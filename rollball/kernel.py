@@ -24,11 +24,15 @@ from numba import njit, types
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
 
+from . import compile_cache
+
 # The landscape callback is passed between compiled functions as a first-class function, which
 # numba announces on stderr at every compile (its text wrapped in terminal highlighting codes);
 # the command line and the setup script keep stderr to their own lines.
 warnings.filterwarnings("ignore", message=r"(\x1b\[[0-9;]*m)*First-class function type",
                         category=NumbaExperimentalFeatureWarning)
+
+compile_cache.install()   # before anything here is compiled or loaded from the disk cache
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
