@@ -6,8 +6,7 @@ No rows are kept: after every step the run updates running accumulators for its 
 so memory does not grow with the number of steps. Each step is the main kernel's own:
 its trial step, fit checks (the search for the edge of the no-fit region included), lift-off
 detection and row formulas (``rollball.kernel``), so a sweep's runs end exactly where
-``simulate`` ends the same scene. (numba's disk cache watches only this file: the compiled
-loop, which inlines the main kernel's step functions, is compiled anew when this file changes.)
+``simulate`` ends the same scene.
 """
 
 from __future__ import annotations
