@@ -9,7 +9,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from .plots import FLOOR, DecadeAxis, fit_decades, thinned
+from .plots import FLOOR, DecadeAxis, cache_axes, fit_decades, thinned
 
 PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
           ("orthogonality", "‖RᵀR − I‖"))
@@ -35,6 +35,7 @@ class ErrorPlots(QtWidgets.QWidget):
             plot.setLogMode(y=True)
             plot.showGrid(x=True, y=True, alpha=0.25)
             plot.setMouseEnabled(x=False, y=False)
+            cache_axes(plot)
             self.plots[key] = plot
         self.reference_line = pg.InfiniteLine(angle=0, pen=REFERENCE_PEN)
         self.reference_label = ""

@@ -70,8 +70,12 @@ LABELS = {key: label for fields in NUMBER_FIELDS.values() for key, label, _, _ i
 UNITS = {key: unit for fields in NUMBER_FIELDS.values() for key, _, unit, _ in fields}
 CHECKING = "checking…"
 ERROR_STYLE, CHECKING_STYLE = "color: #c0392b;", "color: #555;"
-MARKED_STYLE = "QLineEdit { border: 2px solid #c0392b; background: #fdecea; }"
-MARKED_LABEL_STYLE = "color: #c0392b; font-weight: bold;"
+# how a mark looks: the field, its label in the form, the message under it
+MARKS = {"error": ("QLineEdit { border: 2px solid #c0392b; background: #fdecea; }",
+                   "color: #c0392b; font-weight: bold;", ERROR_STYLE),
+         "notice": ("QLineEdit { border: 2px solid #d68910; }", "color: #b9770e; font-weight: bold;",
+                    "color: #b9770e;")}
+GRID_KEYS = ("start.x", "start.y", "view.min", "view.max")   # where the start is, against the grid
 
 
 def labelled(text: str) -> str:
@@ -119,7 +123,8 @@ class ScenePanel(QtWidgets.QWidget):
         self.messages: dict[str, QtWidgets.QLabel] = {}      # under each field, by key
         self.row_labels: dict[str, QtWidgets.QLabel] = {}    # the form's label of each number field
         self._edits: list[str] = []                          # keys typed into, the latest last
-        self.marked: str | None = None                       # the key of the field marked
+        self.marked: str | None = None                       # the key of the field refused
+        self.noticed: str | None = None                      # the key of a field with a notice
         self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
         self._timer.timeout.connect(self.apply)
 
@@ -255,7 +260,7 @@ class ScenePanel(QtWidgets.QWidget):
             self._method_state()
         finally:
             self._filling = False
-        self._show_errors(None, None)
+        self._show_notice(scene)
 
     def _edited(self, key: str | None = None) -> None:
         if self._filling:
@@ -278,7 +283,10 @@ class ScenePanel(QtWidgets.QWidget):
             self._check_formula(text)
             return None
         scene, key, message = self.read()
-        self._show_errors(key, message)
+        if scene is None:
+            self._show_errors(key, message)
+        else:
+            self._show_notice(scene)
         if scene is not None and scene != self._scene:
             self._scene = scene
             self.sceneChanged.emit(scene)
@@ -339,7 +347,6 @@ class ScenePanel(QtWidgets.QWidget):
             scene = Scene.from_dict(data)
         except SceneError as error:
             return None, *self._blame(data, error)
-        self._edits = []
         return scene, None, None
 
     def _blame(self, data: dict, error: SceneError) -> tuple[str, str]:
@@ -370,17 +377,32 @@ class ScenePanel(QtWidgets.QWidget):
             reason = f"{LABELS[other]} ({_get(data, other):g} {UNITS[other]}".rstrip() + f") {reason}"
         return f"{LABELS[key]}: {reason}"
 
-    def _show_errors(self, key: str | None, message: str | None) -> None:
-        """Mark the field ``key`` (None: none) and show ``message`` right under it."""
-        self.marked = key
+    def _show_notice(self, scene: Scene) -> None:
+        """A valid scene whose start is outside the drawn grid: say so at the field changed
+        last among those that place the start and the grid (the ball is drawn nowhere)."""
+        s, v = scene.start, scene.view
+        if v.min <= s.x <= v.max and v.min <= s.y <= v.max:
+            self._show_errors(None, None)
+            return
+        recent = [key for key in self._edits if key in GRID_KEYS]
+        key = recent[-1] if recent else "start.x" if not v.min <= s.x <= v.max else "start.y"
+        self._show_errors(key, f"{LABELS[key]}: the start ({s.x:g}, {s.y:g}) m is outside the drawn grid, "
+                               f"{v.min:g} to {v.max:g} m: the ball starts where no landscape is drawn",
+                          mark="notice")
+
+    def _show_errors(self, key: str | None, message: str | None, mark: str = "error") -> None:
+        """Mark the field ``key`` (None: none) as refused (or with a notice) and show
+        ``message`` right under it."""
+        self.marked, self.noticed = (key, None) if mark == "error" else (None, key)
+        field_style, label_style, message_style = MARKS[mark]
         fields = {"landscape": self.formula, **self.numbers}
         for name, edit in fields.items():
-            edit.setStyleSheet(MARKED_STYLE if name == key else "")
+            edit.setStyleSheet(field_style if name == key else "")
         for name, label in self.row_labels.items():
-            label.setStyleSheet(MARKED_LABEL_STYLE if name == key else "")
+            label.setStyleSheet(label_style if name == key else "")
         shown_at = self.messages.get(key, self.error) if key is not None else None
         for label in (*self.messages.values(), self.error):
-            label.setStyleSheet(ERROR_STYLE)
+            label.setStyleSheet(message_style)
             label.setVisible(label is shown_at)
         if key == "landscape":
             message = f"{message} — the last valid landscape is still shown"
@@ -397,8 +419,15 @@ class ScenePanel(QtWidgets.QWidget):
             parent.ensureWidgetVisible(label, 0, 8)
 
     @property
+    def notice_text(self) -> str:
+        """The notice on a field of a valid scene (empty when there is none)."""
+        return self.messages[self.noticed].text() if self.noticed else ""
+
+    @property
     def error_text(self) -> str:
         """The message currently shown (empty when the fields are valid)."""
+        if self.noticed:
+            return ""
         for label in (*self.messages.values(), self.error):
             if not label.isHidden():
                 return label.text()

@@ -423,6 +423,7 @@ class SceneView(gl.GLViewWidget):
         for color in (colors or [])[1:]:
             ball = gl.GLMeshItem(meshdata=run_ball_mesh(color), smooth=False, shader="shaded",
                                  glOptions="opaque")
+            ball.setTransform(self.ball.transform())   # at the start until its run's first row
             trail = gl.GLLinePlotItem(color=pg.mkColor(color).getRgbF(), width=3.0, antialias=True,
                                       mode="line_strip", glOptions="translucent")
             self.addItem(ball)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 from importlib import resources
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from .timeline import Marker, TimeSlider
 from .undo import SceneChange
 from .view3d import SceneView
 
-PLOT_EVERY = 12                # plots every 12th frame (~5 Hz): redrawing their axes is costly
+PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
@@ -58,13 +59,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.landscape = None
         self.shown_scene: Scene | None = None   # what the view and the run belong to
         self.drawn_index = -1                # the row the view shows
-        self.frames = 0
+        self.plotted_at = -math.inf          # when the plots were last brought up to the shown time
         self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
         self.ready_variants: set[RunSpec] = set()         # what it has compiled so far
         self.start_waiting = False                        # Start was pressed meanwhile
 
         self.controller = RunController(self)
-        self.controller.stateChanged.connect(lambda _state: self._update_controls())
+        self.controller.stateChanged.connect(self._state_changed)
         self.controller.frameReady.connect(self._draw)
         self.controller.event.connect(self._run_event)
         self.controller.finished.connect(self._finished)
@@ -820,19 +821,31 @@ class MainWindow(QtWidgets.QMainWindow):
                     self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
                 self.readouts.show_row(k, run.buffer, i)
         self.timeline.set_time(t)
-        self.frames += 1
-        if force or self.frames % PLOT_EVERY == 0:
-            if self.compare.active:
-                self.compare.error_plots.show_time(t)
-            else:
-                # while playing, the curves grow with the ball; otherwise they show all that is computed
-                buffer = runs[0].buffer
-                self.plots.show_run(buffer, indices[0] if self.state == RUNNING else len(buffer) - 1)
-                self.plots.set_cursor(buffer.t[indices[0]])
-            self.timeline.set_available(self.controller.end_time)
-            self._show_events()
+        if force or time.perf_counter() - self.plotted_at >= PLOT_INTERVAL:
+            self._plot()   # in the same frame as the 3-D view: the window is composed once
         shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
         self.progress.setValue(int(round(1000 * min(1.0, shown / self.controller.t_end))))
+
+    def _plot(self) -> None:
+        """Bring the plots, and the time line's computed span and events, up to the shown time."""
+        self.plotted_at = time.perf_counter()
+        runs, t = self.controller.runs, self.controller.play_time
+        if self.compare.active:
+            self.compare.error_plots.show_time(t)
+        elif runs and len(runs[0].buffer):
+            # while playing, the curves grow with the ball; otherwise they show all that is computed
+            buffer = runs[0].buffer
+            i = buffer.index_at(t)
+            self.plots.show_run(buffer, i if self.state == RUNNING else len(buffer) - 1)
+            self.plots.set_cursor(buffer.t[i])
+        if runs:
+            self.timeline.set_available(self.controller.end_time)
+            self._show_events()
+
+    def _state_changed(self, state: str) -> None:
+        self._update_controls()
+        if state == PAUSED:
+            self._plot()   # the plots catch up with the ball where it stopped
 
     def _update_controls(self) -> None:
         state, computed = self.state, self.controller.computed

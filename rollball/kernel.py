@@ -24,11 +24,15 @@ from numba import njit, types
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
 
+from . import compile_cache
+
 # The landscape callback is passed between compiled functions as a first-class function, which
 # numba announces on stderr at every compile (its text wrapped in terminal highlighting codes);
 # the command line and the setup script keep stderr to their own lines.
 warnings.filterwarnings("ignore", message=r"(\x1b\[[0-9;]*m)*First-class function type",
                         category=NumbaExperimentalFeatureWarning)
+
+compile_cache.install()   # before anything here is compiled or loaded from the disk cache
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
@@ -624,7 +628,9 @@ def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
 
     Each estimate is h (E K)_q per state component q, weighed by scale_q = atol + rtol
     max(|z_q|, |zn_q|) for alpha (m) and v, and by atol + rtol for the rotation increment u:
-    its angle in radians is held to the tolerance as R's entries, of size 1, would be.
+    its angle in radians is held to the tolerance as R's entries, of size 1, would be. Where the
+    ball's rotation axis turns, u's local error is ~1e4 times alpha's (m) at any step size, so u
+    sets the step; weighing v or u otherwise changes the step count, not that ratio (README).
     kind 0: one estimate (E row 0), RMS over the state (Hairer's DOPRI5). kind 1: two
     estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
     as Hairer's DOP853 does.
@@ -692,8 +698,10 @@ BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state ra
 # taken again in sub-steps that approach the edge geometrically (``fold_search``).
 STAGE_RACE = 3.0
 FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
-FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is crossed)
+FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is
+JUMP_TOL = 1e-6        # crossed, at once once a sub-step this short fits and does not race)
 FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
+LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's contact points
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
 FORCE_EVENT, FIT_EVENT = 0.0, 1.0
 KINK, JUMP = 0.0, 1.0
@@ -979,6 +987,19 @@ def stages_raced(K, last):
 
 
 @COLD
+def line_fits(fn, d, r, z0, z1):
+    """The ball fits at LINE_SAMPLES points evenly inside the straight line between the contact
+    points of z0 and z1 (a sub-step may jump a thin no-fit region with both ends fitting)."""
+    for j in range(1, LINE_SAMPLES + 1):
+        theta = j / (LINE_SAMPLES + 1.0)
+        fn(z0[0] + theta * (z1[0] - z0[0]), z0[1] + theta * (z1[1] - z0[1]), data_pointer(d))
+        iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+        if not r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] < 1.0:
+            return False
+    return True
+
+
+@COLD
 def retake(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """Take the step from z again (after a search inside it used the step's buffers)."""
     take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
@@ -1030,22 +1051,25 @@ def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, in
     ts, grow, edge = 0.0, 0.25, -1.0
     for _ in range(FOLD_TRIES):
         reach = fold_time(fn, d, r, Zs, K, ps) / h
-        hs = min(grow, 0.5 * reach, 1.0 - ts)
-        if hs <= FOLD_TOL:  # at the edge
+        if 0.5 * reach <= FOLD_TOL:  # at the edge
             edge = min(ts + reach, 1.0)
             break
+        hs = min(grow, 0.5 * reach, 1.0 - ts)
         bad = take_step(stepping, fn, d, p, W, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
-        good = bad == 0 and u1 >= 0.5 * u0 and not contact_raced(hs * h, Zs, zn, K, 0, last)
-        if not good and hs > FOLD_TOL:
-            grow = 0.25 * hs
-            continue
-        if not good and (u0 < FOLD_NEAR or (bad == 0 and u1 <= 0.0)):
-            edge = min(ts + hs, 1.0)
-            break
-        if bad != 0:  # not finite however short, away from the edge: the step stands
-            break
-        # (else a jump of the curvature, where the ball still fits, is crossed)
+        steady = bad == 0 and not (contact_raced(hs * h, Zs, zn, K, 0, last) or stages_raced(K, last))
+        across = bad == 0 and (u1 <= 0.0 or not line_fits(fn, d, r, Zs, zn))
+        if not (steady and u1 >= 0.5 * u0) or across:
+            near = u0 < FOLD_NEAR or across
+            if hs > (JUMP_TOL if steady and not near else FOLD_TOL):
+                grow = 0.1 * hs
+                continue
+            if near:
+                edge = min(ts + hs, 1.0)
+                break
+            if bad != 0:  # not finite however short, away from the edge: the step stands
+                break
+            # (else a jump of the curvature, where the ball still fits, is crossed)
         # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
         ts += hs
         grow = 2.0 * hs

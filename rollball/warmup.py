@@ -10,6 +10,7 @@ setup script calls it). ``compile_notice`` tells a caller when numba starts comp
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import time
 from contextlib import contextmanager
@@ -102,8 +103,12 @@ def main(argv: list[str] | None = None) -> int:
     def ready(method, mk):
         print(f"ready {method} {'mk' if mk else 'classic'}", flush=True)
 
-    with compile_notice(say):
-        warm_up(progress, first, ready)
+    try:
+        with compile_notice(say):
+            warm_up(progress, first, ready)
+    except BrokenPipeError:   # whoever reads the "ready" lines (the app) has gone: so do we
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # no complaint at exit
+        return 1
     print(f"rollball: the integrator is ready ({time.perf_counter() - started:.1f} s)", file=sys.stderr)
     return 0
 

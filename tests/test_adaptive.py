@@ -160,14 +160,43 @@ def test_recording_every_step_stops_at_the_row_limit(scene_factory, monkeypatch)
     assert np.shares_memory(traj.data, run.rows)  # handed over without a copy
 
 
-@pytest.mark.parametrize("name, ratio", [("bowl", 30), ("hills", 300)])
-def test_orientation_is_held_near_the_contact_point(name, ratio):
-    """The rotation increment is error-controlled in radians like the rest: R's error stays within
-    a bounded multiple of the contact point's (in m, r = 0.1). On the bowl ≈ 9x; on the hills ≈ 200x,
-    as for fixed steps (the spin about the normal turns R without moving the contact point); with
-    the truncated dexp^-1 it was ≈ 1000x."""
-    scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
-    traj = simulate(scene, method="dopri5", rtol=1e-8, atol=1e-11, t_end=3.0, record_dt=0.01)
+def rotation_angle(R, R_ref):
+    """The angle (rad) of the rotation R_ref^T R between two orientations, row by row (small angles)."""
+    Q = np.einsum("nji,njk->nik", R_ref, R)
+    return 0.5 * np.linalg.norm([Q[:, 2, 1] - Q[:, 1, 2], Q[:, 0, 2] - Q[:, 2, 0], Q[:, 1, 0] - Q[:, 0, 1]], axis=0)
+
+
+# The ball rolls in a vertical plane: its rotation axis keeps its direction.
+AXIS_KEPT = {"bowl": ("0.5*(x^2 + y^2)", 0.3), "trough": ("0.3*cos(2*x)", 0.2)}
+
+
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+@pytest.mark.parametrize("name", AXIS_KEPT)
+def test_orientation_error_is_on_the_contact_points_footing(name, method, scene_factory):
+    """Rolling turns the ball by (distance rolled) / r, so an error in the contact point (m) is one of
+    1/r = 10 in R's angle (rad) at r = 0.1. Where the rotation axis keeps its direction, R's error stays
+    within 30x the contact point's (measured 1.3-10.6 for both pairs at rtol 1e-6 ... 1e-10)."""
+    formula, x = AXIS_KEPT[name]
+    scene = scene_factory(formula, x=x, method=method, duration=2.0)
+    traj = simulate(scene, rtol=1e-8, atol=1e-11, record_dt=0.02)
     alpha, _, R = reference_solution(scene, traj.t)
-    contact, orientation = np.abs(traj.contact - alpha).max(), np.abs(traj.R - R).max()
-    assert orientation < ratio * contact and contact < 1e-8
+    contact, orientation = np.linalg.norm(traj.contact - alpha, axis=1).max(), rotation_angle(traj.R, R).max()
+    assert 1e-12 < contact < 1e-7
+    assert orientation < 30 * contact
+
+
+@pytest.mark.parametrize("name", ["hills", "saddle"])
+def test_orientation_is_held_to_the_tolerance_where_the_axis_turns(name):
+    """Where the rotation axis turns, the error of the rotation increment u (rad) sets the step, and R's
+    angle error stays within a few rtol: dopri5 1.5-5 rtol on its rows, dop853 1-12 rtol at its steps
+    (its 7th-order rows are looser: 3-180 rtol). The contact point then comes out 100-10 000 times more
+    accurate than R in these units: the ball spins 10-30 times a second about an axis that turns, which
+    makes u's local error some 10^4 times the contact point's at any step size, for either pair (and for
+    fixed steps): no weighing of the error norm changes that ratio, only the step count."""
+    scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
+    rtol = 1e-8
+    for method, record_dt in (("dopri5", 0.02), ("dop853", None)):
+        traj = simulate(scene, method=method, rtol=rtol, atol=rtol * 1e-3, t_end=2.0, record_dt=record_dt)
+        alpha, _, R = reference_solution(scene, traj.t)
+        assert np.linalg.norm(traj.contact - alpha, axis=1).max() < rtol
+        assert rotation_angle(traj.R, R).max() < 10 * rtol, method

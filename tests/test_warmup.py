@@ -70,6 +70,15 @@ def test_numbas_first_class_function_notice_is_kept_off_stderr_even_when_highlig
     assert result.returncode == 0 and "First-class" not in result.stderr
 
 
+def test_the_warm_up_stops_quietly_when_its_reader_has_gone():
+    # the app reads the "ready" lines; closed while the warm-up still runs, the pipe breaks
+    process = subprocess.Popen([sys.executable, "-m", "rollball.warmup"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    process.stdout.close()
+    _, err = process.communicate(timeout=600)
+    assert process.returncode == 1 and "Traceback" not in err and "BrokenPipe" not in err
+
+
 _COUNT_COMPILES = """
 import json, sys
 from numba.core import event

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from PySide6 import QtGui
 
 from app.compare_runs import COLORS, CompareRun, reference_spacing
 from app.controller import FINISHED
@@ -129,3 +130,15 @@ def test_the_command_line_refuses_a_bad_spec(capsys):
     assert exit.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("rollball-app: error: --compare: unknown run 'gauss9'") and err.count("\n") == 1
+
+
+def test_every_ball_stands_at_the_start_until_its_run_has_rows(qtbot, window):
+    window.compare.enter([CompareRun.of(spec, window.scene) for spec in parse_runs(SPECS)])
+    window.start()   # the runs' first rows arrive through the event loop, not yet
+    view = window.view
+    first = view.balls[0].transform()
+    assert len(view.balls) == 3 and all(ball.transform() == first for ball in view.balls)
+    center = first.map(QtGui.QVector3D(0, 0, 0))
+    assert np.allclose([center.x(), center.y(), center.z()], view.centers[0])
+    assert first.map(QtGui.QVector3D(1, 0, 0)).distanceToPoint(center) == pytest.approx(window.scene.ball.radius)
+    window.reset()

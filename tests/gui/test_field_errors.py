@@ -65,3 +65,17 @@ def test_the_field_whose_change_broke_the_scene_is_marked(qtbot, window, edits, 
         set_field(qtbot, window, key, text)
     assert window.panel.marked == marked
     assert window.panel.messages[marked].text().startswith(words)
+
+
+def test_a_start_outside_the_drawn_grid_is_noticed_at_the_field_just_changed(qtbot, window):
+    panel = window.panel
+    set_field(qtbot, window, "start.x", "10")
+    assert window.scene.start.x == 10   # a valid scene: it runs, but the ball is drawn nowhere
+    assert panel.noticed == "start.x" and panel.marked is None and panel.error_text == ""
+    assert panel.notice_text.startswith("x: the start (10, -0.2) m is outside the drawn grid, -4 to 4 m")
+    set_field(qtbot, window, "view.max", "12")   # the grid now holds it
+    assert panel.noticed is None and panel.notice_text == "" and panel.messages["start.x"].isHidden()
+    set_field(qtbot, window, "view.max", "5")
+    assert panel.noticed == "view.max" and panel.notice_text.startswith("Max: the start (10, -0.2) m")
+    set_field(qtbot, window, "view.max", "-5")   # refused: the refusal replaces the notice
+    assert panel.marked == "view.max" and panel.noticed is None and panel.error_text.startswith("Max:")
