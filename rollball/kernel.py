@@ -653,8 +653,10 @@ BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state ra
 # taken again in sub-steps that approach the edge geometrically (``fold_search``).
 STAGE_RACE = 3.0
 FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
-FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is crossed)
+FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is
+JUMP_TOL = 1e-6        # crossed, at once once a sub-step this short fits and does not race)
 FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
+LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's contact points
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
 FORCE_EVENT, FIT_EVENT = 0.0, 1.0
 KINK, JUMP = 0.0, 1.0
@@ -940,6 +942,19 @@ def stages_raced(K, last):
 
 
 @COLD
+def line_fits(fn, d, r, z0, z1):
+    """The ball fits at LINE_SAMPLES points evenly inside the straight line between the contact
+    points of z0 and z1 (a sub-step may jump a thin no-fit region with both ends fitting)."""
+    for j in range(1, LINE_SAMPLES + 1):
+        theta = j / (LINE_SAMPLES + 1.0)
+        fn(z0[0] + theta * (z1[0] - z0[0]), z0[1] + theta * (z1[1] - z0[1]), data_pointer(d))
+        iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+        if not r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] < 1.0:
+            return False
+    return True
+
+
+@COLD
 def retake(fn, d, p, W, mk, n, h, z, R, K, last, Y, zn, Rn, pn, ints, implicit):
     """Take the step from z again (after a search inside it used the step's buffers)."""
     if implicit:
@@ -994,25 +1009,28 @@ def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, in
     ts, grow, edge = 0.0, 0.25, -1.0
     for _ in range(FOLD_TRIES):
         reach = fold_time(fn, d, r, Zs, K, ps) / h
-        hs = min(grow, 0.5 * reach, 1.0 - ts)
-        if hs <= FOLD_TOL:  # at the edge
+        if 0.5 * reach <= FOLD_TOL:  # at the edge
             edge = min(ts + reach, 1.0)
             break
+        hs = min(grow, 0.5 * reach, 1.0 - ts)
         if implicit:
             bad = collocation_step(fn, d, p, W, mk, n, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         else:
             bad = trial_step_once(fn, d, p, W, mk, n, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
-        good = bad == 0 and u1 >= 0.5 * u0 and not contact_raced(hs * h, Zs, zn, K, 0, last)
-        if not good and hs > FOLD_TOL:
-            grow = 0.25 * hs
-            continue
-        if not good and (u0 < FOLD_NEAR or (bad == 0 and u1 <= 0.0)):
-            edge = min(ts + hs, 1.0)
-            break
-        if bad != 0:  # not finite however short, away from the edge: the step stands
-            break
-        # (else a jump of the curvature, where the ball still fits, is crossed)
+        steady = bad == 0 and not (contact_raced(hs * h, Zs, zn, K, 0, last) or stages_raced(K, last))
+        across = bad == 0 and (u1 <= 0.0 or not line_fits(fn, d, r, Zs, zn))
+        if not (steady and u1 >= 0.5 * u0) or across:
+            near = u0 < FOLD_NEAR or across
+            if hs > (JUMP_TOL if steady and not near else FOLD_TOL):
+                grow = 0.1 * hs
+                continue
+            if near:
+                edge = min(ts + hs, 1.0)
+                break
+            if bad != 0:  # not finite however short, away from the edge: the step stands
+                break
+            # (else a jump of the curvature, where the ball still fits, is crossed)
         # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
         ts += hs
         grow = 2.0 * hs

@@ -17,7 +17,8 @@ from rollball import Reason, Scene, Status, simulate, sweep
 from rollball.examples import EXAMPLES_DIR
 from rollball.geometry import fit_ratio
 from rollball.landscape import landscape_for
-from rollball.reference import reference_rhs
+from rollball.reference import reference_rhs, reference_solution
+from rollball.scene import Ball, Integrator, Start
 from rollball.simulation import initial_state
 from rollball.sweeps.grid import with_values
 
@@ -95,3 +96,31 @@ def test_sweep_runs_stop_where_simulate_stops_them_and_small_balls_roll_on():
         else:
             assert traj.status is Status.DOES_NOT_FIT
             assert math.isclose(valley_fit(radius, table["y_end"][i]), 1.0, abs_tol=1e-5)
+
+
+def make(landscape, radius, method):
+    return Scene(landscape=landscape, ball=Ball(radius, 1.0), start=Start(0.0, -0.5, 0.0, 2.0, 0.0),
+                 integrator=Integrator(method, True, 1e-3), duration=1.0)
+
+
+@pytest.mark.parametrize("method, tolerance", [("rk4", 5e-3), ("dopri5", 1e-5)])
+def test_a_jump_of_the_curvature_where_the_ball_fits_is_crossed(method, tolerance):
+    """Flat for y < 0, 4 y² beyond: r·κ jumps from 0 to 0.8 at y = 0, where the sub-step search
+    starts. It crosses the jump and the ball rolls on, up the valley side and back, as the
+    reference does (to the method's accuracy across a jump of the curvature: rk4 3.3 mm)."""
+    scene = make("4*max(y,0)^2", 0.1, method)
+    traj = simulate(scene)
+    assert traj.status is Status.OK and traj.t[-1] == 1.0
+    alpha, _, _ = reference_solution(scene, [0.0, 1.0], rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(traj.contact[-1], alpha[-1], atol=tolerance)
+
+
+@pytest.mark.parametrize("method, tolerance", [("euler", 1e-12), ("dopri5", 5e-8)])
+def test_a_jump_of_the_curvature_into_the_no_fit_region_stops_the_ball_there(method, tolerance):
+    """Flat for y < 0, 8 y² beyond (r·κ = 2.4 from y = 0 on): the ball rolls straight at 2 m/s
+    and stops at y = 0, t = 0.25 s exactly. (No fold leads up to this edge: rk4's inner stages
+    can step over it unseen for a step or two.)"""
+    traj = simulate(make("8*max(y,0)^2", 0.15, method))
+    assert traj.status is Status.DOES_NOT_FIT and traj.failure.reason is Reason.NO_FIT
+    assert traj.failure.time == pytest.approx(0.25, abs=tolerance)
+    assert traj.contact[-1, 1] == pytest.approx(0.0, abs=1e-9) and traj.contact[-1, 1] <= 0.0

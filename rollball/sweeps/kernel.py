@@ -4,8 +4,9 @@ A run of a sweep needs only the motion (contact point and angular momentum): the
 ``MOTION_SIZE`` entries, with no Munthe-Kaas increment, no Rodrigues update and no matrix R.
 No rows are kept: after every step the run updates running accumulators for its outcomes,
 so memory does not grow with the number of steps. Each step is the main kernel's own:
-its trial step, fit checks, lift-off detection and row formulas (``rollball.kernel``), so a
-sweep's runs end exactly where ``simulate`` ends the same scene.
+its trial step, fit checks (the search for the edge of the no-fit region included), lift-off
+detection and row formulas (``rollball.kernel``), so a sweep's runs end exactly where
+``simulate`` ends the same scene.
 """
 
 from __future__ import annotations
