@@ -14,6 +14,7 @@ from .plots import FLOOR, DecadeAxis, cache_axes, fit_decades, thinned
 PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
           ("orthogonality", "‖RᵀR − I‖"))
 REFERENCE_PEN = pg.mkPen("#555", width=1, style=QtCore.Qt.PenStyle.DashLine)
+LEGEND_COLUMNS = 3   # at most: fewer where the names do not fit side by side (1024-pixel window)
 
 
 class ErrorPlots(QtWidgets.QWidget):
@@ -24,7 +25,7 @@ class ErrorPlots(QtWidgets.QWidget):
         self.graphics = pg.GraphicsLayoutWidget()
         self.graphics.setBackground("w")
         self.graphics.setMinimumHeight(190)
-        self.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#333", colCount=3, horSpacing=12,
+        self.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#333", colCount=LEGEND_COLUMNS, horSpacing=12,
                                     verSpacing=-6)
         self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
         self.plots: dict[str, pg.PlotItem] = {}
@@ -63,6 +64,7 @@ class ErrorPlots(QtWidgets.QWidget):
         self.estimate = None
         self.reference_label = "Reference: computing…"
         self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
+        self._fit_legend()
 
     def set_reference(self, method: str, estimate: float) -> None:
         """Name the reference and its own error; its error is drawn as a floor in the contact plot."""
@@ -72,6 +74,21 @@ class ErrorPlots(QtWidgets.QWidget):
         self.reference_line.setPos(np.log10(max(estimate, FLOOR)))
         self.reference_line.setVisible(True)
         self.estimate = estimate
+        self._fit_legend()
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        self._fit_legend()
+
+    def _fit_legend(self) -> None:
+        """As many legend columns as the width holds: a legend wider than the view would push
+        the last panel out of sight."""
+        for columns in range(LEGEND_COLUMNS, 0, -1):
+            self.legend.setColumnCount(columns)
+            needed = self.graphics.ci.layout.effectiveSizeHint(QtCore.Qt.SizeHint.MinimumSize).width()
+            if needed <= self.graphics.width():
+                break
+        self.graphics.ci.setGeometry(self.graphics.range)   # the view's width again, not the old legend's
 
     def set_visible(self, index: int, visible: bool) -> None:
         for curve in self.curves[index].values():

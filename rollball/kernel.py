@@ -1073,18 +1073,7 @@ def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, in
         # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
         ts += hs
         grow = 2.0 * hs
-        for q in range(n):
-            Zs[q] = zn[q]
-            K[0, q] = K[last, q]
-        if mk and n > MOTION_SIZE:
-            for q in range(3):
-                Zs[5 + q] = 0.0
-                K[0, 5 + q] = pn[PROBE_OMEGA + q]
-        for a in range(3):
-            for c in range(3):
-                Rs[a, c] = Rn[a, c]
-        for q in range(PROBE_SIZE):
-            ps[q] = pn[q]
+        accept(mk, n, Zs, Rs, K, last, ps, zn, Rn, pn)
         if ts >= 1.0 - FOLD_TOL:
             break
     for q in range(n):
