@@ -43,6 +43,7 @@ class Run:
         self.buffer = RunBuffer(landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
                                 capacity=simulation.row_capacity)
         self.liftoff_announced = False
+        self.ended = False                 # the run's computation has ended and all its rows are here
 
     def index_at(self, t: float) -> int:
         return self.buffer.index_at(t)
@@ -102,7 +103,7 @@ class RunController(QtCore.QObject):
             return 0.0
         if self.computed:
             return max(ends)
-        going = [run.buffer.end_time for run in self.runs if not run.simulation.done]
+        going = [run.buffer.end_time for run in self.runs if not run.ended]
         return min(going) if going else max(ends)
 
     # -- commands --------------------------------------------------------------------
@@ -120,7 +121,8 @@ class RunController(QtCore.QObject):
                                        [run.buffer.derive for run in self.runs], self, warm_ups)
         runs = self.runs
         # a chunk still queued when its thread was stopped belongs to runs since dropped
-        self.thread.rowsReady.connect(lambda index, block: runs is self.runs and self._rows_ready(index, block),
+        self.thread.rowsReady.connect(lambda index, block, ended: runs is self.runs
+                                      and self._rows_ready(index, block, ended),
                                       QtCore.Qt.ConnectionType.QueuedConnection)
         self.thread.failed.connect(self.failed)
         self.thread.compiling.connect(lambda: runs is self.runs and self._set_compiling(True),
@@ -196,8 +198,11 @@ class RunController(QtCore.QObject):
             self.thread.deleteLater()
             self.thread = None
 
-    def _rows_ready(self, index: int, block) -> None:
-        self.runs[index].buffer.append(block)
+    def _rows_ready(self, index: int, block, ended: bool) -> None:
+        run = self.runs[index]
+        if block is not None:
+            run.buffer.append(block)
+        run.ended = ended
         self._set_compiling(False)
 
     def _set_compiling(self, on: bool) -> None:

@@ -21,14 +21,15 @@ MIN_STEPS, MAX_STEPS = 256, 1 << 20
 class SimulationThread(QtCore.QThread):
     """Runs each simulation's ``advance`` in chunks until all are done or stopped.
 
-    ``rowsReady`` carries a run's index and its chunk's new rows passed through that run's
-    ``derive`` (an owned array); ``failed`` a one-line message if the core raised (the GUI
+    ``rowsReady`` carries a run's index, its chunk's new rows passed through that run's
+    ``derive`` (an owned array, or None when the chunk has none) and whether the run has
+    ended with it (its last rows: the GUI knows a run has ended only when they are there); ``failed`` a one-line message if the core raised (the GUI
     stays up). ``seconds[i]`` is the time run i's ``advance`` took so far (its compute time);
     the ``warm_ups`` (tiny runs of the same methods) are run first, untimed, so that loading or
     compiling a method's kernel does not count.
     """
 
-    rowsReady = QtCore.Signal(int, object)
+    rowsReady = QtCore.Signal(int, object, bool)
     failed = QtCore.Signal(str)
     compiling = QtCore.Signal()      # numba has started compiling a kernel (first run of a method)
 
@@ -60,8 +61,9 @@ class SimulationThread(QtCore.QThread):
             rows = sims[i].advance(steps[i])
             elapsed = time.perf_counter() - started
             self.seconds[i] += elapsed
-            if len(rows):
-                self.rowsReady.emit(i, self.derives[i](rows))
+            ended = sims[i].done
+            if len(rows) or ended:
+                self.rowsReady.emit(i, self.derives[i](rows) if len(rows) else None, ended)
             scale = CHUNK_SECONDS / max(elapsed, 1e-6)
             steps[i] = int(min(MAX_STEPS, max(MIN_STEPS, steps[i] * min(4.0, max(0.25, scale)))))
 

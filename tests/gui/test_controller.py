@@ -44,7 +44,7 @@ def test_several_runs_play_in_sync_to_the_end(qtbot, hills):
 def test_pause_step_stop_and_reset(qtbot, hills):
     controller = RunController()
     controller.start(runs_of(hills, dict(method="rk4", t_end=5.0)))
-    qtbot.waitUntil(lambda: controller.play_time > 0.05, timeout=5000)
+    qtbot.waitUntil(lambda: controller.play_time > 0.05, timeout=30_000)
     controller.toggle_pause()
     held = controller.play_time
     qtbot.wait(100)
@@ -113,3 +113,17 @@ def test_a_kernel_being_compiled_is_a_state_of_its_own(qtbot, hills, monkeypatch
         controller.start(runs_of(hills, dict(method="rk4", t_end=0.5)))
     assert (RUNNING, True) in seen and seen[-1] == (FINISHED, False)
     assert seen.index((RUNNING, True)) < len(seen) - 1 and not controller.compiling
+
+
+def test_a_run_counts_as_ended_only_once_its_last_rows_have_arrived(qtbot, hills):
+    # the worker finishes a run before the GUI thread has taken its last rows: until they are
+    # there, playback must not go past what that run has shown
+    controller = RunController()
+    runs = controller.runs = runs_of(hills, dict(method="rk4", t_end=0.5), dict(method="dopri5", t_end=0.5))
+    slow, fast = runs
+    controller._rows_ready(0, slow.buffer.derive(slow.simulation.advance(200)), False)
+    rows = fast.simulation.advance(10**6)
+    assert fast.simulation.done and len(rows) > 1
+    assert controller.end_time == fast.buffer.end_time < slow.buffer.end_time   # the fast run has shown nothing
+    controller._rows_ready(1, fast.buffer.derive(rows), True)
+    assert fast.ended and controller.end_time == slow.buffer.end_time

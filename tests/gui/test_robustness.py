@@ -29,7 +29,7 @@ def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
         for i in range(n):
             window.start()
             if i % 2:
-                qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0, timeout=5000)
+                qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0, timeout=30_000)
             window.stop() if i % 3 else window.reset()
         qtbot.wait(50)  # deleteLater of the finished threads
         gc.collect()
@@ -48,7 +48,7 @@ def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
 
 def test_opening_a_scene_during_a_run_replaces_it(qtbot, window):
     window.start()
-    qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=5000)
+    qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=30_000)
     assert window.open_scene(EXAMPLES_DIR / "bowl.json", remember=False)
     assert window.controller.state == READY and window.controller.thread is None
     assert window.scene == Scene.load(EXAMPLES_DIR / "bowl.json")
