@@ -41,12 +41,12 @@ def decade_range(values: np.ndarray) -> tuple[int, int]:
     return low, max(high, low + 1)
 
 
-def fit_decades(plot, values: np.ndarray) -> None:
-    """Show the whole decades holding ``values`` on a log plot's y axis; the range is only set
-    when it changes, so an update that stays within it does not lay the axis out again."""
+def fit_decades(plot, values: np.ndarray, axis: str = "y") -> None:
+    """Show the whole decades holding ``values`` on a log plot's ``axis`` ("x" or "y"); the range
+    is only set when it changes, so an update that stays within it does not lay the axis out again."""
     low, high = decade_range(values)
-    if list(plot.viewRange()[1]) != [low, high]:
-        plot.setYRange(low, high, padding=0.0)
+    if list(plot.viewRange()["xy".index(axis)]) != [low, high]:
+        plot.setRange(**{f"{axis}Range": (low, high)}, padding=0.0)
 
 
 def cache_axes(plot) -> None:
@@ -66,15 +66,29 @@ def thinned(n: int) -> np.ndarray:
 class DecadeAxis(pg.AxisItem):
     """A log axis with labels only at powers of ten, spaced to fit: every decade, or every 2nd,
     3rd, 5th, … when the axis is short for its span; unlabelled ticks at the other decades and,
-    where a decade is long enough, at 2·10ⁿ … 9·10ⁿ. Labels at the two ends may reach half a text
-    height past the axis, so a range of whole decades is labelled at both ends."""
+    where a decade is long enough, at 2·10ⁿ … 9·10ⁿ. Labels are spaced by their extent along the
+    axis: their height on a vertical axis, the widest one's width on a horizontal one. Labels at
+    the two ends may reach half that extent past the axis, so a range of whole decades is
+    labelled at both ends."""
 
     def __init__(self, orientation: str = "left", **options):
         super().__init__(orientation, **options)
         self.setStyle(maxTextLevel=0)
 
     def text_height(self) -> float:
-        return QtGui.QFontMetricsF(self.style["tickFont"] or QtGui.QFont()).height()
+        return self.metrics().height()
+
+    def metrics(self) -> QtGui.QFontMetricsF:
+        return QtGui.QFontMetricsF(self.style["tickFont"] or QtGui.QFont())
+
+    def label_extent(self, low: float, high: float) -> float:
+        """Pixels a label takes along the axis, the largest of the decades from low to high."""
+        if self.orientation in ("left", "right"):
+            return self.text_height()
+        metrics = self.metrics()
+        exponents = range(math.floor(low), math.ceil(high) + 1) if math.isfinite(low) and math.isfinite(high) \
+            else range(0)
+        return max((metrics.horizontalAdvance(power_of_ten(k)) for k in exponents), default=self.text_height())
 
     def tickValues(self, minVal, maxVal, size):  # noqa: N802 (pyqtgraph's names)
         low, high = sorted((minVal, maxVal))
@@ -82,7 +96,8 @@ class DecadeAxis(pg.AxisItem):
             return []
         exponents = range(math.ceil(low - 1e-9), math.floor(high + 1e-9) + 1)
         per_decade = size / (high - low)                  # pixels
-        pitch = LABEL_PITCH * self.text_height()          # pixels from one label to the next, at least
+        # pixels from one label to the next, at least: a label and a gap of part of a text height
+        pitch = self.label_extent(low, high) + (LABEL_PITCH - 1) * self.text_height()
         step = next((s for s in DECADE_STEPS if s * per_decade >= pitch), math.ceil(pitch / per_decade))
         labelled = [k for k in exponents if k % step == 0]
         if len(labelled) < 2 and len(exponents) >= 2 and (exponents[-1] - exponents[0]) * per_decade >= pitch:
@@ -100,7 +115,7 @@ class DecadeAxis(pg.AxisItem):
 
     def boundingRect(self):  # noqa: N802
         rect = super().boundingRect()
-        margin = self.text_height() / 2 + 1
+        margin = self.label_extent(*self.range) / 2 + 1
         return rect.adjusted(0, -margin, 0, margin) if self.orientation in ("left", "right") \
             else rect.adjusted(-margin, 0, margin, 0)
 

@@ -1,6 +1,7 @@
 """Analysis → Speed against error: ``rollball.compare`` on the current scene in the background,
 shown as two log-log panels (error against compute time; error against step size with the
-fitted orders), exported in the command line's formats. Clicking a point asks the main window
+fitted orders), exported in the command line's formats. Both axes show whole decades, labelled
+at powers of ten as the other log plots are. Clicking a point asks the main window
 to load that method and step (``runChosen``)."""
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from rollball.comparison import Cancelled
 from rollball.files import atomic_write_text
 
 from .compare_runs import COLORS
+from .plots import DecadeAxis, fit_decades
 
 CSV_NAME = "compare.csv"
 SPEC_COLORS = COLORS + ("#e377c2", "#7f7f7f", "#bcbd22", "#17becf")   # one per method, as the CLI's figure
@@ -117,13 +119,15 @@ class SpeedWindow(QtWidgets.QWidget):
         layout.addLayout(plots, 1)
 
     def _plot(self, title: str, x: str, units: str, y: str) -> pg.PlotWidget:
-        plot = pg.PlotWidget(background="w")
+        plot = pg.PlotWidget(background="w", axisItems={"left": DecadeAxis("left"), "bottom": DecadeAxis("bottom")})
         plot.setTitle(title, size="10pt", color="#333")
         plot.setLabel("bottom", x, units=units)
         plot.getAxis("bottom").enableAutoSIPrefix(False)
         plot.setLabel("left", y)
         plot.getAxis("left").enableAutoSIPrefix(False)
         plot.setLogMode(x=True, y=True)
+        # room on the right for half the last label along the bottom (a wide one, 10⁻¹⁰)
+        plot.plotItem.layout.setContentsMargins(1, 1, plot.getAxis("bottom").label_extent(-10, -10) / 2, 1)
         plot.showGrid(x=True, y=True, alpha=0.25)
         plot.addLegend(offset=(10, -10), labelTextSize="8pt", labelTextColor="#333")  # bottom left: empty
         return plot
@@ -184,7 +188,6 @@ class SpeedWindow(QtWidgets.QWidget):
             plot.clear()
             plot.plotItem.legend.clear()
         orders = {order.spec: order for order in comparison.orders}
-        lowest = ORIENTATION_CEILING
         for spec in comparison.specs:
             color = SPEC_COLORS[list(METHODS).index(spec.method) % len(SPEC_COLORS)]
             pen = pg.mkPen(color, width=1.5, style=QtCore.Qt.PenStyle.SolidLine if spec.munthe_kaas
@@ -200,12 +203,15 @@ class SpeedWindow(QtWidgets.QWidget):
                 name = spec.label + (f": order {slope:.2f}" if slope is not None else "")
                 self._series(self.step_plot, stepped, [r.dt for r in stepped],
                              [r.error["orientation"] for r in stepped], pen, color, name, spec.munthe_kaas)
-                lowest = min([lowest] + [r.error["orientation"] for r in stepped])
         floor = pg.mkPen("#999", width=1, style=QtCore.Qt.PenStyle.DashLine)
         for plot, key in ((self.time_plot, "contact"), (self.step_plot, "orientation")):
             line = pg.InfiniteLine(pos=np.log10(comparison.reference.floor(key)), angle=0, pen=floor)
             plot.addItem(line)
-        self.step_plot.setYRange(np.log10(lowest) - 0.5, np.log10(ORIENTATION_CEILING), padding=0)
+        for plot, ceiling in ((self.time_plot, np.inf), (self.step_plot, ORIENTATION_CEILING)):
+            lines = [item.getOriginalDataset() for item in plot.listDataItems() if isinstance(item, pg.PlotDataItem)]
+            x, y = (np.concatenate(values) for values in zip(*lines)) if lines else (np.ones(1), np.ones(1))
+            fit_decades(plot, x, "x")
+            fit_decades(plot, np.minimum(y, ceiling), "y")
 
     def _series(self, plot, runs, x, y, pen, color, name, munthe_kaas) -> None:
         """A line per run spec and its runs as points: filled Munthe-Kaas, crosses classic."""

@@ -1,14 +1,10 @@
 """The live plots: log axes labelled legibly at powers of ten, whatever the data span and size;
 plots that follow the ball while it plays."""
 
-import contextlib
-import re
 import time
 
 import numpy as np
 import pytest
-from PySide6 import QtGui
-from pytestqt.exceptions import TimeoutError
 
 from app import help as helps
 from app.controller import PAUSED, RUNNING
@@ -17,45 +13,7 @@ from app.playback import RunBuffer
 from app.window import PLOT_INTERVAL
 from rollball.trajectory import T
 
-POWER = re.compile(r"^10⁻?[⁰¹²³⁴⁵⁶⁷⁸⁹]+$")
-SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
-
-
-def exponent(label: str) -> int:
-    return int(label[2:].translate(SUPERSCRIPT))
-
-
-def drawn_labels(axis) -> list[tuple[float, str]]:
-    """The tick labels the axis draws: (centre along the axis in pixels, text), top to bottom."""
-    pixmap = QtGui.QPixmap(8, 8)   # text measured as on screen
-    painter = QtGui.QPainter(pixmap)
-    try:
-        _, _, texts = axis.generateDrawSpecs(painter)
-    finally:
-        painter.end()
-    return sorted((rect.center().y(), text) for rect, _, text in texts)
-
-
-def assert_legible(qtbot, axis) -> list[str]:
-    """Labels are powers of ten, at least two, in order, and no two overlap in the axis' font."""
-    height = QtGui.QFontMetricsF(axis.style["tickFont"] or QtGui.QFont()).height()
-    length = axis.geometry().height()
-    low, high = axis.range
-    ticks = axis.tickValues(low, high, length + 2)[0][1]   # the labelled level, as pyqtgraph asks for it
-    strings = axis.tickStrings(ticks, 1.0, 1.0)
-    assert len(strings) >= 2 and all(POWER.match(s) for s in strings), strings
-    assert [exponent(s) for s in strings] == [round(v) for v in ticks]
-    # where they sit on the axis (pixels from its top), measured in the axis font
-    centres = [(high - v) / (high - low) * length for v in ticks]
-    assert min(-np.diff(centres)) >= height, (strings, centres, height)
-    # and what pyqtgraph lays out from them: all of them, once the axis has widened to its labels
-    expected = [s for _, s in sorted(zip(centres, strings))]
-    with contextlib.suppress(TimeoutError):
-        qtbot.waitUntil(lambda: [s for _, s in drawn_labels(axis)] == expected, timeout=5000)
-    drawn = drawn_labels(axis)
-    assert [s for _, s in drawn] == expected, (axis.range, drawn)
-    assert all(b - a >= height for (a, _), (b, _) in zip(drawn, drawn[1:]))
-    return strings
+from .guitools import assert_legible, exponent
 
 
 class Rows(RunBuffer):

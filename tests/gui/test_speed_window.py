@@ -4,12 +4,18 @@ and a clicked point loaded into the main window."""
 import csv
 import json
 
+import numpy as np
 import pyqtgraph as pg
+import pytest
 
 from app.controller import RUNNING
-from app.speed_window import CSV_NAME
+from app.speed_window import CSV_NAME, SpeedWindow
+from rollball import Scene
+from rollball.comparison import Comparison, Reference, RunResult, RunSpec
+from rollball.examples import EXAMPLES_DIR
+from rollball.trajectory import Status
 
-from .guitools import set_field
+from .guitools import assert_legible, exponent, label_rects, set_field
 
 
 def scatter(plot) -> pg.ScatterPlotItem:
@@ -61,3 +67,48 @@ def test_a_comparison_can_be_cancelled(qtbot, window):
     qtbot.waitUntil(lambda: speed.thread is None, timeout=30_000)
     assert speed.status.text() == "Cancelled" and speed.comparison is None
     assert speed.run_button.isEnabled() and not speed.export_button.isEnabled()
+
+
+def made_up(times: tuple[float, float], errors: tuple[float, float], steps: tuple[float, float]) -> Comparison:
+    """A comparison whose runs' compute times, errors and steps span the given decades (log10)."""
+    reference = Reference("dop853", 1e-12, 1e-15, 1e-16, {"contact": 1e-16, "orientation": 1e-16},
+                          Status.OK, "", 100, 1.0)
+    comparison = Comparison(Scene.load(EXAMPLES_DIR / "hills.json"), 1.0, 0.01, True, "test", reference)
+    for shift, spec in enumerate((RunSpec("rk4"), RunSpec("rk4", munthe_kaas=False), RunSpec("dopri5"))):
+        for t, e, h in zip(*(np.linspace(low, high, 5) for low, high in (times, errors, steps))):
+            error = 10.0 ** (e - 0.1 * shift)
+            comparison.runs.append(RunResult(spec, 10.0 ** h if spec.fixed_step else None,
+                                             None if spec.fixed_step else 1e-6, None, Status.OK, 10, 0, 40,
+                                             10.0 ** t, {"contact": error, "orientation": error}, False))
+    return comparison
+
+
+def inside(plot, axis) -> bool:
+    """The axis' labels lie wholly in the plot's widget (none cut off at its edge)."""
+    view = plot.sceneRect().adjusted(-0.5, -0.5, 0.5, 0.5)
+    return all(view.contains(axis.mapRectToScene(rect)) for rect, _ in label_rects(axis))
+
+
+# (compute times, errors, step sizes) in decades: within one, one or two, many
+SPANS = [((-3.3, -3.1), (-9.2, -8.9), (-2.2, -2.1)), ((-2.5, -0.7), (-9, -7.3), (-3, -1.5)),
+         ((-4, 1.2), (-14.5, -0.5), (-5, -1)), ((0.1, 0.3), (-1.85, 0.8), (-0.9, -0.2))]
+
+
+@pytest.mark.parametrize("size", [(1100, 560), (700, 400)])
+def test_both_panels_label_both_axes_at_powers_of_ten_that_never_overlap(qtbot, size):
+    speed = SpeedWindow()
+    qtbot.addWidget(speed)
+    speed.resize(*size)
+    speed.show()
+    qtbot.waitExposed(speed)
+    for times, errors, steps in SPANS:
+        speed.show_comparison(made_up(times, errors, steps))
+        qtbot.wait(1)   # laid out
+        # the step panel: the fixed-step runs only, 0.1 decade apart (the time panel: 0.2 with dopri5)
+        for plot, x, lowest in ((speed.time_plot, times, errors[0] - 0.2), (speed.step_plot, steps, errors[0] - 0.1)):
+            for side, span in (("bottom", x), ("left", (lowest, errors[1]))):
+                shown = assert_legible(qtbot, plot.getAxis(side))
+                assert inside(plot, plot.getAxis(side)), (side, span)
+                low, high = plot.viewRange()[side == "left"]
+                assert low <= exponent(shown[0]) < exponent(shown[-1]) <= high
+                assert (low, high) == (np.floor(span[0]), max(np.ceil(span[1]), np.floor(span[0]) + 1))
