@@ -117,13 +117,12 @@ class RunController(QtCore.QObject):
         self.runs = list(runs)
         if reference is not None:
             self._start_reference(*reference)
-        self.thread = SimulationThread([run.simulation for run in self.runs],
-                                       [run.buffer.derive for run in self.runs], self, warm_ups)
         runs = self.runs
-        # a chunk still queued when its thread was stopped belongs to runs since dropped
-        self.thread.rowsReady.connect(lambda index, block, ended: runs is self.runs
-                                      and self._rows_ready(index, block, ended),
-                                      QtCore.Qt.ConnectionType.QueuedConnection)
+        self.thread = SimulationThread([run.simulation for run in runs], [run.buffer.derive for run in runs],
+                                       self, warm_ups, token=runs)
+        # to a method of this object, not a lambda: a lambda's queued calls are dropped with the
+        # thread object once it is deleted (after a fast run, before its rows were taken)
+        self.thread.rowsReady.connect(self._rows_ready, QtCore.Qt.ConnectionType.QueuedConnection)
         self.thread.failed.connect(self.failed)
         self.thread.compiling.connect(lambda: runs is self.runs and self._set_compiling(True),
                                       QtCore.Qt.ConnectionType.QueuedConnection)
@@ -198,7 +197,9 @@ class RunController(QtCore.QObject):
             self.thread.deleteLater()
             self.thread = None
 
-    def _rows_ready(self, index: int, block, ended: bool) -> None:
+    def _rows_ready(self, runs: list, index: int, block, ended: bool) -> None:
+        if runs is not self.runs:
+            return   # a chunk still queued when its thread was stopped: its runs were dropped
         run = self.runs[index]
         if block is not None:
             run.buffer.append(block)

@@ -21,7 +21,8 @@ MIN_STEPS, MAX_STEPS = 256, 1 << 20
 class SimulationThread(QtCore.QThread):
     """Runs each simulation's ``advance`` in chunks until all are done or stopped.
 
-    ``rowsReady`` carries a run's index, its chunk's new rows passed through that run's
+    ``rowsReady`` carries the ``token`` the thread was made with (whose runs these are), a run's
+    index, its chunk's new rows passed through that run's
     ``derive`` (an owned array, or None when the chunk has none) and whether the run has
     ended with it (its last rows: the GUI knows a run has ended only when they are there); ``failed`` a one-line message if the core raised (the GUI
     stays up). ``seconds[i]`` is the time run i's ``advance`` took so far (its compute time);
@@ -29,12 +30,13 @@ class SimulationThread(QtCore.QThread):
     compiling a method's kernel does not count.
     """
 
-    rowsReady = QtCore.Signal(int, object, bool)
+    rowsReady = QtCore.Signal(object, int, object, bool)
     failed = QtCore.Signal(str)
     compiling = QtCore.Signal()      # numba has started compiling a kernel (first run of a method)
 
-    def __init__(self, simulations, derives, parent=None, warm_ups=()):
+    def __init__(self, simulations, derives, parent=None, warm_ups=(), token=None):
         super().__init__(parent)
+        self.token = token
         self.simulations = list(simulations)
         self.derives = list(derives)
         self.warm_ups = list(warm_ups)
@@ -63,7 +65,7 @@ class SimulationThread(QtCore.QThread):
             self.seconds[i] += elapsed
             ended = sims[i].done
             if len(rows) or ended:
-                self.rowsReady.emit(i, self.derives[i](rows) if len(rows) else None, ended)
+                self.rowsReady.emit(self.token, i, self.derives[i](rows) if len(rows) else None, ended)
             scale = CHUNK_SECONDS / max(elapsed, 1e-6)
             steps[i] = int(min(MAX_STEPS, max(MIN_STEPS, steps[i] * min(4.0, max(0.25, scale)))))
 

@@ -121,9 +121,9 @@ def test_a_run_counts_as_ended_only_once_its_last_rows_have_arrived(qtbot, hills
     controller = RunController()
     runs = controller.runs = runs_of(hills, dict(method="rk4", t_end=0.5), dict(method="dopri5", t_end=0.5))
     slow, fast = runs
-    controller._rows_ready(0, slow.buffer.derive(slow.simulation.advance(200)), False)
+    controller._rows_ready(runs, 0, slow.buffer.derive(slow.simulation.advance(200)), False)
     rows = fast.simulation.advance(10**6)
     assert fast.simulation.done and len(rows) > 1
     assert controller.end_time == fast.buffer.end_time < slow.buffer.end_time   # the fast run has shown nothing
-    controller._rows_ready(1, fast.buffer.derive(rows), True)
+    controller._rows_ready(runs, 1, fast.buffer.derive(rows), True)
     assert fast.ended and controller.end_time == slow.buffer.end_time
