@@ -7,7 +7,8 @@ the landscape arrives as a compiled callback ``fn(x, y, out)`` writing f and its
 second derivatives to out[0:6].
 
 State vector z: contact point (x, y), angular momentum about the contact point v (3),
-then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start) or
+then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start; the
+adaptive pairs carry omega there instead and R follows it, ``turn``) or
 R (9, row-major, integrated as a plain matrix by the classic scheme), or nothing: a state
 of MOTION_SIZE carries no orientation at all (sweeps, whose outcomes do not need it). Stage derivatives
 are the rows of K; the hot loop indexes whole arrays and never slices them.
@@ -84,12 +85,14 @@ PROBE_SIZE = 10
 # Integer run counters (``ints``) and float run facts (``info``).
 # I_DENSE: the step whose extra dense-output stages K holds (they are computed on demand).
 # I_HELD: 1 once a stopped step's last valid state is already in zn, Rn, pn (``fold_search``).
-I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE, I_HELD = range(10)
+# I_RETRY: 1 while the adaptive step follows a rejection (kept between calls).
+(I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE, I_HELD,
+ I_RETRY) = range(11)
 # F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
 # F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
 # F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
 F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD = range(11)
-INTS_SIZE, INFO_SIZE = 10, 11
+INTS_SIZE, INFO_SIZE = 11, 11
 
 # Status codes (see trajectory.Status).
 RUNNING, OK, DOES_NOT_FIT, NONFINITE = 0, 1, 2, 3
@@ -125,11 +128,18 @@ def state_size(munthe_kaas: bool) -> int:
     return MK_SIZE if munthe_kaas else CLASSIC_SIZE
 
 
-def parameters(radius: float, mass: float, gravity: float) -> np.ndarray:
+P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this tolerance (rad)
+
+
+def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0) -> np.ndarray:
     """The ball and gravity as the kernel reads them, with the constants it would otherwise
-    recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0."""
+    recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0; then ``turn``:
+    0 for the Munthe-Kaas increment u in the state, else the tolerance (rad) for the
+    orientation's sub-steps when omega is carried instead (``turn``: the adaptive pairs)."""
     r, m, g0 = radius, mass, gravity
-    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0])
+    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + 0.0 * r])
+
+
 
 
 @JIT
@@ -172,6 +182,13 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
     if K.shape[1] == MOTION_SIZE:  # no orientation carried
         pass
+    elif mk and p[P_TURN] > 0.0:
+        # omega' = k (v' + nv' N + nv N'), N' = d: omega carried as a quadrature of the motion
+        e1, e2, e3 = K[row, 2], K[row, 3], K[row, 4]
+        nve = 2.5 * (d1 * v1 + d2 * v2 + d3 * v3 + n1 * e1 + n2 * e2 + n3 * e3)
+        K[row, 5] = k * (e1 + nve * n1 + nv * d1)
+        K[row, 6] = k * (e2 + nve * n2 + nv * d2)
+        K[row, 7] = k * (e3 + nve * n3 + nv * d3)
     elif mk:
         K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
     else:
@@ -240,9 +257,8 @@ def evaluate_points(fn, xs, ys, out):
 
 
 @JIT
-def rodrigues(z, R, out):
-    """out = exp(A(u)) R for u = z[5:8], exact at any angle, with a series for small |u|."""
-    u1, u2, u3 = z[5], z[6], z[7]
+def rodrigues(u1, u2, u3, R, out):
+    """out = exp(A(u)) R, exact at any angle, with a series for small |u| (out may be R)."""
     th2 = u1 * u1 + u2 * u2 + u3 * u3
     th = math.sqrt(th2)
     if th < 1e-4:
@@ -262,6 +278,128 @@ def rodrigues(z, R, out):
         out[0, j] = q11 * r1 + q12 * r2 + q13 * r3
         out[1, j] = q21 * r1 + q22 * r2 + q23 * r3
         out[2, j] = q31 * r1 + q32 * r2 + q33 * r3
+
+
+# -- the orientation of the adaptive pairs ----------------------------------------------------
+#
+# R does not act on the motion: R' = A(omega(t)) R with omega a function of (alpha, v). The
+# pairs therefore carry omega itself in z[5:8] (its derivative from the motion's, ``dynamics``),
+# set to the exact omega at every step start; the step's dense output then gives omega at any
+# time inside it, to the pair's order. ``turn`` carries R through the step in sub-steps of at
+# most p[P_TURN] rad, each by the 6th-order Magnus integrator on the three Gauss points
+# (Blanes, Casas and Ros 2000). Integrated as u by the pair itself, the orientation's error per
+# step grows with the angle turned (u' = dexp_u^-1(omega) is the stiffest part of the system
+# where the axis turns) and u would set the step; here the motion does.
+
+GAUSS_SPREAD = math.sqrt(15.0) / 10.0   # the Gauss points of [0, 1]: 1/2 -+ this, and 1/2
+MAX_TURNS = 1e6                         # sub-steps in one span at most (else R is not finite)
+MAGNUS_ERROR = 5e-5                     # Magnus 6's error in R over a span: at most this times
+                                        # phi^4 |C| (measured 2e-5 - 5e-5; ``turn``)
+# The orientation's tolerance per step, as a share of rtol: the pairs' steps, taken on by the
+# higher-order solution, are far more accurate than their estimate (rtol) says.
+TURN_SHARE = 1e-2
+
+
+@JIT
+def magnus6(a1, a2, a3, b1, b2, b3, c1, c2, c3, h):
+    """The commutator terms of the 6th-order Magnus increment over a step h, from omega at its
+    three Gauss points a, b (the middle), c: Omega = (the integral of omega) + these, with
+    [X, Y] = X x Y on so(3). (The integral by the Gauss points is alpha1 + alpha3 / 12.)"""
+    q = h * math.sqrt(15.0) / 3.0
+    s = h * 10.0 / 3.0
+    x1, x2, x3 = h * b1, h * b2, h * b3                                   # alpha1
+    y1, y2, y3 = q * (c1 - a1), q * (c2 - a2), q * (c3 - a3)              # alpha2
+    w1, w2, w3 = s * (c1 - 2.0 * b1 + a1), s * (c2 - 2.0 * b2 + a2), s * (c3 - 2.0 * b3 + a3)  # alpha3
+    k1, k2, k3 = x2 * y3 - x3 * y2, x3 * y1 - x1 * y3, x1 * y2 - x2 * y1  # C1 = [alpha1, alpha2]
+    f1, f2, f3 = 2.0 * w1 + k1, 2.0 * w2 + k2, 2.0 * w3 + k3
+    m1 = y1 - (x2 * f3 - x3 * f2) / 60.0                                  # alpha2 + C2
+    m2 = y2 - (x3 * f1 - x1 * f3) / 60.0
+    m3 = y3 - (x1 * f2 - x2 * f1) / 60.0
+    l1, l2, l3 = -20.0 * x1 - w1 + k1, -20.0 * x2 - w2 + k2, -20.0 * x3 - w3 + k3
+    return (l2 * m3 - l3 * m2) / 240.0, (l3 * m1 - l1 * m3) / 240.0, (l1 * m2 - l2 * m1) / 240.0
+
+
+def stage_rows(stages: int) -> int:
+    """The rows of K for a method whose W has ``stages`` rows: those, omega's polynomial
+    (three rows, ``omega_polynomial``) and a spare last row for evaluations on the dense output."""
+    return stages + 4
+
+
+@JIT
+def omega_polynomial(h, P, K):
+    """omega's dense output over the step as a polynomial in theta: omega(t + theta h) =
+    omega(t) + sum_k c_k theta^(k+1), component q of c_k into K[P.shape[0] + q, k]."""
+    base = P.shape[0]
+    for q in range(3):
+        for k in range(P.shape[1]):
+            c = 0.0
+            for i in range(P.shape[0]):
+                c += P[i, k] * K[i, 5 + q]
+            K[base + q, k] = h * c
+
+
+@JIT
+def omega_at(z, P, K, theta):
+    """omega at t + theta h (``omega_polynomial``; omega(t) in z[5:8])."""
+    base = P.shape[0]
+    o1, o2, o3 = 0.0, 0.0, 0.0
+    for k in range(P.shape[1] - 1, -1, -1):
+        o1 = (o1 + K[base, k]) * theta
+        o2 = (o2 + K[base + 1, k]) * theta
+        o3 = (o3 + K[base + 2, k]) * theta
+    return z[5] + o1, z[6] + o2, z[7] + o3
+
+
+@JIT
+def omega_integral(z, h, P, K, theta):
+    """The integral of omega from t to t + theta h (exact: a polynomial, ``omega_polynomial``)."""
+    base = P.shape[0]
+    o1, o2, o3 = 0.0, 0.0, 0.0
+    for k in range(P.shape[1] - 1, -1, -1):
+        o1 = (o1 + K[base, k] / (k + 2)) * theta
+        o2 = (o2 + K[base + 1, k] / (k + 2)) * theta
+        o3 = (o3 + K[base + 2, k] / (k + 2)) * theta
+    return h * (z[5] + o1) * theta, h * (z[6] + o2) * theta, h * (z[7] + o3) * theta
+
+
+@COLD
+def turn(p, z, R, h, P, K, theta0, theta1, out):
+    """out = R (the orientation at t + theta0 h) carried to t + theta1 h along omega's dense
+    output (out may be R). The sub-steps: Magnus 6's error in one of m sub-steps of a span
+    turning by phi rad is MAGNUS_ERROR phi^4 |C| / m^7, C = [phi_mid, phi_end - phi_start] the
+    span's commutator (how far its axis turns), so m is chosen for a total of p[P_TURN] (the
+    tolerance): a span whose axis keeps its direction is one sub-step, however far it turns."""
+    x0, x1 = theta0, theta1
+    omega_polynomial(h, P, K)
+    a1, a2, a3 = omega_at(z, P, K, x0)
+    b1, b2, b3 = omega_at(z, P, K, 0.5 * (x0 + x1))
+    c1, c2, c3 = omega_at(z, P, K, x1)
+    span = h * (x1 - x0)
+    phi = abs(span) * math.sqrt(max(a1 * a1 + a2 * a2 + a3 * a3, b1 * b1 + b2 * b2 + b3 * b3,
+                                    c1 * c1 + c2 * c2 + c3 * c3))
+    e1, e2, e3 = c1 - a1, c2 - a2, c3 - a3
+    bend = span * span * math.sqrt((b2 * e3 - b3 * e2) ** 2 + (b3 * e1 - b1 * e3) ** 2 + (b1 * e2 - b2 * e1) ** 2)
+    turns = math.ceil((MAGNUS_ERROR * phi ** 4 * bend / p[P_TURN]) ** (1.0 / 6.0))
+    if not turns <= MAX_TURNS:
+        for a in range(3):
+            for c in range(3):
+                out[a, c] = math.nan
+        return
+    m = max(turns, 1)
+    for a in range(3):
+        for c in range(3):
+            out[a, c] = R[a, c]
+    dx = (x1 - x0) / m
+    q1, q2, q3 = omega_integral(z, h, P, K, x0)
+    for j in range(m):
+        x = x0 + j * dx
+        a1, a2, a3 = omega_at(z, P, K, x + (0.5 - GAUSS_SPREAD) * dx)
+        b1, b2, b3 = omega_at(z, P, K, x + 0.5 * dx)
+        c1, c2, c3 = omega_at(z, P, K, x + (0.5 + GAUSS_SPREAD) * dx)
+        u1, u2, u3 = magnus6(a1, a2, a3, b1, b2, b3, c1, c2, c3, h * dx)
+        e1, e2, e3 = omega_integral(z, h, P, K, x1 if j == m - 1 else x + dx)
+        rodrigues(u1 + e1 - q1, u2 + e2 - q2, u3 + e3 - q3, out, out)
+        q1, q2, q3 = e1, e2, e3
 
 
 @JIT
@@ -350,6 +488,9 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
     dynamics(fn, d, p, z, mk, K, 0, probe, True)
     ints[I_EVALS] += 1
     ints[I_DENSE] = -1
+    if mk and p[P_TURN] > 0.0:
+        for q in range(3):
+            z[5 + q] = probe[PROBE_OMEGA + q]
     record(rows, 0, 0.0, z, R, probe, p)
     if not (_finite(z, 0, n) and _finite_row(K, 0, 0, n) and _finite(probe, 0, PROBE_SIZE)
             and _finite_row(rows, 0, 0, ROW_SIZE)):
@@ -380,7 +521,7 @@ def _trial_step(n: int, mk: bool):
     orientation = n > MOTION_SIZE
 
     @STEP
-    def trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
         """One Runge–Kutta step of size h from z (K[0] = z'(z)) to zn, Rn.
 
         W holds the method (see ``Tableau.kernel_arrays``): rows 1 .. last-1 the stage
@@ -388,14 +529,18 @@ def _trial_step(n: int, mk: bool):
         zn = z + h sum b_i K_i; then the full evaluation at zn (before u is reset) goes to
         K[last] and pn. Returns whether the new state is finite: 0 = yes, 1 = the motion is
         not, 2 = only the orientation is not. Counts its evaluations in ints[I_EVALS].
+        Carrying omega (p[P_TURN] > 0), Rn follows omega's dense output (P) through the step,
+        after the evaluation at zn and the dense-output stages (rows of W after ``last``).
         """
         for i in range(1, last):
             combine(n, z, h, W, i, K, i, Y)
             dynamics(fn, d, p, Y, mk, K, i, pn, False)
         ints[I_EVALS] += last - 1
         combine(n, z, h, W, last, K, last, zn)
+        if orientation and mk and p[P_TURN] > 0.0:
+            return end_of_turn(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if orientation and mk:
-            rodrigues(zn, R, Rn)
+            rodrigues(zn[5], zn[6], zn[7], R, Rn)
         elif orientation:
             for a in range(3):
                 for c in range(3):
@@ -411,14 +556,14 @@ trial_step_motion = _trial_step(MOTION_SIZE, False)
 
 
 @JIT
-def trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """The explicit step (``_trial_step``) for z's layout: MK_SIZE, CLASSIC_SIZE or MOTION_SIZE."""
     n = z.shape[0]
     if n == MK_SIZE:
-        return trial_step_mk(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+        return trial_step_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
     if n == CLASSIC_SIZE:
-        return trial_step_classic(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
-    return trial_step_motion(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+        return trial_step_classic(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return trial_step_motion(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
 @JIT
@@ -438,6 +583,25 @@ def end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints):
     return 0
 
 
+@COLD
+def end_of_turn(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """The end of an explicit step carrying omega: zn checked and evaluated (``end_of_step``),
+    the dense-output stages taken, then R carried through the step into Rn (``turn``)."""
+    for a in range(3):
+        for c in range(3):
+            Rn[a, c] = R[a, c]
+    code = end_of_step(fn, d, p, True, MK_SIZE, True, zn, Rn, K, last, pn, ints)
+    if code != 0:
+        return code
+    for i in range(last + 1, W.shape[0]):
+        combine(MK_SIZE, z, h, W, i, K, i, Y)
+        dynamics(fn, d, p, Y, True, K, i, pn, False)
+    ints[I_EVALS] += W.shape[0] - 1 - last
+    ints[I_DENSE] = ints[I_STEPS] + 1
+    turn(p, z, R, h, P, K, 0.0, 1.0, Rn)
+    return 0 if _finite_matrix(Rn) else 2
+
+
 # What a step reports (trial_step and collocation_step alike): 0 done, 1 the motion is not
 # finite, 2 only the orientation is not, 3 an implicit step's stage equations did not converge.
 STEP_NOT_CONVERGED = 3
@@ -448,11 +612,11 @@ EXPLICIT, IMPLICIT = 0.0, 1.0
 
 
 @JIT
-def take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+def take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One step of the method: collocation_step (``stepping`` IMPLICIT) or trial_step (EXPLICIT)."""
     if stepping == IMPLICIT:
         return collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
-    return trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
 # -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
@@ -518,7 +682,7 @@ def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
         c = h * W[last, 1 + i]
         for q in range(n):
             zn[q] += c * K[1 + i, q]
-    rodrigues(zn, R, Rn)
+    rodrigues(zn[5], zn[6], zn[7], R, Rn)
     return end_of_step(fn, d, p, True, n, True, zn, Rn, K, last, pn, ints)
 
 
@@ -626,12 +790,10 @@ def evaluate(fn, d, p, z, mk, K, row, probe):
 def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
     """The error of a step in units of the tolerance (the step is accepted when <= 1).
 
-    Each estimate is h (E K)_q per state component q, weighed by scale_q = atol + rtol
-    max(|z_q|, |zn_q|) for alpha (m) and v, and by atol + rtol for the rotation increment u:
-    its angle in radians is held to the tolerance as R's entries, of size 1, would be. Where the
-    ball's rotation axis turns, u's local error is ~1e4 times alpha's (m) at any step size, so u
-    sets the step; weighing v or u otherwise changes the step count, not that ratio (README).
-    kind 0: one estimate (E row 0), RMS over the state (Hairer's DOPRI5). kind 1: two
+    Each estimate is h (E K)_q per component q < n, weighed by scale_q = atol + rtol
+    max(|z_q|, |zn_q|) (the pairs pass the motion, alpha and v: omega is a function of it, and
+    R follows omega's dense output in sub-steps held to the tolerance, ``turn``; later components
+    are weighed by atol + rtol). kind 0: one estimate (E row 0), RMS over the state (Hairer's DOPRI5). kind 1: two
     estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
     as Hairer's DOP853 does.
     """
@@ -655,12 +817,15 @@ def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
 
 
 @JIT
-def accept(mk, n, z, R, K, last, probe, zn, Rn, pn):
+def accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn):
     """Make the trial state the current one; K[0] becomes its derivative (u-part = omega)."""
     for q in range(n):
         z[q] = zn[q]
         K[0, q] = K[last, q]
-    if mk and n > MOTION_SIZE:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
+    if mk and n > MOTION_SIZE and p[P_TURN] > 0.0:  # the next step starts from the exact omega
+        for q in range(3):
+            z[5 + q] = pn[PROBE_OMEGA + q]
+    elif mk and n > MOTION_SIZE:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
         for q in range(3):
             z[5 + q] = 0.0
             K[0, 5 + q] = pn[PROBE_OMEGA + q]
@@ -738,15 +903,18 @@ def dense_stages(fn, d, p, W, h, z, K, last, Y, pe, ints):
 
 
 @COLD
-def state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe):
+def state_at(fn, d, p, z, R, h, P, K, theta0, theta, Ye, Re, pe):
     """The dense output's state at t + theta h in Ye, Re, with its probe pe (one evaluation,
-    into the spare last row of K); whether it is finite."""
+    into the spare last row of K); whether it is finite. R is the orientation at t + theta0 h
+    (theta0 is 0 but when carrying omega, where R is turned on from there; Re may be R)."""
     n, mk = shape_of(z)
     interpolate(z, h, P, K, theta, Ye)
     if n == MOTION_SIZE:  # no orientation carried
         pass
+    elif mk and p[P_TURN] > 0.0:
+        turn(p, z, R, h, P, K, theta0, theta, Re)
     elif mk:
-        rodrigues(Ye, R, Re)
+        rodrigues(Ye[5], Ye[6], Ye[7], R, Re)
     else:
         for a in range(3):
             for c in range(3):
@@ -771,7 +939,7 @@ def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
     """g(theta) of an event, negative before it: -F.N (lift-off) or r*kappa - 1 (no fit);
     +inf where the state is not finite (past any event)."""
     if kind == FORCE_EVENT:
-        ok = state_at(fn, d, p, z, R, h, P, K, theta, Ye, Re, pe)
+        ok = state_at(fn, d, p, z, R, h, P, K, 0.0, theta, Ye, Re, pe)
         g = -pe[PROBE_FORCE]
     else:
         surface_at(fn, d, p[0], z, h, P, K, theta, Ye, s)
@@ -905,12 +1073,12 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
     # the ball no longer fits: where along the step r*kappa reached 1. The step is taken again
     # in sub-steps (its own stages may have jumped the edge, its dense output bent around it)
     if raced or fit_end:
-        edge = fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+        edge = fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
                            stepping)
         if edge >= 0.0:
             stop, valid = edge, edge
         else:  # no edge: the step stands, taken again (the search used its buffers)
-            retake(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
             dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
     if fit_end and stop > 1.0:  # the sub-steps all fit: locate the edge on the step's dense output
         gb = event_value(FIT_EVENT, fn, d, p, z, R, h, P, K, 1.0, Ye, Re, pe, sa)
@@ -934,7 +1102,7 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                 approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
                          sm, info[F_LIFTOFF:F_LIFT_Y + 1], stepping)
                 # the run goes on with the whole step, taken again (the approach used its buffers)
-                retake(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
                 dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
             _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
@@ -1000,9 +1168,9 @@ def line_fits(fn, d, r, z0, z1):
 
 
 @COLD
-def retake(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+def retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """Take the step from z again (after a search inside it used the step's buffers)."""
-    take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
     ints[I_DENSE] = -1
 
 
@@ -1024,7 +1192,7 @@ def fold_time(fn, d, r, Zs, K, ps):
 
 
 @COLD
-def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Zs, Rs, ps, stepping):
+def fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Zs, Rs, ps, stepping):
     """Take the step from t to t + h again in sub-steps that each stay within half the time
     ``fold_time`` gives to the edge of the no-fit region (a fold of the centre surface, which
     the contact point reaches at unbounded speed) and are accepted only where they are
@@ -1055,7 +1223,7 @@ def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, in
             edge = min(ts + reach, 1.0)
             break
         hs = min(grow, 0.5 * reach, 1.0 - ts)
-        bad = take_step(stepping, fn, d, p, W, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
+        bad = take_step(stepping, fn, d, p, W, P, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
         steady = bad == 0 and not (contact_raced(hs * h, Zs, zn, K, 0, last) or stages_raced(K, last))
         across = bad == 0 and (u1 <= 0.0 or not line_fits(fn, d, r, Zs, zn))
@@ -1073,7 +1241,7 @@ def fold_search(fn, d, p, W, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, in
         # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
         ts += hs
         grow = 2.0 * hs
-        accept(mk, n, Zs, Rs, K, last, ps, zn, Rn, pn)
+        accept(p, mk, n, Zs, Rs, K, last, ps, zn, Rn, pn)
         if ts >= 1.0 - FOLD_TOL:
             break
     for q in range(n):
@@ -1116,7 +1284,7 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
         hs = theta * h
         if not hs > 0.0:
             break
-        bad = take_step(stepping, fn, d, p, W, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = take_step(stepping, fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad != 0:
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
@@ -1186,8 +1354,8 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
             stepping):
     """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
-    W, P: the method (``Tableau.kernel_arrays``); K has one row more than W (spare, for
-    evaluations on the dense output). ``stepping``: IMPLICIT for collocation_step's steps (the
+    W, P: the method (``Tableau.kernel_arrays``); K has ``stage_rows(W.shape[0])`` rows.
+    ``stepping``: IMPLICIT for collocation_step's steps (the
     Gauss methods, Munthe-Kaas only), EXPLICIT for trial_step's. One compiled loop serves every
     fixed-step method and both orientation schemes (read from the state's length). On the first
     call (no rows yet) the initial state is checked and recorded. The run stops early, with
@@ -1210,9 +1378,9 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
         t0 = (k - 1) * dt
         h = t_end - t0 if final else dt
         t = t_end if final else k * dt
-        bad = take_step(stepping, fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
-            valid = fold_search(fn, d, p, W, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
+            valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
                                 pe, stepping)
             if valid >= 0.0:
                 record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
@@ -1232,7 +1400,7 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
             record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                          Rn, pn, Ye, sa, sb, sm, stepping)
             return
-        accept(mk, n, z, R, K, last, probe, zn, Rn, pn)
+        accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] = k
         if k - ints[I_LAST_RECORDED] == every or final:  # (no division in the loop)
             record(rows, ints[I_ROWS], t, z, R, probe, p)
@@ -1246,7 +1414,8 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
 def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K,
                      probe, rows, ints, info, work):
     """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
-    (Munthe-Kaas only); info[F_TIME] is the time reached and info[F_H] the next step to try.
+    (carrying omega, p[P_TURN] > 0); info[F_TIME] is the time reached and info[F_H] the next
+    step to try. The error is controlled on the motion; R follows omega (``turn``).
 
     The loop is generic over the pair; its plug-in points are data (``Tableau.kernel_arrays``):
     - W, square: rows 1 .. last-1 the stage coefficients, row ``last`` the weights b (the
@@ -1257,7 +1426,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
     - P, (rows of W x degree): the continuous extension, as scipy's ``P``;
     - extra dense-output stages (DOP853's three): rows of W and P after ``last``, evaluated by
       ``dense_stages`` only for steps that are interpolated (a row or an event inside them).
-    K needs W.shape[0] + 1 rows (the last one spare, for evaluations on the dense output).
+    K has ``stage_rows(W.shape[0])`` rows.
 
     Steps are cut only to land on t_end. Rows at the multiples of record_dt are the dense
     output at those times (record_dt 0: every accepted step is a row). Events are located on
@@ -1273,14 +1442,14 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
         if ints[I_STATUS] != RUNNING:
             return
     t, h = info[F_TIME], info[F_H]
-    retry = False  # right after a rejection the step may shrink but not grow (Hairer's rule)
+    retry = ints[I_RETRY] == 1  # right after a rejection the step may shrink but not grow (Hairer's rule)
     for _ in range(max_steps):
         if record_dt == 0.0 and ints[I_ROWS] >= rows.shape[0] - 2:
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        bad = trial_step(fn, d, p, W, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        err = math.inf if bad else error_norm(E, err_kind, K, last, n, z, zn, hs, rtol, atol)
+        bad = trial_step(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        err = math.inf if bad else error_norm(E, err_kind, K, last, MOTION_SIZE, z, zn, hs, rtol, atol)
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
             ints[I_REJECTED] += 1
             retry = True
@@ -1298,6 +1467,10 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
+        theta = 0.0  # Re: the orientation there (the rows' orientations follow on from each other)
+        for a in range(3):
+            for c in range(3):
+                Re[a, c] = R[a, c]
         while record_dt > 0.0:  # the rows inside the step, from its dense output
             t_row = ints[I_ROWS] * record_dt
             if t_end - t_row < 1e-9 * record_dt:
@@ -1309,7 +1482,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
                 ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
             else:
                 dense_stages(fn, d, p, W, hs, z, K, last, Ye, pe, ints)
-                state_at(fn, d, p, z, R, hs, P, K, (t_row - t) / hs, Ye, Re, pe)
+                state_at(fn, d, p, z, Re, hs, P, K, theta, (t_row - t) / hs, Ye, Re, pe)
+                theta = (t_row - t) / hs
                 record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
             ints[I_ROWS] += 1
         if valid >= 0.0:
@@ -1321,7 +1495,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             ints[I_ROWS] += 1
             ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
         t = t_new
-        accept(True, n, z, R, K, last, probe, zn, Rn, pn)
+        accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] += 1
         grown = hs * min(1.0 if retry else MAX_FACTOR, SAFETY * err ** err_exp if err > 0.0 else MAX_FACTOR)
         h = max(h, grown) if land else grown
@@ -1334,3 +1508,4 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             ints[I_STATUS] = OK
             break
     info[F_TIME], info[F_H] = t, h
+    ints[I_RETRY] = 1 if retry else 0

@@ -180,7 +180,8 @@ class Simulation:
         self._fn = self.landscape.compiled
         self._W, self._E, self._P = self.tableau.kernel_arrays()
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.error_norm: 1 or 2 estimates
-        self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity)
+        self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity,
+                                    kernel.TURN_SHARE * self.rtol if self.adaptive else 0.0)
         n = kernel.state_size(mk)
         self._z = np.zeros(n)
         self._R = np.eye(3)
@@ -188,7 +189,7 @@ class Simulation:
         self._z[:2], self._z[2:5] = alpha, v
         if not mk:
             self._z[5:] = self._R.ravel()
-        self._K = np.zeros((len(self._W) + 1, n))
+        self._K = np.zeros((kernel.stage_rows(len(self._W)), n))
         self._probe = np.zeros(kernel.PROBE_SIZE)
         self._rows = np.empty((n_rows, kernel.ROW_SIZE))
         self._ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)

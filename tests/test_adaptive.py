@@ -175,28 +175,28 @@ AXIS_KEPT = {"bowl": ("0.5*(x^2 + y^2)", 0.3), "trough": ("0.3*cos(2*x)", 0.2)}
 def test_orientation_error_is_on_the_contact_points_footing(name, method, scene_factory):
     """Rolling turns the ball by (distance rolled) / r, so an error in the contact point (m) is one of
     1/r = 10 in R's angle (rad) at r = 0.1. Where the rotation axis keeps its direction, R's error stays
-    within 30x the contact point's (measured 1.3-10.6 for both pairs at rtol 1e-6 ... 1e-10)."""
+    within 30x the contact point's (measured 1.6-7.7 for both pairs at rtol 1e-6 ... 1e-10)."""
     formula, x = AXIS_KEPT[name]
     scene = scene_factory(formula, x=x, method=method, duration=2.0)
     traj = simulate(scene, rtol=1e-8, atol=1e-11, record_dt=0.02)
     alpha, _, R = reference_solution(scene, traj.t)
     contact, orientation = np.linalg.norm(traj.contact - alpha, axis=1).max(), rotation_angle(traj.R, R).max()
-    assert 1e-12 < contact < 1e-7
+    assert 1e-12 < contact < 1e-6
     assert orientation < 30 * contact
 
 
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
 @pytest.mark.parametrize("name", ["hills", "saddle"])
-def test_orientation_is_held_to_the_tolerance_where_the_axis_turns(name):
-    """Where the rotation axis turns, the error of the rotation increment u (rad) sets the step, and R's
-    angle error stays within a few rtol: dopri5 1.5-5 rtol on its rows, dop853 1-12 rtol at its steps
-    (its 7th-order rows are looser: 3-180 rtol). The contact point then comes out 100-10 000 times more
-    accurate than R in these units: the ball spins 10-30 times a second about an axis that turns, which
-    makes u's local error some 10^4 times the contact point's at any step size, for either pair (and for
-    fixed steps): no weighing of the error norm changes that ratio, only the step count."""
+def test_orientation_is_held_as_tightly_as_the_contact_point_where_the_axis_turns(name, method):
+    """Where the ball spins 10-30 times a second about an axis that turns, R follows omega's dense output
+    in sub-steps (kernel.turn), so the motion alone sets the step: R's angle error stays within 30x the
+    contact point's (measured 0.4-3.9) and within 10 rtol (measured 0.2-3.9 rtol), on the rows between
+    steps as at them. (Integrated as the Munthe-Kaas increment u by the pair itself, R's error was
+    30-10 000 times the contact point's: u's local error grows with the angle turned per step.)"""
     scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
-    rtol = 1e-8
-    for method, record_dt in (("dopri5", 0.02), ("dop853", None)):
-        traj = simulate(scene, method=method, rtol=rtol, atol=rtol * 1e-3, t_end=2.0, record_dt=record_dt)
+    for rtol in (1e-6, 1e-8, 1e-10):
+        traj = simulate(scene, method=method, rtol=rtol, atol=rtol * 1e-3, t_end=2.0, record_dt=0.02)
         alpha, _, R = reference_solution(scene, traj.t)
-        assert np.linalg.norm(traj.contact - alpha, axis=1).max() < rtol
-        assert rotation_angle(traj.R, R).max() < 10 * rtol, method
+        contact, orientation = np.linalg.norm(traj.contact - alpha, axis=1).max(), rotation_angle(traj.R, R).max()
+        assert 1e-14 < contact < 10 * rtol and orientation < 10 * rtol, (rtol, contact, orientation)
+        assert orientation < 30 * contact, (rtol, contact, orientation)

@@ -14,6 +14,7 @@ from rollball.order_conditions import residuals, rooted_trees
 from rollball.reference import reference_rhs, reference_solution
 from rollball.simulation import initial_state
 from rollball.tableaus import Tableau
+from test_adaptive import rotation_angle
 
 
 def test_the_published_pair_meets_its_conditions():
@@ -94,24 +95,31 @@ def test_measured_order_eight(scene_factory):
 
 
 def test_fewer_evaluations_than_scipys_dop853_for_the_same_error(scene_factory):
-    """scipy's DOP853 at rtol 1e-10 on the reference equations (alpha, v and R as a matrix)
-    against dop853 at the tolerance that reaches the same error in the contact point."""
+    """scipy's DOP853 at rtol 1e-10 on the reference equations (alpha, v and R as a matrix) against
+    dop853 at the tolerance that reaches the same error, the larger of the contact point's (m) and R's
+    angle (rad) at the end. (scipy's steps are set by R, whose entries swing 10-30 times a second: its
+    contact point comes out at round-off, 2e-15 m, and R at 2.1e-10 rad, with 1646 evaluations; ours
+    reaches 1.5e-11 m and 1.3e-10 rad with 421, at rtol 1e-9.)"""
     from scipy.integrate import solve_ivp
 
     scene = scene_factory("0.5*sin(x)*cos(y)", **HILLS)
     t_end = 2.0
-    alpha_ref, _, _ = reference_solution(scene, [0.0, t_end], rtol=1e-13, atol=1e-16)
+    alpha_ref, _, R_ref = reference_solution(scene, [0.0, t_end], rtol=1e-13, atol=1e-16)
     alpha, v = initial_state(landscape_for(scene.landscape), scene)
     start = time.thread_time()   # processor time: a loaded machine does not bend the ratio
     sol = solve_ivp(reference_rhs(scene), (0.0, t_end), np.concatenate([alpha, v, np.eye(3).ravel()]),
                     method="DOP853", rtol=1e-10, atol=1e-13)
     seconds_scipy = time.thread_time() - start
-    error_scipy = np.abs(sol.y[:2, -1] - alpha_ref[-1]).max()
-    for rtol in 10.0 ** -np.arange(10, 14.5, 0.5):
+
+    def error(contact, R):
+        return max(np.abs(contact - alpha_ref[-1]).max(), rotation_angle(R[None], R_ref[-1:])[0])
+
+    error_scipy = error(sol.y[:2, -1], sol.y[5:, -1].reshape(3, 3))
+    for rtol in 10.0 ** -np.arange(6, 14.5, 0.5):
         traj = simulate(scene, method="dop853", rtol=rtol, atol=rtol * 1e-3, t_end=t_end, record_dt=t_end)
-        if np.abs(traj.contact[-1] - alpha_ref[-1]).max() <= error_scipy:
+        if error(traj.contact[-1], traj.R[-1]) <= error_scipy:
             break
-    assert np.abs(traj.contact[-1] - alpha_ref[-1]).max() <= error_scipy
+    assert error(traj.contact[-1], traj.R[-1]) <= error_scipy
     assert traj.evaluations <= sol.nfev, (rtol, traj.evaluations, sol.nfev)
 
     def seconds_ours():

@@ -126,11 +126,11 @@ def test_rodrigues_is_exact_at_any_angle(theta):
     from the small-angle series to sin/cos at |u| = 1e-4."""
     u = theta * np.array([0.48, -0.6, 0.64])  # a unit axis
     R0 = exact_rotation(np.array([0.3, -1.1, 0.7]))
-    z = np.zeros(8)
-    z[5:8] = u  # the Munthe-Kaas state: alpha, v, then u
     out = np.empty((3, 3))
-    rodrigues(z, R0, out)
+    rodrigues(u[0], u[1], u[2], R0, out)
     np.testing.assert_allclose(out, exact_rotation(u) @ R0, rtol=0, atol=2e-15)
+    rodrigues(u[0], u[1], u[2], R0, R0)  # in place
+    np.testing.assert_allclose(R0, out, rtol=0, atol=0)
 
 
 @pytest.mark.parametrize("angle_per_step", [0.5, 1.0, 3.0, 6.0])

@@ -95,7 +95,7 @@ def run_batch(fn, W, D, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, 
             t0 = (k - 1) * dt
             h = t_end - t0 if final else dt
             t = t_end if final else k * dt
-            bad = trial_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            bad = trial_step(fn, d, p, W, D, h, z, R, K, last, Y, zn, Rn, pn, ints)
             if bad:
                 ints[I_STATUS] = NONFINITE
                 break
@@ -109,7 +109,7 @@ def run_batch(fn, W, D, Z0, P, DT, T_END, N_STEPS, status, out, K, probe, rows, 
                     _take_row(row, False, acc)
                     t_reached, x_end, y_end = row[0], row[1], row[2]
                 break
-            accept(False, n, z, R, K, last, probe, zn, Rn, pn)
+            accept(p, False, n, z, R, K, last, probe, zn, Rn, pn)
             record(rows, 0, t, z, R, probe, p)
             _take_row(row, False, acc)
             t_reached, x_end, y_end = t, z[0], z[1]
@@ -129,6 +129,6 @@ def scratch_arrays(stages: int) -> tuple:
     """The scratch arrays ``run_batch`` needs after its outcome arrays (one set per thread);
     stages: the rows of the method's W."""
     n = MOTION_SIZE
-    return (np.zeros((stages + 1, n)), np.zeros(kernel.PROBE_SIZE), np.zeros((1, kernel.ROW_SIZE)),
+    return (np.zeros((kernel.stage_rows(stages), n)), np.zeros(kernel.PROBE_SIZE), np.zeros((1, kernel.ROW_SIZE)),
             np.eye(3), np.zeros(kernel.INTS_SIZE, dtype=np.int64), np.zeros(kernel.INFO_SIZE),
             np.zeros(8), np.zeros(kernel.work_size(n) + n))
