@@ -537,15 +537,21 @@ def _trial_step(n: int, mk: bool):
             dynamics(fn, d, p, Y, mk, K, i, pn, False)
         ints[I_EVALS] += last - 1
         combine(n, z, h, W, last, K, last, zn)
-        if orientation and mk and p[P_TURN] > 0.0:
-            return end_of_turn(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
-        if orientation and mk:
+        carry = orientation and mk and p[P_TURN] > 0.0
+        if carry:  # (finite until carried, after the evaluation at zn)
+            for a in range(3):
+                for c in range(3):
+                    Rn[a, c] = R[a, c]
+        elif orientation and mk:
             rodrigues(zn[5], zn[6], zn[7], R, Rn)
         elif orientation:
             for a in range(3):
                 for c in range(3):
                     Rn[a, c] = zn[5 + 3 * a + c]
-        return end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
+        code = end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
+        if carry and code == 0:
+            code = carry_orientation(fn, d, p, W, P, h, z, R, K, last, Y, Rn, pn, ints)
+        return code
 
     return trial_step
 
@@ -584,20 +590,12 @@ def end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints):
 
 
 @COLD
-def end_of_turn(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
-    """The end of an explicit step carrying omega: zn checked and evaluated (``end_of_step``),
-    the dense-output stages taken, then R carried through the step into Rn (``turn``)."""
-    for a in range(3):
-        for c in range(3):
-            Rn[a, c] = R[a, c]
-    code = end_of_step(fn, d, p, True, MK_SIZE, True, zn, Rn, K, last, pn, ints)
-    if code != 0:
-        return code
-    for i in range(last + 1, W.shape[0]):
-        combine(MK_SIZE, z, h, W, i, K, i, Y)
-        dynamics(fn, d, p, Y, True, K, i, pn, False)
-    ints[I_EVALS] += W.shape[0] - 1 - last
-    ints[I_DENSE] = ints[I_STEPS] + 1
+def carry_orientation(fn, d, p, W, P, h, z, R, K, last, Y, Rn, pn, ints):
+    """The end of an explicit step carrying omega, once its new state is evaluated: the
+    dense-output stages taken, then R carried through the step into Rn (``turn``); returns
+    the step's report (0, or 2 where the orientation is not finite)."""
+    ints[I_DENSE] = -1
+    dense_stages(fn, d, p, W, h, z, K, last, Y, pn, ints)
     turn(p, z, R, h, P, K, 0.0, 1.0, Rn)
     return 0 if _finite_matrix(Rn) else 2
 
