@@ -142,9 +142,15 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0) ->
 
 
 
-@JIT
+# What ``dynamics`` computes: the stage derivative alone, or also the probe. Floats, like mk
+# there (1.0 Munthe-Kaas): numba would compile it anew for every constant bool passed.
+STAGE, FULL = 0.0, 1.0
+
+
+@STEP
 def dynamics(fn, d, p, z, mk, K, row, probe, full):
-    """K[row] = z'(z); with ``full`` also fill ``probe`` (normal, omega, F.N, r*kappa, height)."""
+    """K[row] = z'(z); with ``full`` (FULL) also fill ``probe`` (normal, omega, F.N, r*kappa,
+    height). Compiled once (numba's inlining copied it into every caller), inlined by LLVM."""
     r, k, mr, mr2, mg = p[0], p[3], p[4], p[5], p[6]
     fn(z[0], z[1], data_pointer(d))
     fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
@@ -182,14 +188,14 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
     if K.shape[1] == MOTION_SIZE:  # no orientation carried
         pass
-    elif mk and p[P_TURN] > 0.0:
+    elif mk != 0.0 and p[P_TURN] > 0.0:
         # omega' = k (v' + nv' N + nv N'), N' = d: omega carried as a quadrature of the motion
         e1, e2, e3 = K[row, 2], K[row, 3], K[row, 4]
         nve = 2.5 * (d1 * v1 + d2 * v2 + d3 * v3 + n1 * e1 + n2 * e2 + n3 * e3)
         K[row, 5] = k * (e1 + nve * n1 + nv * d1)
         K[row, 6] = k * (e2 + nve * n2 + nv * d2)
         K[row, 7] = k * (e3 + nve * n3 + nv * d3)
-    elif mk:
+    elif mk != 0.0:
         K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
     else:
         # R' = A(omega) R, column by column
@@ -198,7 +204,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
             K[row, 5 + j] = o2 * q3 - o3 * q2
             K[row, 8 + j] = o3 * q1 - o1 * q3
             K[row, 11 + j] = o1 * q2 - o2 * q1
-    if full:
+    if full != 0.0:
         probe[0], probe[1], probe[2] = n1, n2, n3
         probe[3], probe[4], probe[5] = o1, o2, o3
         # F.N = m (c'' - g).N with c''.N = r (omega x N').N
@@ -485,7 +491,7 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
-    dynamics(fn, d, p, z, mk, K, 0, probe, True)
+    dynamics(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
     ints[I_EVALS] += 1
     ints[I_DENSE] = -1
     if mk and p[P_TURN] > 0.0:
@@ -534,7 +540,7 @@ def _trial_step(n: int, mk: bool):
         """
         for i in range(1, last):
             combine(n, z, h, W, i, K, i, Y)
-            dynamics(fn, d, p, Y, mk, K, i, pn, False)
+            dynamics(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pn, STAGE)
         ints[I_EVALS] += last - 1
         combine(n, z, h, W, last, K, last, zn)
         carry = orientation and mk and p[P_TURN] > 0.0
@@ -580,7 +586,7 @@ def end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints):
         return 1
     if orientation and not (_finite(zn, 5, n) and _finite_matrix(Rn)):
         return 2
-    dynamics(fn, d, p, zn, mk, K, last, pn, True)
+    dynamics(fn, d, p, zn, 1.0 if mk else 0.0, K, last, pn, FULL)
     ints[I_EVALS] += 1
     if not (_finite_row(K, last, 0, 5) and _finite(pn, 0, PROBE_SIZE)):
         return 1
@@ -697,7 +703,7 @@ def _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn):
                 c = h * W[1 + i, 1 + j]
                 for q in range(5):
                     Y[q] += c * K[1 + j, q]
-            dynamics(fn, d, p, Y, True, K, new + i, pn, False)
+            dynamics(fn, d, p, Y, 1.0, K, new + i, pn, STAGE)
         ints[I_EVALS] += s
         change = max(_scaled_change(s, h, z, K, 0, 2), _scaled_change(s, h, z, K, 2, 5))
         for i in range(s):
@@ -781,7 +787,7 @@ def _scaled_change(s, h, z, K, lo, hi):
 
 @COLD
 def evaluate(fn, d, p, z, mk, K, row, probe):
-    dynamics(fn, d, p, z, mk, K, row, probe, True)
+    dynamics(fn, d, p, z, 1.0 if mk else 0.0, K, row, probe, FULL)
 
 
 @JIT
@@ -896,7 +902,7 @@ def dense_stages(fn, d, p, W, h, z, K, last, Y, pe, ints):
     ints[I_DENSE] = ints[I_STEPS] + 1
     for i in range(last + 1, W.shape[0]):
         combine(n, z, h, W, i, K, i, Y)
-        dynamics(fn, d, p, Y, mk, K, i, pe, False)
+        dynamics(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pe, STAGE)
         ints[I_EVALS] += 1
 
 
