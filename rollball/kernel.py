@@ -137,9 +137,8 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0) ->
     0 for the Munthe-Kaas increment u in the state, else the tolerance (rad) for the
     orientation's sub-steps when omega is carried instead (``turn``: the adaptive pairs)."""
     r, m, g0 = radius, mass, gravity
-    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + 0.0 * r])
-
-
+    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0,
+                     turn + 0.0 * r])   # (+ 0 r: a column like the others where r is an array, sweeps)
 
 
 # What ``dynamics`` computes: the stage derivative alone, or also the probe. Floats, like mk
@@ -291,11 +290,12 @@ def rodrigues(u1, u2, u3, R, out):
 # R does not act on the motion: R' = A(omega(t)) R with omega a function of (alpha, v). The
 # pairs therefore carry omega itself in z[5:8] (its derivative from the motion's, ``dynamics``),
 # set to the exact omega at every step start; the step's dense output then gives omega at any
-# time inside it, to the pair's order. ``turn`` carries R through the step in sub-steps of at
-# most p[P_TURN] rad, each by the 6th-order Magnus integrator on the three Gauss points
-# (Blanes, Casas and Ros 2000). Integrated as u by the pair itself, the orientation's error per
-# step grows with the angle turned (u' = dexp_u^-1(omega) is the stiffest part of the system
-# where the axis turns) and u would set the step; here the motion does.
+# time inside it, to the pair's order. ``turn`` carries R through the step in sub-steps, each by
+# the 6th-order Magnus integrator on the three Gauss points (Blanes, Casas and Ros 2000), as
+# many as keep its error below p[P_TURN] (TURN_SHARE of rtol). Integrated as u by the pair
+# itself, the orientation's error per step grows with the angle turned (u' = dexp_u^-1(omega)
+# is the stiffest part of the system where the axis turns) and u would set the step; here the
+# motion does.
 
 GAUSS_SPREAD = math.sqrt(15.0) / 10.0   # the Gauss points of [0, 1]: 1/2 -+ this, and 1/2
 MAX_TURNS = 1e6                         # sub-steps in one span at most (else R is not finite)
@@ -491,6 +491,7 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
+    # (np.int64(0): a literal 0 would compile dynamics anew for it)
     dynamics(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
     ints[I_EVALS] += 1
     ints[I_DENSE] = -1
@@ -600,7 +601,7 @@ def carry_orientation(fn, d, p, W, P, h, z, R, K, last, Y, Rn, pn, ints):
     """The end of an explicit step carrying omega, once its new state is evaluated: the
     dense-output stages taken, then R carried through the step into Rn (``turn``); returns
     the step's report (0, or 2 where the orientation is not finite)."""
-    ints[I_DENSE] = -1
+    ints[I_DENSE] = -1  # (this trial's own)
     dense_stages(fn, d, p, W, h, z, K, last, Y, pn, ints)
     turn(p, z, R, h, P, K, 0.0, 1.0, Rn)
     return 0 if _finite_matrix(Rn) else 2
@@ -795,15 +796,15 @@ def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
     """The error of a step in units of the tolerance (the step is accepted when <= 1).
 
     Each estimate is h (E K)_q per component q < n, weighed by scale_q = atol + rtol
-    max(|z_q|, |zn_q|) (the pairs pass the motion, alpha and v: omega is a function of it, and
-    R follows omega's dense output in sub-steps held to the tolerance, ``turn``; later components
-    are weighed by atol + rtol). kind 0: one estimate (E row 0), RMS over the state (Hairer's DOPRI5). kind 1: two
+    max(|z_q|, |zn_q|). The pairs pass the motion, alpha and v (n = MOTION_SIZE): omega is a
+    function of it, and R follows omega's dense output held to its own tolerance (``turn``).
+    kind 0: one estimate (E row 0), RMS over the components (Hairer's DOPRI5). kind 1: two
     estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
     as Hairer's DOP853 does.
     """
     a5, a3 = 0.0, 0.0
     for q in range(n):
-        scale = atol + rtol * (max(abs(z[q]), abs(zn[q])) if q < 5 else 1.0)
+        scale = atol + rtol * max(abs(z[q]), abs(zn[q]))
         e = 0.0
         for i in range(last + 1):
             e += E[0, i] * K[i, q]
@@ -822,7 +823,8 @@ def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
 
 @JIT
 def accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn):
-    """Make the trial state the current one; K[0] becomes its derivative (u-part = omega)."""
+    """Make the trial state the current one; K[0] becomes its derivative (the u-part omega;
+    carrying omega, z's omega becomes the exact one of the new state)."""
     for q in range(n):
         z[q] = zn[q]
         K[0, q] = K[last, q]
