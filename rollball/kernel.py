@@ -371,12 +371,12 @@ def omega_integral(z, h, P, K, theta):
 @COLD
 def turn(p, z, R, h, P, K, theta0, theta1, out):
     """out = R (the orientation at t + theta0 h) carried to t + theta1 h along omega's dense
-    output (out may be R). The sub-steps: Magnus 6's error in one of m sub-steps of a span
-    turning by phi rad is MAGNUS_ERROR phi^4 |C| / m^7, C = [phi_mid, phi_end - phi_start] the
-    span's commutator (how far its axis turns), so m is chosen for a total of p[P_TURN] (the
-    tolerance): a span whose axis keeps its direction is one sub-step, however far it turns."""
+    output (out may be R), the polynomial ``omega_polynomial`` wrote into K with the step's
+    stages. The sub-steps: Magnus 6's error in one of m sub-steps of a span turning by phi rad
+    is MAGNUS_ERROR phi^4 |C| / m^7, C = [phi_mid, phi_end - phi_start] the span's commutator
+    (how far its axis turns), so m is chosen for a total of p[P_TURN] (the tolerance): a span
+    whose axis keeps its direction is one sub-step, however far it turns."""
     x0, x1 = theta0, theta1
-    omega_polynomial(h, P, K)
     a1, a2, a3 = omega_at(z, P, K, x0)
     b1, b2, b3 = omega_at(z, P, K, 0.5 * (x0 + x1))
     c1, c2, c3 = omega_at(z, P, K, x1)
@@ -603,6 +603,7 @@ def carry_orientation(fn, d, p, W, P, h, z, R, K, last, Y, Rn, pn, ints):
     the step's report (0, or 2 where the orientation is not finite)."""
     ints[I_DENSE] = -1  # (this trial's own)
     dense_stages(fn, d, p, W, h, z, K, last, Y, pn, ints)
+    omega_polynomial(h, P, K)  # (with the stages: every later turn inside the step reads it)
     turn(p, z, R, h, P, K, 0.0, 1.0, Rn)
     return 0 if _finite_matrix(Rn) else 2
 
@@ -1177,7 +1178,8 @@ def line_fits(fn, d, r, z0, z1):
 def retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """Take the step from z again (after a search inside it used the step's buffers)."""
     take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
-    ints[I_DENSE] = -1
+    if p[P_TURN] == 0.0:  # (carrying omega, the step has taken its dense-output stages again)
+        ints[I_DENSE] = -1
 
 
 @COLD

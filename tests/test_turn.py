@@ -21,11 +21,13 @@ def omega(t, omega0=OMEGA0, c=C):
 
 
 def arrays(omega0=OMEGA0, c=C):
-    """z, P and K as a pair's step leaves them: P the identity, so K[k, 5:8] = C[k] / H."""
+    """z, P and K as a pair's step leaves them (with omega's polynomial): P the identity, so
+    K[k, 5:8] = C[k] / H."""
     degree = len(c)
     P = np.eye(degree)
     K = np.zeros((kernel.stage_rows(degree), kernel.MK_SIZE))
     K[:degree, 5:8] = c / H
+    kernel.omega_polynomial(H, P, K)
     z = np.zeros(kernel.MK_SIZE)
     z[5:8] = omega0
     return z, P, K
