@@ -25,6 +25,11 @@ from .plots import DecadeAxis, fit_decades
 CSV_NAME = "compare.csv"
 SPEC_COLORS = COLORS + ("#e377c2", "#7f7f7f", "#bcbd22", "#17becf")   # one per method, as the CLI's figure
 ORIENTATION_CEILING = 10.0   # a classic R far off SO(3) would squash the rest of the step panel
+# Where a panel's legend may sit (pyqtgraph's anchor: the legend's corner, the plot's, an offset
+# in pixels), in order of preference: the first that hides the least of the lines is taken.
+LEGEND_CORNERS = (((0, 1), (0, 1), (10, -10)), ((1, 1), (1, 1), (-10, -10)),
+                  ((1, 0), (1, 0), (-10, 10)), ((0, 0), (0, 0), (10, 10)))
+SAMPLES_PER_SEGMENT = 16
 
 
 class CompareThread(QtCore.QThread):
@@ -129,7 +134,7 @@ class SpeedWindow(QtWidgets.QWidget):
         # room on the right for half the last label along the bottom (a wide one, 10⁻¹⁰)
         plot.plotItem.layout.setContentsMargins(1, 1, plot.getAxis("bottom").label_extent(-10, -10) / 2, 1)
         plot.showGrid(x=True, y=True, alpha=0.25)
-        plot.addLegend(offset=(10, -10), labelTextSize="8pt", labelTextColor="#333")  # bottom left: empty
+        plot.addLegend(offset=(10, -10), labelTextSize="8pt", labelTextColor="#333")  # (placed: place_legend)
         return plot
 
     # -- computing -------------------------------------------------------------------
@@ -212,6 +217,7 @@ class SpeedWindow(QtWidgets.QWidget):
             x, y = (np.concatenate(values) for values in zip(*lines)) if lines else (np.ones(1), np.ones(1))
             fit_decades(plot, x, "x")
             fit_decades(plot, np.minimum(y, ceiling), "y")
+            place_legend(plot)
 
     def _series(self, plot, runs, x, y, pen, color, name, munthe_kaas) -> None:
         """A line per run spec and its runs as points: filled Munthe-Kaas, crosses classic."""
@@ -251,3 +257,40 @@ class SpeedWindow(QtWidgets.QWidget):
     def closeEvent(self, event) -> None:
         self.cancel()
         super().closeEvent(event)
+
+
+def line_points(plot) -> np.ndarray:
+    """The plot's lines sampled along every segment, in scene coordinates (2 x n)."""
+    view = plot.getViewBox()
+    to_scene = view.childTransform() * view.sceneTransform()
+    samples = [np.zeros((2, 0))]
+    t = np.linspace(0.0, 1.0, SAMPLES_PER_SEGMENT)[:, None]
+    for item in plot.listDataItems():
+        x, y = item.getData()   # (in the plot's log10 coordinates)
+        if x is None or len(x) == 0:
+            continue
+        if len(x) == 1:
+            samples.append(np.array([x, y], dtype=float))
+            continue
+        samples.append(np.array([(x[:-1] + t * np.diff(x)).ravel(), (y[:-1] + t * np.diff(y)).ravel()]))
+    x, y = np.concatenate(samples, axis=1)
+    return np.array([to_scene.m11() * x + to_scene.m21() * y + to_scene.dx(),
+                     to_scene.m12() * x + to_scene.m22() * y + to_scene.dy()])
+
+
+def legend_cover(plot, points: np.ndarray | None = None) -> int:
+    """How many of the line samples (``line_points``) the plot's legend hides where it is."""
+    points = line_points(plot) if points is None else points
+    box = plot.plotItem.legend.sceneBoundingRect()
+    x, y = points
+    return int(np.count_nonzero((x >= box.left()) & (x <= box.right()) & (y >= box.top()) & (y <= box.bottom())))
+
+
+def place_legend(plot) -> None:
+    """Put the legend in the first of LEGEND_CORNERS where it hides the least of the lines."""
+    points = line_points(plot)
+    covers = []
+    for corner in LEGEND_CORNERS:
+        plot.plotItem.legend.anchor(*corner)
+        covers.append(legend_cover(plot, points))
+    plot.plotItem.legend.anchor(*LEGEND_CORNERS[int(np.argmin(covers))])

@@ -9,7 +9,7 @@ import pyqtgraph as pg
 import pytest
 
 from app.controller import RUNNING
-from app.speed_window import CSV_NAME, SpeedWindow
+from app.speed_window import CSV_NAME, LEGEND_CORNERS, SpeedWindow, legend_cover, place_legend
 from rollball import Scene
 from rollball.comparison import Comparison, Reference, RunResult, RunSpec
 from rollball.examples import EXAMPLES_DIR
@@ -38,6 +38,8 @@ def test_a_quick_comparison_is_plotted_exported_and_loaded(qtbot, window, tmp_pa
     rk4 = next(o for o in comparison.orders if str(o.spec) == "rk4")
     assert f"RK4 Munthe-Kaas: order {rk4.orientation:.2f}" in orders
     assert speed.status.text() == comparison.summary() and speed.export_button.isEnabled()
+    for plot in (speed.time_plot, speed.step_plot):  # each legend hides none of the lines
+        assert legend_cover(plot) == 0
 
     assert speed.export(tmp_path)
     data = json.loads((tmp_path / "compare.json").read_text())
@@ -112,3 +114,26 @@ def test_both_panels_label_both_axes_at_powers_of_ten_that_never_overlap(qtbot, 
                 low, high = plot.viewRange()[side == "left"]
                 assert low <= exponent(shown[0]) < exponent(shown[-1]) <= high
                 assert (low, high) == (np.floor(span[0]), max(np.ceil(span[1]), np.floor(span[0]) + 1))
+
+
+def test_the_legend_takes_the_corner_that_hides_the_least(qtbot):
+    """Lines filling the bottom left push the legend to another corner; the first corner is kept
+    while it hides nothing."""
+    speed = SpeedWindow()
+    qtbot.addWidget(speed)
+    speed.resize(900, 500)
+    speed.show()
+    plot = speed.time_plot
+    plot.plot([1e-5, 1e-1], [1e-1, 1e-12], name="falling")
+    plot.plot([1e-5, 1e-2], [1e-12, 1e-12], name="along the bottom")
+    plot.setRange(xRange=(-5, 0), yRange=(-13, 0), padding=0.0)
+    plot.plotItem.legend.anchor(*LEGEND_CORNERS[0])
+    assert legend_cover(plot) > 0
+    place_legend(plot)
+    assert legend_cover(plot) == 0
+    assert plot.plotItem.legend.pos().x() > plot.getViewBox().width() / 2   # moved to the right
+    plot.clear()
+    plot.plotItem.legend.clear()
+    plot.plot([1e-1, 1], [1e-1, 1e-3], name="top right")
+    place_legend(plot)
+    assert legend_cover(plot) == 0 and plot.plotItem.legend.pos().x() < plot.getViewBox().width() / 2
