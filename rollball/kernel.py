@@ -25,15 +25,11 @@ from numba import njit, types
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
 
-from . import compile_cache
-
 # The landscape callback is passed between compiled functions as a first-class function, which
 # numba announces on stderr at every compile (its text wrapped in terminal highlighting codes);
 # the command line and the setup script keep stderr to their own lines.
 warnings.filterwarnings("ignore", message=r"(\x1b\[[0-9;]*m)*First-class function type",
                         category=NumbaExperimentalFeatureWarning)
-
-compile_cache.install()   # before anything here is compiled or loaded from the disk cache
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
@@ -1456,7 +1452,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        bad = trial_step(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = trial_step_mk(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)  # (the pairs: MK_SIZE)
         err = math.inf if bad else error_norm(E, err_kind, K, last, MOTION_SIZE, z, zn, hs, rtol, atol)
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
             ints[I_REJECTED] += 1

@@ -3,8 +3,9 @@
 numba compiles the stepping kernel the first time each kind of method runs (seconds to tens
 of seconds with empty caches) and keeps the machine code on disk, so later processes load
 it in well under a second. ``warm_up`` runs every method once on a tiny run, and a tiny
-sweep (the sweep loop is compiled code of its own), so that the compiling happens now; ``python -m rollball.warmup`` does it with progress on stderr (the
-setup script calls it). ``compile_notice`` tells a caller when numba starts compiling.
+sweep (whose fold of rows into outcomes is compiled code of its own), so that the compiling
+happens now; ``python -m rollball.warmup`` does it with progress on stderr (the setup script
+calls it). ``compile_notice`` tells a caller when numba starts compiling.
 """
 
 from __future__ import annotations

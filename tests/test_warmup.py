@@ -8,7 +8,7 @@ import sys
 from numba import njit
 
 from rollball import METHODS
-from rollball.sweeps import kernel as sweep_kernel
+from rollball.sweeps import outcomes
 from rollball.warmup import compile_notice, variants, warm_up
 
 
@@ -26,7 +26,7 @@ def test_every_method_is_warmed_with_each_orientation_update_it_allows():
     assert len(set(warmed)) == len(warmed)
 
 
-def test_the_warm_up_reports_each_part_and_readies_the_sweep_loop_too():
+def test_the_warm_up_reports_each_part_and_readies_sweeps_too():
     parts, ready = [], []
     warm_up(lambda done, total, text: parts.append((done, total, text)), [("lawson5", False)],
             lambda method, mk: ready.append((method, mk)))
@@ -34,7 +34,7 @@ def test_the_warm_up_reports_each_part_and_readies_the_sweep_loop_too():
     assert parts[0] == (0, total, "lawson5 classic") and ready[0] == ("lawson5", False)
     assert parts[-2:] == [(total - 1, total, "sweeps"), (total, total, "done")]
     assert sorted(ready) == sorted(variants())
-    assert sweep_kernel.run_batch.signatures   # compiled, or loaded from the disk cache
+    assert outcomes._fold.signatures   # compiled, or loaded from the disk cache
 
 
 def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all():
@@ -111,8 +111,9 @@ def test_a_cold_warm_up_compiles_each_kernel_function_once(tmp_path):
     assert {name: len(ids) for name, ids in compiled.items() if len(ids) != len(set(ids))} == {}
     steps = compiled.pop("rollball.kernel._trial_step.<locals>.trial_step")
     assert len(steps) == len(set(steps)) == 3  # MK_SIZE, CLASSIC_SIZE, MOTION_SIZE
-    assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive",
-            "rollball.sweeps.kernel.run_batch"} <= set(compiled)
+    assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive"} <= set(compiled)
+    # sweeps run through simulate's loop (advance): only their small fold of rows is their own
+    assert [name for name in compiled if name.startswith("rollball.sweeps.")] == ["rollball.sweeps.outcomes._fold"]
     # the right-hand side is compiled once (and inlined by LLVM); the other per-stage helpers are
     # inlined by numba, not compiled alone; few functions in all
     assert "rollball.kernel.dynamics" in compiled and "rollball.kernel.combine" not in compiled

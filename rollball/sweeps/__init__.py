@@ -2,7 +2,7 @@
 per run (``rollball sweep``, ``rollball.sweep``)."""
 
 from .grid import KEYS, MAX_RUNS, Grid, parse_vary
-from .kernel import OUTCOMES
+from .outcomes import OUTCOMES
 from .runner import sweep
 from .table import SweepTable
 

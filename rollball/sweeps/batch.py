@@ -1,9 +1,9 @@
 """One batch of a sweep: runs lo .. hi-1 of the grid, from scene values to outcomes.
 
 ``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
-scenes, computes the initial states for the whole batch at once and runs them all in one
-call of the compiled sweep loop (which releases the GIL). The same batch gives the same
-numbers bit for bit wherever it runs. A process compiles the landscape once, on its
+scenes, computes the initial states for the whole batch at once and runs them one after
+another (``outcomes.Runner``; the compiled loop releases the GIL). The same batch gives the
+same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
 first batch, and keeps it for the rest.
 """
 
@@ -20,8 +20,8 @@ from ..landscape import landscape_for
 from ..scene import Scene, SceneError
 from ..simulation import initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
-from . import kernel as sweep_kernel
 from .grid import KEYS, Grid, value_of, with_values
+from .outcomes import INVALID, NOT_RUN, OUTCOMES, Runner
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -101,8 +101,8 @@ def run(task: Task) -> Result:
     runs = len(values)
     method = sweep_method(scene)
     messages = validate(scene, grid, values)
-    status = np.full(runs, sweep_kernel.NOT_RUN, dtype=np.int64)
-    status[list(messages)] = sweep_kernel.INVALID
+    status = np.full(runs, NOT_RUN, dtype=np.int64)
+    status[list(messages)] = INVALID
     c = _columns(scene, grid, values)
     fn = _landscape(scene.landscape)
     r, m = c["ball.radius"], c["ball.mass"]
@@ -119,9 +119,10 @@ def run(task: Task) -> Result:
     for i, (h, t) in enumerate(combos):
         if h > 0 and t > 0:
             n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
-    outcomes = np.full((runs, len(sweep_kernel.OUTCOMES)), np.nan)
+    outcomes = np.full((runs, len(OUTCOMES)), np.nan)
     W, _, D = method.kernel_arrays()
-    sweep_kernel.run_batch(fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
-                           status, outcomes, *sweep_kernel.scratch_arrays(W.shape[0]))
+    runner = Runner(W, D)
+    for b in np.flatnonzero(status == NOT_RUN):
+        status[b] = runner.run(fn, z0[b], p[b], dt[b], t_end[b], n_steps[b], outcomes[b])
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)

@@ -14,7 +14,7 @@ import numpy as np
 from .. import kernel
 from ..files import atomic_write_bytes
 from .grid import KEYS
-from .kernel import INVALID, NOT_RUN, OUTCOMES
+from .outcomes import INVALID, NOT_RUN, OUTCOMES
 
 UNITS = {"t_reached": "s", "liftoff_time": "s", "x_end": "m", "y_end": "m", "energy_drift": "relative",
          "min_normal_force": "N", "max_speed": "m/s", "path_length": "m"}

@@ -23,7 +23,7 @@ from ..scene import Scene
 from ..simulation import step_count
 from . import batch
 from .grid import Grid
-from .kernel import NOT_RUN, OUTCOMES
+from .outcomes import NOT_RUN, OUTCOMES
 from .table import SweepTable
 
 # Landscape evaluations per batch: about 0.2 s on a 2020s core for a small formula.

@@ -15,7 +15,7 @@ from ..files import atomic_write, atomic_write_text
 from ..scene import Scene
 from ..trajectory import Status
 from .grid import Grid
-from .kernel import INVALID, NOT_RUN, OUTCOMES
+from .outcomes import INVALID, NOT_RUN, OUTCOMES
 
 # Status codes by name, as the CSV writes them.
 STATUS_NAMES = {kernel.OK: str(Status.OK), kernel.DOES_NOT_FIT: str(Status.DOES_NOT_FIT),
