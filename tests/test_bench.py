@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rollball import Scene, Simulation
-from rollball.bench import Config, run, targets
+from rollball.bench import Config, report, run, targets
 from rollball.bench.cstep import CStep
 from rollball.cli import main
 from rollball.comparison import default_runs
@@ -52,3 +52,27 @@ def test_bench_command_line_usage(capsys):
     with pytest.raises(SystemExit) as stop:
         main(["bench", "--help"])
     assert stop.value.code == 0 and "--quick" in capsys.readouterr().out
+
+
+def _targets(**changes):
+    cold = {"import": 0.4, "first_simulate_cold_cache": 20.0, "new_formula_cold_cache": 0.1,
+            "process_cold_cache": 21.0, "first_simulate_disk_cache": 0.3, "known_formula_disk_cache": 0.09,
+            "process_disk_cache": 1.0, "all_methods_cold_cache": 8.0}
+    results = {"c": {"ratio": 1.1, "ns_ours": 270.0, "ns_c": 245.0, "same_step": 1e-15},
+               "costs": {"rk4 MK": 270.0}, "real_time": 400.0, "latency": 0.07, "memory": 100 * 2**20,
+               "app": {"longest_gap_ms": 90.0, "median_gap_ms": 20.0}, "cold": cold}
+    for key, value in changes.items():
+        if key in cold:
+            cold[key] = value
+        else:
+            results[key] = value
+    return "\n".join(report._targets(results))
+
+
+def test_the_report_marks_each_figure_that_misses_its_goal():
+    assert "missed" not in _targets()
+    for change, row in [({"all_methods_cold_cache": 36.0}, "compiling every method"),
+                        ({"c": {"ratio": 1.3, "ns_ours": 300.0, "ns_c": 230.0, "same_step": 1e-15}}, "against C"),
+                        ({"latency": 0.2}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory")]:
+        missed = [line for line in _targets(**change).splitlines() if "missed" in line]
+        assert len(missed) == 1 and row in missed[0], (change, missed)

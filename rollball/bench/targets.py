@@ -111,6 +111,14 @@ formula = time.perf_counter()
 print(imported - start, simulated - imported, formula - simulated)
 """
 
+_WARM_UP = """
+import time
+start = time.process_time()
+from rollball.warmup import warm_up
+warm_up()
+print(time.process_time() - start)
+"""
+
 _MEMORY = """
 import resource
 from rollball import Scene, simulate
@@ -140,7 +148,16 @@ def cold_start() -> dict:
         (imp2, first2, formula2), wall2 = _python(code, env)
     return {"import": imp, "first_simulate_cold_cache": first, "new_formula_cold_cache": formula,
             "process_cold_cache": wall, "first_simulate_disk_cache": first2,
-            "known_formula_disk_cache": formula2, "process_disk_cache": wall2}
+            "known_formula_disk_cache": formula2, "process_disk_cache": wall2,
+            "all_methods_cold_cache": all_methods_cold()}
+
+
+def all_methods_cold() -> float:
+    """CPU seconds to compile every method (and the sweeps' fold), ``warm_up``, in one fresh
+    process with empty numba and landscape caches: what ``scripts/setup`` waits for once."""
+    with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
+        (seconds,), _ = _python(_WARM_UP, {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours})
+    return seconds
 
 
 def peak_memory(steps: int) -> float:
