@@ -621,6 +621,13 @@ def take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     return trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
+@COLD
+def search_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """``take_step`` for the searches inside a step (``fold_search``, ``approach``, ``retake``):
+    compiled once and called, where inlined each of them held a copy of every layout's step."""
+    return take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+
+
 # -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
 #
 # An s-stage Gauss method solves K_i = z'(z + h sum_j a_ij K_j) at every step. The iteration
@@ -1173,7 +1180,7 @@ def line_fits(fn, d, r, z0, z1):
 @COLD
 def retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """Take the step from z again (after a search inside it used the step's buffers)."""
-    take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    search_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
     if p[P_TURN] == 0.0:  # (carrying omega, the step has taken its dense-output stages again)
         ints[I_DENSE] = -1
 
@@ -1227,7 +1234,7 @@ def fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints,
             edge = min(ts + reach, 1.0)
             break
         hs = min(grow, 0.5 * reach, 1.0 - ts)
-        bad = take_step(stepping, fn, d, p, W, P, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
+        bad = search_step(stepping, fn, d, p, W, P, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
         u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
         steady = bad == 0 and not (contact_raced(hs * h, Zs, zn, K, 0, last) or stages_raced(K, last))
         across = bad == 0 and (u1 <= 0.0 or not line_fits(fn, d, r, Zs, zn))
@@ -1288,7 +1295,7 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
         hs = theta * h
         if not hs > 0.0:
             break
-        bad = take_step(stepping, fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = search_step(stepping, fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad != 0:
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
