@@ -106,6 +106,7 @@ R_HEIGHT_JUMP = 9          # the height jumps (value: the jump, m)
 R_NOT_CONVERGED = 10       # an implicit step's stage equations did not converge (value: the step)
 
 ROW_SIZE = 23  # t, x, y, c(3), c'(3), omega(3), R(9), energy, normal force
+ROW_CENTER, ROW_VELOCITY, ROW_ENERGY, ROW_FORCE = 3, 6, 21, 22  # where ``record`` writes them
 
 # Step-size control of the embedded pairs: the next step is h * SAFETY * err^exponent,
 # bounded to [MIN_FACTOR, MAX_FACTOR] times h, with exponent -1/(q + 1) for an error
@@ -1360,7 +1361,7 @@ def scratch(work, n):
             work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
 
 
-@JIT
+@COLD  # called from Python (simulate) and by the sweeps' batch loop: compiled once
 def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
             stepping):
     """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
@@ -1520,3 +1521,79 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
     info[F_TIME], info[F_H] = t, h
     ints[I_RETRY] = 1 if retry else 0
+
+
+# -- sweeps: batches of fixed-step runs ---------------------------------------------------------
+#
+# A run of a sweep needs only the motion (contact point and angular momentum): its state has
+# MOTION_SIZE entries. Each run is stepped by ``advance`` itself, so a sweep's runs end exactly
+# where ``simulate`` ends the same scene, every step recorded into a buffer of BATCH_CHUNK rows
+# that is folded into the run's outcomes and reused: memory does not grow with the steps.
+
+NOT_RUN = 11                  # a run of a batch not run yet (sweeps also mark refused runs, 10)
+BATCH_CHUNK = 256             # steps folded into a run's outcomes at a time
+BATCH_ROWS = BATCH_CHUNK + 2  # the buffer: the last row folded, a chunk, a stop's row
+# One row of outcomes per run, in this order.
+OUTCOMES = ("t_reached", "liftoff_time", "x_end", "y_end", "energy_drift", "min_normal_force",
+            "max_speed", "path_length")
+O_T, O_LIFTOFF, O_X, O_Y, O_DRIFT, O_MIN_FORCE, O_MAX_SPEED, O_PATH = range(len(OUTCOMES))
+TINY = 2.2250738585072014e-308  # the smallest normal double
+
+
+@JIT
+def fold_rows(rows, first, count, acc):
+    """Fold rows[first:count] into a run's accumulators acc = E0, max |E - E0|, min F.N, max
+    speed, path length; rows[first - 1] is the row before them (first 0 starts them)."""
+    if first == 0:
+        acc[0], acc[1], acc[2], acc[3], acc[4] = rows[0, ROW_ENERGY], 0.0, math.inf, 0.0, 0.0
+    for i in range(first, count):
+        acc[1] = max(acc[1], abs(rows[i, ROW_ENERGY] - acc[0]))
+        acc[2] = min(acc[2], rows[i, ROW_FORCE])
+        v = ROW_VELOCITY
+        acc[3] = max(acc[3], math.sqrt(rows[i, v] ** 2 + rows[i, v + 1] ** 2 + rows[i, v + 2] ** 2))
+        if i > 0:
+            c = ROW_CENTER
+            acc[4] += math.sqrt((rows[i, c] - rows[i - 1, c]) ** 2 + (rows[i, c + 1] - rows[i - 1, c + 1]) ** 2
+                                + (rows[i, c + 2] - rows[i - 1, c + 2]) ** 2)
+
+
+@COLD
+def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K, probe, rows, ints, info,
+                  work, acc):
+    """Run every run of a batch whose status is NOT_RUN, without the GIL; write its status and
+    outcomes (O_T ...). Per run b: Z0[b] the initial motion state, PARAMS[b] the parameters
+    (``parameters``), DT[b], T_END[b], N_STEPS[b] the fixed steps; W, P the explicit method.
+    z (MOTION_SIZE), R, K, probe, rows (BATCH_ROWS), ints, info, work, acc (5): scratch."""
+    n = MOTION_SIZE
+    for b in range(Z0.shape[0]):
+        if status[b] != NOT_RUN:
+            continue
+        p = PARAMS[b]
+        for q in range(n):
+            z[q] = Z0[b, q]
+        for q in range(ints.shape[0]):
+            ints[q] = 0
+        for q in range(info.shape[0]):
+            info[q] = math.nan
+        for q in range(out.shape[1]):
+            out[b, q] = math.nan
+        first = 0
+        while ints[I_STATUS] == RUNNING:
+            # (np.int64: a literal int would compile advance anew for it)
+            advance(fn, W, P, p, DT[b], T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R, K, probe,
+                    rows, ints, info, work, EXPLICIT)
+            count = ints[I_ROWS]
+            if count == 0:  # the initial state is not finite: nothing to report
+                break
+            fold_rows(rows, first, count, acc)
+            for c in range(ROW_SIZE):  # the last row, the one before the next chunk's
+                rows[0, c] = rows[count - 1, c]
+            ints[I_ROWS], first = 1, 1
+        status[b] = ints[I_STATUS]
+        if first == 0:
+            continue
+        o = out[b]
+        o[O_T], o[O_X], o[O_Y] = rows[0, 0], rows[0, 1], rows[0, 2]
+        o[O_LIFTOFF] = info[F_LIFTOFF]
+        o[O_DRIFT] = acc[1] / max(abs(acc[0]), p[0] * p[1] * p[2], TINY)
+        o[O_MIN_FORCE], o[O_MAX_SPEED], o[O_PATH] = acc[2], acc[3], acc[4]

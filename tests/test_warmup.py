@@ -7,8 +7,7 @@ import sys
 
 from numba import njit
 
-from rollball import METHODS
-from rollball.sweeps import outcomes
+from rollball import METHODS, kernel
 from rollball.warmup import compile_notice, variants, warm_up
 
 
@@ -34,7 +33,7 @@ def test_the_warm_up_reports_each_part_and_readies_sweeps_too():
     assert parts[0] == (0, total, "lawson5 classic") and ready[0] == ("lawson5", False)
     assert parts[-2:] == [(total - 1, total, "sweeps"), (total, total, "done")]
     assert sorted(ready) == sorted(variants())
-    assert outcomes._fold.signatures   # compiled, or loaded from the disk cache
+    assert kernel.advance_batch.signatures   # compiled, or loaded from the disk cache
 
 
 def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all():
@@ -111,9 +110,7 @@ def test_a_cold_warm_up_compiles_each_kernel_function_once(tmp_path):
     assert {name: len(ids) for name, ids in compiled.items() if len(ids) != len(set(ids))} == {}
     steps = compiled.pop("rollball.kernel._trial_step.<locals>.trial_step")
     assert len(steps) == len(set(steps)) == 3  # MK_SIZE, CLASSIC_SIZE, MOTION_SIZE
-    assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive"} <= set(compiled)
-    # sweeps run through simulate's loop (advance): only their small fold of rows is their own
-    assert [name for name in compiled if name.startswith("rollball.sweeps.")] == ["rollball.sweeps.outcomes._fold"]
+    assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive", "rollball.kernel.advance_batch"} <= set(compiled)
     # the right-hand side is compiled once (and inlined by LLVM); the other per-stage helpers are
     # inlined by numba, not compiled alone; few functions in all
     assert "rollball.kernel.dynamics" in compiled and "rollball.kernel.combine" not in compiled

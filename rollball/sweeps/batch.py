@@ -1,8 +1,8 @@
 """One batch of a sweep: runs lo .. hi-1 of the grid, from scene values to outcomes.
 
 ``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
-scenes, computes the initial states for the whole batch at once and runs them one after
-another (``outcomes.Runner``; the compiled loop releases the GIL). The same batch gives the
+scenes, computes the initial states for the whole batch at once and runs them all in one
+call of the compiled batch loop (``kernel.advance_batch``, which releases the GIL). The same batch gives the
 same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
 first batch, and keeps it for the rest.
 """
@@ -21,7 +21,7 @@ from ..scene import Scene, SceneError
 from ..simulation import initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
 from .grid import KEYS, Grid, value_of, with_values
-from .outcomes import INVALID, NOT_RUN, OUTCOMES, Runner
+from .outcomes import INVALID, NOT_RUN, OUTCOMES
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -121,8 +121,11 @@ def run(task: Task) -> Result:
             n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
     outcomes = np.full((runs, len(OUTCOMES)), np.nan)
     W, _, D = method.kernel_arrays()
-    runner = Runner(W, D)
-    for b in np.flatnonzero(status == NOT_RUN):
-        status[b] = runner.run(fn, z0[b], p[b], dt[b], t_end[b], n_steps[b], outcomes[b])
+    n = kernel.MOTION_SIZE
+    kernel.advance_batch(fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
+                         status, outcomes, np.zeros(n), np.eye(3), np.zeros((kernel.stage_rows(len(W)), n)),
+                         np.zeros(kernel.PROBE_SIZE), np.empty((kernel.BATCH_ROWS, kernel.ROW_SIZE)),
+                         np.zeros(kernel.INTS_SIZE, dtype=np.int64), np.empty(kernel.INFO_SIZE),
+                         np.empty(kernel.work_size(n)), np.empty(5))
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)
