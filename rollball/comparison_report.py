@@ -118,7 +118,8 @@ def new_figure(width: float, height: float):
 
 
 def png(fig) -> bytes:
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:  # (a figure may lay itself out, e.g. around a legend outside)
+        fig.tight_layout()
     out = io.BytesIO()
     fig.savefig(out, format="png", dpi=110)
     return out.getvalue()
