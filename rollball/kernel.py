@@ -49,8 +49,11 @@ LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(ty
 #   most of the code. Inlined by numba it was copied into every loop; called, a step cost a
 #   fifth more.
 # - COLD, compiled once and called: what runs once per run, per recorded row or per event
-#   (start, the event location, the last valid state), and the implicit step, whose stage
-#   iteration outweighs a call.
+#   (start, the event location, the last valid state), the implicit step, whose stage
+#   iteration outweighs a call, the step of the searches inside a step (``search_step``), and
+#   the fixed-step loop ``advance``, which the sweeps' batch loop calls once per chunk of steps.
+#   (numba still compiles a called function again into each caller's machine code: LLVM's share
+#   of a cold compile grows with how many loops reach a function, not with how often it runs.)
 # One signature each: a constant bool or int passed to a compiled function makes numba compile
 # it anew for that constant, so flags passed to COLD functions are floats (EXPLICIT/IMPLICIT,
 # the event kinds) or read from the arrays (shape_of).
