@@ -204,3 +204,11 @@ def test_ctrl_c_writes_the_finished_runs_marked_partial(tmp_path, capsys):
     assert info["partial"] is True and 0 < info["finished"] < 20000
     assert len((out / "sweep.csv").read_text().splitlines()) == 1 + info["finished"]
     assert "stopped early" in capsys.readouterr().err
+
+
+def test_the_batch_loop_reads_the_columns_the_trajectory_names():
+    from rollball import kernel, trajectory
+
+    assert (kernel.ROW_CENTER, kernel.ROW_VELOCITY, kernel.ROW_ENERGY, kernel.ROW_FORCE) == (
+        trajectory.CENTER.start, trajectory.VELOCITY.start, trajectory.ENERGY, trajectory.NORMAL_FORCE)
+    assert trajectory.CENTER.stop - trajectory.CENTER.start == trajectory.VELOCITY.stop - trajectory.VELOCITY.start == 3

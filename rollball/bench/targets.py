@@ -153,7 +153,7 @@ def cold_start() -> dict:
 
 
 def all_methods_cold() -> float:
-    """CPU seconds to compile every method (and the sweeps' fold), ``warm_up``, in one fresh
+    """CPU seconds to compile every method (and the sweeps' batch loop), ``warm_up``, in one fresh
     process with empty numba and landscape caches: what ``scripts/setup`` waits for once."""
     with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
         (seconds,), _ = _python(_WARM_UP, {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours})

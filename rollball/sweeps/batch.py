@@ -2,8 +2,8 @@
 
 ``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
 scenes, computes the initial states for the whole batch at once and runs them all in one
-call of the compiled batch loop (``kernel.advance_batch``, which releases the GIL). The same batch gives the
-same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
+call of the compiled batch loop (``kernel.advance_batch``, which releases the GIL). The same
+batch gives the same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
 first batch, and keeps it for the rest.
 """
 
