@@ -114,12 +114,18 @@ def new_figure(width: float, height: float):
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    return Figure(figsize=(width, height))
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def legend_below(fig, ax) -> None:
+    """One legend for the figure's work-precision panels (ax: a panel that holds every line),
+    below them, where it hides none of the lines."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 6), fontsize=7,
+               title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
 
 
 def png(fig) -> bytes:
-    if fig.get_layout_engine() is None:  # (a figure may lay itself out, e.g. around a legend outside)
-        fig.tight_layout()
     out = io.BytesIO()
     fig.savefig(out, format="png", dpi=110)
     return out.getvalue()
@@ -152,14 +158,14 @@ def draw_orders(ax, cmp: Comparison, colors: dict) -> None:
 def figure(cmp: Comparison) -> bytes:
     """The PNG: contact-point error against compute time (every run spec), and orientation
     error against step size (fixed-step specs) with the fitted slopes written on the lines."""
-    fig = new_figure(11, 4.8)
+    fig = new_figure(11, 5.4)
     left, right = fig.subplots(1, 2)
     colors: dict = {}
     draw_work_precision(left, cmp, colors)
     draw_orders(right, cmp, colors)
     left.set_title("error against time")
     right.set_title("error against step size (fitted slopes)")
-    left.legend(fontsize=7, title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
+    legend_below(fig, left)
     fig.suptitle(f"{cmp.scene.description or cmp.scene.landscape} — to t = {cmp.t_end:g} s; dashed grey: "
                  f"{FLOOR_FACTOR:g}× the reference's own error\n{cmp.machine}", fontsize=8)
     return png(fig)

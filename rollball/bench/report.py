@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..comparison_report import draw_work_precision, findings, machine, new_figure, png
+from ..comparison_report import draw_work_precision, findings, legend_below, machine, new_figure, png
 from .workprecision import SceneResult
 
 
@@ -86,7 +86,6 @@ def markdown(targets: dict | None, results: list[SceneResult], t_end: float | No
 def figure(results: list[SceneResult]) -> bytes:
     """Contact-point error against compute time, one panel per scene, scipy dashed black."""
     fig = new_figure(5.2 * len(results), 5.2)
-    fig.set_layout_engine("constrained")
     axes = fig.subplots(1, len(results), squeeze=False)[0]
     colors: dict = {}
     for ax, result in zip(axes, results):
@@ -94,9 +93,6 @@ def figure(results: list[SceneResult]) -> bytes:
         ax.loglog([b.seconds for b in result.scipy], [max(b.contact, 1e-16) for b in result.scipy], "k--o",
                   label="scipy DOP853", markersize=4)
         ax.set_title(result.name)
-    # one legend for all panels, below them, where it hides no line
-    handles, labels = axes[-1].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 6), fontsize=7,
-               title="solid: Munthe-Kaas, dotted: classic", title_fontsize=7)
+    legend_below(fig, axes[-1])
     fig.suptitle(f"RollBall work-precision — {machine()}", fontsize=9)
     return png(fig)
