@@ -2,9 +2,11 @@
 loop for every tableau (classic and Munthe-Kaas), fixed or adaptive steps, validity checks
 and recording.
 
-Everything here is landscape-independent and compiled once (cached on disk by numba);
-the landscape arrives as a compiled callback ``fn(x, y, out)`` writing f and its first and
-second derivatives to out[0:6].
+Everything here is landscape-independent and compiled once; the landscape arrives as the
+address of its compiled code ``f(x, y, out)`` writing f and its first and second derivatives
+to out[0:6] (``landscape``). Python calls the kernel only through the entry points at the end
+of this file (``ENTRIES``), which machine_code.py compiles: from the machine-independent code
+shipped with RollBall where it fits this machine, else with numba (cached on disk).
 
 State vector z: contact point (x, y), angular momentum about the contact point v (3),
 then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start; the
@@ -18,18 +20,10 @@ from __future__ import annotations
 
 import math
 
-import warnings
-
 import numpy as np
-from numba import njit, types
-from numba.core.errors import NumbaExperimentalFeatureWarning
+from llvmlite import ir
+from numba import carray, njit, types
 from numba.extending import intrinsic
-
-# The landscape callback is passed between compiled functions as a first-class function, which
-# numba announces on stderr at every compile (its text wrapped in terminal highlighting codes);
-# the command line and the setup script keep stderr to their own lines.
-warnings.filterwarnings("ignore", message=r"(\x1b\[[0-9;]*m)*First-class function type",
-                        category=NumbaExperimentalFeatureWarning)
 
 LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
 
@@ -70,6 +64,40 @@ def data_pointer(typingctx, array):
     def codegen(context, builder, signature, args):
         return context.make_array(signature.args[0])(context, builder, args[0]).data
     return types.CPointer(array.dtype)(array), codegen
+
+
+@intrinsic
+def landscape(typingctx, address, x, y, out):
+    """Call the landscape's compiled code (LANDSCAPE_SIGNATURE) at ``address``: f and its
+    derivatives at (x, y) into out[0:6]. An address, not a function object, so that the
+    kernel's compiled code holds nothing of this process and can be shipped."""
+    def codegen(context, builder, signature, args):
+        double = ir.DoubleType()
+        code = ir.FunctionType(ir.VoidType(), [double, double, double.as_pointer()])
+        builder.call(builder.inttoptr(args[0], code.as_pointer()), args[1:])
+        return context.get_dummy_value()
+    return types.void(types.int64, types.float64, types.float64, types.CPointer(types.float64)), codegen
+
+
+def _pointer_to(dtype):
+    @intrinsic
+    def pointer(typingctx, address):
+        """The address (an int64) as a pointer to numbers of this dtype."""
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+        return types.CPointer(dtype)(types.int64), codegen
+    return pointer
+
+
+float_pointer, int_pointer = _pointer_to(types.float64), _pointer_to(types.int64)
+
+
+@intrinsic
+def as_floats(typingctx, pointer):
+    """The same memory as a pointer to float64 (the entry points' float arguments)."""
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], context.get_value_type(signature.return_type))
+    return types.CPointer(types.float64)(pointer), codegen
 
 
 # What one evaluation learns about a state besides its derivative ("probe").
@@ -151,7 +179,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     """K[row] = z'(z); with ``full`` (FULL) also fill ``probe`` (normal, omega, F.N, r*kappa,
     height). Compiled once (numba's inlining copied it into every caller), inlined by LLVM."""
     r, k, mr, mr2, mg = p[0], p[3], p[4], p[5], p[6]
-    fn(z[0], z[1], data_pointer(d))
+    landscape(fn, z[0], z[1], data_pointer(d))
     fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
     W2 = 1.0 + fx * fx + fy * fy
     iW = 1.0 / math.sqrt(W2)  # one division, then products
@@ -251,12 +279,11 @@ def curvatures(fx, fy, fxx, fxy, fyy, iW):
     return mean + root, mean - root
 
 
-@njit(cache=True, nogil=True)
-def evaluate_points(fn, xs, ys, out):
-    """out[:, i] = f, f_x, f_y, f_xx, f_xy, f_yy at (xs[i], ys[i])."""
-    d = np.empty(6)
+@COLD
+def evaluate_points(fn, xs, ys, out, d):
+    """out[:, i] = f, f_x, f_y, f_xx, f_xy, f_yy at (xs[i], ys[i]); d (6): scratch."""
     for i in range(xs.shape[0]):
-        fn(xs[i], ys[i], d.ctypes)
+        landscape(fn, xs[i], ys[i], data_pointer(d))
         for k in range(6):
             out[k, i] = d[k]
 
@@ -487,7 +514,7 @@ def _fail(ints, info, status, reason, t, x, y, value):
 def start(fn, d, p, z, R, K, probe, rows, ints, info):
     """Check and record the initial state; K[0] and probe describe it afterwards."""
     n, mk = shape_of(z)
-    fn(z[0], z[1], data_pointer(d))
+    landscape(fn, z[0], z[1], data_pointer(d))
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
@@ -941,7 +968,7 @@ def state_at(fn, d, p, z, R, h, P, K, theta0, theta, Ye, Re, pe):
 def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
     """The landscape under the dense output's contact point at t + theta h, in s (SURFACE_SIZE)."""
     interpolate(z, h, P, K, theta, Ye)
-    fn(Ye[0], Ye[1], data_pointer(d))
+    landscape(fn, Ye[0], Ye[1], data_pointer(d))
     fx, fy = d[1], d[2]
     iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
     hi, lo = curvatures(fx, fy, d[3], d[4], d[5], iW)
@@ -1174,7 +1201,7 @@ def line_fits(fn, d, r, z0, z1):
     points of z0 and z1 (a sub-step may jump a thin no-fit region with both ends fitting)."""
     for j in range(1, LINE_SAMPLES + 1):
         theta = j / (LINE_SAMPLES + 1.0)
-        fn(z0[0] + theta * (z1[0] - z0[0]), z0[1] + theta * (z1[1] - z0[1]), data_pointer(d))
+        landscape(fn, z0[0] + theta * (z1[0] - z0[0]), z0[1] + theta * (z1[1] - z0[1]), data_pointer(d))
         iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
         if not r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] < 1.0:
             return False
@@ -1200,7 +1227,7 @@ def fold_time(fn, d, r, Zs, K, ps):
     if not speed > 0.0:
         return math.inf
     delta = 1e-7 * (1.0 + max(abs(Zs[0]), abs(Zs[1])))
-    fn(Zs[0] + delta * k1 / speed, Zs[1] + delta * k2 / speed, data_pointer(d))
+    landscape(fn, Zs[0] + delta * k1 / speed, Zs[1] + delta * k2 / speed, data_pointer(d))
     iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
     rate = (r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] - ps[PROBE_FIT]) / delta * speed
     return (1.0 - ps[PROBE_FIT]) / (2.0 * rate) if rate > 0.0 else math.inf
@@ -1382,6 +1409,9 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
 
     if ints[I_ROWS] == 0:
+        for a in range(3):   # (a state without orientation never writes these: they are checked as R)
+            for c in range(3):
+                Rn[a, c] = Re[a, c] = R[a, c]
         start(fn, d, p, z, R, K, probe, rows, ints, info)
         if ints[I_STATUS] != RUNNING:
             return
@@ -1600,3 +1630,107 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K
         o[O_LIFTOFF] = info[F_LIFTOFF]
         o[O_DRIFT] = acc[1] / max(abs(acc[0]), p[0] * p[1] * p[2], TINY)
         o[O_MIN_FORCE], o[O_MAX_SPEED], o[O_PATH] = acc[2], acc[3], acc[4]
+
+
+# -- entry points -----------------------------------------------------------------------------------
+#
+# What Python calls, each by its address with one C signature (ENTRY_SIGNATURE): a pointer to
+# int64 "slots" that hold the arguments of the function it calls, in their order: an array
+# as three slots (its data's address, rows, columns: 1 for a vector), an int as one, a float
+# as one (its bits). ``machine_code.Arguments`` packs them. These are plain functions here:
+# machine_code.py compiles them (numba's ``cfunc``), so importing the kernel compiles nothing.
+
+ENTRY_SIGNATURE = types.void(types.CPointer(types.int64))
+ENTRY_SLOTS = 64
+
+
+@JIT
+def _vector(a, i):
+    return carray(float_pointer(a[i]), (a[i + 1],)), i + 3
+
+
+@JIT
+def _matrix(a, i):
+    return carray(float_pointer(a[i]), (a[i + 1], a[i + 2])), i + 3
+
+
+@JIT
+def _integers(a, i):
+    return carray(int_pointer(a[i]), (a[i + 1],)), i + 3
+
+
+@JIT
+def _run_arrays(a, i):
+    """The arrays of a run every loop takes, in this order, from slot i (and the next slot)."""
+    z, i = _vector(a, i)
+    R, i = _matrix(a, i)
+    K, i = _matrix(a, i)
+    probe, i = _vector(a, i)
+    rows, i = _matrix(a, i)
+    ints, i = _integers(a, i)
+    info, i = _vector(a, i)
+    work, i = _vector(a, i)
+    return z, R, K, probe, rows, ints, info, work, i
+
+
+def advance_entry(slots):
+    a, x = carray(slots, (ENTRY_SLOTS,)), carray(as_floats(slots), (ENTRY_SLOTS,))
+    W, i = _matrix(a, 1)
+    P, i = _matrix(a, i)
+    p, i = _vector(a, i)
+    dt, t_end, n_steps, every, max_steps = x[i], x[i + 1], a[i + 2], a[i + 3], a[i + 4]
+    z, R, K, probe, rows, ints, info, work, i = _run_arrays(a, i + 5)
+    advance(a[0], W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work, x[i])
+
+
+def advance_adaptive_entry(slots):
+    a, x = carray(slots, (ENTRY_SLOTS,)), carray(as_floats(slots), (ENTRY_SLOTS,))
+    W, i = _matrix(a, 1)
+    E, i = _matrix(a, i)
+    P, i = _matrix(a, i)
+    p, i = _vector(a, i)
+    err_kind, err_exp, t_end, record_dt, rtol, atol, max_steps = (a[i], x[i + 1], x[i + 2], x[i + 3], x[i + 4],
+                                                                  x[i + 5], a[i + 6])
+    z, R, K, probe, rows, ints, info, work, i = _run_arrays(a, i + 7)
+    advance_adaptive(a[0], W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K, probe,
+                     rows, ints, info, work)
+
+
+def advance_batch_entry(slots):
+    a = carray(slots, (ENTRY_SLOTS,))
+    W, i = _matrix(a, 1)
+    P, i = _matrix(a, i)
+    Z0, i = _matrix(a, i)
+    PARAMS, i = _matrix(a, i)
+    DT, i = _vector(a, i)
+    T_END, i = _vector(a, i)
+    N_STEPS, i = _integers(a, i)
+    status, i = _integers(a, i)
+    out, i = _matrix(a, i)
+    z, R, K, probe, rows, ints, info, work, i = _run_arrays(a, i)
+    acc, i = _vector(a, i)
+    advance_batch(a[0], W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K, probe, rows, ints, info, work,
+                  acc)
+
+
+def evaluate_points_entry(slots):
+    a = carray(slots, (ENTRY_SLOTS,))
+    xs, i = _vector(a, 1)
+    ys, i = _vector(a, i)
+    out, i = _matrix(a, i)
+    d, i = _vector(a, i)
+    evaluate_points(a[0], xs, ys, out, d)
+
+
+# Each entry point by the name of the function it calls, with that function's arguments as
+# ``machine_code.Arguments`` packs them: "address" (the landscape's), "int", "float", "vector" and
+# "matrix" (float64 arrays), "ints" (an int64 vector); arrays C-contiguous.
+ENTRIES = {
+    "advance": (advance_entry, "address matrix matrix vector float float int int int vector matrix matrix vector "
+                               "matrix ints vector vector float"),
+    "advance_adaptive": (advance_adaptive_entry, "address matrix matrix matrix vector int float float float float "
+                                                 "float int vector matrix matrix vector matrix ints vector vector"),
+    "advance_batch": (advance_batch_entry, "address matrix matrix matrix matrix vector vector ints ints matrix "
+                                           "vector matrix matrix vector matrix ints vector vector vector"),
+    "evaluate_points": (evaluate_points_entry, "address vector vector matrix vector"),
+}

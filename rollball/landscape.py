@@ -161,11 +161,12 @@ class Landscape:
 
         The compiled code the integrator uses; points outside the formula's domain give NaN.
         """
-        from .kernel import evaluate_points
+        from .machine_code import call
 
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         out = np.empty((6, x.size))
-        evaluate_points(self.compiled, np.ascontiguousarray(x).ravel(), np.ascontiguousarray(y).ravel(), out)
+        call("evaluate_points", self.compiled.address, np.ascontiguousarray(x).ravel(),
+             np.ascontiguousarray(y).ravel(), out, np.empty(6))
         return out.reshape((6,) + x.shape)
 
     def height(self, x, y) -> np.ndarray:

@@ -11,7 +11,7 @@ import threading
 
 import numpy as np
 
-from . import __version__, kernel
+from . import __version__, kernel, machine_code
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_for
 from .scene import CONSTRAINTS, Scene
@@ -177,7 +177,7 @@ class Simulation:
         self._busy = threading.Lock()
 
         self.landscape = landscape_for(scene.landscape)
-        self._fn = self.landscape.compiled
+        self._fn = self.landscape.compiled.address
         self._W, self._E, self._P = self.tableau.kernel_arrays()
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.error_norm: 1 or 2 estimates
         self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity,
@@ -196,6 +196,16 @@ class Simulation:
         self._info = np.full(kernel.INFO_SIZE, np.nan)
         self._info[kernel.F_H] = self.dt
         self._work = np.empty(kernel.work_size(n))
+        if self.adaptive:
+            self._kernel = machine_code.Arguments(
+                "advance_adaptive", self._fn, self._W, self._E, self._P, self._p, self._error_kind,
+                self.tableau.error_exponent, self.t_end, self.record_dt or 0.0, self.rtol, self.atol, 1,
+                self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
+        else:
+            self._kernel = machine_code.Arguments(
+                "advance", self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps,
+                self.record_every, 1, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
+                self._work, kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
         self.status: Status | None = None
 
     @property
@@ -283,17 +293,14 @@ class Simulation:
                     grown = np.empty((min(2 * len(self._rows), MAX_ROWS), kernel.ROW_SIZE))
                     grown[: len(self._rows)] = self._rows
                     self._rows = grown
+                    self._kernel.set("rows", grown)
                 before = self.steps + self.rejected
-                kernel.advance_adaptive(
-                    self._fn, self._W, self._E, self._P, self._p, self._error_kind,
-                    self.tableau.error_exponent, self.t_end, self.record_dt or 0.0, self.rtol, self.atol, chunk,
-                    self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
+                self._kernel.set("max_steps", chunk)
+                self._kernel()
                 chunk = self.steps + self.rejected - before
             else:
-                kernel.advance(
-                    self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps, self.record_every,
-                    chunk, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
-                    self._work, kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
+                self._kernel.set("max_steps", chunk)
+                self._kernel()
             remaining -= chunk
             code = int(self._ints[kernel.I_STATUS])
             if code != kernel.RUNNING:

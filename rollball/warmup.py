@@ -1,11 +1,12 @@
 """Compiling the integrator before it is needed.
 
-numba compiles the stepping kernel the first time each kind of method runs (seconds to tens
-of seconds with empty caches) and keeps the machine code on disk, so later processes load
-it in well under a second. ``warm_up`` runs every method once on a tiny run, and a tiny
-sweep (whose fold of rows into outcomes is compiled code of its own), so that the compiling
-happens now; ``python -m rollball.warmup`` does it with progress on stderr (the setup script
-calls it). ``compile_notice`` tells a caller when numba starts compiling.
+The stepping kernel is made into machine code the first time a run needs it: from the code
+RollBall ships, in about two seconds; where that does not fit the machine, numba compiles
+it, which takes a minute or more (machine_code.py). Either is kept on disk, so later
+processes load it in well under a second. ``warm_up`` runs every method once on a tiny run,
+and a tiny sweep, so that this happens now; ``python -m rollball.warmup`` does it with
+progress on stderr (the setup script calls it). ``compile_notice`` tells a caller when the
+kernel starts being compiled.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from contextlib import contextmanager
 
 from numba.core import event
 
+from . import machine_code
 from .examples import DEFAULT_EXAMPLE
 from .scene import Scene
 from .simulation import simulate
@@ -56,11 +58,15 @@ class _FirstCompile(event.Listener):
     def __init__(self, say):
         self.say, self.said = say, False
 
-    def on_start(self, ev):
-        module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
-        if not self.said and module.split(".")[0] == "rollball":  # not a landscape's callback
+    def __call__(self):   # machine_code makes the kernel's machine code
+        if not self.said:
             self.said = True
             self.say()
+
+    def on_start(self, ev):
+        module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
+        if module.split(".")[0] == "rollball":  # not a landscape's callback
+            self()
 
     def on_end(self, ev):
         pass
@@ -68,10 +74,16 @@ class _FirstCompile(event.Listener):
 
 @contextmanager
 def compile_notice(say):
-    """Within the block, call ``say()`` once when numba starts compiling part of RollBall's
-    kernel (nothing is said when everything comes from the disk cache)."""
-    with event.install_listener("numba:compile", _FirstCompile(say)):
-        yield
+    """Within the block, call ``say()`` once when RollBall's kernel starts being compiled: its
+    shipped code made into machine code for this processor, or numba compiling part of it
+    (nothing is said when it comes from the disk cache)."""
+    first = _FirstCompile(say)
+    machine_code.listeners.append(first)
+    try:
+        with event.install_listener("numba:compile", first):
+            yield
+    finally:
+        machine_code.listeners.remove(first)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -44,6 +44,27 @@ def test_every_run_ends_where_simulate_ends_it(scene, vary):
     assert set(table["status"]) == {"ok"} | ({"does_not_fit"} if "ball.radius" in vary else set())
 
 
+@pytest.mark.parametrize("garbage", [np.nan, np.inf, -1e300])
+def test_outcomes_do_not_depend_on_what_the_scratch_memory_held(monkeypatch, garbage):
+    # the batch loop's scratch comes from np.empty: whatever it held must not change a run (the
+    # motion-only state never writes its orientation scratch, which once made lift-offs vanish)
+    vary = {"start.vx": [4.5, 5.25, 6.0]}   # each lifts off
+    clean = sweep(LIFTOFF, vary, workers=1)
+    empty = np.empty
+
+    def used(shape, dtype=float, **kwargs):
+        a = empty(shape, dtype=dtype, **kwargs)
+        if a.dtype == np.float64:
+            a.fill(garbage)
+        return a
+
+    monkeypatch.setattr(np, "empty", used)
+    dirty = sweep(LIFTOFF, vary, workers=1)
+    monkeypatch.undo()
+    assert np.isfinite(clean["liftoff_time"]).all()
+    np.testing.assert_array_equal(dirty.outcomes, clean.outcomes)
+
+
 def test_a_landscape_undefined_along_the_way_is_nonfinite():
     scene = Scene(landscape="sqrt(x)", start=LIFTOFF.start.__class__(x=0.5, y=0.0, vx=-3.0), duration=1.0)
     table = sweep(scene, {"start.x": [0.5, -1.0]}, workers=1)

@@ -4,10 +4,14 @@ import json
 import os
 import subprocess
 import sys
+from importlib import resources
+
+import numpy as np
+import pytest
 
 from numba import njit
 
-from rollball import METHODS, kernel
+from rollball import METHODS, kernel, machine_code
 from rollball.warmup import compile_notice, variants, warm_up
 
 
@@ -33,7 +37,7 @@ def test_the_warm_up_reports_each_part_and_readies_sweeps_too():
     assert parts[0] == (0, total, "lawson5 classic") and ready[0] == ("lawson5", False)
     assert parts[-2:] == [(total - 1, total, "sweeps"), (total, total, "done")]
     assert sorted(ready) == sorted(variants())
-    assert kernel.advance_batch.signatures   # compiled, or loaded from the disk cache
+    assert set(machine_code.entries()) == set(kernel.ENTRIES)   # compiled, or loaded from the disk cache
 
 
 def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all():
@@ -48,6 +52,24 @@ def test_a_kernel_compile_is_announced_once_and_a_landscape_compile_not_at_all()
     assert said == ["compiling"]
 
 
+def test_making_the_machine_code_is_announced_once_and_only_within_the_block():
+    said = []
+    with compile_notice(lambda: said.append("compiling")):
+        (listener,) = machine_code.listeners
+        listener()
+        listener()
+    assert said == ["compiling"] and machine_code.listeners == []
+
+
+def test_the_command_line_says_once_when_it_makes_the_machine_code_and_not_again(tmp_path):
+    env = {**os.environ, "ROLLBALL_CACHE_DIR": str(tmp_path)}   # (no machine code kept yet)
+    command = [sys.executable, "-m", "rollball", "simulate", "hills", "--t-end", "0.1"]
+    first = subprocess.run(command, capture_output=True, text=True, env=env, timeout=600)
+    again = subprocess.run(command, capture_output=True, text=True, env=env, timeout=600)
+    assert first.returncode == 0 and first.stderr.count("compiling the integrator, first run only") == 1
+    assert again.returncode == 0 and "compiling" not in again.stderr
+
+
 def test_an_unknown_run_to_warm_first_is_refused_in_one_line(capsys):
     from rollball.warmup import main
 
@@ -56,17 +78,6 @@ def test_an_unknown_run_to_warm_first_is_refused_in_one_line(capsys):
     assert "unknown run 'rk5'" in err and "\n" not in err
 
 
-
-
-def test_numbas_first_class_function_notice_is_kept_off_stderr_even_when_highlighted():
-    # numba wraps the text in terminal highlighting codes; pytest resets warning filters per test,
-    # so the check runs in a process of its own
-    code = ("import warnings, rollball.kernel\n"
-            "from numba.core.errors import NumbaExperimentalFeatureWarning as N\n"
-            "warnings.warn('\\x1b[1m\\x1b[1mFirst-class function type feature is experimental\\x1b[0m', N)\n"
-            "warnings.warn('First-class function type feature is experimental', N)\n")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert result.returncode == 0 and "First-class" not in result.stderr
 
 
 def test_the_warm_up_stops_quietly_when_its_reader_has_gone():
@@ -79,7 +90,7 @@ def test_the_warm_up_stops_quietly_when_its_reader_has_gone():
 
 
 _COUNT_COMPILES = """
-import json, sys
+import hashlib, json, time
 from numba.core import event
 compiled = {}
 class Count(event.Listener):
@@ -91,27 +102,75 @@ class Count(event.Listener):
     def on_end(self, ev):
         pass
 event.register("numba:compile", Count())
+from rollball import Scene, machine_code, simulate
+from rollball.examples import scene_path
 from rollball.warmup import warm_up
+started = time.process_time()
 warm_up()
-print(json.dumps(compiled))
+seconds = time.process_time() - started
+import numpy as np
+runs = [simulate(Scene.load(scene_path(name)), method=method, t_end=2.0)
+        for name in ("hills", "saddle") for method in ("rk4", "dop853", "gauss4")]
+runs = [np.column_stack([t.t, t.contact, t.omega, t.R.reshape(-1, 9), t.energy]) for t in runs]
+print(json.dumps({"compiled": compiled, "source": machine_code.source, "seconds": seconds,
+                  "rows": [rows.tolist() for rows in runs]}))
 """
 
 
-def test_a_cold_warm_up_compiles_each_kernel_function_once(tmp_path):
-    # The cold compile is the first Start's wait. Each compiled function once: a constant bool
-    # or int passed to one would compile it again for that constant, and a helper numba
-    # inlines is not compiled on its own at all. The explicit step is one function per state
-    # layout. (Empty caches: a process of its own, compiling everything, ~30 s.)
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "ROLLBALL_CACHE_DIR": str(tmp_path / "ours")}
+def _cold_warm_up(tmp_path, source: str) -> dict:
+    """warm_up in a process of its own with empty numba and landscape caches, the kernel from
+    ``source``; then the rows of a few runs."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "ROLLBALL_CACHE_DIR": str(tmp_path / "ours"),
+           "ROLLBALL_MACHINE_CODE": source}
     result = subprocess.run([sys.executable, "-c", _COUNT_COMPILES], capture_output=True, text=True, env=env,
-                            timeout=900)
+                            timeout=1200)
     assert result.returncode == 0, result.stderr
-    compiled = json.loads(result.stdout.strip().splitlines()[-1])
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+@pytest.fixture(scope="module")
+def shipped_cold(tmp_path_factory):
+    return _cold_warm_up(tmp_path_factory.mktemp("shipped"), "shipped")
+
+
+def test_a_cold_warm_up_from_the_shipped_code_compiles_nothing_with_numba(shipped_cold):
+    # The cold compile is the first Start's wait: the shipped code is made into machine code by
+    # LLVM alone (~2 s of the ~5 s here); numba compiles no kernel function (a minute and more)
+    assert shipped_cold["source"] == "shipped"
+    assert shipped_cold["compiled"] == {}
+
+
+def test_without_the_shipped_code_numba_compiles_each_kernel_function_once_and_runs_the_same(
+        tmp_path, shipped_cold):
+    # Where the shipped code does not fit, numba compiles the same entry points from kernel.py.
+    # Each compiled function once: a constant bool or int passed to one would compile it again
+    # for that constant, and a helper numba inlines is not compiled on its own at all. The
+    # explicit step is one function per state layout. (Empty caches: compiling everything, ~60 s.)
+    cold = _cold_warm_up(tmp_path, "numba")
+    assert cold["source"] == "numba"
+    compiled = cold["compiled"]
     assert {name: len(ids) for name, ids in compiled.items() if len(ids) != len(set(ids))} == {}
     steps = compiled.pop("rollball.kernel._trial_step.<locals>.trial_step")
     assert len(steps) == len(set(steps)) == 3  # MK_SIZE, CLASSIC_SIZE, MOTION_SIZE
-    assert {"rollball.kernel.advance", "rollball.kernel.advance_adaptive", "rollball.kernel.advance_batch"} <= set(compiled)
+    # (the adaptive loop is inlined into its entry point)
+    assert {"rollball.kernel.advance", "rollball.kernel.advance_batch"} <= set(compiled), sorted(compiled)
     # the right-hand side is compiled once (and inlined by LLVM); the other per-stage helpers are
     # inlined by numba, not compiled alone; few functions in all
     assert "rollball.kernel.dynamics" in compiled and "rollball.kernel.combine" not in compiled
-    assert len(compiled) <= 26, sorted(compiled)
+    assert len(compiled) <= 30, sorted(compiled)
+    # the same code, compiled either way: the same runs (to round-off where the processor the
+    # shipped code was optimised for differs from this one)
+    for shipped, compiled_here in zip(shipped_cold["rows"], cold["rows"]):
+        shipped, compiled_here = np.array(shipped), np.array(compiled_here)
+        assert shipped.shape == compiled_here.shape and len(shipped) > 10
+        assert np.allclose(shipped, compiled_here, rtol=1e-9, atol=1e-12)
+
+
+def test_the_shipped_code_is_made_from_this_kernel(shipped_cold):
+    # kernel.py changed without ``python -m rollball.kernel_build``: the shipped code is stale,
+    # and every user would wait for numba instead
+    facts = json.loads(resources.files("rollball").joinpath(machine_code.STAMP).read_text())
+    assert facts["kernel"] == machine_code.sources_digest(), "run: python -m rollball.kernel_build"
+    assert {key: facts[key] for key in ("numba", "triple")} == {
+        key: machine_code.stamp()[key] for key in ("numba", "triple")}
+    assert set(facts["entries"]) == set(kernel.ENTRIES)

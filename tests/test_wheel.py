@@ -31,12 +31,13 @@ def wheel(tmp_path_factory):
     return path
 
 
-def test_wheel_holds_examples_icon_help_and_c_source(wheel):
+def test_wheel_holds_examples_icon_help_c_source_and_the_kernels_code(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert {f"rollball/examples/{name}.json" for name in example_names()} <= names
     assert len(example_names()) >= 10
     assert {"app/icons/rollball.svg", "rollball/bench/step.c", "rollball/examples/__init__.py",
-            "app/help_pages/model.html", "app/help_pages/plots.html"} <= names
+            "app/help_pages/model.html", "app/help_pages/plots.html", "rollball/kernel.bc",
+            "rollball/kernel.json"} <= names
     entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
     text = zipfile.ZipFile(wheel).read(entry_points).decode()
     assert "rollball = rollball.cli:main" in text and "rollball-app = app:main" in text
@@ -57,3 +58,19 @@ def test_installed_wheel_lists_examples_from_any_folder(wheel, tmp_path):
     listed = [line.split()[0] for line in result.stdout.splitlines()[:len(example_names())]]
     assert listed == example_names()
     assert str(target) in result.stdout   # read from the installed copy, not this checkout
+
+
+def test_installed_wheel_runs_on_its_shipped_kernel_code(wheel, tmp_path):
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--target", str(target),
+                    str(wheel)], check=True, capture_output=True, timeout=300)
+    code = ("import rollball; from rollball import machine_code, simulate, Scene; "
+            "from rollball.examples import scene_path; "
+            "traj = simulate(Scene.load(scene_path('bowl')), t_end=0.5); "
+            "print(machine_code.source, traj.status, rollball.__file__)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                            cwd=tmp_path, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin",
+                                               "ROLLBALL_CACHE_DIR": str(tmp_path / "cache")})
+    assert result.returncode == 0, result.stderr
+    source, status, where = result.stdout.split()
+    assert (source, status) == ("shipped", "ok") and where.startswith(str(target))

@@ -139,8 +139,10 @@ def _python(code: str, env: dict | None = None) -> tuple[list[float], float]:
     return [float(v) for v in out.split()], time.perf_counter() - start
 
 
-def cold_start() -> dict:
-    """A fresh process: with empty numba and landscape caches, then again with them filled."""
+def cold_start(quick: bool = False) -> dict:
+    """A fresh process: with empty numba and landscape caches, then again with them filled;
+    every method compiled in one process, and (not ``quick``, a minute or more) the same where
+    the shipped kernel code does not fit and numba compiles kernel.py."""
     with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
         env = {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours}
         code = _COLD.format(hills=str(HILLS))
@@ -149,14 +151,18 @@ def cold_start() -> dict:
     return {"import": imp, "first_simulate_cold_cache": first, "new_formula_cold_cache": formula,
             "process_cold_cache": wall, "first_simulate_disk_cache": first2,
             "known_formula_disk_cache": formula2, "process_disk_cache": wall2,
-            "all_methods_cold_cache": all_methods_cold()}
+            "all_methods_cold_cache": all_methods_cold(),
+            "all_methods_numba_cold_cache": None if quick else all_methods_cold("numba")}
 
 
-def all_methods_cold() -> float:
+def all_methods_cold(source: str = "shipped") -> float:
     """CPU seconds to compile every method (and the sweeps' batch loop), ``warm_up``, in one fresh
-    process with empty numba and landscape caches: what ``scripts/setup`` waits for once."""
+    process with empty numba and landscape caches: what ``scripts/setup`` waits for once. The
+    kernel from ``source``: "shipped" (its LLVM code made into machine code) or "numba"
+    (compiled from kernel.py, as where the shipped code does not fit: machine_code.py)."""
     with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
-        (seconds,), _ = _python(_WARM_UP, {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours})
+        (seconds,), _ = _python(_WARM_UP, {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours,
+                                           "ROLLBALL_MACHINE_CODE": source})
     return seconds
 
 
@@ -198,7 +204,7 @@ def measure(quick: bool) -> dict:
         "costs": step_costs(repeats, 50_000 if quick else 200_000),
         "real_time": real_time_factor(repeats, 5.0 if quick else 20.0),
         "latency": new_formula_latency(5 if quick else 15),
-        "cold": cold_start(),
+        "cold": cold_start(quick),
         "memory": peak_memory(10_000_000),
         "app": app_responsiveness(),
     }

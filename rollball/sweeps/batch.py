@@ -15,7 +15,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .. import kernel
+from .. import kernel, machine_code
 from ..landscape import landscape_for
 from ..scene import Scene, SceneError
 from ..simulation import initial_momentum, step_count
@@ -92,7 +92,7 @@ def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
 
 def _landscape(text: str):
     with _COMPILE_LOCK:
-        return landscape_for(text).compiled
+        return landscape_for(text).compiled.address
 
 
 def run(task: Task) -> Result:
@@ -122,10 +122,10 @@ def run(task: Task) -> Result:
     outcomes = np.full((runs, len(OUTCOMES)), np.nan)
     W, _, D = method.kernel_arrays()
     n = kernel.MOTION_SIZE
-    kernel.advance_batch(fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end), n_steps,
-                         status, outcomes, np.zeros(n), np.eye(3), np.zeros((kernel.stage_rows(len(W)), n)),
-                         np.zeros(kernel.PROBE_SIZE), np.empty((kernel.BATCH_ROWS, kernel.ROW_SIZE)),
-                         np.zeros(kernel.INTS_SIZE, dtype=np.int64), np.empty(kernel.INFO_SIZE),
-                         np.empty(kernel.work_size(n)), np.empty(5))
+    machine_code.call("advance_batch", fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end),
+                      n_steps, status, outcomes, np.zeros(n), np.eye(3), np.zeros((kernel.stage_rows(len(W)), n)),
+                      np.zeros(kernel.PROBE_SIZE), np.empty((kernel.BATCH_ROWS, kernel.ROW_SIZE)),
+                      np.zeros(kernel.INTS_SIZE, dtype=np.int64), np.empty(kernel.INFO_SIZE),
+                      np.empty(kernel.work_size(n)), np.empty(5))
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)
