@@ -608,8 +608,8 @@ class MainWindow(QtWidgets.QMainWindow):
         return self.controller.state
 
     def prepare_integrator(self, command: list[str] | None = None) -> None:
-        """Compile the integrator for every method in a process of its own, from launch (numba
-        keeps the result on disk, where a run finds it), the current scene's method first. A
+        """Compile the integrator for every method in a process of its own, from launch (its
+        machine code is kept on disk, where a run finds it), the current scene's method first. A
         Start meanwhile waits until its method is ready, saying so with a busy indicator, and
         the run starts by itself."""
         scene = self.scene

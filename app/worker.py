@@ -32,7 +32,7 @@ class SimulationThread(QtCore.QThread):
 
     rowsReady = QtCore.Signal(object, int, object, bool)
     failed = QtCore.Signal(str)
-    compiling = QtCore.Signal()      # numba has started compiling a kernel (first run of a method)
+    compiling = QtCore.Signal()      # the kernel is being compiled (first run on this machine)
 
     def __init__(self, simulations, derives, parent=None, warm_ups=(), token=None):
         super().__init__(parent)

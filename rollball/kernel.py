@@ -32,8 +32,9 @@ LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(ty
 # numba's reference counting (_nrt=False): the counting of arrays handed between the helpers
 # would cost as much as a stage.
 #
-# What is inlined where, and why (the cold compile is the first Start's wait; the step's speed
-# is the ratio to hand-written C):
+# What is inlined where, and why (numba's cold compile is what a machine without the shipped
+# code waits for once, and what kernel_build takes; the step's speed is the ratio to
+# hand-written C):
 # - JIT, numba's own inlining (the helper's code is copied into every caller before typing):
 #   the small per-stage and per-step helpers (dynamics, combine, rodrigues, the finiteness
 #   checks, step_events, accept, record, ...). Each copy costs compile time, so JIT helpers
@@ -1391,7 +1392,7 @@ def scratch(work, n):
             work[k + 2 * SURFACE_SIZE:k + 3 * SURFACE_SIZE])
 
 
-@COLD  # called from Python (simulate) and by the sweeps' batch loop: compiled once
+@COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
 def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
             stepping):
     """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.

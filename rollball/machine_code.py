@@ -7,7 +7,7 @@ kernel's entry points (``kernel.ENTRIES``) on x86-64 Linux, optimised but not ti
 processor. Where it fits (this machine's target, the numba it was made with, the kernel.py
 it was made from: ``kernel.json``), LLVM turns it into machine code for this processor in
 about two seconds, kept on disk too; elsewhere numba compiles the same entry points from
-kernel.py as before. Both give the same code for the same source.
+kernel.py as before (a minute or more, cached too). Both give the same runs.
 
 ``python -m rollball.kernel_build`` makes kernel.bc and kernel.json anew from kernel.py
 (a developer's step after changing the kernel; a test says when they are out of date).
