@@ -4,9 +4,9 @@ numba needs about a minute of processor time to compile kernel.py (typing it and
 to LLVM's intermediate code takes most of it; its compiled code is kept on disk). RollBall
 therefore ships that intermediate code: ``kernel.bc``, the LLVM bitcode numba made of the
 kernel's entry points (``kernel.ENTRIES``) on x86-64 Linux, optimised, with no particular
-processor's instructions in it. Where it fits (this machine's target, the numba it was made with, the kernel.py
-it was made from: ``kernel.json``), LLVM turns it into machine code for this processor in
-about two seconds, kept on disk too; elsewhere numba compiles the same entry points from
+processor's instructions in it. Where it fits (this machine's target, the numba it was made
+with, the kernel.py it was made from: ``kernel.json``), LLVM turns it into machine code for
+this processor in about two seconds, kept on disk too; elsewhere numba compiles the same entry points from
 kernel.py as before (a minute or more, cached too). Both give the same runs.
 
 ``python -m rollball.kernel_build`` makes kernel.bc and kernel.json anew from kernel.py
