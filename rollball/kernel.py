@@ -5,8 +5,8 @@ and recording.
 Everything here is landscape-independent and compiled once; the landscape arrives as the
 address of its compiled code ``f(x, y, out)`` writing f and its first and second derivatives
 to out[0:6] (``landscape``). Python calls the kernel only through the entry points at the end
-of this file (``ENTRIES``), which machine_code.py compiles: from the machine-independent code
-shipped with RollBall where it fits this machine, else with numba (cached on disk).
+of this file (``ENTRIES``), which machine_code.py compiles: from the LLVM code numba made of
+them, shipped with RollBall, where it fits this machine, else with numba (cached on disk).
 
 State vector z: contact point (x, y), angular momentum about the contact point v (3),
 then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start; the
