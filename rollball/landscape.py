@@ -13,20 +13,18 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import math
-import os
 import re
 import sys
-import tempfile
 import types
 import warnings
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 import sympy as sp
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
+from .cache import cache_dir
 from .files import atomic_write_text
 from .formula import X, Y, FormulaError, check_constants, parse_formula
 from .text import shown
@@ -39,7 +37,6 @@ MAX_DERIVATIVE_NODES = 100_000
 
 # Compiled callbacks by generated source: the same formula is compiled once per process.
 _COMPILED: dict[str, object] = {}
-_CACHE_DIR: Path | None = None
 
 
 class _Printer(PythonCodePrinter):
@@ -171,24 +168,6 @@ class Landscape:
 
     def height(self, x, y) -> np.ndarray:
         return self.evaluate(x, y)[0]
-
-
-def cache_dir() -> Path:
-    """Where generated landscape modules and their compiled code are kept between runs:
-    $ROLLBALL_CACHE_DIR, else $XDG_CACHE_HOME/rollball (~/.cache/rollball), else, where
-    that cannot be written, a temporary directory for this process only."""
-    global _CACHE_DIR
-    if _CACHE_DIR is None:
-        base = os.environ.get("ROLLBALL_CACHE_DIR") or os.path.join(
-            os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "rollball")
-        try:
-            os.makedirs(base, exist_ok=True)
-            if not os.access(base, os.W_OK):
-                raise PermissionError(base)
-            _CACHE_DIR = Path(base)
-        except OSError:
-            _CACHE_DIR = Path(tempfile.mkdtemp(prefix="rollball-"))
-    return _CACHE_DIR
 
 
 class CacheWarning(UserWarning):

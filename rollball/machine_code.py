@@ -203,7 +203,7 @@ def _from_bitcode(bitcode: bytes, entries: dict[str, str], calls: list[str]) -> 
 
 
 def _object_path(key: str):
-    from .landscape import cache_dir
+    from .cache import cache_dir
 
     return cache_dir() / f"kernel-{key}.o"
 
