@@ -27,6 +27,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from .cache import cache_dir
 from .files import atomic_write_text
 from .formula import X, Y, FormulaError, check_constants, parse_formula
+from .machine_code import call
 from .text import shown
 
 # The work budget of a formula: its derivatives may hold about this many nodes (operations,
@@ -158,8 +159,6 @@ class Landscape:
 
         The compiled code the integrator uses; points outside the formula's domain give NaN.
         """
-        from .machine_code import call
-
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         out = np.empty((6, x.size))
         call("evaluate_points", self.compiled.address, np.ascontiguousarray(x).ravel(),

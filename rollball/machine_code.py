@@ -16,6 +16,7 @@ kernel.py as before (a minute or more, cached too). Both give the same runs.
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import inspect
 import json
@@ -26,6 +27,8 @@ from importlib import resources
 import numpy as np
 
 from . import kernel
+from .cache import cache_dir
+from .files import atomic_write_bytes
 
 SHIPPED, STAMP = "kernel.bc", "kernel.json"
 
@@ -64,16 +67,13 @@ class Arguments:
 
     def __init__(self, name: str, *args):
         self.name = name
-        self.kinds = kernel.ENTRIES[name][1].split()
-        names = list(inspect.signature(getattr(kernel, name).py_func).parameters)
-        if len(self.kinds) != len(names) or len(args) != len(names):
-            raise TypeError(f"{name}: {len(names)} arguments expected, {len(args)} given")
-        self.offsets = dict(zip(names, np.cumsum([0] + [1 if k in _NUMBERS else 3 for k in self.kinds])))
-        self.positions = {key: i for i, key in enumerate(names)}
+        self.kinds, self.offsets, self.positions = _layout(name)
+        if len(args) != len(self.kinds):
+            raise TypeError(f"{name}: {len(self.kinds)} arguments expected, {len(args)} given")
         self.slots = np.zeros(kernel.ENTRY_SLOTS, dtype=np.int64)
         self.address = self.slots.ctypes.data
         self.kept = list(args)
-        for key, value in zip(names, args):
+        for key, value in zip(self.positions, args):
             self.set(key, value)
 
     def set(self, key: str, value) -> None:
@@ -96,6 +96,18 @@ class Arguments:
 
 
 _NUMBERS = ("float", "int", "address")
+
+
+@functools.cache
+def _layout(name: str) -> tuple[list[str], dict[str, int], dict[str, int]]:
+    """The kinds of the kernel function's arguments, and by parameter name each one's first
+    slot and its position."""
+    kinds = kernel.ENTRIES[name][1].split()
+    names = list(inspect.signature(getattr(kernel, name).py_func).parameters)
+    if len(kinds) != len(names):
+        raise TypeError(f"{name}: kernel.ENTRIES gives {len(kinds)} kinds for {len(names)} parameters")
+    offsets = dict(zip(names, np.cumsum([0] + [1 if k in _NUMBERS else 3 for k in kinds]).tolist()))
+    return kinds, offsets, {key: i for i, key in enumerate(names)}
 
 
 def call(name: str, *args) -> None:
@@ -203,8 +215,6 @@ def _from_bitcode(bitcode: bytes, entries: dict[str, str], calls: list[str]) -> 
 
 
 def _object_path(key: str):
-    from .cache import cache_dir
-
     return cache_dir() / f"kernel-{key}.o"
 
 
@@ -220,8 +230,6 @@ def _read(path) -> bytes | None:
 
 def _write(path, code: bytes) -> None:
     """Keep the machine code for later processes; a cache that cannot be written costs only time."""
-    from .files import atomic_write_bytes
-
     try:
         atomic_write_bytes(path, hashlib.sha256(code).digest() + code)
     except OSError:
