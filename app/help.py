@@ -8,16 +8,16 @@ over them opens the help there.
 from __future__ import annotations
 
 import html
-from importlib import resources
-
 from PySide6 import QtCore, QtGui, QtWidgets
+
+from rollball import resources
 
 PAGES = {"model.html": "The model", "plots.html": "Reading the plots", "keys": "Keyboard shortcuts"}
 TOPIC = "helpTopic"   # widget property holding a topic such as "model.html#liftoff"
 
 
 def page_html(name: str) -> str:
-    return resources.files(__package__).joinpath("help_pages", name).read_text(encoding="utf-8")
+    return resources.path("help_pages", name).read_text(encoding="utf-8")
 
 
 def set_topic(widget: QtWidgets.QWidget, topic: str) -> None:

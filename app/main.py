@@ -1,4 +1,5 @@
-"""Start the app: ``python -m app [SCENE]`` or the installed ``rollball-app``.
+"""Start the app: ``rollball-app [SCENE]`` or ``python -m rollball_app [SCENE]`` (``python -m app
+[SCENE]`` in a checkout).
 
 Headless (DESIGN §9): with ``--screenshot PNG`` the app opens the scene, optionally runs it to
 ``--run-to T`` (as fast as computed), saves a picture of the window and exits; with

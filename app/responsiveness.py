@@ -1,6 +1,6 @@
 """How responsive the window stays while a long run is computed and played, for ``rollball bench``.
 
-``python -m app.responsiveness`` opens the main window on the hills example with h = 1e-4 for
+``python -m rollball_app.responsiveness`` opens the main window on the hills example with h = 1e-4 for
 100 s (10⁶ steps), plays it as fast as it is computed, and meanwhile lets a 5 ms timer tick on
 the GUI thread. It prints one line of JSON: the longest and the median gap between ticks
 (painting included: under Xvfb the GL view is rendered in software, on the same cores as the

@@ -5,13 +5,12 @@ from __future__ import annotations
 import math
 import sys
 import time
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method
+from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method, resources
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes
 from rollball.geometry import reachable_height, unit_normal
@@ -107,7 +106,7 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- layout ----------------------------------------------------------------------
 
     def _build_layout(self) -> None:
-        self.setWindowIcon(QtGui.QIcon(str(resources.files("app") / "icons" / "rollball.svg")))
+        self.setWindowIcon(QtGui.QIcon(str(resources.path("icons", "rollball.svg"))))
         scroll = QtWidgets.QScrollArea(widgetResizable=True)
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)

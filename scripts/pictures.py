@@ -11,9 +11,9 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtGui
 
-from app.main import application, screenshot
-from app.preferences import Preferences
-from app.window import MainWindow
+from rollball_app.main import application, screenshot
+from rollball_app.preferences import Preferences
+from rollball_app.window import MainWindow
 from rollball.examples import example_scenes, scene_path
 from rollball.files import atomic_write_bytes
 

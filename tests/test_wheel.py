@@ -1,5 +1,7 @@
 """The installed package carries its data: a wheel built from the sources holds the example
-scenes, the app's icon and help pages and the benchmark's C source, and lists the examples from any folder."""
+scenes, the app's icon and help pages (the top-level resources/ folder, installed as
+rollball.resources) and the benchmark's C source, installs the app (the top-level app/ folder)
+as rollball_app and no top-level app, and lists the examples from any folder."""
 
 import shutil
 import subprocess
@@ -19,7 +21,7 @@ def wheel(tmp_path_factory):
     source = tmp_path_factory.mktemp("source")
     for name in ("pyproject.toml", "README.md"):
         shutil.copy(ROOT / name, source)
-    for package in ("rollball", "app"):
+    for package in ("rollball", "app", "resources"):
         shutil.copytree(ROOT / package, source / package,
                         ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
     out = tmp_path_factory.mktemp("dist")
@@ -33,14 +35,23 @@ def wheel(tmp_path_factory):
 
 def test_wheel_holds_examples_icon_help_c_source_and_the_kernels_code(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    assert {f"rollball/examples/{name}.json" for name in example_names()} <= names
+    assert {f"rollball/resources/examples/{name}.json" for name in example_names()} <= names
     assert len(example_names()) >= 10
-    assert {"app/icons/rollball.svg", "rollball/bench/step.c", "rollball/examples/__init__.py",
-            "app/help_pages/model.html", "app/help_pages/plots.html", "rollball/kernel.bc",
-            "rollball/kernel.json"} <= names
+    assert {"rollball/resources/__init__.py", "rollball/resources/icons/rollball.svg",
+            "rollball/resources/help_pages/model.html", "rollball/resources/help_pages/plots.html",
+            "rollball/bench/step.c", "rollball/examples.py", "rollball/kernel.bc",
+            "rollball/kernel.json", "rollball_app/__init__.py", "rollball_app/__main__.py",
+            "rollball_app/window.py"} <= names
     entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
     text = zipfile.ZipFile(wheel).read(entry_points).decode()
-    assert "rollball = rollball.cli:main" in text and "rollball-app = app:main" in text
+    assert "rollball = rollball.cli:main" in text and "rollball-app = rollball_app:main" in text
+
+
+def test_wheel_installs_no_top_level_app_or_resources(wheel):
+    """Only rollball and rollball_app reach site-packages: nothing named app (or resources) to
+    clash with another project's, or to be taken over by a local app/ folder."""
+    tops = {name.split("/")[0] for name in zipfile.ZipFile(wheel).namelist()}
+    assert {top for top in tops if not top.endswith(".dist-info")} == {"rollball", "rollball_app"}
 
 
 def test_installed_wheel_lists_examples_from_any_folder(wheel, tmp_path):
@@ -49,11 +60,16 @@ def test_installed_wheel_lists_examples_from_any_folder(wheel, tmp_path):
                     str(wheel)], check=True, capture_output=True, timeout=300)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    code = ("import sys, rollball.cli; from importlib import resources; "
-            "assert resources.files('app').joinpath('icons', 'rollball.svg').is_file(); "
+    (elsewhere / "app").mkdir()   # a local app/ folder of someone else's: not what runs
+    (elsewhere / "app" / "__init__.py").write_text("raise SystemExit('the wrong app')\n")
+    code = ("import sys, rollball.cli; from rollball import resources; "
+            "assert resources.path('icons', 'rollball.svg').is_file(); "
+            "assert resources.path('help_pages', 'model.html').is_file(); "
+            "assert resources.path('icons').is_relative_to(sys.argv[1]); "
+            "import rollball_app; assert rollball_app.__file__.startswith(sys.argv[1]); "
             "sys.exit(rollball.cli.main(['examples']))")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
-                            cwd=elsewhere, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin"})
+    result = subprocess.run([sys.executable, "-c", code, str(target)], capture_output=True, text=True,
+                            timeout=120, cwd=elsewhere, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin"})
     assert result.returncode == 0, result.stderr
     listed = [line.split()[0] for line in result.stdout.splitlines()[:len(example_names())]]
     assert listed == example_names()

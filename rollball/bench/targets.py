@@ -177,11 +177,11 @@ XVFB = ["xvfb-run", "-a", "-s", "-screen 0 1400x900x24 +extension GLX +render"]
 
 def app_responsiveness() -> dict:
     """The window's longest event-loop gap while 10⁶ steps are computed and played, measured in
-    a child process (``python -m app.responsiveness``; under Xvfb when there is no display), or
+    a child process (``python -m rollball_app.responsiveness``; under Xvfb when there is no display), or
     why it could not be measured. The core imports no Qt: the app does this in its own process."""
     import shutil
 
-    command = [sys.executable, "-m", "app.responsiveness"]
+    command = [sys.executable, "-m", "rollball_app.responsiveness"]
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         if shutil.which("xvfb-run") is None:
             return {"error": "no display and no xvfb-run"}

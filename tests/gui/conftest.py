@@ -3,10 +3,10 @@
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from app.garbage import collect_anywhere, collect_on_gui_thread
-from app.main import prepare_qt
-from app.preferences import Preferences
-from app.window import MainWindow
+from rollball_app.garbage import collect_anywhere, collect_on_gui_thread
+from rollball_app.main import prepare_qt
+from rollball_app.preferences import Preferences
+from rollball_app.window import MainWindow
 from rollball.examples import EXAMPLES_DIR
 from rollball.warmup import warm_up
 

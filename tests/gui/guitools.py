@@ -7,8 +7,8 @@ import re
 from PySide6 import QtCore, QtGui
 from pytestqt.exceptions import TimeoutError
 
-from app.controller import FINISHED
-from app.window import SPEEDS
+from rollball_app.controller import FINISHED
+from rollball_app.window import SPEEDS
 
 FASTEST = len(SPEEDS) - 1
 

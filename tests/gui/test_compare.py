@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from PySide6 import QtGui
 
-from app.compare_runs import COLORS, CompareRun, reference_spacing
-from app.controller import FINISHED
+from rollball_app.compare_runs import COLORS, CompareRun, reference_spacing
+from rollball_app.controller import FINISHED
 from rollball import METHODS, parse_runs
 from rollball.comparison import reference_method
 from rollball.reference import reference_solution
@@ -123,7 +123,7 @@ def test_reference_rows_meet_every_run():
 
 
 def test_the_command_line_refuses_a_bad_spec(capsys):
-    from app.main import main
+    from rollball_app.main import main
 
     with pytest.raises(SystemExit) as exit:
         main(["--compare", "euler/classic,gauss9"])

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
-from app.document import Document
+from rollball_app.controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
+from rollball_app.document import Document
 from rollball import Scene, Simulation, simulate
 from rollball.examples import EXAMPLES_DIR
 from rollball.landscape import landscape_for

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui
 
-from app.main import screenshot
+from rollball_app.main import screenshot
 from rollball.examples import example_names, scene_path
 
 from .guitools import run_to_end, set_field
@@ -76,7 +76,7 @@ def test_heights_the_ball_cannot_reach_are_cut_away(qtbot, window):
 
 
 def _app(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "app", *args], capture_output=True, text=True, timeout=300,
+    return subprocess.run([sys.executable, "-m", "rollball_app", *args], capture_output=True, text=True, timeout=300,
                           env=env or os.environ)
 
 

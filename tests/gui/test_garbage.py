@@ -6,7 +6,7 @@ import threading
 
 from PySide6 import QtCore, QtWidgets
 
-from app.garbage import INTERVAL
+from rollball_app.garbage import INTERVAL
 
 
 class Cycle:

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.controller import FINISHED, PAUSED
-from app.timeline import STEPS
+from rollball_app.controller import FINISHED, PAUSED
+from rollball_app.timeline import STEPS
 from rollball.examples import EXAMPLES_DIR
 
 from .guitools import run_to_end, set_field
@@ -195,13 +195,13 @@ def test_help_pages_teach_and_the_shortcuts_page_lists_every_shortcut(qtbot, win
 def test_headless_record_writes_the_video_and_exits_0(tmp_path):
     out = tmp_path / "hills.mp4"
     env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), HOME=str(tmp_path))
-    result = subprocess.run([sys.executable, "-m", "app", "flat", "--run-to", "0.5", "--record", str(out),
+    result = subprocess.run([sys.executable, "-m", "rollball_app", "flat", "--run-to", "0.5", "--record", str(out),
                              "--fps", "20", "--size", "160x120"], env=env, capture_output=True, text=True,
                             timeout=120)
     assert result.returncode == 0, result.stderr
     assert "Exported 11 frames" in result.stdout and "Traceback" not in result.stderr
     assert imageio_ffmpeg.count_frames_and_secs(str(out))[0] == 11
-    bad = subprocess.run([sys.executable, "-m", "app", "--record", str(tmp_path / "x.avi")], env=env,
+    bad = subprocess.run([sys.executable, "-m", "rollball_app", "--record", str(tmp_path / "x.avi")], env=env,
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and ".mp4 or .gif" in bad.stderr
     assert not (tmp_path / "x.avi").exists()

@@ -6,11 +6,11 @@ import time
 import numpy as np
 import pytest
 
-from app import help as helps
-from app.controller import PAUSED, RUNNING
-from app.plots import FLOOR, LivePlots
-from app.playback import RunBuffer
-from app.window import PLOT_INTERVAL
+from rollball_app import help as helps
+from rollball_app.controller import PAUSED, RUNNING
+from rollball_app.plots import FLOOR, LivePlots
+from rollball_app.playback import RunBuffer
+from rollball_app.window import PLOT_INTERVAL
 from rollball.trajectory import T
 
 from .guitools import assert_legible, exponent

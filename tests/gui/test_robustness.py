@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.controller import PAUSED, READY, RUNNING
-from app.worker import SimulationThread
+from rollball_app.controller import PAUSED, READY, RUNNING
+from rollball_app.worker import SimulationThread
 
 from .guitools import apply_fields, run_to_end, set_field
 from hostile_corpus import FORMULAS, SCENE_BYTES, SCENE_TEXTS

@@ -3,8 +3,8 @@ every control and readout is on screen, whole, and the runs' names are readable.
 
 from PySide6 import QtCore, QtWidgets
 
-from app.compare_runs import CompareRun
-from app.controller import FINISHED
+from rollball_app.compare_runs import CompareRun
+from rollball_app.controller import FINISHED
 from rollball import parse_runs
 
 from .guitools import FASTEST, set_field

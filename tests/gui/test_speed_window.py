@@ -8,8 +8,8 @@ import numpy as np
 import pyqtgraph as pg
 import pytest
 
-from app.controller import RUNNING
-from app.speed_window import CSV_NAME, LEGEND_CORNERS, SpeedWindow, legend_cover, place_legend
+from rollball_app.controller import RUNNING
+from rollball_app.speed_window import CSV_NAME, LEGEND_CORNERS, SpeedWindow, legend_cover, place_legend
 from rollball import Scene
 from rollball.comparison import Comparison, Reference, RunResult, RunSpec
 from rollball.examples import EXAMPLES_DIR

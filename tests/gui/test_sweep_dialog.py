@@ -3,8 +3,8 @@
 import numpy as np
 from PySide6 import QtCore
 
-from app.controller import READY
-from app.sweep_dialog import SweepDialog
+from rollball_app.controller import READY
+from rollball_app.sweep_dialog import SweepDialog
 
 
 def _open(qtbot, window) -> SweepDialog:

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.controller import PAUSED, READY, RUNNING, STOPPED
-from app.window import MainWindow
+from rollball_app.controller import PAUSED, READY, RUNNING, STOPPED
+from rollball_app.window import MainWindow
 from rollball import Scene, read_csv
 from rollball.examples import EXAMPLES_DIR, example_scenes
 
@@ -358,7 +358,7 @@ def test_preferences_remember_geometry_and_recent_files(qtbot, window, preferenc
 
 def test_the_entry_point_starts_the_window(tmp_path):
     env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), HOME=str(tmp_path))
-    process = subprocess.Popen([sys.executable, "-m", "app"], env=env, stdout=subprocess.PIPE,
+    process = subprocess.Popen([sys.executable, "-m", "rollball_app"], env=env, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
     try:
         time.sleep(6)

@@ -1,16 +1,15 @@
-"""The example scenes shipped with RollBall: the JSON files in this package, read as package
-data (``importlib.resources``), so they are found from any folder, in a checkout as in an
-installed wheel. A scene can be named by its file or, for an example, by its name alone."""
+"""The example scenes shipped with RollBall: the JSON files in ``resources/examples/`` (installed
+as package data of ``rollball.resources``, so found from any folder, in a checkout as in an
+installed wheel). A scene can be named by its file or, for an example, by its name alone."""
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
 
-from ..scene import Scene
+from . import resources
+from .scene import Scene
 
-# an installed package is a folder on disk, so this is a Path
-EXAMPLES_DIR: Path = resources.files(__name__)
+EXAMPLES_DIR: Path = resources.path("examples")
 DEFAULT_EXAMPLE = EXAMPLES_DIR / "hills.json"
 
 
