@@ -1,7 +1,7 @@
 """Start the app: ``rollball-app [SCENE]`` or ``python -m rollball_app [SCENE]`` (``python -m app
 [SCENE]`` in a checkout).
 
-Headless (DESIGN §9): with ``--screenshot PNG`` the app opens the scene, optionally runs it to
+Headless (docs/design.md §7): with ``--screenshot PNG`` the app opens the scene, optionally runs it to
 ``--run-to T`` (as fast as computed), saves a picture of the window and exits; with
 ``--record VIDEO`` it records the playback. Exit 0, or non-zero with a one-line message.
 """

@@ -467,7 +467,7 @@ def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Ord
 
 @dataclass
 class Comparison:
-    """What ``compare`` measured; ``to_dict`` is DESIGN §7's compare.json, ``save`` writes it
+    """What ``compare`` measured; ``to_dict`` is docs/design.md §6's compare.json, ``save`` writes it
     with the report (compare.md) and the figure (compare.png)."""
 
     scene: Scene

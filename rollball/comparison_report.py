@@ -1,4 +1,4 @@
-"""A comparison's files: compare.json (DESIGN §7), compare.md (the readable report) and
+"""A comparison's files: compare.json (docs/design.md §6), compare.md (the readable report) and
 compare.png (error against wall time, and against step size with the fitted slopes)."""
 
 from __future__ import annotations

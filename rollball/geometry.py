@@ -2,7 +2,7 @@
 
 Both take the derivative array ``d`` = (f, f_x, f_y, f_xx, f_xy, f_yy) of
 ``Landscape.evaluate`` (shape (6,) + grid shape) and work elementwise; they are the
-same formulas the kernel evaluates at every step (DESIGN §1).
+same formulas the kernel evaluates at every step (docs/design.md §1).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""An independent reference solution: the equations of DESIGN §1 written with plain numpy
+"""An independent reference solution: the equations of docs/design.md §1 written with plain numpy
 linear algebra (no closed forms, R as a full matrix) and integrated by scipy's DOP853.
 
 Slow and accurate: for tests and the benchmark, never for normal runs.

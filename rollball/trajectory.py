@@ -1,4 +1,4 @@
-"""A recorded run: one row per recorded step, the CSV columns of DESIGN §5, and how it ended."""
+"""A recorded run: one row per recorded step, the CSV columns of docs/design.md §5, and how it ended."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from .files import atomic_write
 COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
            "energy", "normal_force")
-# The CSV adds columns derived per row after the 23 above (DESIGN §5); readers that take the
+# The CSV adds columns derived per row after the 23 above (docs/design.md §5); readers that take the
 # first 23 keep working.
 CSV_COLUMNS = COLUMNS + ("energy_error",)
 UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
@@ -191,7 +191,7 @@ class Trajectory:
         return notes
 
     def to_csv(self, path: str | os.PathLike, keep=()) -> None:
-        """Write the CSV of DESIGN §5 atomically, numbers at full precision (``keep``: paths
+        """Write the CSV of docs/design.md §5 atomically, numbers at full precision (``keep``: paths
         that must not be overwritten, see ``rollball.files``)."""
         atomic_write(path, self.write_csv, keep=keep)
 

@@ -1,5 +1,5 @@
 """``rollball compare`` and ``rollball.compare``: run specs, orders, errors checked against an
-independent reference, the compare.json of DESIGN §7, progress, cancelling and Ctrl-C."""
+independent reference, the compare.json of docs/design.md §6, progress, cancelling and Ctrl-C."""
 
 import json
 import math
@@ -78,7 +78,7 @@ def _number(value):
 
 
 def check_compare_json(doc: dict) -> None:
-    """DESIGN §7: compare.json's keys and the types of their values."""
+    """docs/design.md §6: compare.json's keys and the types of their values."""
     assert doc["format"] == "rollball-compare" and doc["version"] == 1
     assert doc["program"] == f"rollball {rollball.__version__}"
     Scene.from_dict(doc["scene"])  # the scene as in a scene file
