@@ -98,13 +98,13 @@ def test_runs_are_measured_against_a_reference_computed_alongside(qtbot, hills):
 def test_a_kernel_being_compiled_is_a_state_of_its_own(qtbot, hills, monkeypatch):
     from contextlib import contextmanager
 
-    import app.worker
+    import rollball_app.worker
 
     @contextmanager
     def compiles_at_once(say):   # as numba's compile event would, before the first rows
         say()
         yield
-    monkeypatch.setattr(app.worker, "compile_notice", compiles_at_once)
+    monkeypatch.setattr(rollball_app.worker, "compile_notice", compiles_at_once)
     controller = RunController()
     seen = []
     controller.stateChanged.connect(lambda state: seen.append((state, controller.compiling)))

@@ -142,16 +142,16 @@ def test_pause_survives_a_finished_computation(qtbot, window):
 def test_a_formula_is_checked_off_the_gui_thread(qtbot, window, monkeypatch):
     """While a slow formula is derived and compiled the field says so, the event loop keeps
     running and the last valid scene stays; then the new landscape is taken."""
-    import app.inputs
+    import rollball_app.inputs
 
     release = threading.Event()
-    real = app.inputs.landscape_for
+    real = rollball_app.inputs.landscape_for
 
     def slow(text):
         release.wait(30)  # as long as the test wants: the check must not block the window
         return real(text)
 
-    monkeypatch.setattr(app.inputs, "landscape_for", slow)
+    monkeypatch.setattr(rollball_app.inputs, "landscape_for", slow)
     scene = window.scene
     field = window.panel.formula
     field.selectAll()
