@@ -26,7 +26,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from .cache import cache_dir
 from .files import atomic_write_text
-from .formula import X, Y, FormulaError, check_constants, parse_formula
+from .formula import X, Y, FormulaError, check_constants, code_constant, parse_formula
 from .machine_code import call
 from .text import shown
 
@@ -47,6 +47,12 @@ class _Printer(PythonCodePrinter):
             base = self.parenthesize(expr.base, PRECEDENCE["Pow"])
             return f"(1.0/{base}**{-expr.exp})"
         return super()._print_Pow(expr, rational=rational)
+
+    def _print_Rational(self, expr):  # also Integer: too large for numba's integers -> a float
+        return code_constant(expr) or super()._print_Rational(expr)
+
+    def _print_Integer(self, expr):
+        return code_constant(expr) or super()._print_Integer(expr)
 
     def _print_RealAbs(self, expr):
         return f"abs({self._print(expr.args[0])})"
