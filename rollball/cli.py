@@ -280,7 +280,9 @@ def _sweep(args) -> int:
 def _compare(args) -> int:
     from tqdm import tqdm
 
+    from . import comparison_report
     from .comparison import NothingToCompare, compare, parse_runs
+    from .files import NotReplaced
     from .scene import Scene
 
     scene = _load_scene(args.scene)
@@ -290,6 +292,14 @@ def _compare(args) -> int:
         runs = None if args.runs is None else parse_runs(args.runs)
     except ValueError as e:
         return _fail(str(e))
+    keep = [scene_path(args.scene)]
+    try:  # before the first run: a refused folder or file must not cost the runs
+        comparison_report.check(Path(args.out), keep)
+    except OSError as e:
+        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
+    failure = _compiles(scene)
+    if failure:
+        return _fail(failure)
     with tqdm(total=1, file=sys.stderr, unit="run", dynamic_ncols=True, leave=False) as bar:
         def progress(done: int, total: int, text: str) -> None:
             bar.total = total
@@ -304,14 +314,30 @@ def _compare(args) -> int:
             return EXIT_STOPPED
         except ValueError as e:  # includes FormulaError
             return _fail(str(e))
-    try:
-        result.save(args.out)
-    except OSError as e:
-        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
     stopped = sum(not r.ok for r in result.runs)
     note = f"; {stopped} runs stopped early (see compare.md)" if stopped else ""
-    print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
+    print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}",
+          flush=True)
+    try:
+        written = result.save(args.out, keep)
+    except NotReplaced as e:
+        return _fail(f"cannot write {shown(e.filename or args.out)}: {e.strerror or e}")
+    except OSError as e:
+        return _fail(f"cannot write {shown(e.filename or args.out)}: {e.strerror or e}; "
+                     f"none of {', '.join(comparison_report.FILES)} was replaced")
+    print(f"wrote {', '.join(shown(p) for p in written)}")
     return EXIT_OK
+
+
+def _compiles(scene) -> str | None:
+    """None when the scene's landscape compiles, else why not (one line): before any run."""
+    from .landscape import landscape_for
+
+    try:
+        landscape_for(scene.landscape).compiled
+    except ValueError as e:  # FormulaError
+        return str(e)
+    return None
 
 
 def _examples() -> int:

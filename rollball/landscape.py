@@ -157,7 +157,14 @@ class Landscape:
     def compiled(self):
         """The numba ``cfunc`` computing f, f_x, f_y, f_xx, f_xy, f_yy at (x, y)."""
         if self.source not in _COMPILED:
-            _COMPILED[self.source] = _compile(self.source)
+            from numba.core.errors import NumbaError
+
+            try:
+                _COMPILED[self.source] = _compile(self.source)
+            except NumbaError as e:  # a construct numba refuses: one line, not its traceback
+                text = re.sub(r"\x1b\[[0-9;]*m", "", str(e))  # numba colours its messages
+                first = next((line.strip() for line in text.splitlines() if line.strip()), "")
+                raise FormulaError(f"cannot compile the formula ({first})") from None
         return _COMPILED[self.source]
 
     def evaluate(self, x, y) -> np.ndarray:
