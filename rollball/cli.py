@@ -213,8 +213,10 @@ def _sweep(args) -> int:
 
     from tqdm import tqdm
 
+    from .files import NotReplaced
     from .scene import Scene
     from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+    from .sweeps import table as sweep_files
 
     try:
         grid = Grid.of([parse_vary(text) for text in args.vary])
@@ -226,12 +228,13 @@ def _sweep(args) -> int:
     if not isinstance(scene, Scene):
         return scene
     out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
+    try:  # before the first run: a refused folder or file must not cost the runs
+        sweep_files.check(out, keep=[scene_path(args.scene)])
     except OSError as e:
-        return _fail(f"cannot write to {shown(out)}: {e.strerror or e}")
-    if not os.access(out, os.W_OK):
-        return _fail(f"cannot write to {shown(out)}: permission denied")
+        return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
+    failure = _compiles(scene)
+    if failure:
+        return _fail(failure)
 
     cancel = threading.Event()
 
@@ -257,11 +260,14 @@ def _sweep(args) -> int:
     finally:
         signal.signal(signal.SIGINT, previous)
         bar.close()
+    done = int(table.done.sum())
     try:
         files = table.save(out, args.color)
+    except NotReplaced as e:
+        return _fail(f"cannot write {shown(e.filename or out)}: {e.strerror or e}")
     except OSError as e:
-        return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
-    done = int(table.done.sum())
+        return _fail(f"cannot write {shown(e.filename or out)}: {e.strerror or e}; "
+                     f"none of {', '.join(sweep_files.FILES)} was replaced")
     counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
     where = f"Dask workers at {table.scheduler}" if table.scheduler else "local threads"
     print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "

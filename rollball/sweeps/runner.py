@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from ..scene import Scene
-from ..simulation import step_count
+from ..simulation import MAX_STEPS, step_count
 from . import batch
 from .grid import Grid
 from .outcomes import NOT_RUN, OUTCOMES
@@ -45,15 +45,19 @@ def local_workers() -> int:
 def batch_size(scene: Scene, grid: Grid, workers: int) -> int:
     """Runs per batch: about BATCH_EVALUATIONS landscape evaluations for the longest run,
     and at least BATCHES_PER_WORKER batches per worker."""
-    def extreme(key, pick):
+    def extreme(key, pick, smallest=0.0):
         if key in grid.keys:
             values = grid.axes[grid.keys.index(key)]
-            values = values[values > 0]
+            values = values[values > smallest]
             return float(pick(values)) if values.size else None
         return None
-    dt = extreme("integrator.dt", np.min) or scene.integrator.dt
     t_end = extreme("duration", np.max) or scene.duration
-    evaluations = step_count(dt, t_end) * batch.sweep_method(scene).stages
+    # steps too small for the longest run are refused run by run (status invalid), not sized for
+    dt = extreme("integrator.dt", np.min, t_end / MAX_STEPS) or scene.integrator.dt
+    try:
+        evaluations = step_count(dt, t_end) * batch.sweep_method(scene).stages
+    except ValueError:
+        evaluations = BATCH_EVALUATIONS
     runs = max(1, BATCH_EVALUATIONS // evaluations)
     return max(1, min(runs, math.ceil(grid.size / (BATCHES_PER_WORKER * workers))))
 
