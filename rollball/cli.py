@@ -20,6 +20,8 @@ from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .files import write_target
 from .scene import SceneError
 from .sweeps.grid import KEYS as SWEEP_KEYS
+from .sweeps.runner import CONNECT_TIMEOUT as SWEEP_CONNECT_TIMEOUT
+from .sweeps.runner import WORKER_TIMEOUT as SWEEP_WORKER_TIMEOUT
 from .tableaus import METHODS, MethodKind, get_method
 from .text import shown
 
@@ -125,6 +127,12 @@ def build_parser() -> argparse.ArgumentParser:
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
                             "(needs pip install 'rollball[dask]')")
+    sweep.add_argument("--connect-timeout", type=_positive_float, default=SWEEP_CONNECT_TIMEOUT, metavar="S",
+                       help=f"with --scheduler: seconds for the scheduler to answer "
+                            f"(default {SWEEP_CONNECT_TIMEOUT:g})")
+    sweep.add_argument("--worker-timeout", type=_positive_float, default=SWEEP_WORKER_TIMEOUT, metavar="S",
+                       help=f"with --scheduler: seconds to wait for a first worker, or for one to come "
+                            f"back when all left (default {SWEEP_WORKER_TIMEOUT:g})")
     sweep.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
 
     cmp = commands.add_parser(
@@ -224,6 +232,13 @@ def _sweep(args) -> int:
         return _fail(str(e))
     if args.color not in OUTCOMES:
         return _fail(f"--color {shown(args.color)}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
+    if args.scheduler is not None:
+        from .sweeps.runner import check_address
+
+        try:
+            check_address(args.scheduler)
+        except ValueError as e:
+            return _fail(shown(str(e)))
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
@@ -251,7 +266,8 @@ def _sweep(args) -> int:
     previous = signal.signal(signal.SIGINT, interrupted)
     try:
         table = sweep(scene, dict(zip(grid.keys, grid.axes)), workers=args.workers,
-                      scheduler=args.scheduler, progress=progress, cancel=cancel)
+                      scheduler=args.scheduler, progress=progress, cancel=cancel,
+                      connect_timeout=args.connect_timeout, worker_timeout=args.worker_timeout)
     except ValueError as e:
         return _fail(str(e))
     except KeyboardInterrupt:
