@@ -406,8 +406,8 @@ Report = Callable[[str, int], None]   # (what runs next, ladder points so far)
 
 
 def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunResult]:
-    """Steps from coarse to fine: first a search down to an error (the larger of contact and
-    orientation) of about CEILING, then a point every ``effort.decades`` decades of error,
+    """Steps from coarse to fine: first a search down to a contact error of about CEILING,
+    then a point every ``effort.decades`` decades of error,
     until every fitted error is at the reference's floor (one exact error, as the contact
     point's on a plane, does not stop it), a run that ends early, the budget or ``max_points``."""
     effort, order = runner.effort, METHODS[spec.method].order
@@ -419,11 +419,11 @@ def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunRes
         start = time.perf_counter()
         result = runner.run(spec, dt)
         spent += time.perf_counter() - start
-        worst = result.worst
-        if not points and not (result.ok and worst <= CEILING):  # still searching
+        contact = result.error["contact"]
+        if not points and not (result.ok and contact <= CEILING):  # still searching
             shrink = 0.25
-            if result.ok and worst > 0:
-                shrink = min(0.5, max(1e-3, 0.8 * (CEILING / worst) ** (1.0 / order)))
+            if result.ok and contact > 0:
+                shrink = min(0.5, max(1e-3, 0.8 * (CEILING / contact) ** (1.0 / order)))
             smaller = runner.finer(dt, 1 / shrink)
             if spent + runner.cost(result.seconds * dt / smaller) > effort.budget or smaller < runner.t_end * 1e-9:
                 return [result]  # the ladder never started: show how the last try ended
@@ -498,7 +498,7 @@ def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Ord
             slopes[key] = None
             reasons[key] = (f"{len(used)} run{'s' if len(used) != 1 else ''} ended ok with a {key} error "
                             f"above the reference's floor ({reference.floor(key):.1e}); a slope needs two"
-                            + (" (the error is exact to round-off at these steps)" if mine and not used else ""))
+                            + (" (the error is at the floor already at the coarsest step)" if mine and not used else ""))
             continue
         dts, errors = [r.dt for r in used], [r.error[key] for r in used]
         lo, hi = asymptotic_range(dts, errors, METHODS[spec.method].order)
