@@ -98,24 +98,32 @@ def test_values_that_cannot_be_computed_are_null_with_a_reason(tmp_path, capsys)
     assert "not fitted:" in (out / "compare.md").read_text()
 
 
-def test_a_write_failing_after_the_runs_replaces_nothing_and_keeps_the_new_report(tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("spoil", ["read_only_png", "fifo_md"])
+def test_a_write_failing_after_the_runs_replaces_nothing_and_keeps_the_new_report(spoil, tmp_path, monkeypatch,
+                                                                                   capsys):
     from rollball import comparison_report
 
     scene = write_scene(tmp_path / "s.json")
     out = tmp_path / "out"
     assert main(["compare", scene, "--runs", "rk4", "--quick", "--out", str(out)]) == 0
-    old = {name: (out / name).read_bytes() for name in FILES}
-    # the png turns read-only while the runs go on (the check before them passed)
+    # a file turns read-only, or into a named pipe, while the runs go on (the check before them passed)
     monkeypatch.setattr(comparison_report, "check", lambda directory, keep=(): None)
-    os.chmod(out / "compare.png", 0o444)
+    if spoil == "read_only_png":
+        os.chmod(out / "compare.png", 0o444)
+    else:
+        os.unlink(out / "compare.md")
+        os.mkfifo(out / "compare.md")
+    kept_files = [name for name in FILES if (out / name).is_file()]
+    old = {name: (out / name).read_bytes() for name in kept_files}
     capsys.readouterr()
     assert main(["compare", scene, "--runs", "rk4,euler", "--quick", "--out", str(out)]) == 2
     captured = capsys.readouterr()
     assert "for 1e-06" in captured.out  # what was computed is said
     err = captured.err
-    assert err.count("\n") == 1 and "compare.png" in err and "read-only" in err
+    bad = {"read_only_png": "compare.png: is read-only", "fifo_md": "compare.md: is a named pipe"}[spoil]
+    assert err.count("\n") == 1 and bad in err
     assert "none of compare.json, compare.md, compare.png was replaced" in err
-    assert {name: (out / name).read_bytes() for name in FILES} == old  # the old set intact
+    assert {name: (out / name).read_bytes() for name in kept_files} == old  # the old set intact
     (kept,) = [p for p in out.iterdir() if p.name.startswith("compare-unsaved-")]
     assert str(kept) in err and sorted(os.listdir(kept)) == FILES
     assert {r["method"] for r in strict((kept / "compare.json").read_text())["runs"]} == {"rk4", "euler"}
@@ -185,3 +193,12 @@ def test_asymptotic_range_leaves_out_coarse_steps_and_round_off():
     assert (lo, hi) == (2, 5)
     slope = np.polyfit(np.log(dts[lo:hi]), np.log(errors[lo:hi]), 1)[0]
     assert slope == pytest.approx(5, abs=1e-9)
+
+
+@pytest.mark.parametrize("formula", ["1e10*1e10*x", "0.1*sin(1e15*x)"])
+def test_formulas_with_huge_folded_constants_run_in_compare_and_sweep(formula, tmp_path, capsys):
+    scene = write_scene(tmp_path / "s.json", landscape=formula, duration=0.05)
+    assert main(["compare", scene, "--runs", "rk4", "--quick", "--out", str(tmp_path / "c")]) == 0
+    assert main(["sweep", scene, "--vary", "start.vx=0:1:2", "--workers", "1", "--out", str(tmp_path / "s")]) == 0
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "error" not in err
