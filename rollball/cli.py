@@ -269,8 +269,10 @@ def _sweep(args) -> int:
                       scheduler=args.scheduler, progress=progress, cancel=cancel,
                       connect_timeout=args.connect_timeout, worker_timeout=args.worker_timeout)
     except ValueError as e:
+        bar.close()  # first, so that the message is a line of its own
         return _fail(str(e))
     except KeyboardInterrupt:
+        bar.close()
         print("rollball: interrupted", file=sys.stderr)
         return 130
     finally:
