@@ -91,3 +91,14 @@ def test_check_outputs_refuses_before_the_work(old, tmp_path):
     fresh = tmp_path / "new" / "folder"
     assert [p.name for p in check_outputs(fresh, NEW)] == list(NEW)
     assert fresh.is_dir() and os.listdir(fresh) == []
+
+
+def test_a_link_is_written_through_and_stays_a_link(old, tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "real.png").write_bytes(b"real old")
+    os.unlink(old / "r.png")
+    os.symlink(elsewhere / "real.png", old / "r.png")
+    replace_together(old, NEW)
+    assert os.path.islink(old / "r.png") and (elsewhere / "real.png").read_bytes() == b"new png"
+    assert no_staging_left(old) and no_staging_left(elsewhere)
