@@ -17,7 +17,6 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball import METHODS, Scene, compare
 from rollball.comparison import Cancelled
-from rollball.files import atomic_write_text
 
 from .compare_runs import COLORS
 from .plots import DecadeAxis, fit_decades
@@ -243,9 +242,13 @@ class SpeedWindow(QtWidgets.QWidget):
         """The command line's files (compare.json, compare.md, compare.png) and compare.csv."""
         if self.comparison is None:
             return False
-        try:
-            self.comparison.save(folder)
-            atomic_write_text(folder / CSV_NAME, runs_csv(self.comparison))
+        from rollball import comparison_report
+        from rollball.files import replace_together
+
+        try:  # the four files replaced together, or none of them
+            files, _ = comparison_report.render(self.comparison)
+            files[CSV_NAME] = runs_csv(self.comparison)
+            replace_together(folder, files, kept_name=comparison_report.KEPT_NAME)
         except (OSError, ValueError) as error:
             message = getattr(error, "strerror", None) or str(error)
             self.status.setText(f"Cannot export to {folder}: {message}")

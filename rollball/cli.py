@@ -20,6 +20,8 @@ from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .files import write_target
 from .scene import SceneError
 from .sweeps.grid import KEYS as SWEEP_KEYS
+from .sweeps.runner import CONNECT_TIMEOUT as SWEEP_CONNECT_TIMEOUT
+from .sweeps.runner import WORKER_TIMEOUT as SWEEP_WORKER_TIMEOUT
 from .tableaus import METHODS, MethodKind, get_method
 from .text import shown
 
@@ -125,6 +127,12 @@ def build_parser() -> argparse.ArgumentParser:
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
                             "(needs pip install 'rollball[dask]')")
+    sweep.add_argument("--connect-timeout", type=_positive_float, default=SWEEP_CONNECT_TIMEOUT, metavar="S",
+                       help=f"with --scheduler: seconds for the scheduler to answer "
+                            f"(default {SWEEP_CONNECT_TIMEOUT:g})")
+    sweep.add_argument("--worker-timeout", type=_positive_float, default=SWEEP_WORKER_TIMEOUT, metavar="S",
+                       help=f"with --scheduler: seconds to wait for a first worker, or for one to come "
+                            f"back when all left (default {SWEEP_WORKER_TIMEOUT:g})")
     sweep.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
 
     cmp = commands.add_parser(
@@ -213,8 +221,10 @@ def _sweep(args) -> int:
 
     from tqdm import tqdm
 
+    from .files import NotReplaced
     from .scene import Scene
     from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+    from .sweeps import table as sweep_files
 
     try:
         grid = Grid.of([parse_vary(text) for text in args.vary])
@@ -222,16 +232,24 @@ def _sweep(args) -> int:
         return _fail(str(e))
     if args.color not in OUTCOMES:
         return _fail(f"--color {shown(args.color)}: not an outcome; the outcomes: {', '.join(OUTCOMES)}")
+    if args.scheduler is not None:
+        from .sweeps.runner import check_address
+
+        try:
+            check_address(args.scheduler)
+        except ValueError as e:
+            return _fail(shown(str(e)))
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
     out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
+    try:  # before the first run: a refused folder or file must not cost the runs
+        sweep_files.check(out, keep=[scene_path(args.scene)])
     except OSError as e:
-        return _fail(f"cannot write to {shown(out)}: {e.strerror or e}")
-    if not os.access(out, os.W_OK):
-        return _fail(f"cannot write to {shown(out)}: permission denied")
+        return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
+    failure = _compiles(scene)
+    if failure:
+        return _fail(failure)
 
     cancel = threading.Event()
 
@@ -248,20 +266,26 @@ def _sweep(args) -> int:
     previous = signal.signal(signal.SIGINT, interrupted)
     try:
         table = sweep(scene, dict(zip(grid.keys, grid.axes)), workers=args.workers,
-                      scheduler=args.scheduler, progress=progress, cancel=cancel)
+                      scheduler=args.scheduler, progress=progress, cancel=cancel,
+                      connect_timeout=args.connect_timeout, worker_timeout=args.worker_timeout)
     except ValueError as e:
+        bar.close()  # first, so that the message is a line of its own
         return _fail(str(e))
     except KeyboardInterrupt:
+        bar.close()
         print("rollball: interrupted", file=sys.stderr)
         return 130
     finally:
         signal.signal(signal.SIGINT, previous)
         bar.close()
+    done = int(table.done.sum())
     try:
         files = table.save(out, args.color)
+    except NotReplaced as e:
+        return _fail(f"cannot write {shown(e.filename or out)}: {e.strerror or e}")
     except OSError as e:
-        return _fail(f"cannot write to {shown(e.filename or out)}: {e.strerror or e}")
-    done = int(table.done.sum())
+        return _fail(f"cannot write {shown(e.filename or out)}: {e.strerror or e}; "
+                     f"none of {', '.join(sweep_files.FILES)} was replaced")
     counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
     where = f"Dask workers at {table.scheduler}" if table.scheduler else "local threads"
     print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
@@ -280,7 +304,9 @@ def _sweep(args) -> int:
 def _compare(args) -> int:
     from tqdm import tqdm
 
+    from . import comparison_report
     from .comparison import NothingToCompare, compare, parse_runs
+    from .files import NotReplaced
     from .scene import Scene
 
     scene = _load_scene(args.scene)
@@ -290,6 +316,14 @@ def _compare(args) -> int:
         runs = None if args.runs is None else parse_runs(args.runs)
     except ValueError as e:
         return _fail(str(e))
+    keep = [scene_path(args.scene)]
+    try:  # before the first run: a refused folder or file must not cost the runs
+        comparison_report.check(Path(args.out), keep)
+    except OSError as e:
+        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
+    failure = _compiles(scene)
+    if failure:
+        return _fail(failure)
     with tqdm(total=1, file=sys.stderr, unit="run", dynamic_ncols=True, leave=False) as bar:
         def progress(done: int, total: int, text: str) -> None:
             bar.total = total
@@ -304,14 +338,30 @@ def _compare(args) -> int:
             return EXIT_STOPPED
         except ValueError as e:  # includes FormulaError
             return _fail(str(e))
-    try:
-        result.save(args.out)
-    except OSError as e:
-        return _fail(f"cannot write to {shown(e.filename or args.out)}: {e.strerror or e}")
     stopped = sum(not r.ok for r in result.runs)
     note = f"; {stopped} runs stopped early (see compare.md)" if stopped else ""
-    print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}")
+    print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}",
+          flush=True)
+    try:
+        written = result.save(args.out, keep)
+    except NotReplaced as e:
+        return _fail(f"cannot write {shown(e.filename or args.out)}: {e.strerror or e}")
+    except OSError as e:
+        return _fail(f"cannot write {shown(e.filename or args.out)}: {e.strerror or e}; "
+                     f"none of {', '.join(comparison_report.FILES)} was replaced")
+    print(f"wrote {', '.join(shown(p) for p in written)}")
     return EXIT_OK
+
+
+def _compiles(scene) -> str | None:
+    """None when the scene's landscape compiles, else why not (one line): before any run."""
+    from .landscape import landscape_for
+
+    try:
+        landscape_for(scene.landscape).compiled
+    except ValueError as e:  # FormulaError
+        return str(e)
+    return None
 
 
 def _examples() -> int:

@@ -37,8 +37,9 @@ ERROR_UNITS = {"contact": "m", "velocity": "m/s", "omega": "rad/s", "orientation
 REFERENCE_RTOL = 1e-13     # the reference run, and its check one decade tighter
 ATOL_PER_RTOL = 1e-3       # atol = 1e-3 rtol for every adaptive run
 FLOOR_FACTOR = 10.0        # errors below 10x the reference's own error are flagged, not fitted
+ROUNDOFF = 100 * np.finfo(float).eps   # nor are errors below this times the quantity's size
 CEILING = 1e-2             # fixed-step ladders start at about this contact error
-ASYMPTOTIC = 1e-3          # orders are fitted over errors below this when there are 3 such points
+SPREAD = 0.4               # orders are fitted where the local slopes agree to within this (asymptotic range)
 TARGETS = (1e-6, 1e-10)    # the summary names the cheapest run reaching each
 ROWS_PER_SECOND = 20       # the common times: at least 50 and at most 1000 of them
 MIN_ROWS, MAX_ROWS = 50, 1000
@@ -235,10 +236,11 @@ class Reference:
     message: str
     steps: int
     seconds: float
+    scales: dict = field(default_factory=dict)   # key -> size of the quantity (round-off is relative to it)
 
     def floor(self, key: str) -> float:
-        """Errors below this are the reference's own, not the run's."""
-        return FLOOR_FACTOR * self.error_estimates[key]
+        """Errors below this are the reference's own, or round-off, not the run's."""
+        return max(FLOOR_FACTOR * self.error_estimates[key], ROUNDOFF * self.scales.get(key, 0.0))
 
 
 def reference_method() -> str:
@@ -259,8 +261,11 @@ def _reference(scene: Scene, t_end: float, record_dt: float, cancel=None) -> tup
     (traj, seconds), (tighter, _) = runs
     estimates = _max_errors(traj, tighter)
     estimate = max(v for k, v in estimates.items() if k != "energy")
+    with np.errstate(all="ignore"):
+        scales = {"contact": float(np.nanmax(np.linalg.norm(traj.contact, axis=1), initial=0.0)),
+                  "orientation": 1.0}   # ‖R‖_F = √3 for a rotation; its entries are at most 1
     return traj, Reference(method, REFERENCE_RTOL, REFERENCE_RTOL * ATOL_PER_RTOL, estimate, estimates,
-                           traj.status, traj.message, traj.steps, seconds)
+                           traj.status, traj.message, traj.steps, seconds, scales)
 
 
 def record_step(t_end: float) -> float:
@@ -292,8 +297,9 @@ class RunResult:
     evaluations: int
     seconds: float             # compute time of the run alone (median of repeats when short)
     error: dict[str, float]    # maxima over the common times (NaN where none: see status)
-    below_reference_floor: bool
+    below_reference_floor: bool   # some fitted error (contact, orientation) is below the reference's floor
     message: str = ""
+    at_floor: bool = False     # every fitted error is: a finer step or tighter tolerance tells nothing more
 
     @property
     def ok(self) -> bool:
@@ -309,21 +315,26 @@ class RunResult:
                 "rtol": self.rtol, "atol": self.atol, "status": str(self.status), "steps": self.steps,
                 "rejected": self.rejected, "evaluations": self.evaluations, "seconds": self.seconds,
                 "error": {k: _finite_or_none(v) for k, v in self.error.items()},
-                "below_reference_floor": self.below_reference_floor, "message": self.message}
+                "below_reference_floor": self.below_reference_floor, "at_reference_floor": self.at_floor,
+                "message": self.message}
 
 
 @dataclass(frozen=True)
 class Order:
-    """The fitted slope of log error against log dt for one fixed-step run spec."""
+    """The fitted slope of log error against log dt for one fixed-step run spec; None where it
+    cannot be fitted, ``reasons`` saying why; ``ranges`` the (coarsest, finest) dt fitted over."""
 
     spec: RunSpec
     contact: float | None
     orientation: float | None
     expected: int
+    reasons: dict = field(default_factory=dict)   # key -> why that order is None
+    ranges: dict = field(default_factory=dict)    # key -> (largest dt, smallest dt) fitted
 
     def to_dict(self) -> dict:
         return {"method": self.spec.method, "munthe_kaas": self.spec.munthe_kaas,
-                "contact": self.contact, "orientation": self.orientation, "expected": self.expected}
+                "contact": self.contact, "orientation": self.orientation, "expected": self.expected,
+                "reasons": dict(self.reasons), "fitted_dt": {k: list(v) for k, v in self.ranges.items()}}
 
 
 def _finite_or_none(value: float) -> float | None:
@@ -385,10 +396,10 @@ class _Runner:
                 times.append(_advance(again, self.cancel))
             seconds = float(np.median(times))
         error = _max_errors(traj, self.ref_traj)
-        below = any(error[key] < self.reference.floor(key) for key in FITTED)
+        below = [error[key] < self.reference.floor(key) for key in FITTED]
         return RunResult(spec, options.get("dt"), options.get("rtol"), options.get("atol"), traj.status,
-                         traj.steps, traj.rejected, traj.evaluations, seconds, error, below,
-                         traj.message)
+                         traj.steps, traj.rejected, traj.evaluations, seconds, error, any(below),
+                         traj.message, all(below))
 
 
 Report = Callable[[str, int], None]   # (what runs next, ladder points so far)
@@ -396,8 +407,9 @@ Report = Callable[[str, int], None]   # (what runs next, ladder points so far)
 
 def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunResult]:
     """Steps from coarse to fine: first a search down to a contact error of about CEILING,
-    then a point every ``effort.decades`` decades of error, until the reference's floor, a
-    run that ends early, the budget or ``max_points``."""
+    then a point every ``effort.decades`` decades of error,
+    until every fitted error is at the reference's floor (one exact error, as the contact
+    point's on a plane, does not stop it), a run that ends early, the budget or ``max_points``."""
     effort, order = runner.effort, METHODS[spec.method].order
     ratio = min(10.0, max(1.5, 10.0 ** (effort.decades / order)))
     dt, _ = runner.grid_step(runner.t_end / COARSEST)
@@ -418,7 +430,7 @@ def _fixed_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[RunRes
             dt = smaller
             continue
         points.append(result)
-        if not result.ok or result.below_reference_floor or len(points) >= effort.max_points:
+        if not result.ok or result.at_floor or len(points) >= effort.max_points:
             return points
         finer = runner.finer(dt, ratio)
         if spent + runner.cost(result.seconds * dt / finer) > effort.budget:
@@ -437,30 +449,72 @@ def _tolerance_ladder(runner: _Runner, spec: RunSpec, report: Report) -> list[Ru
         spent += time.perf_counter() - start
         points.append(result)
         # the next tolerance is 10-1000x tighter: its cost grows by a few times at most
-        if not result.ok or result.below_reference_floor or spent + runner.cost(4 * result.seconds) > runner.effort.budget:
+        if not result.ok or result.at_floor or spent + runner.cost(4 * result.seconds) > runner.effort.budget:
             break
     return points
 
 
-def _slope(dts: list[float], errors: list[float]) -> float | None:
-    if len(dts) < 2:
-        return None
+def _slope(dts: list[float], errors: list[float]) -> float:
     return float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
+
+
+def asymptotic_range(dts: list[float], errors: list[float], expected: float,
+                     spread: float = SPREAD) -> tuple[int, int]:
+    """The points (lo .. hi-1 of dts from coarse to fine) where the error goes as dt^q for one
+    q: past the smallest error the error grows as the step shrinks (round-off adds up), so the
+    points after it are left out; of the rest, the longest run of neighbouring points whose
+    local slopes (log error ratio over log step ratio, pair by pair) are positive and agree to
+    within ``spread``. Coarse steps before that range have not settled yet. Only between runs
+    of equal length does the expected order choose: the one whose slopes are nearest to it."""
+    last = int(np.argmin(errors)) + 1
+    dts, errors = dts[:last], errors[:last]
+    local = [math.log(errors[i] / errors[i + 1]) / math.log(dts[i] / dts[i + 1]) for i in range(len(dts) - 1)]
+    best, best_key = (0, min(1, len(dts))), None
+    for lo in range(len(local)):
+        hi = lo
+        while hi < len(local) and local[hi] > 0 and max(local[lo:hi + 1]) - min(local[lo:hi + 1]) <= spread:
+            hi += 1
+        if hi == lo:
+            continue
+        key = (hi - lo, -abs(float(np.mean(local[lo:hi])) - expected))
+        if best_key is None or key > best_key:
+            best, best_key = (lo, hi + 1), key
+    return best
 
 
 def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Order:
     """The least-squares slope of log error against log dt, in the contact point and the
-    orientation, over this spec's runs that ended ok with errors above the reference's floor
-    and, where at least three are, below ASYMPTOTIC (coarser steps are often not yet in the
-    range where the error goes as dt^order)."""
-    mine = [r for r in runs if r.spec == spec and r.ok and r.dt is not None]
-    slopes = {}
+    orientation, over this spec's runs that ended ok with errors above the reference's floor,
+    and of those over the asymptotic range only (``asymptotic_range``: away from the coarse
+    steps, where the error does not yet go as dt^order, and from round-off at the finest).
+    None, with the reason, where fewer than two such runs are."""
+    mine = sorted((r for r in runs if r.spec == spec and r.ok and r.dt is not None), key=lambda r: -r.dt)
+    slopes, reasons, ranges = {}, {}, {}
     for key in FITTED:
-        used = [r for r in mine if math.isfinite(r.error[key]) and r.error[key] >= reference.floor(key)]
-        small = [r for r in used if r.error[key] <= ASYMPTOTIC]
-        used = small if len(small) >= 3 else used
-        slopes[key] = _slope([r.dt for r in used], [r.error[key] for r in used])
-    return Order(spec, slopes["contact"], slopes["orientation"], METHODS[spec.method].order)
+        used = [r for r in mine if math.isfinite(r.error[key]) and r.error[key] > 0
+                and r.error[key] >= reference.floor(key)]
+        used = [r for i, r in enumerate(used) if i == 0 or r.dt < used[i - 1].dt]  # distinct steps
+        if len(used) < 2:
+            slopes[key] = None
+            reasons[key] = (f"{len(used)} run{'s' if len(used) != 1 else ''} ended ok with a {key} error "
+                            f"above the reference's floor ({reference.floor(key):.1e}); a slope needs two"
+                            + (" (the error is at the floor already at the coarsest step)" if mine and not used else ""))
+            continue
+        dts, errors = [r.dt for r in used], [r.error[key] for r in used]
+        lo, hi = asymptotic_range(dts, errors, METHODS[spec.method].order)
+        if hi - lo < 2:
+            slopes[key] = None
+            reasons[key] = (f"no two neighbouring steps where the {key} error shrinks with the step "
+                            f"(above the floor it is round-off, growing as the step shrinks)")
+            continue
+        slope = _slope(dts[lo:hi], errors[lo:hi])
+        if math.isfinite(slope):
+            slopes[key] = slope
+            ranges[key] = (dts[lo], dts[hi - 1])
+        else:
+            slopes[key] = None
+            reasons[key] = "the fit of the measured errors is not a finite number"
+    return Order(spec, slopes["contact"], slopes["orientation"], METHODS[spec.method].order, reasons, ranges)
 
 
 # -- the comparison --------------------------------------------------------------------------
@@ -492,9 +546,12 @@ class Comparison:
     def summary(self) -> str:
         """One line: the cheapest run for each target error, and its cost."""
         parts = []
+        floor = max(self.reference.floor(key) for key in FITTED)
         for target in TARGETS:
             run = self.best(target)
-            if run is None:
+            if run is None and floor > target:
+                parts.append(f"{target:.0e} is below what the reference resolves ({floor:.1e})")
+            elif run is None:
                 parts.append(f"no run reached {target:.0e}")
             else:
                 parts.append(f"for {target:.0e}: {setting_text(run)} "
@@ -507,26 +564,49 @@ class Comparison:
         for target in TARGETS:
             run = self.best(target)
             best[f"{target:.0e}"] = None if run is None else self.runs.index(run)
-        return {
+        return strict_json({
             "format": "rollball-compare", "version": 1, "program": f"rollball {__version__}",
             "scene": self.scene.to_dict(), "t_end": self.t_end, "machine": self.machine,
-            "reference": {"method": ref.method, "rtol": ref.rtol, "error_estimate": ref.error_estimate,
+            "reference": {"method": ref.method, "rtol": ref.rtol, "error_estimate": _finite_or_none(ref.error_estimate),
                           "atol": ref.atol,
                           "error_estimates": {k: _finite_or_none(v) for k, v in ref.error_estimates.items()},
+                          "floors": {k: ref.floor(k) for k in FITTED},
                           "status": str(ref.status), "message": ref.message, "steps": ref.steps,
                           "seconds": ref.seconds},
             "runs": [r.to_dict() for r in self.runs],
             "orders": [o.to_dict() for o in self.orders],
             "record_dt": self.record_dt, "quick": self.quick,
             "best": best,   # index into runs of the fastest run reaching each error, or null
-        }
+        })
 
-    def save(self, directory: str | Path) -> None:
-        """compare.json, compare.md and compare.png in ``directory`` (made if missing), each
-        written atomically; all three are rendered before the first is written."""
+    def save(self, directory: str | Path, keep=()) -> list[Path]:
+        """compare.json, compare.md and compare.png in ``directory`` (made if missing),
+        replaced together or not at all (``files.NotReplaced``, whose message says where the
+        new files were kept); ``keep``: paths not to overwrite (the scene)."""
         from . import comparison_report
 
-        comparison_report.save(self, Path(directory))
+        return comparison_report.save(self, Path(directory), keep)
+
+
+def strict_json(doc: dict) -> dict:
+    """``doc`` with every number JSON cannot hold (NaN, ±inf) replaced by null, each listed
+    under "not_computed" with where it was and why ({"path": "runs[3].seconds", "reason": ...});
+    what already is null for a stated reason (an order's "reasons") stays as it is."""
+    missing = []
+
+    def clean(value, path):
+        if isinstance(value, dict):
+            return {k: clean(v, f"{path}.{k}" if path else str(k)) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [clean(v, f"{path}[{i}]") for i, v in enumerate(value)]
+        if isinstance(value, float) and not math.isfinite(value):
+            missing.append({"path": path, "reason": f"not a finite number ({value!r}): it could not be computed"})
+            return None
+        return value
+
+    out = clean(doc, "")
+    out["not_computed"] = missing
+    return out
 
 
 def setting_text(run: RunResult) -> str:

@@ -9,9 +9,20 @@ import os
 import platform
 from pathlib import Path
 
-from .comparison import (ASYMPTOTIC, ERROR_UNITS, ERRORS, FLOOR_FACTOR, TARGETS, Comparison, RunResult, RunSpec,
-                         setting_text)
-from .files import atomic_write_bytes, atomic_write_text
+import warnings
+
+from .comparison import (ERROR_UNITS, ERRORS, FITTED, FLOOR_FACTOR, SPREAD, TARGETS, Comparison, RunResult,
+                         RunSpec, setting_text)
+from .files import check_outputs, replace_together
+
+FILES = ("compare.json", "compare.md", "compare.png")
+KEPT_NAME = "compare-unsaved"   # where a report that could not replace the old one is kept
+
+
+def literal(text: str) -> str:
+    """User text as it can go into a UTF-8 file or a figure: a lone surrogate (which no
+    encoding writes) becomes U+FFFD."""
+    return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in str(text))
 
 
 def machine() -> str:
@@ -65,7 +76,9 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
              f"{ref.method} at rtol = {ref.rtol:.0e}, atol = {ref.atol:.0e} ({ref.steps} steps, "
              f"{ref.seconds * 1e3:.3g} ms). Its own error, against a run at a 10× tighter tolerance: "
              + ", ".join(f"{k} {_number(ref.error_estimates[k], '.1e')}" for k in ERRORS) + ". "
-             f"Errors below {FLOOR_FACTOR:g}× that are marked * and left out of the fitted orders."]
+             f"Errors below {FLOOR_FACTOR:g}× that, or below round-off (100 ε times the quantity's size), "
+             f"are marked * and left out of the fitted orders: floors "
+             + ", ".join(f"{k} {ref.floor(k):.1e}" for k in FITTED) + "."]
     if ref.status != "ok":
         lines += ["", f"The reference stopped early ({ref.message}): every run is compared up to "
                       f"t = {cmp.t_end:g} s."]
@@ -73,22 +86,29 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
               "Errors are maxima over the run at the common times; cost is compute time (processor "
               "time of the run, the median of repeats for short runs). Ranked by the larger of the contact-point (m) and orientation "
               "errors.", "", "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
+    floor = max(ref.floor(key) for key in FITTED)
     for target in TARGETS:
         best = cmp.best(target)
-        lines.append(f"| {target:.0e} | none reached it | — | — |" if best is None else
+        none = "none reached it" if floor <= target else f"below what the reference resolves ({floor:.1e})"
+        lines.append(f"| {target:.0e} | {none} | — | — |" if best is None else
                      f"| {target:.0e} | {setting_text(best)} | {best.seconds * 1e3:.3g} | {best.steps} |")
     if cmp.orders:
         lines += ["", f"{heading} Orders", "",
                   f"Least-squares slope of log error against log dt over the runs that ended ok above the "
-                  f"reference's floor (over those with errors below {ASYMPTOTIC:g} where there are three).",
+                  f"reference's floor, and of those over the asymptotic range: the longest run of "
+                  f"neighbouring steps whose pairwise slopes agree to within {SPREAD:g}, up to the smallest error (coarse steps whose "
+                  f"error does not yet go as dt^order, and the round-off beyond the smallest error, are left out).",
                   "", "| run | contact point | orientation | expected |", "|---|---:|---:|---:|"]
         lines += [f"| {o.spec.label} | {_number(o.contact, '.2f')} | {_number(o.orientation, '.2f')} | "
                   f"{o.expected} |" for o in cmp.orders]
+        notes = [f"- {o.spec.label}, {key}: not fitted: {reason}." for o in cmp.orders
+                 for key, reason in o.reasons.items()]
+        lines += ["", *notes] if notes else []
     return lines
 
 
 def markdown(cmp: Comparison, figure: str | None = "compare.png") -> str:
-    lines = ["# Speed against error", "", *([cmp.scene.description, ""] if cmp.scene.description else []),
+    lines = ["# Speed against error", "", *([literal(cmp.scene.description), ""] if cmp.scene.description else []),
              *_scene_lines(cmp), "",
              f"Machine: {cmp.machine}. Mode: {'quick' if cmp.quick else 'full'}.", "", *findings(cmp)]
     if figure:
@@ -166,9 +186,13 @@ def figure(cmp: Comparison) -> bytes:
     left.set_title("error against time")
     right.set_title("error against step size (fitted slopes)")
     legend_below(fig, left)
-    fig.suptitle(f"{cmp.scene.description or cmp.scene.landscape} — to t = {cmp.t_end:g} s; dashed grey: "
-                 f"{FLOOR_FACTOR:g}× the reference's own error\n{cmp.machine}", fontsize=8)
-    return png(fig)
+    # the description is the user's text: drawn as written ($ is not mathtext, no TeX)
+    fig.suptitle(f"{literal(cmp.scene.description or cmp.scene.landscape)} — to t = {cmp.t_end:g} s; dashed "
+                 f"grey: {FLOOR_FACTOR:g}× the reference's own error\n{literal(cmp.machine)}", fontsize=8,
+                 parse_math=False, usetex=False)
+    with warnings.catch_warnings():  # a glyph the font lacks is drawn as a box, not reported
+        warnings.simplefilter("ignore")
+        return png(fig)
 
 
 def _slope_label(ax, cmp: Comparison, spec: RunSpec, runs: list[RunResult], color: str) -> None:
@@ -181,12 +205,31 @@ def _slope_label(ax, cmp: Comparison, spec: RunSpec, runs: list[RunResult], colo
                 bbox=dict(boxstyle="round,pad=0.15", facecolor="white", edgecolor="none", alpha=0.8))
 
 
-def save(cmp: Comparison, directory: Path) -> None:
-    """Render all three files, then write each atomically (no half-written set on an error)."""
-    text = json.dumps(cmp.to_dict(), indent=1, allow_nan=False)
-    report = markdown(cmp)
-    image = figure(cmp)
-    directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(directory / "compare.json", text + "\n")
-    atomic_write_text(directory / "compare.md", report)
-    atomic_write_bytes(directory / "compare.png", image)
+def render(cmp: Comparison) -> tuple[dict, list[str]]:
+    """The report's files (name -> text or bytes; None for a figure that could not be drawn,
+    so that an old one does not stay beside the new report) and notes on what is missing."""
+    files = {"compare.json": json.dumps(cmp.to_dict(), indent=1, allow_nan=False) + "\n",
+             "compare.md": markdown(cmp)}
+    notes = []
+    try:
+        files["compare.png"] = figure(cmp)
+    except Exception as error:  # noqa: BLE001 - the numbers are worth more than the picture
+        files["compare.png"] = None
+        notes.append(f"compare.png not drawn ({type(error).__name__}: {' '.join(str(error).split())[:200]})")
+    return files, notes
+
+
+def check(directory: Path, keep=()) -> None:
+    """Before the first run: the folder and each file of the report may be written (OSError if not)."""
+    check_outputs(directory, FILES, keep)
+
+
+def save(cmp: Comparison, directory: Path, keep=()) -> list[Path]:
+    """Render the three files, then replace them together (files.replace_together): all or
+    none. ``NotReplaced`` when none was; the new files are then kept in a folder of their own
+    (its name in the message). Returns the files written."""
+    files, notes = render(cmp)
+    written = replace_together(directory, files, keep=keep, kept_name=KEPT_NAME)
+    if notes:
+        warnings.warn("; ".join(notes), stacklevel=2)
+    return written

@@ -17,6 +17,13 @@ A refusal or a failing write (missing folder, full disk) raises ``OSError`` nami
 path and leaves any existing file untouched. Interrupting the program (Ctrl-C, SIGTERM,
 SIGHUP) during a write removes the temporary file; the old file stays intact.
 
+A set of files that belong together (a report's compare.json, compare.md and compare.png; a
+sweep's sweep.csv, sweep.json and sweep.png) goes through ``replace_together``: every file is
+written whole into a staging folder beside its target first, and only then are they renamed
+into place, one after the other; a rename that fails puts back the ones before it. So the
+set is replaced entirely or not at all. ``check_outputs`` makes the same checks before long
+work, so that a refused folder or file costs nothing.
+
 ``open_regular`` opens a file for reading only if it is a regular file: a named pipe
 would block the program forever, a device never end.
 """
@@ -25,6 +32,7 @@ from __future__ import annotations
 
 import errno
 import os
+import shutil
 import signal
 import stat
 import tempfile
@@ -114,9 +122,12 @@ def _removed_on_termination(tmp: list):
     ours = [s for s, handler in previous.items() if handler is signal.SIG_DFL]
 
     def terminate(signum, frame):
-        if tmp:
+        for name in tmp:  # temporary files, or staging folders (see replace_together)
             try:
-                os.unlink(tmp[0])
+                if os.path.isdir(name) and not os.path.islink(name):
+                    shutil.rmtree(name, ignore_errors=True)
+                else:
+                    os.unlink(name)
             except OSError:
                 pass
         signal.signal(signum, signal.SIG_DFL)
@@ -194,3 +205,172 @@ def open_regular(path: str | os.PathLike) -> IO[bytes]:
         os.close(fd)
     raise _refuse(path, f"is {kind}, not a regular file",
                   errno.EISDIR if kind == "a folder" else errno.EPERM)
+
+
+# -- sets of files replaced together --------------------------------------------------------
+
+STAGING_PREFIX = ".rollball-staging-"
+
+
+class NotReplaced(OSError):
+    """A set of files was not replaced. ``strerror`` says why and what holds what: nothing of
+    the set was replaced (the old files stay), and where the new files were kept, if
+    anywhere (``kept``, a folder); ``filename`` names the file that failed."""
+
+    kept: Path | None = None
+
+
+def _folder(directory: str | os.PathLike) -> Path:
+    """The output folder, made if missing; OSError naming it if it is not a writable folder."""
+    folder = Path(directory)
+    if folder.exists() and not folder.is_dir():
+        raise _refuse(directory, "is a file, not a folder; nothing was written", errno.ENOTDIR)
+    folder.mkdir(parents=True, exist_ok=True)
+    mode = folder.stat().st_mode
+    if not mode & 0o222 or not os.access(folder, os.W_OK | os.X_OK):
+        raise _refuse(directory, "is a read-only folder; nothing was written", errno.EACCES)
+    return folder
+
+
+def check_outputs(directory: str | os.PathLike, names: Iterable[str],
+                  keep: Iterable[str | os.PathLike] = ()) -> list[Path]:
+    """Before long work: the folder (made if missing) and each file ``names`` in it may be
+    written, and a staging folder can be made there; the targets, or ``OSError`` (naming the
+    folder or file and why) if not."""
+    folder = _folder(directory)
+    keep = list(keep)
+    targets = [write_target(folder / name, keep) for name in names]
+    for parent in dict.fromkeys(t.parent for t in targets):
+        shutil.rmtree(tempfile.mkdtemp(dir=parent, prefix=STAGING_PREFIX))  # OSError if it cannot
+    return targets
+
+
+def replace_together(directory: str | os.PathLike, files: dict[str, object],
+                     keep: Iterable[str | os.PathLike] = (), kept_name: str | None = None) -> list[Path]:
+    """Replace the files ``files`` (name -> str for UTF-8 text, bytes, or None to remove an old
+    file of that name) in ``directory`` (made if missing) together: all of them or none.
+
+    Each is written whole into a staging folder in ``directory`` first (by the rules of
+    ``atomic_write``: permissions of a replaced file kept; read-only files, special files,
+    ``keep`` refused), then the staged files are renamed into place; if a rename fails, the
+    ones before it are put back. Raises ``NotReplaced`` when nothing was replaced: its message
+    says so, and, when ``kept_name`` is given, the new files are kept in a new folder named
+    ``kept_name-XXXX`` in ``directory`` (``NotReplaced.kept``; its message names it). Returns
+    the files written."""
+    folder = _folder(directory)
+    keep = list(keep)
+    listed = ", ".join(files)
+    tmp: list[str] = []
+
+    def failed(error: OSError, stage: str | None) -> NotReplaced:
+        where = None
+        if stage is not None and kept_name is not None:
+            try:
+                for name in os.listdir(stage):  # only the new files stay
+                    if name not in files:
+                        os.unlink(os.path.join(stage, name))
+                where = tempfile.mkdtemp(dir=folder, prefix=f"{kept_name}-")
+                os.rmdir(where)
+                os.rename(stage, where)
+                tmp.remove(stage)
+            except OSError:
+                where = None
+        reason = (error.strerror or str(error)).removesuffix("; nothing was written")
+        kept = (f"; the new files are in {where}" if where and os.listdir(where)
+                else "; the new files were not kept")
+        out = NotReplaced(error.errno or errno.EIO, f"{reason}; none of {listed} was replaced (the old "
+                          f"ones, if any, are untouched){kept}", error.filename or str(folder))
+        out.kept = Path(where) if where else None
+        return out
+
+    with _removed_on_termination(tmp):
+        stage = None
+        try:
+            try:
+                stage = tempfile.mkdtemp(dir=folder, prefix=STAGING_PREFIX)
+                tmp.append(stage)
+                moves: list[tuple[str | None, Path]] = []   # (staged file or None to remove, target)
+                staged = {}
+                for name, content in files.items():  # first what was computed, whatever else fails
+                    if content is not None:
+                        staged[name] = os.path.join(stage, name)
+                        _stage(staged[name], content, folder / name)
+                backups: dict[Path, str] = {}
+                for name, content in files.items():
+                    target = write_target(folder / name, keep)
+                    if target.exists():  # a second name for the old file: put back if a later rename fails
+                        backups[target] = os.path.join(stage, f".old.{len(backups)}")
+                        _second_name(target, backups[target])
+                    if content is None:
+                        moves.append((None, target))
+                    elif target.parent == Path(os.path.realpath(folder)):
+                        moves.append((staged[name], target))
+                    else:  # a link to another folder: stage beside the file it names too
+                        other = tempfile.mkdtemp(dir=target.parent, prefix=STAGING_PREFIX)
+                        tmp.append(other)
+                        _stage(os.path.join(other, target.name), content, target)
+                        moves.append((os.path.join(other, target.name), target))
+            except OSError as error:
+                raise failed(error, stage) from None
+            done: list[tuple[str | None, Path]] = []
+            try:
+                for staged_file, target in moves:
+                    if staged_file is not None:
+                        if staged_file.startswith(stage):  # keep a copy until all are in place
+                            _second_name(staged_file, staged_file + ".placed")
+                        os.replace(staged_file, target)
+                        if staged_file.startswith(stage):
+                            os.replace(staged_file + ".placed", staged_file)
+                    elif target in backups:
+                        os.unlink(target)
+                    done.append((staged_file, target))
+            except OSError as error:
+                undone = []
+                for staged_file, target in reversed(done):
+                    try:
+                        if target in backups:
+                            os.replace(backups[target], target)
+                        elif staged_file is not None:
+                            os.unlink(target)
+                    except OSError:
+                        undone.append(target.name)
+                if undone:  # rare: the folder changed under us
+                    raise NotReplaced(error.errno or errno.EIO,
+                                      f"{error.strerror or error}; replaced and not put back: "
+                                      f"{', '.join(undone)}", error.filename) from None
+                raise failed(error, stage) from None
+            return [target for staged_file, target in moves if staged_file is not None]
+        finally:
+            for name in tmp:
+                shutil.rmtree(name, ignore_errors=True)
+
+
+def _second_name(path, name) -> None:
+    """A hard link ``name`` to the file ``path``, or a copy where links are not allowed."""
+    try:
+        os.link(path, name)
+    except OSError:
+        shutil.copy2(path, name)
+
+
+def _stage(name: str, content, target: Path) -> None:
+    """Write content (str or bytes) to the new file ``name`` with the permissions ``target``
+    has (owner and group where allowed), or the umask's for a new file."""
+    try:
+        info = target.stat()
+    except OSError:
+        info = None
+    binary = isinstance(content, (bytes, bytearray))
+    fd = os.open(name, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
+    with (os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8", newline="\n")) as stream:
+        stream.write(content)
+        stream.flush()
+        os.fsync(stream.fileno())
+    if info is None:
+        os.chmod(name, 0o666 & ~_umask())
+    else:
+        os.chmod(name, stat.S_IMODE(info.st_mode))
+        try:
+            os.chown(name, info.st_uid, info.st_gid)
+        except OSError:
+            pass

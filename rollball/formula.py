@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+from fractions import Fraction
 from dataclasses import dataclass
 
 import sympy as sp
@@ -288,6 +289,27 @@ def parse_formula(text: str) -> sp.Expr:
     expr = _Parser(_tokenize(text)).parse()
     check_constants(expr)
     return expr
+
+
+# numba types an integer literal in generated code as a 64-bit integer and refuses a larger
+# one ("Int value is too large"): 1e10*1e10*x folds to the exact 100000000000000000000*x, and
+# the second derivative of sin(1e15*x) holds 10^30. Beyond 2^53 a double holds the number no
+# less exactly than the arithmetic it feeds (which is in doubles), so such constants are
+# spelled as float literals.
+LARGEST_CODE_INTEGER = 2**53
+
+
+def code_constant(number: sp.Rational) -> str | None:
+    """How generated code spells a rational constant whose numerator or denominator numba
+    cannot take as an integer: the correctly rounded float literal (in parentheses); None
+    when the ordinary spelling compiles."""
+    p, q = int(number.p), int(number.q)
+    if abs(p) <= LARGEST_CODE_INTEGER and q <= LARGEST_CODE_INTEGER:
+        return None
+    value = float(Fraction(p, q))  # correctly rounded; constants over 1e300 were refused earlier
+    if not math.isfinite(value):
+        raise FormulaError("a constant in the formula is too large")
+    return f"({value!r})"
 
 
 def check_constants(expr: sp.Expr) -> None:

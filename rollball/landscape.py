@@ -26,7 +26,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from .cache import cache_dir
 from .files import atomic_write_text
-from .formula import X, Y, FormulaError, check_constants, parse_formula
+from .formula import X, Y, FormulaError, check_constants, code_constant, parse_formula
 from .machine_code import call
 from .text import shown
 
@@ -47,6 +47,12 @@ class _Printer(PythonCodePrinter):
             base = self.parenthesize(expr.base, PRECEDENCE["Pow"])
             return f"(1.0/{base}**{-expr.exp})"
         return super()._print_Pow(expr, rational=rational)
+
+    def _print_Rational(self, expr):  # also Integer: too large for numba's integers -> a float
+        return code_constant(expr) or super()._print_Rational(expr)
+
+    def _print_Integer(self, expr):
+        return code_constant(expr) or super()._print_Integer(expr)
 
     def _print_RealAbs(self, expr):
         return f"abs({self._print(expr.args[0])})"
@@ -151,7 +157,14 @@ class Landscape:
     def compiled(self):
         """The numba ``cfunc`` computing f, f_x, f_y, f_xx, f_xy, f_yy at (x, y)."""
         if self.source not in _COMPILED:
-            _COMPILED[self.source] = _compile(self.source)
+            from numba.core.errors import NumbaError
+
+            try:
+                _COMPILED[self.source] = _compile(self.source)
+            except NumbaError as e:  # a construct numba refuses: one line, not its traceback
+                text = re.sub(r"\x1b\[[0-9;]*m", "", str(e))  # numba colours its messages
+                first = next((line.strip() for line in text.splitlines() if line.strip()), "")
+                raise FormulaError(f"cannot compile the formula ({first})") from None
         return _COMPILED[self.source]
 
     def evaluate(self, x, y) -> np.ndarray:

@@ -24,7 +24,10 @@ def test_small_work_precision_report(tmp_path):
     # classic and Munthe-Kaas share the motion, and differ in R
     mk, classic = ([r["error"] for r in bowl["runs"] if r["method"] == "rk4" and r["munthe_kaas"] is k]
                    for k in (True, False))
-    assert [e["contact"] for e in mk] == [e["contact"] for e in classic]
+    # (same steps, same contact errors; a ladder goes on until both its errors are at the floor, so
+    # classic's, whose R is worse, may take a step more)
+    n = min(len(mk), len(classic))
+    assert n >= 2 and [e["contact"] for e in mk[:n]] == [e["contact"] for e in classic[:n]]
     assert mk[0]["orientation"] < classic[0]["orientation"]
     assert "### bowl" in text and "#### scipy DOP853 on the same equations" in text
     assert (tmp_path / "bench.png").read_bytes()[:4] == b"\x89PNG" and "![work-precision](bench.png)" in text

@@ -36,3 +36,35 @@ def test_accepted(text, expected):
 def test_not_text():
     with pytest.raises(FormulaError, match="must be text"):
         parse_formula(3)
+
+
+@pytest.mark.parametrize("text, at, expected", [
+    # folded exactly by sympy to integers numba's 64-bit literals cannot hold
+    ("1e10*1e10*x", 0.5, [5e19, 1e20, 0, 0, 0, 0]),
+    ("0.1*sin(1e15*x)", 0.25, None),          # f_xx holds 10^29
+    ("1e20/3*x + x/(1e10*1e10)", 1.0, [1e20 / 3 + 1e-20, 1e20 / 3 + 1e-20, 0, 0, 0, 0]),
+])
+def test_constants_too_large_for_machine_integers_compile(text, at, expected):
+    import math
+
+    import numpy as np
+
+    from rollball.landscape import Landscape
+
+    values = Landscape(text).evaluate(at, 0.0)
+    if expected is None:
+        expected = [0.1 * math.sin(1e15 * at), 1e14 * math.cos(1e15 * at), 0, -1e29 * math.sin(1e15 * at), 0, 0]
+    np.testing.assert_allclose(values, expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("text", ["1e10*1e10*x", "0.1*sin(1e15*x)"])
+def test_they_run_from_the_command_line(text, tmp_path, capsys):
+    import json
+
+    from rollball.cli import main
+
+    scene = tmp_path / "s.json"
+    scene.write_text(json.dumps({"format": "rollball-scene", "version": 2, "landscape": text, "duration": 0.05}))
+    assert main(["simulate", str(scene)]) == 0
+    out = capsys.readouterr()
+    assert "status ok" in out.out and "Traceback" not in out.err

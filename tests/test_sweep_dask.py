@@ -32,10 +32,10 @@ def test_a_dask_sweep_equals_the_local_one_bit_for_bit(scheduler):
     assert remote.workers == 2 and remote.scheduler == scheduler and calls[-1] == 27
 
 
-def test_an_unreachable_scheduler_is_a_clear_error(monkeypatch):
-    monkeypatch.setattr("rollball.sweeps.runner.CONNECT_TIMEOUT", "0.5s")
+def test_an_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(ValueError, match="cannot reach the Dask scheduler"):
-        sweep(Scene.load(EXAMPLES_DIR / "liftoff.json"), {"start.vx": [1.0]}, scheduler="tcp://127.0.0.1:9")
+        sweep(Scene.load(EXAMPLES_DIR / "liftoff.json"), {"start.vx": [1.0]}, scheduler="tcp://127.0.0.1:9",
+              connect_timeout=0.5)
 
 
 def test_a_lost_worker_does_not_lose_the_sweep(scheduler):
@@ -74,3 +74,111 @@ def test_a_failed_batch_ends_the_sweep_with_the_runs_finished(monkeypatch):
     assert table.partial and "worker out of memory" in table.error
     first = table.done.sum()                                  # the first batch, and only it
     assert 0 < first < 40 and table.done[:first].all()
+
+
+# -- bounded waits (issue 23): loopback servers that never answer, answer garbage, or have no workers
+
+LIFTOFF = EXAMPLES_DIR / "liftoff.json"
+
+
+@pytest.fixture
+def loopback_server():
+    """A TCP server on 127.0.0.1 that accepts and then stays silent, or answers garbage."""
+    import socket
+    import threading
+
+    servers = []
+
+    def start(answer: bytes | None):
+        listener = socket.socket()
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(8)
+        conns = []
+
+        def serve():
+            while True:
+                try:
+                    conn, _ = listener.accept()
+                except OSError:
+                    return
+                conns.append(conn)
+                if answer is not None:
+                    conn.sendall(answer)
+
+        threading.Thread(target=serve, daemon=True).start()
+        servers.append((listener, conns))
+        return f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+
+    yield start
+    for listener, conns in servers:
+        for conn in conns:
+            conn.close()
+        listener.close()
+
+
+@pytest.mark.parametrize("answer, words", [
+    (None, "no answer from the Dask scheduler at tcp://127.0.0.1:"),
+    # a length prefix of 2^64 - 1 bytes, then text: a Dask client reading it once tried to allocate 3 EiB
+    (b"\xff" * 16 + b"HTTP/1.1 400 Bad Request\r\n\r\n" * 20, "did not answer as a Dask scheduler does"),
+])
+def test_a_port_that_never_answers_or_answers_garbage_is_refused_in_bounded_time(loopback_server, answer, words):
+    import time
+
+    address = loopback_server(answer)
+    start = time.monotonic()
+    with pytest.raises(ValueError, match=words):
+        sweep(Scene.load(LIFTOFF), {"start.vx": [1.0]}, scheduler=address, connect_timeout=0.5)
+    assert time.monotonic() - start < 5
+
+
+@pytest.fixture(scope="module")
+def no_workers():
+    with distributed.LocalCluster(n_workers=0, processes=False, host="127.0.0.1", protocol="tcp",
+                                  dashboard_address=":0") as cluster:
+        assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
+        yield cluster.scheduler_address
+
+
+def test_a_scheduler_without_workers_is_given_up_on_after_the_worker_timeout(no_workers):
+    import time
+
+    start = time.monotonic()
+    with pytest.raises(ValueError, match="has no workers: none joined within 0.5 s"):
+        sweep(Scene.load(LIFTOFF), {"start.vx": [1.0]}, scheduler=no_workers, worker_timeout=0.5)
+    assert time.monotonic() - start < 5
+
+
+def test_the_first_ctrl_c_stops_the_wait_for_workers(no_workers, tmp_path, capsys):
+    import threading
+    import time
+
+    from rollball.cli import main
+
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    try:
+        code = main(["sweep", str(LIFTOFF), "--vary", "start.vx=3:6:4", "--scheduler", no_workers,
+                     "--worker-timeout", "60", "--out", str(tmp_path)])
+    finally:
+        timer.cancel()
+    assert code == 130 and time.monotonic() - start < 10
+    assert "interrupted" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("address, words", [
+    ("ucx://127.0.0.1:8786", "the ucx:// transport is not supported"),
+    ("tls://127.0.0.1:8786", "the tls:// transport is not supported"),
+    ("tcp://127.0.0.1", "expected tcp://HOST:PORT"),
+    ("tcp://127.0.0.1:99999", "expected tcp://HOST:PORT"),
+])
+def test_unsupported_addresses_are_refused_up_front(address, words, tmp_path, capsys, monkeypatch):
+    import rollball.sweeps
+
+    monkeypatch.setattr(rollball.sweeps, "sweep", lambda *a, **k: pytest.fail("the sweep started"))
+    from rollball.cli import main
+
+    assert main(["sweep", str(LIFTOFF), "--vary", "start.vx=3:6:4", "--scheduler", address,
+                 "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and "\n" not in err and list(tmp_path.iterdir()) == []

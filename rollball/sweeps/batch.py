@@ -75,7 +75,8 @@ def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
         combos, inverse = np.unique(columns, axis=0, return_inverse=True)
         for i, combo in enumerate(combos):
             refusal = _refusal(scene, tuple(group), tuple(float(v) for v in combo))
-            if refusal:
+            if refusal:  # the key and value named, whatever the message says
+                refusal = f"{refusal} ({', '.join(f'{k} = {float(v)!r}' for k, v in zip(group, combo))})"
                 for row in np.flatnonzero(inverse.ravel() == i):
                     messages.setdefault(int(row), refusal)
     return messages
@@ -84,8 +85,9 @@ def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
 @lru_cache(maxsize=1 << 16)  # batches of a grid share most values: each is checked once per process
 def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
     try:
-        with_values(scene, keys, values)
-    except SceneError as e:
+        varied = with_values(scene, keys, values)
+        step_count(varied.integrator.dt, varied.duration)  # a dt of 1e-300: too many steps
+    except (SceneError, ValueError) as e:
         return str(e)
     return None
 
@@ -118,7 +120,10 @@ def run(task: Task) -> Result:
     combos, inverse = np.unique(pairs, axis=0, return_inverse=True)
     for i, (h, t) in enumerate(combos):
         if h > 0 and t > 0:
-            n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
+            try:
+                n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
+            except ValueError:  # too many steps: refused by validate, not run
+                pass
     outcomes = np.full((runs, len(OUTCOMES)), np.nan)
     W, _, D = method.kernel_arrays()
     n = kernel.MOTION_SIZE

@@ -8,6 +8,7 @@ fitting are hatched whatever their colour, so those regions read at a glance.
 from __future__ import annotations
 
 import io
+import warnings
 
 import numpy as np
 
@@ -46,16 +47,33 @@ def _edges(centres: np.ndarray) -> np.ndarray:
 def figure(table, path, color: str = "liftoff_time") -> bool:
     """Draw the table's figure to ``path`` (atomically); False when there is none to draw:
     matplotlib missing or more than two varied keys."""
+    data = figure_png(table, color)
+    if data is None:
+        return False
+    atomic_write_bytes(path, data)
+    return True
+
+
+def figure_png(table, color: str = "liftoff_time") -> bytes | None:
+    """The table's figure as PNG bytes; None when there is none to draw: matplotlib missing or
+    more than two varied keys. Matplotlib's warnings (a log scale with nothing positive, a
+    layout that does not fit) are its own business: they do not reach the user."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return _figure_png(table, color)
+
+
+def _figure_png(table, color):
     if color not in OUTCOMES:
         raise ValueError(f"cannot colour by {color!r}; the outcomes: {', '.join(OUTCOMES)}")
     if len(table.keys) > 2:
-        return False
+        return None
     try:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        return False
+        return None
     if len(table.keys) == 2:
         fig = _map(plt, table, color)
     else:
@@ -65,13 +83,12 @@ def figure(table, path, color: str = "liftoff_time") -> bool:
              f"{scene.integrator.method} dt {scene.integrator.dt:g} s{' (stopped early)' if table.partial else ''}\n"
              f"{table.seconds:.1f} s wall on {table.workers} "
              f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}")
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(title, fontsize=9, parse_math=False, usetex=False)
     fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.93))
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=130)
     plt.close(fig)
-    atomic_write_bytes(path, buffer.getvalue())
-    return True
+    return buffer.getvalue()
 
 
 def _map(plt, table, color):
@@ -133,5 +150,6 @@ def _curves(plt, table, color):
         ax.tick_params(labelsize=8)
     for ax in axes[1]:
         ax.set_xlabel(label(key), fontsize=9)
-    axes[0, 0].legend(fontsize=8)
+    if axes[0, 0].get_legend_handles_labels()[0]:  # none when no run was run (all refused)
+        axes[0, 0].legend(fontsize=8)
     return fig

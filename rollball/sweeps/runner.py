@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from ..scene import Scene
-from ..simulation import step_count
+from ..simulation import MAX_STEPS, step_count
 from . import batch
 from .grid import Grid
 from .outcomes import NOT_RUN, OUTCOMES
@@ -29,7 +29,10 @@ from .table import SweepTable
 # Landscape evaluations per batch: about 0.2 s on a 2020s core for a small formula.
 BATCH_EVALUATIONS = 3_000_000
 BATCHES_PER_WORKER = 4
-CONNECT_TIMEOUT = "10s"  # to reach a Dask scheduler
+CONNECT_TIMEOUT = 10.0   # seconds to reach a Dask scheduler and hear it answer
+WORKER_TIMEOUT = 60.0    # seconds to wait for a first worker (and for one to come back)
+POLL = 0.2               # seconds between looks at the cancel event while waiting on a cluster
+SCHEMES = ("tcp",)       # the Dask transports a sweep connects by (inproc too, in-process)
 
 Progress = Callable[[int, int, str], None]
 
@@ -45,27 +48,56 @@ def local_workers() -> int:
 def batch_size(scene: Scene, grid: Grid, workers: int) -> int:
     """Runs per batch: about BATCH_EVALUATIONS landscape evaluations for the longest run,
     and at least BATCHES_PER_WORKER batches per worker."""
-    def extreme(key, pick):
+    def extreme(key, pick, smallest=0.0):
         if key in grid.keys:
             values = grid.axes[grid.keys.index(key)]
-            values = values[values > 0]
+            values = values[values > smallest]
             return float(pick(values)) if values.size else None
         return None
-    dt = extreme("integrator.dt", np.min) or scene.integrator.dt
     t_end = extreme("duration", np.max) or scene.duration
-    evaluations = step_count(dt, t_end) * batch.sweep_method(scene).stages
+    # steps too small for the longest run are refused run by run (status invalid), not sized for
+    dt = extreme("integrator.dt", np.min, t_end / MAX_STEPS) or scene.integrator.dt
+    try:
+        evaluations = step_count(dt, t_end) * batch.sweep_method(scene).stages
+    except ValueError:
+        evaluations = BATCH_EVALUATIONS
     runs = max(1, BATCH_EVALUATIONS // evaluations)
     return max(1, min(runs, math.ceil(grid.size / (BATCHES_PER_WORKER * workers))))
 
 
+def check_address(address: str) -> str:
+    """A Dask scheduler address a sweep can connect to, as ``tcp://host:port`` (a bare
+    ``host:port`` is tcp); ValueError naming the problem for anything else (tls:// needs
+    certificates, ucx:// a library; neither is set up by this program)."""
+    text = str(address).strip()
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        scheme, rest = "tcp", text
+    scheme = scheme.lower()
+    if scheme == "inproc":  # a cluster in this very process (tests, notebooks)
+        return text
+    if scheme not in SCHEMES:
+        raise ValueError(f"scheduler {address!r}: the {scheme}:// transport is not supported; "
+                         f"give a tcp://HOST:PORT address")
+    host, colon, port = rest.rpartition(":")
+    host = host.strip("[]")
+    if not colon or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"scheduler {address!r}: expected tcp://HOST:PORT (a port from 1 to 65535)")
+    return f"tcp://{rest}"
+
+
 def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | None = None,
-          progress: Progress | None = None, cancel: threading.Event | None = None) -> SweepTable:
+          progress: Progress | None = None, cancel: threading.Event | None = None,
+          connect_timeout: float = CONNECT_TIMEOUT, worker_timeout: float = WORKER_TIMEOUT) -> SweepTable:
     """Run the scene once for every combination of the varied values; return the table.
 
     vary: a mapping from dotted scene keys (``start.vx``, ``ball.radius``, ... see
     ``grid.KEYS``) to their values; the runs are the full grid, the last key varying
     fastest. Local by default, on ``workers`` threads (default: every core); with
-    ``scheduler`` (a Dask address, ``tcp://host:8786``) on that cluster instead.
+    ``scheduler`` (a Dask address, ``tcp://host:8786``) on that cluster instead: the scheduler
+    must answer within ``connect_timeout`` seconds and have a worker within ``worker_timeout``
+    (and get one back within that time if all leave), else ValueError saying which; setting
+    ``cancel`` while waiting for them raises ``KeyboardInterrupt``.
     progress(done, total, text) is called as batches finish; setting ``cancel`` stops the
     sweep after the batches under way, and the table is then ``partial``; so is a sweep whose
     batch failed on a cluster (``table.error`` says why). Raises
@@ -73,6 +105,11 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
     """
     grid = Grid.of(vary)
     batch.sweep_method(scene)
+    if scheduler is not None:
+        scheduler = check_address(scheduler)
+        for name, value in (("connect_timeout", connect_timeout), ("worker_timeout", worker_timeout)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < math.inf:
+                raise ValueError(f"{name} must be a number of seconds greater than 0, not {value!r}")
     if scheduler is not None and workers is not None:
         raise ValueError("give workers (local threads) or scheduler (a Dask cluster), not both")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
@@ -98,7 +135,8 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
         _run_local(_tasks(scene, grid, table.workers), table.workers, take, cancel)
     else:
         table.scheduler = str(scheduler)
-        table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel)
+        table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel,
+                                               float(connect_timeout), float(worker_timeout))
     table.seconds = time.perf_counter() - started
     from ..bench.report import machine
     table.machine = machine()
@@ -131,27 +169,104 @@ def _run_local(tasks, workers: int, take, cancel: threading.Event) -> None:
                 future.cancel()
 
 
-def _run_dask(scene: Scene, grid: Grid, address: str, take, cancel: threading.Event) -> int:
+def _probe(address: str, timeout: float, cancel: threading.Event | None = None) -> None:
+    """Ask the scheduler who it is, in a thread of its own, all within ``timeout`` seconds:
+    ValueError for no answer (a port that accepts and never answers), an answer that is not a
+    Dask scheduler's (a port answering garbage), or no connection at all."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    outcome: list = []
+
+    async def ask():
+        comm = await connect(address, timeout=0.8 * timeout)  # its own error first: refused, ...
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    def run():
+        try:
+            outcome.append(asyncio.run(asyncio.wait_for(ask(), timeout)))
+        except BaseException as error:  # noqa: BLE001 - reported below, in one line
+            outcome.append(error)
+
+    thread = threading.Thread(target=run, name="rollball-dask-probe", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout + 5.0  # wait_for ends it by then; one that hangs anyway is left
+    while thread.is_alive() and time.monotonic() < deadline:
+        thread.join(POLL)
+        if cancel is not None and cancel.is_set():
+            raise KeyboardInterrupt
+    answer = outcome[0] if outcome else TimeoutError()
+    if isinstance(answer, (TimeoutError, asyncio.TimeoutError)):
+        raise ValueError(f"no answer from the Dask scheduler at {address} within {timeout:g} s "
+                         f"(--connect-timeout)")
+    if isinstance(answer, OSError):
+        raise ValueError(f"cannot reach the Dask scheduler at {address}: {' '.join(str(answer).split())[:200]}")
+    if isinstance(answer, BaseException) or not isinstance(answer, dict) or answer.get("type") != "Scheduler":
+        what = type(answer).__name__ if isinstance(answer, BaseException) else "an answer"
+        raise ValueError(f"{address} did not answer as a Dask scheduler does ({what})")
+
+
+def _wait_until(condition, seconds: float, cancel: threading.Event) -> bool:
+    """Poll ``condition`` until it holds (True), ``seconds`` pass (False) or ``cancel`` is set
+    (KeyboardInterrupt: the caller's Ctrl-C)."""
+    deadline = time.monotonic() + seconds
+    while not condition():
+        if cancel.is_set():
+            raise KeyboardInterrupt
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(min(POLL, max(0.0, deadline - time.monotonic())))
+    return True
+
+
+def _run_dask(scene: Scene, grid: Grid, address: str, take, cancel: threading.Event,
+              connect_timeout: float = CONNECT_TIMEOUT, worker_timeout: float = WORKER_TIMEOUT):
     try:
-        from distributed import Client, as_completed
+        from distributed import Client, wait as dask_wait
     except ImportError:
         raise ValueError("a sweep on a Dask cluster needs Dask distributed: "
                          "pip install 'rollball[dask]'") from None
+    if not address.startswith("inproc://"):
+        _probe(address, connect_timeout, cancel)
     try:
-        client = Client(address, timeout=CONNECT_TIMEOUT)
+        client = Client(address, timeout=f"{connect_timeout}s")
     except (OSError, TimeoutError, ValueError) as e:
         raise ValueError(f"cannot reach the Dask scheduler at {address}: {e}") from None
     with client:
-        workers = len(client.scheduler_info()["workers"])
+        def worker_count() -> int:
+            return len(client.scheduler_info().get("workers", {}))
+
+        if not _wait_until(lambda: worker_count() > 0, worker_timeout, cancel):
+            raise ValueError(f"the Dask scheduler at {address} has no workers: none joined within "
+                             f"{worker_timeout:g} s (--worker-timeout)")
+        workers = worker_count()
         threads = sum(client.nthreads().values()) or 1
         futures = client.map(batch.run, _tasks(scene, grid, threads), pure=False)
-        for future in as_completed(futures):
+        pending, alone_since = set(futures), None
+        while pending:
             try:
-                take(future.result())
-            except Exception as error:  # e.g. KilledWorker: the batch took down workers repeatedly
-                client.cancel(futures)
-                return workers, f"a batch failed on the cluster ({type(error).__name__}: {error})"
+                finished, pending = dask_wait(pending, timeout=POLL, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                finished = set()
+            for future in finished:
+                try:
+                    take(future.result())
+                except Exception as error:  # e.g. KilledWorker: the batch took down workers repeatedly
+                    client.cancel(futures)
+                    return workers, f"a batch failed on the cluster ({type(error).__name__}: {error})"
             if cancel.is_set():
                 client.cancel(futures)
                 break
+            if worker_count():
+                alone_since = None
+            elif alone_since is None:
+                alone_since = time.monotonic()
+            elif time.monotonic() - alone_since > worker_timeout:
+                client.cancel(futures)
+                return workers, f"the cluster lost its workers: none for {worker_timeout:g} s (--worker-timeout)"
     return workers, None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from dataclasses import dataclass, field
@@ -11,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, kernel
-from ..files import atomic_write, atomic_write_text
+from ..files import atomic_write, check_outputs, replace_together
 from ..scene import Scene
 from ..trajectory import Status
 from .grid import Grid
@@ -21,6 +22,13 @@ from .outcomes import INVALID, NOT_RUN, OUTCOMES
 STATUS_NAMES = {kernel.OK: str(Status.OK), kernel.DOES_NOT_FIT: str(Status.DOES_NOT_FIT),
                 kernel.NONFINITE: str(Status.NONFINITE), INVALID: "invalid", NOT_RUN: "not_run"}
 FORMAT = "rollball-sweep"
+FILES = ("sweep.csv", "sweep.json", "sweep.png")
+KEPT_NAME = "sweep-unsaved"   # where a sweep's files that could not replace the old ones are kept
+
+
+def check(directory, keep=()) -> None:
+    """Before the first run: the folder and each of a sweep's files may be written (OSError if not)."""
+    check_outputs(directory, FILES, keep)
 VERSION = 1
 
 
@@ -111,14 +119,15 @@ class SweepTable:
 
     def save(self, directory, color: str = "liftoff_time") -> list[Path]:
         """Write sweep.csv, sweep.json and (one or two varied keys, with matplotlib) sweep.png
-        into ``directory`` (created if missing), each atomically; returns the files written."""
-        from .plot import figure
+        into ``directory`` (created if missing), replaced together or not at all
+        (``files.replace_together``; an old sweep.png is removed when there is no figure, so it
+        cannot pass for this sweep's). ``files.NotReplaced`` when none was: the new files are
+        then kept in a folder of their own, named in its message. Returns the files written."""
+        from .plot import figure_png
 
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        self.to_csv(out / "sweep.csv")
-        atomic_write_text(out / "sweep.json", json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
-        written = [out / "sweep.csv", out / "sweep.json"]
-        if figure(self, out / "sweep.png", color):
-            written.append(out / "sweep.png")
-        return written
+        csv_text = io.StringIO()
+        self.write_csv(csv_text)
+        files = {"sweep.csv": csv_text.getvalue(),
+                 "sweep.json": json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n",
+                 "sweep.png": figure_png(self, color)}
+        return replace_together(directory, files, kept_name=KEPT_NAME)
