@@ -298,18 +298,21 @@ def replace_together(directory: str | os.PathLike, files: dict[str, object],
                 backups: dict[Path, str] = {}
                 for name, content in files.items():
                     target = write_target(folder / name, keep)
+                    beside = stage
+                    if target.parent != Path(os.path.realpath(folder)):
+                        # a link to another folder (maybe another file system): stage beside the file it names
+                        beside = tempfile.mkdtemp(dir=target.parent, prefix=STAGING_PREFIX)
+                        tmp.append(beside)
                     if target.exists():  # a second name for the old file: put back if a later rename fails
-                        backups[target] = os.path.join(stage, f".old.{len(backups)}")
+                        backups[target] = os.path.join(beside, f".old.{len(backups)}")
                         _second_name(target, backups[target])
                     if content is None:
                         moves.append((None, target))
-                    elif target.parent == Path(os.path.realpath(folder)):
+                    elif beside == stage:
                         moves.append((staged[name], target))
-                    else:  # a link to another folder: stage beside the file it names too
-                        other = tempfile.mkdtemp(dir=target.parent, prefix=STAGING_PREFIX)
-                        tmp.append(other)
-                        _stage(os.path.join(other, target.name), content, target)
-                        moves.append((os.path.join(other, target.name), target))
+                    else:
+                        _stage(os.path.join(beside, target.name), content, target)
+                        moves.append((os.path.join(beside, target.name), target))
             except OSError as error:
                 raise failed(error, stage) from None
             done: list[tuple[str | None, Path]] = []
