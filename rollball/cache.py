@@ -33,6 +33,9 @@ from .text import shown
 
 _CACHE_DIR: Path | None = None
 _LOCK = threading.Lock()
+# Ownership and mode bits say who may write only on POSIX systems (Windows has ACLs instead, and
+# no geteuid): there the checks below that need them are skipped.
+_POSIX = hasattr(os, "geteuid")
 
 
 def configured() -> str:
@@ -71,6 +74,8 @@ def unsafe(folder: str | os.PathLike, make: bool = True) -> str | None:
         return error.strerror or str(error)
     if not stat.S_ISDIR(info.st_mode):
         return "not a folder"
+    if not _POSIX:
+        return None if os.access(real, os.W_OK) else "cannot be written"
     if info.st_uid != os.geteuid():
         return "owned by another user"
     if info.st_mode & 0o022:
@@ -115,7 +120,7 @@ def read(path: str | os.PathLike, limit: int, what: str) -> bytes | None:
         problem = None
         if not stat.S_ISREG(info.st_mode):
             problem = "not a regular file"
-        elif info.st_uid != os.geteuid():
+        elif _POSIX and info.st_uid != os.geteuid():
             problem = "owned by another user"
         elif info.st_size > limit:
             problem = f"{info.st_size:,} bytes, more than the {limit:,} it can be"
@@ -142,7 +147,7 @@ def write(path: str | os.PathLike, data: bytes) -> str | None:
     ``read`` refused included). None when written, else why not (that costs only time)."""
     try:
         info = os.lstat(path)
-        if not stat.S_ISREG(info.st_mode) or info.st_uid != os.geteuid():
+        if not stat.S_ISREG(info.st_mode) or _POSIX and info.st_uid != os.geteuid():
             os.unlink(path)
     except FileNotFoundError:
         pass

@@ -20,6 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 import sympy as sp
+from sympy.core import cache as sympy_cache
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
@@ -35,6 +36,9 @@ from .text import shown
 # counted after. Differentiating, simplifying and compiling that much takes a few seconds; a
 # product of 17 factors sin(k*x + y) (180 characters) is about this large.
 MAX_DERIVATIVE_NODES = 100_000
+
+# sympy's cached results kept at most (about 300 bytes each): see _bound_sympy_cache
+SYMPY_CACHE_ENTRIES = 20_000
 
 # Machine code by generated source, while anyone holds it: the same formula is compiled once
 # while it is in use, and its code freed when no landscape (and no run) holds it any more.
@@ -120,6 +124,7 @@ class Landscape:
             check_constants(e)
         self.source = self._generate_source()
         self._compiled: LandscapeCode | None = None
+        _bound_sympy_cache()
 
     def __repr__(self) -> str:
         return f"Landscape({self.text!r})"
@@ -174,6 +179,15 @@ class Landscape:
 
     def height(self, x, y) -> np.ndarray:
         return self.evaluate(x, y)[0]
+
+
+def _bound_sympy_cache() -> None:
+    """sympy keeps what it derives in caches of its own, each bounded but not all of them
+    together: about 80 entries (25 kB) a new formula, for good. Past ``SYMPY_CACHE_ENTRIES``
+    they start again empty, so a long session of new formulas stays within a few MB."""
+    functions = getattr(sympy_cache, "CACHE", [])
+    if sum(f.cache_info().currsize for f in functions if hasattr(f, "cache_info")) > SYMPY_CACHE_ENTRIES:
+        sympy_cache.clear_cache()
 
 
 class CacheWarning(UserWarning):
