@@ -1,32 +1,33 @@
 """A landscape z = f(x, y): its formula, derivatives, and their compiled form.
 
 sympy derives f_x, f_y, f_xx, f_xy, f_yy once; common subexpressions are shared and
-printed as a small scalar function, compiled by numba as a C callback (``cfunc``) that the
-one cached stepping kernel calls. A new formula therefore costs a small compile, not a
-recompile of the integrator, and a formula seen in an earlier run is loaded from numba's
-disk cache. ``evaluate`` gives the same six quantities as numpy arrays
-for grids (drawing) and for the reference solver, from the same compiled code.
+printed as a small scalar function, compiled as a C callback (landscape_code.py) that the
+one stepping kernel calls. A new formula therefore costs a small compile, not a recompile of
+the integrator; a formula seen in an earlier run loads its machine code from the cache folder;
+and the code of a formula no longer used is freed. ``evaluate`` gives the same six quantities
+as numpy arrays for grids (drawing) and for the reference solver, from the same compiled code.
 """
 
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import math
 import re
-import sys
-import types
+import threading
 import warnings
+import weakref
 from functools import lru_cache
 
 import numpy as np
 import sympy as sp
+from sympy.core import cache as sympy_cache
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
+from . import landscape_code
 from .cache import cache_dir
-from .files import atomic_write_text
 from .formula import X, Y, FormulaError, check_constants, code_constant, parse_formula
+from .landscape_code import LandscapeCode
 from .machine_code import call
 from .text import shown
 
@@ -36,8 +37,13 @@ from .text import shown
 # product of 17 factors sin(k*x + y) (180 characters) is about this large.
 MAX_DERIVATIVE_NODES = 100_000
 
-# Compiled callbacks by generated source: the same formula is compiled once per process.
-_COMPILED: dict[str, object] = {}
+# sympy's cached results kept at most (about 300 bytes each): see _bound_sympy_cache
+SYMPY_CACHE_ENTRIES = 20_000
+
+# Machine code by generated source, while anyone holds it: the same formula is compiled once
+# while it is in use, and its code freed when no landscape (and no run) holds it any more.
+_COMPILED: weakref.WeakValueDictionary[str, LandscapeCode] = weakref.WeakValueDictionary()
+_COMPILE_LOCK = threading.RLock()
 
 
 class _Printer(PythonCodePrinter):
@@ -123,6 +129,8 @@ class Landscape:
         for e in self.derivatives:
             check_constants(e)
         self.source = self._generate_source()
+        self._compiled: LandscapeCode | None = None
+        _bound_sympy_cache()
 
     def __repr__(self) -> str:
         return f"Landscape({self.text!r})"
@@ -154,18 +162,17 @@ class Landscape:
         return source
 
     @property
-    def compiled(self):
-        """The numba ``cfunc`` computing f, f_x, f_y, f_xx, f_xy, f_yy at (x, y)."""
-        if self.source not in _COMPILED:
-            from numba.core.errors import NumbaError
-
-            try:
-                _COMPILED[self.source] = _compile(self.source)
-            except NumbaError as e:  # a construct numba refuses: one line, not its traceback
-                text = re.sub(r"\x1b\[[0-9;]*m", "", str(e))  # numba colours its messages
-                first = next((line.strip() for line in text.splitlines() if line.strip()), "")
-                raise FormulaError(f"cannot compile the formula ({first})") from None
-        return _COMPILED[self.source]
+    def compiled(self) -> LandscapeCode:
+        """The machine code computing f, f_x, f_y, f_xx, f_xy, f_yy at (x, y) (``address``,
+        ``ctypes``): made once and kept while this landscape (or anyone else) holds it."""
+        code = self._compiled
+        if code is None:
+            with _COMPILE_LOCK:
+                code = _COMPILED.get(self.source)
+                if code is None:
+                    code = _compile_or_refuse(self.source)
+                code = self._compiled = _COMPILED[self.source] = code
+        return code
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y): an array of shape (6,) + broadcast shape.
@@ -182,54 +189,49 @@ class Landscape:
         return self.evaluate(x, y)[0]
 
 
+def _bound_sympy_cache() -> None:
+    """sympy keeps what it derives in caches of its own, each bounded but not all of them
+    together: about 80 entries (25 kB) a new formula, for good. Past ``SYMPY_CACHE_ENTRIES``
+    they start again empty, so a long session of new formulas stays within a few MB."""
+    functions = getattr(sympy_cache, "CACHE", [])
+    if sum(f.cache_info().currsize for f in functions if hasattr(f, "cache_info")) > SYMPY_CACHE_ENTRIES:
+        sympy_cache.clear_cache()
+
+
 class CacheWarning(UserWarning):
-    """The cache folder cannot be used; formulas are compiled without it."""
+    """The cache folder cannot be written; formulas are compiled without keeping their code."""
 
 
 _CACHE_BROKEN = False  # the cache failed once: this process compiles without it (and said so)
 
 
-def _compile(source: str):
-    """Compile generated source as a numba cfunc, cached on disk by numba: the source is
-    written to a module named by its hash, so a formula seen in an earlier run loads in
-    milliseconds. The file is rewritten unless it holds exactly this source. The cache is
-    only an optimisation: where it cannot be written (full disk, no permission) the formula
-    is compiled in memory, and a ``CacheWarning`` says so once."""
+def _compile(source: str) -> LandscapeCode:
+    """The machine code of generated source (landscape_code.py), kept in the cache folder
+    under a name made from its hash and the machine, so a formula seen in an earlier run loads
+    in milliseconds. The cache is only an optimisation: where it cannot be written (full disk,
+    no permission) the formula is compiled in memory, and a ``CacheWarning`` says so once."""
     global _CACHE_BROKEN
-    from numba import cfunc
-
-    from .kernel import LANDSCAPE_SIGNATURE
-
     text = "import math\n\n\n" + source
-    name = "landscape_" + hashlib.sha256(text.encode()).hexdigest()[:24]
-    module = None
-    if not _CACHE_BROKEN:
-        try:
-            return _compile_cached(text, name, cfunc, LANDSCAPE_SIGNATURE)
-        except (OSError, RuntimeError) as error:  # numba: RuntimeError "cannot cache function"
-            if isinstance(error, RuntimeError) and "cache" not in str(error):
-                raise
-            _CACHE_BROKEN = True
-            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-            warnings.warn(f"the cache folder {shown(str(cache_dir()))} cannot be used ({reason}); "
-                          f"formulas are compiled without it from now on", CacheWarning, stacklevel=2)
-    module = types.ModuleType(f"rollball_{name}")
-    exec(compile(text, f"<{name}>", "exec"), module.__dict__)  # our generated code, checked, not user text
-    return cfunc(LANDSCAPE_SIGNATURE, error_model="numpy", cache=False)(module.landscape)
+    name = "rollball_landscape_" + hashlib.sha256(text.encode()).hexdigest()[:24]
+    code = landscape_code.load(text, name, cached=not _CACHE_BROKEN)
+    if code.unwritten and not _CACHE_BROKEN:
+        _CACHE_BROKEN = True
+        warnings.warn(f"the cache folder {shown(str(cache_dir()))} cannot be used ({code.unwritten}); "
+                      f"formulas are compiled without it from now on", CacheWarning, stacklevel=3)
+    return code
 
 
-def _compile_cached(text: str, name: str, cfunc, signature):
-    path = cache_dir() / f"{name}.py"
+def _compile_or_refuse(source: str) -> LandscapeCode:
+    """``_compile``, with a construct numba refuses (where it lowers what the translation does
+    not know) as one line, not its coloured traceback."""
+    from numba.core.errors import NumbaError
+
     try:
-        current = path.read_text(encoding="utf-8")
-    except OSError:
-        current = None
-    if current != text:
-        atomic_write_text(path, text)
-    spec = importlib.util.spec_from_file_location(f"rollball_{name}", path)
-    module = sys.modules[spec.name] = importlib.util.module_from_spec(spec)  # numba's cache looks it up
-    spec.loader.exec_module(module)  # our generated code, checked above, not user text
-    return cfunc(signature, error_model="numpy", cache=True)(module.landscape)
+        return _compile(source)
+    except NumbaError as e:
+        text = re.sub(r"\x1b\[[0-9;]*m", "", str(e))  # numba colours its messages
+        first = next((line.strip() for line in text.splitlines() if line.strip()), "")
+        raise FormulaError(f"cannot compile the formula ({first})") from None
 
 
 @lru_cache(maxsize=64)

@@ -27,8 +27,8 @@ from importlib import resources
 import numpy as np
 
 from . import kernel
+from . import cache
 from .cache import cache_dir
-from .files import atomic_write_bytes
 
 SHIPPED, STAMP = "kernel.bc", "kernel.json"
 
@@ -218,11 +218,16 @@ def _object_path(key: str):
     return cache_dir() / f"kernel-{key}.o"
 
 
+# The kernel's machine code is about 250 kB; a cached file larger than this is not ours.
+OBJECT_LIMIT = 64 << 20
+
+
 def _read(path) -> bytes | None:
-    """Machine code kept by an earlier process, if it is there whole (its SHA-256 first)."""
-    try:
-        data = path.read_bytes()
-    except OSError:
+    """Machine code kept by an earlier process, if it is there whole (its SHA-256 first) and
+    sound: a regular file of ours of plausible size (cache.read; else one warning, and it is
+    made again)."""
+    data = cache.read(path, OBJECT_LIMIT, "machine code of the kernel")
+    if data is None:
         return None
     digest, code = data[:32], data[32:]
     return code if code and hashlib.sha256(code).digest() == digest else None
@@ -230,7 +235,4 @@ def _read(path) -> bytes | None:
 
 def _write(path, code: bytes) -> None:
     """Keep the machine code for later processes; a cache that cannot be written costs only time."""
-    try:
-        atomic_write_bytes(path, hashlib.sha256(code).digest() + code)
-    except OSError:
-        pass
+    cache.write(path, hashlib.sha256(code).digest() + code)

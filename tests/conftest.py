@@ -1,10 +1,13 @@
+import atexit
 import os
+import shutil
 import tempfile
 
 import pytest
 
-# compiled landscapes go to a cache of the test run's own, not the user's
+# compiled landscapes go to a cache of the test run's own, not the user's, removed at the end
 os.environ["ROLLBALL_CACHE_DIR"] = tempfile.mkdtemp(prefix="rollball-test-cache-")
+atexit.register(shutil.rmtree, os.environ["ROLLBALL_CACHE_DIR"], True)
 
 from rollball.scene import Ball, Integrator, Scene, Start
 

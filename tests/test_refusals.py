@@ -15,6 +15,7 @@ import pytest
 from conftest import make_scene
 
 import rollball.landscape as landscape_module
+from rollball import cache
 from rollball import Scene, SceneError, Simulation, simulate
 from rollball.cli import main
 from rollball.examples import EXAMPLES_DIR
@@ -91,10 +92,10 @@ def test_simulate_takes_a_scene_or_its_path(tmp_path):
 
 
 def test_a_full_cache_folder_compiles_without_it_and_says_so_once(monkeypatch):
-    def full(path, text, keep=()):
+    def full(path, data, keep=()):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr(landscape_module, "atomic_write_text", full)
+    monkeypatch.setattr(cache, "atomic_write_bytes", full)
     monkeypatch.setattr(landscape_module, "_CACHE_BROKEN", False)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -93,8 +93,9 @@ def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
 
 
 def _landscape(text: str):
+    """The landscape's machine code; the caller holds it while the kernel runs it."""
     with _COMPILE_LOCK:
-        return landscape_for(text).compiled.address
+        return landscape_for(text).compiled
 
 
 def run(task: Task) -> Result:
@@ -106,7 +107,8 @@ def run(task: Task) -> Result:
     status = np.full(runs, NOT_RUN, dtype=np.int64)
     status[list(messages)] = INVALID
     c = _columns(scene, grid, values)
-    fn = _landscape(scene.landscape)
+    code = _landscape(scene.landscape)   # held while the kernel runs it: its machine code lives as long
+    fn = code.address
     r, m = c["ball.radius"], c["ball.mass"]
     with np.errstate(all="ignore"):  # refused runs may hold any value; they are not run
         z0 = np.empty((runs, kernel.MOTION_SIZE))
