@@ -32,3 +32,14 @@ def test_the_app_starts_as_installed_and_from_a_checkout():
         result = subprocess.run([sys.executable, "-m", module, "--help"], capture_output=True, text=True,
                                 timeout=120, cwd=cwd)
         assert result.returncode == 0 and "rollball-app" in result.stdout, (module, result.stderr)
+
+
+def test_the_tests_import_the_app_by_its_installed_name():
+    """A local app/ folder is the installed rollball_app only in a checkout: tests, scripts and the
+    core import rollball_app, so they test what is installed."""
+    root = Path(__file__).resolve().parent.parent
+    for path in [*root.joinpath("tests").rglob("*.py"), *root.joinpath("scripts").glob("*.py")]:
+        for line in path.read_text(encoding="utf-8").splitlines():
+            words = line.split()
+            if words[:1] in (["import"], ["from"]) and len(words) > 1:
+                assert words[1].split(".")[0] != "app", (path, line)

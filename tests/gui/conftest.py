@@ -22,7 +22,7 @@ def compiled_kernel():
 
 @pytest.fixture(scope="package", autouse=True)
 def garbage_on_gui_thread(qapp):
-    """As in the app: cycles are collected on the GUI thread only (``app.garbage``); the tests
+    """As in the app: cycles are collected on the GUI thread only (``rollball_app.garbage``); the tests
     outside this folder get Python's automatic collection back."""
     collect_on_gui_thread()
     yield
