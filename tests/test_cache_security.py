@@ -228,3 +228,12 @@ def test_landscape_code_checks_its_entry_whole(tmp_path):
     entry = hashlib.sha256(data).digest() + data
     assert landscape_code._unpack(entry) == (["sin"], b"code")
     assert landscape_code._unpack(entry[:-1] + b"x") is None
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="the benchmark's C step needs gcc")
+def test_the_benchmarks_c_step_leaves_no_folder_behind(tmp_path):
+    code = "from rollball.bench.cstep import CStep; print(CStep.build().executable.is_file())"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT,
+                            env={**os.environ, "TMPDIR": str(tmp_path)})
+    assert result.stdout.strip() == "True", result.stderr
+    assert os.listdir(tmp_path) == []

@@ -3,6 +3,7 @@ compiled with ``gcc -O3 -march=native`` at run time and timed in its own process
 
 from __future__ import annotations
 
+import atexit
 import shutil
 import subprocess
 import tempfile
@@ -21,7 +22,10 @@ class CStep:
         gcc = shutil.which("gcc")
         if gcc is None:
             return None
-        directory = Path(directory or tempfile.mkdtemp(prefix="rollball-cstep-"))
+        if directory is None:   # a folder of this process's own, removed when it ends
+            directory = tempfile.mkdtemp(prefix="rollball-cstep-")
+            atexit.register(shutil.rmtree, directory, True)
+        directory = Path(directory)
         executable = directory / "step"
         with resources.as_file(resources.files(__package__) / "step.c") as source:
             subprocess.run([gcc, "-O3", "-march=native", "-o", str(executable), str(source), "-lm"],
