@@ -2,6 +2,10 @@
 
 __version__ = "0.2.0"
 
+from .cache import guard_numba_cache  # noqa: E402
+
+guard_numba_cache()   # before numba is imported: its cache folder must be ours alone too
+
 from .formula import FormulaError, parse_formula  # noqa: E402
 from .landscape import Landscape  # noqa: E402
 from .scene import Scene, SceneError  # noqa: E402

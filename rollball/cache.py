@@ -94,6 +94,25 @@ def unsafe(folder: str | os.PathLike, make: bool = True) -> str | None:
     return None
 
 
+def guard_numba_cache() -> None:
+    """numba keeps what it compiles with ``cache=True`` (the kernel, where the shipped code does not
+    fit) in $NUMBA_CACHE_DIR when that is set, with an index that is a pickle: a folder others can
+    write would let them run code here. Such a folder is replaced, for this process and those it
+    starts, by one inside RollBall's checked cache folder (one warning line)."""
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if not folder:
+        return
+    reason = unsafe(folder)
+    if reason is None:
+        return
+    instead = cache_dir() / "numba"
+    os.environ["NUMBA_CACHE_DIR"] = str(instead)
+    config = sys.modules.get("numba.core.config")
+    if config is not None:
+        config.reload_config()
+    warn(f"numba's cache folder {shown(folder)} is not used ({reason}); {shown(str(instead))} is used instead")
+
+
 def warn(message: str) -> None:
     """One warning line on stderr."""
     try:

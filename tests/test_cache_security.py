@@ -237,3 +237,19 @@ def test_the_benchmarks_c_step_leaves_no_folder_behind(tmp_path):
                             env={**os.environ, "TMPDIR": str(tmp_path)})
     assert result.stdout.strip() == "True", result.stderr
     assert os.listdir(tmp_path) == []
+
+
+def test_numbas_cache_folder_is_ours_alone_too(tmp_path):
+    # numba keeps the kernel it compiles (where the shipped code does not fit) with a pickled
+    # index in $NUMBA_CACHE_DIR: one that others can write is replaced by one in our folder
+    code = "import rollball; from numba.core import config; print(config.CACHE_DIR)"
+    ours = tmp_path / "ours"
+    for mode, used in ((0o777, ours / "numba"), (0o700, tmp_path / "numba")):
+        (tmp_path / "numba").mkdir(exist_ok=True)
+        (tmp_path / "numba").chmod(mode)
+        result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT,
+                                env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+                                     "ROLLBALL_CACHE_DIR": str(ours)})
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.strip() == str(used)
+        assert len(warnings_in(result.stderr)) == (1 if mode == 0o777 else 0)
