@@ -79,7 +79,8 @@ def unsafe(folder: str | os.PathLike, make: bool = True) -> str | None:
     if info.st_uid != os.geteuid():
         return "owned by another user"
     if info.st_mode & 0o022:
-        return f"mode {stat.S_IMODE(info.st_mode):04o}: its group or others can write to it"
+        return (f"mode {stat.S_IMODE(info.st_mode):04o}: its group or others can write to it; "
+                f"'chmod go-w' makes it usable")
     above = real
     while os.path.dirname(above) != above:
         above = os.path.dirname(above)
