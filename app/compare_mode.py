@@ -124,3 +124,5 @@ class CompareMode:
         self.error_plots.set_reference(f"{METHODS[reference_method()].label} at rtol {REFERENCE_RTOL:g}", estimate)
         self.error_plots.show_time(controller.play_time)
         self.summary.fill()
+        if controller.runs and all(run.ended for run in controller.runs):
+            self.finished()   # the last word no longer says the reference is being computed

@@ -50,17 +50,19 @@ class ErrorPlots(QtWidgets.QWidget):
         font = QtGui.QFont(self.font())
         font.setPointSizeF(font.pointSizeF() * scale)
         normal = scale == 1.0
+        words = min(scale, 1.5)   # titles and legend: large, but the curves keep their height
         for (_, title), plot in zip(PANELS, self.plots.values()):
-            plot.setTitle(title, size=f"{9 * scale:g}pt", color="#333")
+            plot.setTitle(title, size=f"{9 * words:g}pt", color="#333")
             for side in ("left", "bottom"):
                 axis = plot.getAxis(side)
                 axis.setTickFont(None if normal else font)
                 axis.label.setFont(font)
             plot.getAxis("left").setWidth(None if normal else int(round(40 * scale)))
-            plot.getAxis("bottom").setHeight(None if normal else int(round(30 * scale)))
-        self.legend.opts["labelTextSize"] = f"{8 * scale:g}pt"
+            plot.getAxis("bottom").setHeight(None if normal else int(round(20 * scale)))
+            plot.showLabel("bottom", normal)   # in large text the seconds' name gives the curves room
+        self.legend.opts["labelTextSize"] = f"{8 * words:g}pt"
         for _, label in self.legend.items:
-            label.setText(label.text, size=f"{8 * scale:g}pt")
+            label.setText(label.text, size=f"{8 * words:g}pt")
         self._fit_legend()
 
     def set_runs(self, runs, t_end: float) -> None:

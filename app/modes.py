@@ -15,13 +15,16 @@ start (a layout can never hide the Scene panel).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
 DEFAULT_SIZE = (1280, 860)   # the window's size on a screen that has room for it
-SCREEN_MARGIN = 0.96         # of the available screen, at most, for a window's size
+FRAME_ROOM = (8, 40)         # pixels of the available screen left for a window manager's frame
+SETTLE_MS = 1500             # after leaving full screen, the window manager's moves are undone this long
 ERROR_PLOTS_SHARE = 0.4      # of the view's and plots' height, at least, for compare mode's plots
+PRESENTATION_PLOTS_SHARE = 0.47   # the same in presentation, where their text is larger
 
 
 @dataclass(frozen=True)
@@ -45,9 +48,9 @@ def layout(compare: bool, presentation: bool, scene_wanted: bool = True, closeup
 
 
 def fitted(size: tuple[int, int], available: QtCore.QRect) -> QtCore.QSize:
-    """``size``, made smaller where the available screen has less room."""
-    return QtCore.QSize(min(size[0], int(available.width() * SCREEN_MARGIN)),
-                        min(size[1], int(available.height() * SCREEN_MARGIN)))
+    """``size``, made smaller where the available screen has less room (a frame's room left)."""
+    return QtCore.QSize(min(size[0], available.width() - FRAME_ROOM[0]),
+                        min(size[1], available.height() - FRAME_ROOM[1]))
 
 
 def clamp_to_screen(widget: QtWidgets.QWidget, screen: QtGui.QScreen | None = None) -> None:
@@ -69,6 +72,20 @@ def clamp_to_screen(widget: QtWidgets.QWidget, screen: QtGui.QScreen | None = No
         widget.move(max(x, area.left()), max(y, area.top()))
 
 
+def place_over(widget: QtWidgets.QWidget, owner: QtWidgets.QWidget) -> None:
+    """A secondary window (help, speed against error, a sweep) at most as large as the owner's
+    screen has room for, centred over the owner, and wholly on that screen."""
+    screen = owner.screen() or QtWidgets.QApplication.primaryScreen()
+    if screen is None:
+        return
+    area = screen.availableGeometry()
+    size = fitted((widget.width(), widget.height()), area)
+    widget.resize(size.expandedTo(widget.minimumSizeHint()).boundedTo(area.size()))
+    center = owner.frameGeometry().center()
+    widget.move(center.x() - widget.width() // 2, center.y() - widget.height() // 2)
+    clamp_to_screen(widget, screen)
+
+
 class Modes:
     """The window's modes, applied to it. The window's actions call ``set_compare``,
     ``set_presentation``, ``choose_scene_panel`` and ``choose_closeup``; nothing else shows or
@@ -80,8 +97,9 @@ class Modes:
         self.presentation = False
         self.scene_wanted = True      # the user's choices in the editing layout
         self.closeup_wanted = False
-        self._normal_geometry: QtCore.QByteArray | None = None   # the window before presentation
+        self._normal_geometry: QtCore.QRect | None = None   # the window before presentation
         self._was_maximized = False
+        self._settle_until = 0.0   # time.monotonic() until which leaving full screen settles
         self._applying = False
         self._editing_sizes: list[int] | None = None   # the view's and plots' heights when editing
         self.default_state = window.saveState()   # for View → Reset Layout
@@ -106,23 +124,31 @@ class Modes:
             self._was_maximized = w.isMaximized()
         self.presentation = on
         w.presentation.active = on
+        w.presentation.apply_scale()
         if on:
-            w.presentation.apply_scale()
+            self._settle_until = 0.0
             self.apply(raise_compare=self.compare)
             w.showFullScreen()
             return
         w.showMaximized() if self._was_maximized else w.showNormal()
-        w.presentation.apply_scale()
-        w.centralWidget().layout() and w.centralWidget().layout().activate()
         self.apply(raise_compare=self.compare)
         if not self._was_maximized and self._normal_geometry is not None:
-            self._put_back(self._normal_geometry)
-            # a window manager leaves full screen in its own time and may place the window again
-            QtCore.QTimer.singleShot(100, lambda rect=self._normal_geometry: self._put_back(rect))
+            # a window manager leaves full screen in its own time and may place and size the
+            # window as it likes meanwhile: until it has settled, the window goes back to where it was
+            self._settle_until = time.monotonic() + SETTLE_MS / 1000
+            self._put_back()
+            QtCore.QTimer.singleShot(SETTLE_MS // 3, self._put_back)
 
-    def _put_back(self, rect: QtCore.QRect) -> None:
-        w = self.window
-        if self.presentation or w.isMaximized():
+    def window_changed(self) -> None:
+        """The window was resized, moved or changed state (the window's event hook)."""
+        if self.compare or self.presentation:
+            self._share_height(self.shown())   # the plots' share of a new height
+        if time.monotonic() < self._settle_until:
+            QtCore.QTimer.singleShot(0, self._put_back)
+
+    def _put_back(self) -> None:
+        w, rect = self.window, self._normal_geometry
+        if self.presentation or w.isMaximized() or rect is None:
             return
         if w.windowState() & QtCore.Qt.WindowState.WindowFullScreen:
             w.showNormal()
@@ -187,8 +213,9 @@ class Modes:
             return
         if self._editing_sizes is None and total:
             self._editing_sizes = sizes
-        if shown.error_plots and total and sizes[1] < ERROR_PLOTS_SHARE * total:
-            below = round(ERROR_PLOTS_SHARE * total)
+        share = PRESENTATION_PLOTS_SHARE if self.presentation else ERROR_PLOTS_SHARE
+        if shown.error_plots and total and sizes[1] < share * total:
+            below = round(share * total)
             splitter.setSizes([total - below, below])
 
     # -- what is remembered ----------------------------------------------------------

@@ -15,6 +15,7 @@ from __future__ import annotations
 from PySide6 import QtCore, QtWidgets
 
 PRESENTATION_SCALE = 2.0      # times the preferred text size
+VIEW_HEIGHT, PRESENTATION_VIEW_HEIGHT = 280, 200   # the 3-D view's least height (the close-up is in it)
 TRAIL_WIDTH = 3.0             # pixels; times the scale in presentation mode
 TEXT_SIZES = (("Normal", 1.0), ("Large (125 %)", 1.25), ("Larger (150 %)", 1.5), ("Largest (200 %)", 2.0))
 
@@ -73,6 +74,11 @@ class Presentation:
         for dock in (w.scene_dock, w.compare.dock):
             dock.widget().setFont(panel_font)
         w.view.trail.setData(width=TRAIL_WIDTH * (PRESENTATION_SCALE if self.active else 1.0))
+        w.view.setMinimumHeight(PRESENTATION_VIEW_HEIGHT if self.active else VIEW_HEIGHT)
+        # the run buttons as icons in presentation: the toolbar keeps the Scene and Leave
+        # buttons on a 1024-pixel screen (their names are in their tooltips)
+        w.run_toolbar.setToolButtonStyle(QtCore.Qt.ToolButtonStyle.ToolButtonIconOnly if self.active
+                                         else QtCore.Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
 
     def _fit_readouts(self, points: float) -> None:
         """The readouts at ``points``, or as large as the screen's width holds them."""

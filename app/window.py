@@ -27,7 +27,7 @@ from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunContr
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
 from .inputs import ScenePanel
-from .modes import DEFAULT_SIZE, Modes, fitted
+from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
@@ -709,6 +709,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.speed_window is None:
             self.speed_window = SpeedWindow(self)
             self.speed_window.runChosen.connect(self.load_run)
+            place_over(self.speed_window, self)
         self.speed_window.compute(self.scene)
 
     def load_run(self, result) -> None:
@@ -891,6 +892,7 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog = SweepDialog(self.scene, self)
         dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
         dialog.startChosen.connect(self.load_start)
+        place_over(dialog, self)
         dialog.show()
         return dialog
 
@@ -971,6 +973,21 @@ class MainWindow(QtWidgets.QMainWindow):
             self.closeup.show_ball(center, R, contact, trail, self.view.opts["azimuth"], self.view.opts["elevation"],
                                    color)
 
+    def changeEvent(self, event) -> None:
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.WindowStateChange and hasattr(self, "modes"):
+            self.modes.window_changed()
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        if hasattr(self, "modes"):
+            self.modes.window_changed()
+
+    def moveEvent(self, event) -> None:
+        super().moveEvent(event)
+        if hasattr(self, "modes"):
+            self.modes.window_changed()
+
     def eventFilter(self, watched, event) -> bool:
         if watched is self.view and event.type() == QtCore.QEvent.Type.Resize:
             self._place_closeup()
@@ -1009,6 +1026,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def show_help(self, topic: str) -> None:
         if self.help_window is None:
             self.help_window = helps.HelpWindow(self._all_actions, self)
+            place_over(self.help_window, self)
         self.help_window.show_topic(topic)
 
     def context_help(self) -> None:
