@@ -100,6 +100,7 @@ class Modes:
         self._normal_geometry: QtCore.QRect | None = None   # the window before presentation
         self._was_maximized = False
         self._settle_until = 0.0   # time.monotonic() until which leaving full screen settles
+        self._normal_sizes: list[int] | None = None     # the view's and plots' heights before presentation
         self._applying = False
         self._editing_sizes: list[int] | None = None   # the view's and plots' heights when editing
         self.default_state = window.saveState()   # for View → Reset Layout
@@ -122,6 +123,7 @@ class Modes:
         if on:
             self._normal_geometry = QtCore.QRect(w.geometry())
             self._was_maximized = w.isMaximized()
+            self._normal_sizes = w.splitter.sizes()
         self.presentation = on
         w.presentation.active = on
         w.presentation.apply_scale()
@@ -137,14 +139,14 @@ class Modes:
             # window as it likes meanwhile: until it has settled, the window goes back to where it was
             self._settle_until = time.monotonic() + SETTLE_MS / 1000
             self._put_back()
-            QtCore.QTimer.singleShot(SETTLE_MS // 3, self._put_back)
+            QtCore.QTimer.singleShot(SETTLE_MS // 3, self.window, self._put_back)
 
     def window_changed(self) -> None:
         """The window was resized, moved or changed state (the window's event hook)."""
-        if self.compare or self.presentation:
-            self._share_height(self.shown())   # the plots' share of a new height
+        if self.presentation:
+            self._share_height(self.shown())   # the plots' share of the full screen
         if time.monotonic() < self._settle_until:
-            QtCore.QTimer.singleShot(0, self._put_back)
+            QtCore.QTimer.singleShot(0, self.window, self._put_back)
 
     def _put_back(self) -> None:
         w, rect = self.window, self._normal_geometry
@@ -154,6 +156,8 @@ class Modes:
             w.showNormal()
         if w.geometry() != rect:
             w.setGeometry(rect)
+        if w.geometry() == rect and self._normal_sizes and w.splitter.sizes() != self._normal_sizes:
+            w.splitter.setSizes(self._normal_sizes)   # the view's and plots' heights as they were
 
     def choose_scene_panel(self, on: bool) -> None:
         """The Scene action: in presentation it opens or closes the panel over the view for a
