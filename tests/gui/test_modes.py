@@ -222,8 +222,9 @@ def test_on_a_projector_screen_every_mode_fits_and_cycles_back(tmp_path, screen)
     """The real app under a window manager on a screen of that size: the window, presentation
     and compare in presentation fit it with every control inside; F11/Esc cycles put the window
     back exactly; quitting while comparing restarts in the editing layout."""
+    quick = "" if screen == "1024x768" else "quick"   # the cycles once, on the small screen
     command = (f"openbox >/dev/null 2>&1 & sleep 1; {sys.executable} -m tests.gui.probe_modes "
-               f"{tmp_path / 'preferences.ini'}")
+               f"{tmp_path / 'preferences.ini'} {quick}")
     env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
     done = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {screen}x24 +extension GLX +render",
                            "bash", "-c", command], cwd=ROOT, env=env, capture_output=True, text=True,
@@ -234,14 +235,19 @@ def test_on_a_projector_screen_every_mode_fits_and_cycles_back(tmp_path, screen)
     start = report["start"]
     assert not start["outside"] and start["geometry"][2] <= width and start["scene_panel"]
     for name in ("presentation", "cycle1", "cycle3", "compare_presentation"):
+        if name not in report:
+            continue
         state = report[name]
         assert state["full_screen"] and state["geometry"] == [0, 0, width, height], (name, state)
         assert state["minimum"][0] <= width and state["minimum"][1] <= height, (name, state)
         assert not state["outside"] and not state["scene_panel"] and not state["compare_panel"], (name, state)
     for name in ("left", "cycle2", "cycle4", "compare", "compare_left", "restart"):
+        if name not in report:
+            continue
         state = report[name]
         assert state["geometry"] == start["geometry"] and not state["full_screen"], (name, state)
         assert not state["outside"] and state["title"] == start["title"] and state["scene_panel"], (name, state)
+    assert quick or "cycle4" in report
     assert report["compare_left"]["compare_panel"] and not report["restart"]["compare_panel"]
     assert not report["restart"]["compare"]
     assert report["error_plot_font"] >= 1.5 * 9
