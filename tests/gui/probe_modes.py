@@ -12,14 +12,14 @@ import time
 
 from PySide6 import QtCore, QtTest, QtWidgets
 
-from app.main import prepare_qt
+from rollball_app.main import prepare_qt
 
 prepare_qt()
 app = QtWidgets.QApplication(sys.argv[:1])
 
-from app.controller import FINISHED  # noqa: E402
-from app.preferences import Preferences  # noqa: E402
-from app.window import SPEEDS, MainWindow  # noqa: E402
+from rollball_app.controller import FINISHED  # noqa: E402
+from rollball_app.preferences import Preferences  # noqa: E402
+from rollball_app.window import SPEEDS, MainWindow  # noqa: E402
 from rollball.examples import EXAMPLES_DIR  # noqa: E402
 
 KEY = QtCore.Qt.Key

@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from app.compare_runs import CompareRun
-from app.controller import FINISHED
-from app.modes import layout
-from app.preferences import Preferences
-from app.timeline import STEPS
-from app.window import MainWindow
+from rollball_app.compare_runs import CompareRun
+from rollball_app.controller import FINISHED
+from rollball_app.modes import layout
+from rollball_app.preferences import Preferences
+from rollball_app.timeline import STEPS
+from rollball_app.window import MainWindow
 from rollball import parse_runs
 from rollball.examples import EXAMPLES_DIR
 
