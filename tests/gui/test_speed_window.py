@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pyqtgraph as pg
 import pytest
-from PySide6 import QtCore
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball_app.controller import RUNNING
 from rollball_app.speed_window import CSV_NAME, LEGEND_CORNERS, SpeedWindow, legend_cover, place_legend
@@ -55,7 +55,10 @@ def test_a_quick_comparison_is_plotted_exported_and_loaded(qtbot, window, tmp_pa
     plot = speed.step_plot
     spot = scatter(plot).points()[-1]
     at = plot.mapFromScene(plot.plotItem.vb.mapViewToScene(spot.pos()))
-    qtbot.mouseMove(plot.viewport(), at)
+    move = QtGui.QMouseEvent(QtCore.QEvent.Type.MouseMove, QtCore.QPointF(at),
+                             QtCore.QPointF(plot.viewport().mapToGlobal(at)), QtCore.Qt.MouseButton.NoButton,
+                             QtCore.Qt.MouseButton.NoButton, QtCore.Qt.KeyboardModifier.NoModifier)
+    QtWidgets.QApplication.sendEvent(plot.viewport(), move)   # the mouse comes to rest on the point
     qtbot.waitUntil(lambda: "click: load it" in plot.toolTip())
     named = plot.toolTip().splitlines()[0]   # e.g. "RK4 Munthe-Kaas, h = 0.05 s"
     result = speed.run_at(plot, plot.mapToScene(at))
