@@ -215,6 +215,8 @@ class MainWindow(QtWidgets.QMainWindow):
                                               "The equations of motion, lift-off, no-fit, Munthe-Kaas")
         self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
                                               "What the plots, readouts and colours say")
+        self.compare_help_action = self._action("&Comparing Methods", lambda: self.show_help("compare.html"), None,
+                                                "Compare mode, speed against error, sweeps; which method when")
         self.keys_help_action = self._action("&Keyboard Shortcuts", lambda: self.show_help("keys"), None,
                                              "Every shortcut of the menus")
         self.context_help_action = self._action("Help on This", self.context_help, "F1",
@@ -281,7 +283,8 @@ class MainWindow(QtWidgets.QMainWindow):
         analysis = bar.addMenu("&Analysis")
         analysis.addActions([self.speed_error_action, self.sweep_action])
         help_menu = bar.addMenu("&Help")
-        help_menu.addActions([self.model_help_action, self.plots_help_action, self.keys_help_action,
+        help_menu.addActions([self.model_help_action, self.plots_help_action, self.compare_help_action,
+                              self.keys_help_action,
                               self.context_help_action])
         help_menu.addSeparator()
         help_menu.addActions([self.limits_action, self.about_action])
@@ -1011,7 +1014,9 @@ class MainWindow(QtWidgets.QMainWindow):
                   "plots.html#orthogonality": [self.plots.plots[1]],
                   "plots.html#force": [self.plots.plots[2]],
                   "plots.html#colours": [self.view],
-                  "plots.html#readouts": [self.readouts]}
+                  "plots.html#readouts": [self.readouts],
+                  "compare.html#compare": [self.compare.panel, self.compare.error_plots],
+                  "compare.html#summary": [self.compare.summary]}
         for topic, widgets in topics.items():
             for widget in widgets:
                 helps.set_topic(widget, topic)

@@ -21,7 +21,7 @@ from rollball_app.window import MainWindow
 from rollball import parse_runs
 from rollball.examples import EXAMPLES_DIR
 
-from .guitools import FASTEST, set_field
+from .guitools import FASTEST, apply_fields, set_field
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -251,3 +251,35 @@ def test_on_a_projector_screen_every_mode_fits_and_cycles_back(tmp_path, screen)
     assert report["compare_left"]["compare_panel"] and not report["restart"]["compare_panel"]
     assert not report["restart"]["compare"]
     assert report["error_plot_font"] >= 1.5 * 9
+
+
+def test_help_explains_comparing_methods_honestly(qtbot, window):
+    window.compare_help_action.trigger()
+    text = " ".join(window.help_window.browser.toPlainText().split())
+    for words in ("Compare mode (Run → Compare Methods, Ctrl+K)", "reference run", "true error",
+                  "Speed against error", "Sweeps (Analysis → Sweep…)", "Gauss4", "Gauss6", "DOPRI5", "DOP853",
+                  "ghosts", "The energy error is not the error"):
+        assert words in text, words
+    window.model_help_action.trigger()
+    model = " ".join(window.help_window.browser.toPlainText().split())
+    assert "tells you how far the computed run is from the true one" not in model
+    assert "It is not a measure of how far the run is from the true one" in model
+    assert "Gauss4" in model and "DOP853" in model
+    assert "F1: Help → Comparing methods" in window.compare.summary.toolTip()
+
+
+def test_an_energy_gain_is_drawn_apart_from_a_loss(qtbot, window):
+    set_field(qtbot, window, "duration", "3")
+    set_field(qtbot, window, "integrator.dt", "0.01")
+    window.panel.methods.buttons()[0].click()   # Euler: its energy grows
+    apply_fields(qtbot, window)
+    assert window.scene.integrator.method == "euler"
+    window.speed.setCurrentIndex(FASTEST)
+    window.start()
+    qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=30_000)
+    window.seek(float("inf"))
+    window._plot()
+    t, gain = window.plots.curves["energy_gain"].getOriginalDataset()
+    drift = window.controller.runs[0].buffer.energy_error
+    assert np.isfinite(gain).sum() > 0 and (drift > 0).any()
+    assert np.all(np.isnan(gain) | (gain > 0))
