@@ -14,7 +14,7 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball_app.compare_runs import CompareRun
 from rollball_app.controller import FINISHED
-from rollball_app.modes import layout
+from rollball_app.modes import DEFAULT_SIZE, fitted, layout
 from rollball_app.preferences import Preferences
 from rollball_app.timeline import STEPS
 from rollball_app.window import MainWindow
@@ -283,3 +283,15 @@ def test_an_energy_gain_is_drawn_apart_from_a_loss(qtbot, window):
     drift = window.controller.runs[0].buffer.energy_error
     assert np.isfinite(gain).sum() > 0 and (drift > 0).any()
     assert np.all(np.isnan(gain) | (gain > 0))
+
+
+def test_the_default_size_fits_the_screen_and_secondary_windows_stay_on_it(qtbot, window):
+    small = QtCore.QRect(0, 0, 1024, 768)
+    assert fitted(DEFAULT_SIZE, small) == QtCore.QSize(1016, 728)
+    assert fitted(DEFAULT_SIZE, QtCore.QRect(0, 0, 1920, 1080)) == QtCore.QSize(*DEFAULT_SIZE)
+    area = window.screen().availableGeometry()
+    window.move(area.right() - 200, area.bottom() - 150)   # the main window mostly off to a corner
+    window.compare_help_action.trigger()
+    help_window = window.help_window
+    qtbot.waitExposed(help_window)
+    assert area.contains(help_window.frameGeometry()), (help_window.frameGeometry(), area)
