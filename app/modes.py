@@ -22,7 +22,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 DEFAULT_SIZE = (1280, 860)   # the window's size on a screen that has room for it
 FRAME_ROOM = (8, 40)         # pixels of the available screen left for a window manager's frame
-SETTLE_MS = 1500             # after leaving full screen, the window manager's moves are undone this long
+SETTLE_MS = 3000             # after leaving full screen, the window manager's moves are undone this long
 ERROR_PLOTS_SHARE = 0.4      # of the view's and plots' height, at least, for compare mode's plots
 PRESENTATION_PLOTS_SHARE = 0.47   # the same in presentation, where their text is larger
 
@@ -132,6 +132,9 @@ class Modes:
             self.apply(raise_compare=self.compare)
             w.showFullScreen()
             return
+        # the small text's smaller minimum sizes first: a panel shown beside the large text's
+        # minimum would widen the window
+        QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
         w.showMaximized() if self._was_maximized else w.showNormal()
         self.apply(raise_compare=self.compare)
         if not self._was_maximized and self._normal_geometry is not None:
