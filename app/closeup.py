@@ -9,12 +9,13 @@ under the ball), the ball, and the trail; its camera looks from the main view's 
 from __future__ import annotations
 
 import numpy as np
+import pyqtgraph as pg
 import pyqtgraph.opengl as gl
 from PySide6 import QtCore, QtGui
 
 from rollball.geometry import fit_ratio
 
-from .view3d import BACKGROUND, TRAIL_COLOR, ball_mesh, ball_transform, surface_colors
+from .view3d import BACKGROUND, TRAIL_COLOR, ball_mesh, ball_transform, run_ball_mesh, surface_colors
 
 PATCH_RADII = 5.0      # the patch reaches this many ball radii either side of the contact point
 PATCH_CELLS = 40       # grid cells per side of the patch
@@ -28,6 +29,7 @@ class CloseUp(gl.GLViewWidget):
         self.setBackgroundColor(BACKGROUND)
         self.setObjectName("closeup")
         self.landscape = None
+        self.color: str | None = None   # the run's colour, None: the striped ball
         self.radius = 0.1
         self.z_span = (0.0, 1.0)
         self.patch = gl.GLSurfacePlotItem(shader="shaded", smooth=True, glOptions="opaque")
@@ -45,12 +47,22 @@ class CloseUp(gl.GLViewWidget):
         self.landscape, self.radius, self.z_span = landscape, radius, z_span
         self._patch_origin = None
 
+    def set_color(self, color: str | None) -> None:
+        """The ball and trail in a run's colour (compare mode), or None: the striped ball."""
+        if color == self.color:
+            return
+        self.color = color
+        self.ball.setMeshData(meshdata=ball_mesh() if color is None else run_ball_mesh(color))
+        self.trail.setData(color=TRAIL_COLOR if color is None else pg.mkColor(color).getRgbF())
+
     def show_ball(self, center: np.ndarray, R: np.ndarray, contact: np.ndarray, trail: np.ndarray,
-                  azimuth: float, elevation: float) -> None:
+                  azimuth: float, elevation: float, color: str | None = None) -> None:
         """Draw the ball at ``center`` turned by R, touching at ``contact`` (x, y), with the trail
-        points (n, 3), seen from the main camera's direction."""
+        points (n, 3), seen from the main camera's direction; ``color``: the run's (see
+        ``set_color``)."""
         if self.landscape is None:
             return
+        self.set_color(color)
         self._update_patch(contact)
         self.ball.setTransform(ball_transform(center, R, self.radius))
         near = np.max(np.abs(trail[:, :2] - contact[:2]), axis=1) <= PATCH_RADII * self.radius if len(trail) else []

@@ -58,14 +58,12 @@ class CompareMode:
         self.action.setChecked(True)
 
     def set_active(self, on: bool) -> None:
+        """Entering or leaving: the run so far is dropped (the window's ``Modes`` shows and
+        hides the panels)."""
         w = self.window
         w.reset()
         if on and not self.panel.rows and w.scene is not None:
             self.panel.use_preset(next(iter(compare_runs.PRESETS)))
-        self.dock.setVisible(on)
-        if on:
-            self.dock.raise_()
-        w.bottom.setCurrentWidget(self.error_plots if on else w.plots)
         w.show_message("Compare mode: set the runs, then Compare (F5)" if on else "")
 
     def scene_changed(self, scene: Scene) -> None:
@@ -86,11 +84,18 @@ class CompareMode:
         w.readouts.set_runs([(run.label, run.color) for run in runs])
         self.error_plots.set_runs(runs, scene.duration)
         self.summary.set_runs(runs)
+        w.timeline.set_span(max(sim.t_end for sim in simulations))
         w.controller.start(runs, reference=(scene, scene.duration, spacing),
                            warm_ups=[compare_runs.warm_up(scene, choice) for choice in choices])
         for i, shown in enumerate(self.panel.shown()):
             self.show_run(i, shown)
         w.show_message(f"Comparing {len(runs)} runs to t = {scene.duration:g} s, with a reference run")
+
+    def clear(self) -> None:
+        """No results: the runs' summary and error curves go with the runs (a reset, another
+        scene); the panel's choice of runs stays."""
+        self.summary.set_runs([])
+        self.error_plots.set_runs([], self.window.scene.duration if self.window.scene else 1.0)
 
     def finished(self) -> None:
         runs = self.window.controller.runs
@@ -119,3 +124,5 @@ class CompareMode:
         self.error_plots.set_reference(f"{METHODS[reference_method()].label} at rtol {REFERENCE_RTOL:g}", estimate)
         self.error_plots.show_time(controller.play_time)
         self.summary.fill()
+        if controller.runs and all(run.ended for run in controller.runs):
+            self.finished()   # the last word no longer says the reference is being computed

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from .plots import FLOOR, DecadeAxis, cache_axes, fit_decades, thinned
 
@@ -45,6 +45,26 @@ class ErrorPlots(QtWidgets.QWidget):
         self.curves: list[dict[str, pg.PlotDataItem]] = []
         self.runs = []
 
+    def set_font_scale(self, scale: float) -> None:
+        """Titles, axis labels, tick numbers and the legend at ``scale`` times their normal size."""
+        font = QtGui.QFont(self.font())
+        font.setPointSizeF(font.pointSizeF() * scale)
+        normal = scale == 1.0
+        words = min(scale, 1.5)   # titles and legend: large, but the curves keep their height
+        for (_, title), plot in zip(PANELS, self.plots.values()):
+            plot.setTitle(title, size=f"{9 * words:g}pt", color="#333")
+            for side in ("left", "bottom"):
+                axis = plot.getAxis(side)
+                axis.setTickFont(None if normal else font)
+                axis.label.setFont(font)
+            plot.getAxis("left").setWidth(None if normal else int(round(40 * scale)))
+            plot.getAxis("bottom").setHeight(None if normal else int(round(20 * scale)))
+            plot.showLabel("bottom", normal)   # in large text the seconds' name gives the curves room
+        self.legend.opts["labelTextSize"] = f"{8 * words:g}pt"
+        for _, label in self.legend.items:
+            label.setText(label.text, size=f"{8 * words:g}pt")
+        self._fit_legend()
+
     def set_runs(self, runs, t_end: float) -> None:
         """A curve per run and panel in the run's colour; the legend names them."""
         for plot in self.plots.values():
@@ -63,7 +83,8 @@ class ErrorPlots(QtWidgets.QWidget):
         self.reference_line.setVisible(False)
         self.estimate = None
         self.reference_label = "Reference: computing…"
-        self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
+        if self.runs:   # nothing to refer to before a comparison
+            self.legend.addItem(pg.PlotDataItem(pen=REFERENCE_PEN), self.reference_label)
         self._fit_legend()
 
     def set_reference(self, method: str, estimate: float) -> None:

@@ -1,4 +1,4 @@
-"""Help that teaches: The model, Reading the plots (HTML pages shipped with the app) and the
+"""Help that teaches: The model, Reading the plots, Comparing methods (HTML pages shipped with the app) and the
 keyboard shortcuts, generated from the window's actions so the list cannot go stale.
 
 Widgets name a help topic (``set_topic``); their tooltip then says where to read more, and F1
@@ -12,7 +12,8 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import resources
 
-PAGES = {"model.html": "The model", "plots.html": "Reading the plots", "keys": "Keyboard shortcuts"}
+PAGES = {"model.html": "The model", "plots.html": "Reading the plots", "compare.html": "Comparing methods",
+         "keys": "Keyboard shortcuts"}
 TOPIC = "helpTopic"   # widget property holding a topic such as "model.html#liftoff"
 
 
@@ -80,7 +81,7 @@ class HelpWindow(QtWidgets.QWidget):
         self.resize(860, 680)
 
     def show_topic(self, topic: str) -> None:
-        """Show a page (``model.html``, ``plots.html`` or ``keys``), scrolled to ``#anchor`` if given."""
+        """Show a page (``model.html``, ``plots.html``, ``compare.html`` or ``keys``), scrolled to ``#anchor`` if given."""
         name, _, anchor = topic.partition("#")
         if name != self.page:
             self.page = name

@@ -18,6 +18,7 @@ from rollball.trajectory import NORMAL_FORCE
 from .help import TOPIC
 
 FLOOR = 1e-17       # log plots show exact zeros at this level
+GAIN_COLOR = "#e67e22"   # the energy curve where the energy has grown
 MAX_POINTS = 2000   # per curve; longer runs are thinned for drawing
 TITLE_POINTS = 9    # plot titles at font scale 1
 LABEL_PITCH = 1.6   # labels on a log axis at least this many text heights apart
@@ -137,7 +138,7 @@ class LivePlots(QtWidgets.QWidget):
         self.plots: list[pg.PlotItem] = []
         self.cursors = []
         for name, title, units, log in (
-            ("energy", "|E − E₀| / E₀", "", True),
+            ("energy", "|E − E₀| / E₀ (orange: gained)", "", True),
             ("orthogonality", "‖RᵀR − I‖", "", True),
             ("force", "Normal force F·N", "N", False),
         ):
@@ -161,6 +162,9 @@ class LivePlots(QtWidgets.QWidget):
             self.cursors.append(cursor)
             self.plots.append(plot)
             self.curves[name] = plot.plot(pen=pg.mkPen("#1f5fa8", width=1), skipFiniteCheck=True)
+        # where the energy has grown (the ball could climb above where it started): over the
+        # |E − E0| curve in another colour, so a gain is told from a loss on the log axis
+        self.curves["energy_gain"] = self.plots[0].plot(pen=pg.mkPen(GAIN_COLOR, width=2), connect="finite")
         self.scale = 1.0
         self.show_run(None, 0)
 
@@ -207,7 +211,9 @@ class LivePlots(QtWidgets.QWidget):
             return
         picked = thinned(index + 1)
         t = buffer.t[picked]
-        for plot, name, values in ((self.plots[0], "energy", np.abs(buffer.energy_error[picked])),
+        drift = buffer.energy_error[picked]
+        self.curves["energy_gain"].setData(t, np.where(drift > 0, np.maximum(drift, FLOOR), np.nan))
+        for plot, name, values in ((self.plots[0], "energy", np.abs(drift)),
                                    (self.plots[1], "orthogonality", buffer.orthogonality_error[picked])):
             values = np.maximum(values, FLOOR)
             self.curves[name].setData(t, values)

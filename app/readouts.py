@@ -93,6 +93,7 @@ class Readouts(QtWidgets.QWidget):
         first row's labels stay the same widgets (what is attached to them stays)."""
         for widget in [*self.names, *(label for row in self.rows[1:] for label in row.values())]:
             self.grid.removeWidget(widget)
+            widget.hide()   # gone from the window now, not when the event loop deletes it
             widget.deleteLater()
         self.rows, self.names = self.rows[:1], []
         for r, run in enumerate(runs):

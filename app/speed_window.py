@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import threading
 from pathlib import Path
 
@@ -16,7 +17,7 @@ import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
 from rollball import METHODS, Scene, compare
-from rollball.comparison import Cancelled
+from rollball.comparison import Cancelled, RunResult
 
 from .compare_runs import COLORS
 from .plots import DecadeAxis, fit_decades
@@ -29,6 +30,7 @@ ORIENTATION_CEILING = 10.0   # a classic R far off SO(3) would squash the rest o
 LEGEND_CORNERS = (((0, 1), (0, 1), (10, -10)), ((1, 1), (1, 1), (-10, -10)),
                   ((1, 0), (1, 0), (-10, 10)), ((0, 0), (0, 0), (10, 10)))
 SAMPLES_PER_SEGMENT = 16
+PICK_PIXELS = 8              # a point this near the mouse is the one its tooltip and click mean
 
 
 class CompareThread(QtCore.QThread):
@@ -134,7 +136,35 @@ class SpeedWindow(QtWidgets.QWidget):
         plot.plotItem.layout.setContentsMargins(1, 1, plot.getAxis("bottom").label_extent(-10, -10) / 2, 1)
         plot.showGrid(x=True, y=True, alpha=0.25)
         plot.addLegend(offset=(10, -10), labelTextSize="8pt", labelTextColor="#333")  # (placed: place_legend)
+        # one point under the mouse, for the tooltip and the click alike (points of several
+        # series can lie on each other: each series' own tooltip and click could pick two runs)
+        plot.scene().sigMouseMoved.connect(lambda pos, p=plot: p.setToolTip(
+            _tip(0, 0, run) if (run := self.run_at(p, pos)) is not None else ""))
+        plot.scene().sigMouseClicked.connect(lambda event, p=plot: self._clicked(p, event))
         return plot
+
+    def run_at(self, plot: pg.PlotWidget, scene_pos: QtCore.QPointF) -> RunResult | None:
+        """The run whose point is nearest to ``scene_pos`` (within ``PICK_PIXELS``); of points
+        on each other, the one drawn on top."""
+        view = plot.plotItem.vb
+        best, best_distance = None, PICK_PIXELS
+        for item in plot.items():
+            if not isinstance(item, pg.ScatterPlotItem) or not item.isVisible():
+                continue
+            for spot in item.points():
+                at = view.mapViewToScene(spot.pos())
+                distance = math.hypot(at.x() - scene_pos.x(), at.y() - scene_pos.y())
+                if distance <= best_distance:   # later items are drawn over earlier ones
+                    best, best_distance = spot.data(), distance
+        return best
+
+    def _clicked(self, plot: pg.PlotWidget, event) -> None:
+        if event.button() != QtCore.Qt.MouseButton.LeftButton:
+            return
+        run = self.run_at(plot, event.scenePos())
+        if run is not None:
+            event.accept()
+            self.runChosen.emit(run)
 
     # -- computing -------------------------------------------------------------------
 
@@ -227,8 +257,7 @@ class SpeedWindow(QtWidgets.QWidget):
         points = pg.ScatterPlotItem(x=np.log10(x), y=np.log10(y), data=runs, brush=pg.mkBrush(color),
                                     pen=None if munthe_kaas else pg.mkPen(color, width=2),
                                     symbol="o" if munthe_kaas else "x", size=8, hoverable=True, hoverSize=11,
-                                    tip=_tip)
-        points.sigClicked.connect(lambda item, spots, event: spots and self.runChosen.emit(spots[0].data()))
+                                    tip=None)   # the plot's tooltip names the one point picked (run_at)
         plot.addItem(points)
 
     # -- export ----------------------------------------------------------------------

@@ -14,8 +14,9 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from rollball import Scene, sweep
+from rollball import Scene, get_method, sweep
 from rollball.sweeps import KEYS, OUTCOMES, Grid
+from rollball.sweeps.batch import sweep_method
 from rollball.sweeps.grid import value_of, with_values
 from rollball.sweeps.plot import label
 
@@ -23,6 +24,29 @@ from .inputs import format_number
 
 # What a fresh dialog offers: (key, half-width around the scene's value, N), first and second
 DEFAULTS = (("start.vx", 2.0, 41), ("start.spin", 4.0, 21))
+DEFAULT_COLOR = "min_normal_force"   # lift-off where it is ≤ 0; a value for every run
+
+
+def tidy(values: np.ndarray) -> np.ndarray:
+    """Grid values rounded to the grid's own precision (a tenth of its spacing, in decimals):
+    1.95 where the spacing is 0.05, not 1.9500000000000002."""
+    spacing = np.min(np.abs(np.diff(values))) if len(values) > 1 else 0.0
+    if not spacing > 0:
+        return values
+    decimals = max(0, int(np.ceil(-np.log10(spacing))) + 1)
+    return np.round(values, decimals)
+
+
+def method_text(scene: Scene) -> str:
+    """Which method and step every run of a sweep of the scene uses."""
+    method = get_method(scene.integrator.method)
+    try:
+        sweep_method(scene)
+    except ValueError as error:
+        return f"Cannot sweep with {method.label}: {error}"
+    return (f"Each run: {method.label}, step h = {scene.integrator.dt:g} s, to t = {scene.duration:g} s "
+            f"(the scene's method and step; the ball's turning is not followed, so Munthe-Kaas or "
+            f"classic makes no difference)")
 
 
 class SweepThread(QtCore.QThread):
@@ -83,7 +107,7 @@ class AxisRow:
         except ValueError:
             raise ValueError(f"{key}: 'from' and 'to' must be numbers") from None
         n = self.n.value()
-        return key, (np.array([lo]) if n == 1 else np.linspace(lo, hi, n))
+        return key, (np.array([lo]) if n == 1 else tidy(np.linspace(lo, hi, n)))
 
 
 class SweepDialog(QtWidgets.QDialog):
@@ -106,9 +130,17 @@ class SweepDialog(QtWidgets.QDialog):
         self.color = QtWidgets.QComboBox(objectName="color")
         for name in OUTCOMES:
             self.color.addItem(label(name), name)
-        self.color.setCurrentIndex(OUTCOMES.index("liftoff_time"))
+        # an outcome every finished run has (lift-off, say, is blank on a scene where none lifts off)
+        self.color.setCurrentIndex(OUTCOMES.index(DEFAULT_COLOR))
         self.color.currentIndexChanged.connect(self._show)
         form.addRow("Colour by", self.color)
+        try:
+            used = method_text(scene)
+        except KeyError:
+            used = ""
+        self.method_note = QtWidgets.QLabel(used, objectName="method", wordWrap=True)
+        self.method_note.setStyleSheet("color: #555;")
+        form.addRow(self.method_note)
 
         self.run_button = QtWidgets.QPushButton("Run", objectName="run", default=True)
         self.run_button.clicked.connect(self.run)

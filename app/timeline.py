@@ -137,14 +137,15 @@ class TimeSlider(QtWidgets.QWidget):
         self.events.setText("Go to: " + " · ".join(f'<a href="{m.time!r}">{m.text}</a>' for m in markers)
                             if markers else "")
 
-    def set_time(self, t: float) -> None:
-        """Show time t (no ``seeked``)."""
+    def set_time(self, t: float, shown: float | None = None) -> None:
+        """Put the handle at time t (no ``seeked``); the label says ``shown``, the time of the
+        row drawn (the readouts' time), or t."""
         self._setting = True
         try:
             self.slider.setValue(self._position(t))
         finally:
             self._setting = False
-        self.label.setText(f"{t:.3f} s / {self.t_end:g} s" if self.t_end > 0 else "—")
+        self.label.setText(f"{t if shown is None else shown:.4f} s / {self.t_end:g} s" if self.t_end > 0 else "—")
 
     def _moved(self, value: int) -> None:
         if self._setting:

@@ -27,6 +27,7 @@ LIFTOFF_COLOR = (1.0, 0.55, 0.0, 1.0)
 BALL_STRIPES = np.array([(0.90, 0.20, 0.15), (1.00, 0.80, 0.10), (0.15, 0.45, 0.85),
                          (0.95, 0.55, 0.10), (0.20, 0.65, 0.30), (0.55, 0.25, 0.70)])
 HEIGHT_MAP = pg.colormap.get("viridis")
+GHOST_ALPHA = 0.3        # the balls of the runs not followed, in compare mode: see-through
 FILL = 0.9               # the framed landscape fills up to this fraction of the view
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
@@ -50,12 +51,18 @@ def ball_mesh(stripes: np.ndarray = BALL_STRIPES, cap=(0.97, 0.97, 0.97), rows: 
     return mesh
 
 
-def run_ball_mesh(color) -> gl.MeshData:
+def run_ball_mesh(color, alpha: float = 1.0) -> gl.MeshData:
     """A beach ball in one run's colour: its segments alternate the colour and a pale tint of
-    it, with dark caps, so rotation and deformation stay as visible as on the striped ball."""
+    it, with dark caps, so rotation and deformation stay as visible as on the striped ball.
+    With ``alpha`` < 1 a see-through ghost of it."""
     c = np.asarray(pg.mkColor(color).getRgbF()[:3])
     pale = 0.35 * c + 0.65
-    return ball_mesh(np.array([c, pale] * 3), cap=0.45 * c)
+    mesh = ball_mesh(np.array([c, pale] * 3), cap=0.45 * c)
+    if alpha < 1.0:
+        colors = mesh.faceColors()
+        colors[:, 3] = alpha
+        mesh.setFaceColors(colors)
+    return mesh
 
 
 def ball_transform(center: np.ndarray, R: np.ndarray, radius: float) -> pg.Transform3D:
@@ -247,6 +254,8 @@ class SceneView(gl.GLViewWidget):
         self.centers = [np.zeros(3)]
         self.followed = 0                                      # the run the camera follows
         self.trails_shown = True
+        self.label_scale = 1.0   # the axis labels' text size, times 8 pt
+        self.colors: list | None = None   # the runs' colours in compare mode
 
     @property
     def ball_center(self) -> np.ndarray:
@@ -390,7 +399,7 @@ class SceneView(gl.GLViewWidget):
         for item in self.axis_labels:
             self.removeItem(item)
         font = QtGui.QFont()
-        font.setPointSize(8)
+        font.setPointSizeF(8 * self.label_scale)
         self.axis_labels = [gl.GLTextItem(pos=np.asarray(pos, dtype=float), text=text, color=TEXT_COLOR,
                                           font=font, glOptions="translucent") for pos, text in labels]
         for item in self.axis_labels:
@@ -436,11 +445,35 @@ class SceneView(gl.GLViewWidget):
             ball.setVisible(True)
             trail.setVisible(self.trails_shown)
         self.centers = [self.centers[0]] * len(self.balls)
+        self.colors = list(colors) if colors else None
         self.followed = 0
+        self._ghosts()
+
+    def _ghosts(self) -> None:
+        """With several runs, the followed run's ball is solid and the others are see-through
+        ghosts drawn after it: a ball deformed by a classic update stays in sight where the
+        other runs' balls stand in the same place."""
+        if not self.colors or len(self.balls) < 2:
+            return
+        for k, (ball, color) in enumerate(zip(self.balls, self.colors)):
+            ghost = k != self.followed
+            ball.setMeshData(meshdata=run_ball_mesh(color, GHOST_ALPHA if ghost else 1.0))
+            ball.setGLOptions("translucent" if ghost else "opaque")
+            ball.setDepthValue(1 if ghost else 0)
 
     def set_run_visible(self, index: int, visible: bool) -> None:
         self.balls[index].setVisible(visible)
         self.trails[index].setVisible(visible and self.trails_shown)
+
+    def set_label_scale(self, scale: float) -> None:
+        """The axis labels at ``scale`` times their normal size."""
+        if scale == self.label_scale:
+            return
+        self.label_scale = scale
+        for item in self.axis_labels:
+            font = QtGui.QFont(item.font)
+            font.setPointSizeF(8 * scale)
+            item.setData(font=font)
 
     def set_trails_visible(self, on: bool) -> None:
         self.trails_shown = on
@@ -475,8 +508,9 @@ class SceneView(gl.GLViewWidget):
         """Keep a run's ball (``index``, or the one followed so far) in the centre of the view;
         zoom in to it when a radius is given."""
         self.follow = follow
-        if index is not None:
+        if index is not None and index != self.followed:
             self.followed = index
+            self._ghosts()
         if follow:
             self.opts["center"] = QtGui.QVector3D(*map(float, self.ball_center))
             if radius is not None:

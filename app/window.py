@@ -27,6 +27,7 @@ from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunContr
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
 from .inputs import ScenePanel
+from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
@@ -96,9 +97,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.compare = CompareMode(self)
         self.compare.panel.followChanged.connect(lambda _i: self._follow(self.follow_action.isChecked()))
         self.presentation = Presentation(self)
-        self.presentation.bar.addActions([self.scene_panel_action, self.presentation_action])
+        self.presentation.add_actions([self.scene_panel_action, self.presentation_action])
+        self.modes = Modes(self)
         self.preferences.restore(self)
-        self.compare.dock.hide()   # compare mode starts off, whatever the last session showed
+        self.modes.restored()   # the editing layout, whatever the last session showed
         self._set_text_size(self.preferences.font_scale())
         self._set_help_topics()
         self._update_controls()
@@ -117,7 +119,7 @@ class MainWindow(QtWidgets.QMainWindow):
                          | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetFloatable)
         self.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, dock)
 
-        splitter = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical)
+        self.splitter = splitter = QtWidgets.QSplitter(QtCore.Qt.Orientation.Vertical)
         top = QtWidgets.QWidget()
         v = QtWidgets.QVBoxLayout(top)
         v.setContentsMargins(0, 0, 0, 0)
@@ -131,7 +133,8 @@ class MainWindow(QtWidgets.QMainWindow):
         splitter.setStretchFactor(0, 4)
         splitter.setStretchFactor(1, 1)
         self.setCentralWidget(splitter)
-        self.resize(1280, 860)
+        screen = self.screen() or QtWidgets.QApplication.primaryScreen()
+        self.resize(fitted(DEFAULT_SIZE, screen.availableGeometry()))
 
     def _action(self, text, slot, shortcut=None, tip=None, checkable=False, name=None) -> QtGui.QAction:
         action = QtGui.QAction(text, self, checkable=checkable)
@@ -184,20 +187,22 @@ class MainWindow(QtWidgets.QMainWindow):
                                         "Show the last computed moment")
         self.liftoff_action = self._action("Go to &Lift-off", self.go_to_liftoff, "L",
                                            "Show the moment the real ball would leave the surface")
-        self.presentation_action = self._action("&Presentation", self.presentation_toggled, "F11",
+        self.presentation_action = self._action("&Presentation", lambda on: self.modes.set_presentation(on), "F11",
                                                 "Full screen, large text, close-up of the ball (Esc leaves)",
                                                 checkable=True)
         self.leave_action = self._action("Leave Presentation", lambda: self.presentation_action.setChecked(False),
                                          "Esc", "Back from presentation mode")
-        self.scene_panel_action = self._action("Scene", lambda on: self.scene_dock.setVisible(on), None,
+        self.scene_panel_action = self._action("Scene", lambda on: self.modes.choose_scene_panel(on), None,
                                                "Show or hide the scene panel", checkable=True,
                                                name="scene_panel")
-        self.scene_dock.visibilityChanged.connect(self.scene_panel_action.setChecked)
+        self.reset_layout_action = self._action("Reset &Layout", lambda: self.modes.reset_layout(), None,
+                                                "The panels where they were at first, the window at its "
+                                                "default size", name="reset_layout")
         self.leave_action.setEnabled(False)
-        self.closeup_action = self._action("&Close-up", self._show_closeup, "Z",
+        self.closeup_action = self._action("&Close-up", lambda on: self.modes.choose_closeup(on), "Z",
                                            "A close-up following the ball in the corner of the view",
                                            checkable=True)
-        self.compare_action = self._action("&Compare Methods", lambda on: self.compare.set_active(on), "Ctrl+K",
+        self.compare_action = self._action("&Compare Methods", self._compare_toggled, "Ctrl+K",
                                            "Several methods side by side on this scene, with their true errors",
                                            checkable=True)
         self.speed_error_action = self._action("&Speed against Error…", self.show_speed_against_error, None,
@@ -210,6 +215,8 @@ class MainWindow(QtWidgets.QMainWindow):
                                               "The equations of motion, lift-off, no-fit, Munthe-Kaas")
         self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
                                               "What the plots, readouts and colours say")
+        self.compare_help_action = self._action("&Comparing Methods", lambda: self.show_help("compare.html"), None,
+                                                "Compare mode, speed against error, sweeps; which method when")
         self.keys_help_action = self._action("&Keyboard Shortcuts", lambda: self.show_help("keys"), None,
                                              "Every shortcut of the menus")
         self.context_help_action = self._action("Help on This", self.context_help, "F1",
@@ -271,16 +278,19 @@ class MainWindow(QtWidgets.QMainWindow):
             self.text_size_group.addAction(action)
         view.addSeparator()
         view.addActions([self.follow_action, self.trail_action, self.camera_action])
+        view.addSeparator()
+        view.addActions([self.scene_panel_action, self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")
         analysis.addActions([self.speed_error_action, self.sweep_action])
         help_menu = bar.addMenu("&Help")
-        help_menu.addActions([self.model_help_action, self.plots_help_action, self.keys_help_action,
+        help_menu.addActions([self.model_help_action, self.plots_help_action, self.compare_help_action,
+                              self.keys_help_action,
                               self.context_help_action])
         help_menu.addSeparator()
         help_menu.addActions([self.limits_action, self.about_action])
 
     def _build_toolbar(self) -> None:
-        bar = self.addToolBar("Run")
+        self.run_toolbar = bar = self.addToolBar("Run")
         bar.setObjectName("runToolbar")
         bar.setMovable(False)
         bar.setToolButtonStyle(QtCore.Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
@@ -702,6 +712,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.speed_window is None:
             self.speed_window = SpeedWindow(self)
             self.speed_window.runChosen.connect(self.load_run)
+            place_over(self.speed_window, self)
         self.speed_window.compute(self.scene)
 
     def load_run(self, result) -> None:
@@ -749,6 +760,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.drawn_index = -1
         self.view.set_runs(None)
         self.readouts.set_runs([None])
+        self.compare.clear()   # no results of runs that are gone
         scene = self.scene
         if scene is not None and self.landscape is not None:
             self._draw_start(scene)
@@ -817,9 +829,11 @@ class MainWindow(QtWidgets.QMainWindow):
                 self.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
                 self.view.set_trail(trail, k)
                 if k == followed:
-                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail)
+                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color)
                 self.readouts.show_row(k, run.buffer, i)
-        self.timeline.set_time(t)
+        followed = self.compare.followed if self.compare.followed < len(runs) else 0
+        if len(runs[followed].buffer):   # the time of the moment drawn, as its readout says it
+            self.timeline.set_time(t, shown=float(runs[followed].buffer.t[indices[followed]]))
         if force or time.perf_counter() - self.plotted_at >= PLOT_INTERVAL:
             self._plot()   # in the same frame as the 3-D view: the window is composed once
         shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
@@ -881,6 +895,7 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog = SweepDialog(self.scene, self)
         dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
         dialog.startChosen.connect(self.load_start)
+        place_over(dialog, self)
         dialog.show()
         return dialog
 
@@ -936,11 +951,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -- presentation, close-up, text size ------------------------------------------
 
-    def presentation_toggled(self, on: bool) -> None:
-        self.presentation.set_active(on)
-        self.leave_action.setEnabled(on)
+    def _compare_toggled(self, on: bool) -> None:
+        if on != self.modes.compare:
+            self.compare.set_active(on)
+            self.modes.set_compare(on)
 
-    def _show_closeup(self, on: bool) -> None:
+    def show_closeup(self, on: bool) -> None:
         self.closeup_frame.setVisible(on)
         self._place_closeup()
         if not on:
@@ -955,9 +971,25 @@ class MainWindow(QtWidgets.QMainWindow):
         h = round(0.75 * w)
         self.closeup_frame.setGeometry(self.view.width() - w - 8, 8, w, h)
 
-    def _show_closeup_at(self, center, R, contact, trail) -> None:
+    def _show_closeup_at(self, center, R, contact, trail, color: str | None = None) -> None:
         if self.closeup.isVisible():
-            self.closeup.show_ball(center, R, contact, trail, self.view.opts["azimuth"], self.view.opts["elevation"])
+            self.closeup.show_ball(center, R, contact, trail, self.view.opts["azimuth"], self.view.opts["elevation"],
+                                   color)
+
+    def changeEvent(self, event) -> None:
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.WindowStateChange and hasattr(self, "modes"):
+            self.modes.window_changed()
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        if hasattr(self, "modes"):
+            self.modes.window_changed()
+
+    def moveEvent(self, event) -> None:
+        super().moveEvent(event)
+        if hasattr(self, "modes"):
+            self.modes.window_changed()
 
     def eventFilter(self, watched, event) -> bool:
         if watched is self.view and event.type() == QtCore.QEvent.Type.Resize:
@@ -982,7 +1014,9 @@ class MainWindow(QtWidgets.QMainWindow):
                   "plots.html#orthogonality": [self.plots.plots[1]],
                   "plots.html#force": [self.plots.plots[2]],
                   "plots.html#colours": [self.view],
-                  "plots.html#readouts": [self.readouts]}
+                  "plots.html#readouts": [self.readouts],
+                  "compare.html#compare": [self.compare.panel, self.compare.error_plots],
+                  "compare.html#summary": [self.compare.summary]}
         for topic, widgets in topics.items():
             for widget in widgets:
                 helps.set_topic(widget, topic)
@@ -997,6 +1031,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def show_help(self, topic: str) -> None:
         if self.help_window is None:
             self.help_window = helps.HelpWindow(self._all_actions, self)
+            place_over(self.help_window, self)
         self.help_window.show_topic(topic)
 
     def context_help(self) -> None:
@@ -1010,7 +1045,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if not self._may_discard():
             event.ignore()
             return
-        self.presentation_action.setChecked(False)   # the window's own layout is what is remembered
+        self.modes.leave_all()   # the editing layout is what is remembered
         self.preferences.save(self)
         if self.speed_window is not None:
             self.speed_window.close()

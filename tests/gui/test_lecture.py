@@ -44,7 +44,8 @@ def test_presentation_enlarges_the_text_and_esc_restores_it(qtbot, window):
     assert window.isFullScreen() and window.presentation.active
     assert points(readout) >= 2 * before and points(window.message) >= 2 * status
     assert tick.style["tickFont"].pointSizeF() >= 2 * QtWidgets.QApplication.font().pointSizeF()
-    assert not window.scene_dock.isVisible() and window.presentation.bar.isVisible()
+    qtbot.waitUntil(window.presentation.bar.isVisible)   # the toolbar lays it out
+    assert not window.scene_dock.isVisible()
     assert window.closeup_frame.isVisible()
     assert window.view.trail.width >= 6
     qtbot.keyClick(window, QtCore.Qt.Key.Key_Escape)
@@ -60,9 +61,17 @@ def test_text_size_is_a_preference(qtbot, window, preferences):
     larger.trigger()
     assert points(window.readouts["t"]) == pytest.approx(1.5 * before)
     assert preferences.font_scale() == 1.5
-    window.presentation_action.trigger()   # presentation doubles the preferred size
-    assert points(window.readouts["t"]) == pytest.approx(3.0 * before)
+    field = window.panel.numbers["duration"]
+    assert field.font().pointSizeF() == pytest.approx(1.5 * QtWidgets.QApplication.font().pointSizeF())
+    assert window.view.axis_labels[0].font.pointSizeF() == pytest.approx(1.5 * 8)
+    window.presentation_action.trigger()   # presentation doubles the preferred size: the status
+    assert points(window.message) == pytest.approx(3.0 * before)
+    # and the readouts as far as the screen's width holds all of them (3 × is too wide here)
+    assert 2.0 * before < points(window.readouts["t"]) <= 3.0 * before
+    screen = window.screen().availableGeometry().width()
+    assert window.readouts.minimumSizeHint().width() <= screen
     window.presentation_action.trigger()
+    assert points(window.readouts["t"]) == pytest.approx(1.5 * before)
 
 
 def test_the_slider_shows_a_chosen_time(qtbot, window):

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pyqtgraph as pg
 import pytest
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball_app.controller import RUNNING
 from rollball_app.speed_window import CSV_NAME, LEGEND_CORNERS, SpeedWindow, legend_cover, place_legend
@@ -50,14 +51,23 @@ def test_a_quick_comparison_is_plotted_exported_and_loaded(qtbot, window, tmp_pa
     assert len(rows) == len(data["runs"])
     assert [float(row["error_contact"]) for row in rows] == [run["error"]["contact"] for run in data["runs"]]
 
-    points = scatter(speed.time_plot)
-    spot = points.points()[-1]
-    result = spot.data()
-    assert "click: load it" in points.opts["tip"](x=0, y=0, data=result)
-    points.sigClicked.emit(points, [spot], None)
+    # the mouse on a point: its tooltip names a run, and a click loads exactly that run
+    plot = speed.step_plot
+    spot = scatter(plot).points()[-1]
+    at = plot.mapFromScene(plot.plotItem.vb.mapViewToScene(spot.pos()))
+    move = QtGui.QMouseEvent(QtCore.QEvent.Type.MouseMove, QtCore.QPointF(at),
+                             QtCore.QPointF(plot.viewport().mapToGlobal(at)), QtCore.Qt.MouseButton.NoButton,
+                             QtCore.Qt.MouseButton.NoButton, QtCore.Qt.KeyboardModifier.NoModifier)
+    QtWidgets.QApplication.sendEvent(plot.viewport(), move)   # the mouse comes to rest on the point
+    qtbot.waitUntil(lambda: "click: load it" in plot.toolTip())
+    named = plot.toolTip().splitlines()[0]   # e.g. "RK4 Munthe-Kaas, h = 0.05 s"
+    result = speed.run_at(plot, plot.mapToScene(at))
+    assert named == plot.toolTip().splitlines()[0] and result is not None
+    qtbot.mouseClick(plot.viewport(), QtCore.Qt.MouseButton.LeftButton, pos=at)
     integrator = window.scene.integrator
     assert (integrator.method, integrator.munthe_kaas) == (result.spec.method, result.spec.munthe_kaas)
     assert (integrator.dt if result.dt is not None else integrator.rtol) == (result.dt or result.rtol)
+    assert named.startswith(result.spec.label + ", ")
     assert window.controller.state == RUNNING and not window.compare.active
 
 

@@ -4,7 +4,9 @@ import numpy as np
 from PySide6 import QtCore
 
 from rollball_app.controller import READY
-from rollball_app.sweep_dialog import SweepDialog
+from rollball_app.sweep_dialog import SweepDialog, tidy
+
+from .guitools import set_field
 
 
 def _open(qtbot, window) -> SweepDialog:
@@ -55,7 +57,7 @@ def test_one_key_gives_a_curve_and_cancel_stops_the_sweep(qtbot, window):
     dialog = _open(qtbot, window)
     dialog.rows[1].enabled.setChecked(False)
     _set_row(dialog.rows[0], "start.vx", 0.0, 1.0, 3000)
-    assert dialog.color.currentData() == "liftoff_time"
+    dialog.color.setCurrentIndex(dialog.color.findData("liftoff_time"))
     qtbot.mouseClick(dialog.run_button, QtCore.Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: dialog.progress.value() > 0, timeout=60_000)
     qtbot.mouseClick(dialog.cancel_button, QtCore.Qt.MouseButton.LeftButton)
@@ -74,3 +76,24 @@ def test_bad_ranges_are_said_in_the_dialog(qtbot, window):
     qtbot.mouseClick(dialog.run_button, QtCore.Qt.MouseButton.LeftButton)
     assert "must be numbers" in dialog.status.text() and dialog.thread is None
     dialog.close()
+
+
+def test_the_default_sweep_shows_a_map_says_its_method_and_loads_tidy_values(qtbot, window):
+    set_field(qtbot, window, "duration", "0.5")   # short runs; the default keys and outcome
+    dialog = _open(qtbot, window)
+    assert dialog.method_note.text().startswith("Each run: RK4, step h = 0.001 s, to t = 0.5 s")
+    _set_row(dialog.rows[0], "start.vx", -2.0, 2.0, 81)   # spacing 0.05: values such as 1.9500000000000002
+    dialog.rows[1].n.setValue(5)
+    _run(qtbot, dialog)
+    assert dialog.color.currentData() == "min_normal_force" and dialog.note.text() == ""
+    assert dialog.colorbar.isVisible() and np.isfinite(dialog.image.image).all()   # not an empty map
+    assert dialog.pick(1.95, 0.0) is not None
+    qtbot.waitUntil(lambda: window.panel.numbers["start.vx"].text() == "1.95")
+    assert window.panel.numbers["start.spin"].text() == "0.0"
+    dialog.close()
+
+
+def test_grid_values_are_rounded_to_the_grid_precision():
+    assert list(tidy(np.linspace(-2.0, 2.0, 81))[78:]) == [1.9, 1.95, 2.0]
+    assert 1.9500000000000002 in np.linspace(-2.0, 2.0, 81)   # (what a plain grid holds)
+    assert list(tidy(np.linspace(0.0, 1e-3, 3))) == [0.0, 0.0005, 0.001]
