@@ -323,16 +323,22 @@ class SceneView(gl.GLViewWidget):
 
     # -- camera ----------------------------------------------------------------------
 
-    def reset_camera(self) -> None:
+    def reset_camera(self, include: np.ndarray | None = None, aspect: float | None = None) -> None:
         """Frame the drawn landscape, its heights included, from the first viewpoint of
         ``VIEWPOINTS`` where the ball, some of the region where it does not fit and the lowest
-        point are in sight (not behind a wall); failing that, without the lowest point."""
+        point are in sight (not behind a wall); failing that, without the lowest point.
+        ``include``: more points (n, 3) the ball's centre passes (an export frames the whole
+        path, also where it leaves the drawn grid); ``aspect``: the framed picture's height over
+        its width (default: the view's)."""
         r = self.ball_radius
-        box = np.array([np.minimum(self.bounds[0], self.ball_center - r),
-                        np.maximum(self.bounds[1], self.ball_center + r)])
+        points = np.vstack([self.ball_center.reshape(1, 3)] + ([] if include is None else
+                                                                [np.asarray(include, dtype=float).reshape(-1, 3)]))
+        points = points[np.all(np.isfinite(points), axis=1)]
+        box = np.array([np.minimum(self.bounds[0], points.min(axis=0) - r),
+                        np.maximum(self.bounds[1], points.max(axis=0) + r)])
         center = box.mean(axis=0)
         corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
-        aspect = self.height() / max(self.width(), 1)
+        aspect = aspect or self.height() / max(self.width(), 1)
         fov = self.opts["fov"]
         views = [(self._fit_distance(corners, center, elevation, azimuth, fov, aspect), elevation, azimuth)
                  for elevation, azimuth in VIEWPOINTS]
