@@ -60,10 +60,16 @@ def application():
     return app
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):
+        """One line (not the usage over several), as every other refusal."""
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .animation import MAX_FPS
 
-    parser = argparse.ArgumentParser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
+    parser = _Parser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
     parser.add_argument("--compare", metavar="SPECS",
                         help="open in compare mode with these runs, e.g. euler/classic,rk4/classic,rk4")

@@ -26,7 +26,7 @@ from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
-from .inputs import ScenePanel
+from .inputs import ScenePanel, compile_reason
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
@@ -382,7 +382,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             landscape.compiled  # noqa: B018 - compile now, so a run starts at once
         except Exception as error:  # numba refused generated code: keep what is shown
-            self._warn("Cannot use this landscape", str(error))
+            self._warn("Cannot use this landscape", compile_reason(error))
             return []
         notes = []
         grid_changed = old is None or old.landscape != scene.landscape or old.view != scene.view
