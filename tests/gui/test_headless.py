@@ -15,11 +15,11 @@ import pytest
 import shiboken6
 from PySide6 import QtCore, QtGui
 
-from app import worker
-from app.garbage import collect_on_gui_thread
-from app.main import close_down
-from app.picture import labels_at
-from app.window import MainWindow
+from rollball_app import worker
+from rollball_app.garbage import collect_on_gui_thread
+from rollball_app.main import close_down
+from rollball_app.picture import labels_at
+from rollball_app.window import MainWindow
 from rollball.examples import scene_path
 
 from .guitools import run_to_end, set_field
@@ -28,7 +28,7 @@ DISPLAY = "-screen 0 1400x900x24 +extension GLX +render"
 
 
 def _app(*args, env=None, timeout=60):
-    return subprocess.run([sys.executable, "-m", "app", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "rollball_app", *args], capture_output=True, text=True,
                           timeout=timeout, env=env or os.environ)
 
 
@@ -88,8 +88,8 @@ def test_sigterm_during_record_removes_its_temporary_files_and_writes_nothing(tm
     staging = tmp_path / "tmp"
     staging.mkdir()
     env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), HOME=str(tmp_path), TMPDIR=str(staging))
-    process = subprocess.Popen([sys.executable, "-m", "app", "bump", "--run-to", "20", "--record", str(out),
-                                "--fps", "30", "--size", "320x240"], env=env, stdout=subprocess.PIPE,
+    process = subprocess.Popen([sys.executable, "-m", "rollball_app", "bump", "--run-to", "6", "--record",
+                                str(out), "--fps", "60", "--size", "320x240"], env=env, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 300
@@ -136,9 +136,9 @@ def test_an_unusable_preferences_file_is_ignored_with_a_warning(tmp_path):
     folder = tmp_path / "RollBall"
     folder.mkdir()
     os.mkfifo(folder / "RollBall.conf")   # QSettings would block on it for good
-    code = ("from app.main import application; from app.window import MainWindow; app = application(); "
-            "app.setOrganizationName('RollBall'); app.setApplicationName('RollBall'); w = MainWindow(); "
-            "print(type(w.preferences.settings).__name__)")
+    code = ("from rollball_app.main import application; from rollball_app.window import MainWindow; "
+            "app = application(); app.setOrganizationName('RollBall'); app.setApplicationName('RollBall'); "
+            "w = MainWindow(); print(type(w.preferences.settings).__name__)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                             env=dict(os.environ, XDG_CONFIG_HOME=str(tmp_path)))
     assert result.returncode == 0, result.stderr
@@ -228,7 +228,7 @@ def test_compute_time_is_the_runs_own_processor_time(qtbot):
 
 
 def test_a_formula_the_compiler_refuses_says_why_in_one_clean_line(qtbot, window, monkeypatch):
-    import app.inputs as inputs
+    import rollball_app.inputs as inputs
 
     noisy = ("Failed in nopython mode pipeline (step: nopython frontend)\n\x1b[1mNo implementation of function "
              "Function(<built-in function gamma>) found for signature:\n \n >>> gamma(float64, float64)\n"
