@@ -169,6 +169,19 @@ def test_pictures_carry_the_axis_numbers_and_names(qtbot, window, tmp_path):
     assert QtGui.QImage(str(path)).size() == QtCore.QSize(*size)
 
 
+def test_the_axis_numbers_and_names_are_framed_with_the_landscape(qtbot, window):
+    from rollball.examples import example_names
+
+    for name in example_names():
+        assert window.open_scene(scene_path(name), remember=False)
+        w, h = window.view.width(), window.view.height()
+        placed = labels_at(window.view, (w, h))
+        assert any(item.text == "x (m)" for _, _, item in placed), name
+        outside = [(round(x), round(y), item.text) for x, y, item in placed
+                   if not (0 <= x <= w - 20 and 12 <= y <= h)]   # room for the text itself
+        assert outside == [], (name, outside)
+
+
 def test_an_exported_video_keeps_the_ball_in_frame_when_it_leaves_the_grid(qtbot, window, tmp_path):
     assert window.open_scene(scene_path("liftoff"), remember=False)
     set_field(qtbot, window, "duration", "2")
