@@ -67,8 +67,9 @@ class AnimationWriter:
     colours (RGB in 0..1) that may appear after the first frame and must keep their hue in a GIF
     (trail, markers, the ball's stripes); each is kept in several shades."""
 
-    def __init__(self, path: str | os.PathLike, size: tuple[int, int], fps: float, accents=()):
+    def __init__(self, path: str | os.PathLike, size: tuple[int, int], fps: float, accents=(), keep=()):
         self.path = Path(path)
+        self.keep = list(keep)   # paths never written over (the open scene)
         self.kind = format_of(path)
         self.size = even_size(*size) if self.kind == ".mp4" else (int(size[0]), int(size[1]))
         if min(self.size) < 2:
@@ -116,7 +117,8 @@ class AnimationWriter:
         try:
             self._encoder.close()
             with open(self._file, "rb") as source:
-                atomic_write(self.path, lambda stream: shutil.copyfileobj(source, stream), binary=True)
+                atomic_write(self.path, lambda stream: shutil.copyfileobj(source, stream), binary=True,
+                             keep=self.keep)
         finally:
             self._staging.cleanup()
         return self.path
@@ -137,11 +139,12 @@ class AnimationWriter:
 
 
 def record(path: str | os.PathLike, times: np.ndarray, fps: float, size: tuple[int, int], show, frame,
-           progress=None, accents=()) -> bool:
+           progress=None, accents=(), keep=()) -> bool:
     """Write one frame per time: ``show(t)`` puts that moment in place, ``frame()`` returns it as
     an RGB array of ``size``. ``progress(done, total)`` is called after every frame; when it
-    returns False the export is cancelled, nothing is written and False is returned."""
-    with AnimationWriter(path, size, fps, accents) as writer:
+    returns False the export is cancelled, nothing is written and False is returned. ``keep``:
+    paths the file may not replace."""
+    with AnimationWriter(path, size, fps, accents, keep) as writer:
         for k, t in enumerate(times):
             show(float(t))
             writer.add(frame())

@@ -258,7 +258,7 @@ class RunController(QtCore.QObject):
         now = time.perf_counter()
         elapsed, self._last_tick = now - self._last_tick, now
         self._frame_started = now
-        QtCore.QTimer.singleShot(0, self._frame_done)  # runs once this frame is painted
+        QtCore.QTimer.singleShot(0, self, self._frame_done)  # once this frame is painted; never after self is deleted
         if not self.runs or self.state != RUNNING:
             return  # paused: nothing moves (Step draws its own frame)
         end = self.end_time

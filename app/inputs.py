@@ -9,6 +9,7 @@ below Min), the field whose change broke the scene is the one marked.
 
 from __future__ import annotations
 
+import re
 import threading
 
 from PySide6 import QtCore, QtWidgets
@@ -69,6 +70,10 @@ def format_number(value: float) -> str:
 LABELS = {key: label for fields in NUMBER_FIELDS.values() for key, label, _, _ in fields} | {"landscape": "Formula"}
 UNITS = {key: unit for fields in NUMBER_FIELDS.values() for key, _, unit, _ in fields}
 CHECKING = "checking…"
+MAX_REASON = 160               # characters of a compiler's reason shown under the formula
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")                       # terminal colours
+_PATH = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.~+-]+){2,}[\\/]?")   # an absolute file path
+_NOISE = ("Failed in ", "During:", "File ", "There are ", "^", "- Of which", "Type Restricted")
 ERROR_STYLE, CHECKING_STYLE = "color: #c0392b;", "color: #555;"
 # how a mark looks: the field, its label in the form, the message under it
 MARKS = {"error": ("QLineEdit { border: 2px solid #c0392b; background: #fdecea; }",
@@ -89,6 +94,23 @@ def labelled(text: str) -> str:
 def _number(text: str) -> float:
     """A field's number; the minus sign of typeset text (U+2212) is a minus too."""
     return float(text.strip().replace("\u2212", "-"))
+
+
+def compile_reason(error: Exception) -> str:
+    """A compiler's refusal (numba's, over many lines, in terminal colours, naming the
+    generated module in the cache folder) as one clean line for the formula's message: the
+    missing function and the types it was given, or else the first line that says something,
+    without colour codes or file paths."""
+    text = _ANSI.sub("", str(error))
+    called = re.search(r"function Function\(<built-in function (\w+)>\)", text)
+    signature = re.search(r">>> *(.+)", text)
+    if called and signature:
+        reason = f"no version of {called.group(1)} takes {signature.group(1).strip().split('(', 1)[-1].rstrip(')')}"
+    else:
+        lines = [line.strip() for line in text.splitlines()]
+        reason = next((line for line in lines if line and not line.startswith(_NOISE)), type(error).__name__)
+    reason = _PATH.sub("…", reason).rstrip(":")
+    return reason if len(reason) <= MAX_REASON else reason[: MAX_REASON - 1] + "…"
 
 
 def _message_label(name: str) -> QtWidgets.QLabel:
@@ -309,7 +331,7 @@ class ScenePanel(QtWidgets.QWidget):
         except FormulaError as error:
             problem = str(error)
         except Exception as error:  # e.g. numba refusing generated code
-            problem = f"cannot compile the formula ({type(error).__name__}: {error})"
+            problem = f"cannot compile the formula: {compile_reason(error)}"
         self._formulaChecked.emit(text, problem)  # queued to the GUI thread
 
     def _formula_checked(self, text: str, problem: str | None) -> None:

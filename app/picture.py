@@ -16,6 +16,7 @@ from .view3d import BALL_STRIPES, LIFTOFF_COLOR, NO_FIT_COLOR, TRAIL_COLOR
 ACCENTS = (TRAIL_COLOR[:3], LIFTOFF_COLOR[:3], NO_FIT_COLOR[:3], *BALL_STRIPES, (0.97, 0.97, 0.97))
 MAX_TEXTURE = 4096          # pixels per side of one off-screen rendering pass
 INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
+MIN_LABEL_PIXELS = 10      # axis numbers and names in a picture are at least this high
 CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)
 
 
@@ -54,6 +55,38 @@ def render_view(view, size: tuple[int, int]) -> QtGui.QImage:
     return image.copy()   # owns its pixels once rgb is gone
 
 
+def labels_at(view, size: tuple[int, int]) -> list[tuple[float, float, object]]:
+    """The view's text items (axis numbers and names: ``view.axis_labels``) shown, as (x, y,
+    item): where each one's anchor falls in a picture of ``size`` taken with the view's
+    camera. GL draws this text on the widget with a painter, so an off-screen rendering
+    (``renderToArray``) has none of it: ``compose`` draws it."""
+    width, height = int(size[0]), int(size[1])
+    matrix = view.projectionMatrix((0, 0, width, height), (0, 0, width, height)) * view.viewMatrix()
+    placed = []
+    for item in getattr(view, "axis_labels", ()):
+        if not (item.visible() and item.text):
+            continue
+        p = matrix.map(QtGui.QVector4D(*map(float, item.pos), 1.0))
+        if p.w() <= 0:
+            continue   # behind the camera
+        placed.append(((p.x() / p.w() + 1) / 2 * width, (1 - p.y() / p.w()) / 2 * height, item))
+    return placed
+
+
+def draw_labels(painter: QtGui.QPainter, view, size: tuple[int, int]) -> None:
+    """The view's axis numbers and names on a picture of it at ``size``, as on screen: anchored
+    at their points (left, baseline), their text scaled with the picture (at least
+    ``MIN_LABEL_PIXELS`` high, so a small video keeps them legible)."""
+    scale = size[0] / max(1, view.width())
+    for x, y, item in labels_at(view, size):
+        font = QtGui.QFont(item.font)
+        on_screen = QtGui.QFontInfo(item.font).pixelSize()
+        font.setPixelSize(max(MIN_LABEL_PIXELS, round(on_screen * scale)))
+        painter.setFont(font)
+        painter.setPen(item.color)
+        painter.drawText(QtCore.QPointF(x, y), item.text)
+
+
 def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
             plots: QtWidgets.QWidget | None = None) -> QtGui.QImage:
     """The view at ``size``; ``inset`` (a GL view, e.g. the close-up) drawn in the top right
@@ -69,6 +102,7 @@ def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
     painter.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
     painter.setRenderHint(QtGui.QPainter.RenderHint.TextAntialiasing)
     painter.drawImage(0, 0, picture)
+    draw_labels(painter, view, (width, height))
     if inset is not None:
         w = round(INSET_FRACTION * width)
         h = round(w * inset.height() / max(1, inset.width()))

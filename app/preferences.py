@@ -3,6 +3,9 @@ text size."""
 
 from __future__ import annotations
 
+import os
+import stat
+import sys
 from pathlib import Path
 
 from PySide6 import QtCore
@@ -10,9 +13,70 @@ from PySide6 import QtCore
 MAX_RECENT = 8
 
 
+class SessionSettings:
+    """Preferences kept for this session only (what QSettings offers the app), where the
+    preferences file cannot be used."""
+
+    def __init__(self):
+        self._values: dict = {}
+
+    def value(self, key: str, default=None):
+        return self._values.get(key, default)
+
+    def setValue(self, key: str, value) -> None:
+        self._values[key] = value
+
+    def sync(self) -> None:
+        pass
+
+
+def settings_files() -> list[Path]:
+    """The files QSettings reads the app's preferences from (Unix: the user's
+    ``$XDG_CONFIG_HOME/RollBall/RollBall.conf`` and ``RollBall.conf`` beside it, then the same
+    in each system folder)."""
+    if sys.platform in ("win32", "darwin"):   # the registry, property lists: not checked here
+        return []
+    org, app = QtCore.QCoreApplication.organizationName(), QtCore.QCoreApplication.applicationName()
+    folders = [QtCore.QStandardPaths.writableLocation(QtCore.QStandardPaths.StandardLocation.GenericConfigLocation),
+               *(os.environ.get("XDG_CONFIG_DIRS") or "/etc/xdg").split(os.pathsep),
+               QtCore.QLibraryInfo.path(QtCore.QLibraryInfo.LibraryPath.SettingsPath)]
+    files = []
+    for folder in dict.fromkeys(f for f in folders if f):
+        files += [Path(folder) / org / f"{app}.conf", Path(folder) / f"{org}.conf"]
+    return files
+
+
+def unusable_settings_file() -> tuple[Path, str] | None:
+    """A preferences file QSettings would hang on or fail with (a named pipe, a device, a
+    folder): QSettings opens it as soon as it is made, and a FIFO blocks there for good.
+    Returns (path, what it is) or None."""
+    for path in settings_files():
+        try:
+            mode = os.stat(path).st_mode
+        except OSError:
+            continue   # missing (or unreadable: QSettings copes)
+        if not stat.S_ISREG(mode):
+            kind = ("a named pipe (FIFO)" if stat.S_ISFIFO(mode) else "a folder" if stat.S_ISDIR(mode)
+                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a regular file")
+            return path, kind
+    return None
+
+
+def default_settings():
+    """QSettings on the app's preferences file, or, where that file is not a regular file,
+    preferences for this session only (said on stderr once)."""
+    unusable = unusable_settings_file()
+    if unusable is None:
+        return QtCore.QSettings()
+    path, kind = unusable
+    print(f"rollball: warning: the preferences file {path} is {kind}, not a regular file: ignored "
+          f"(preferences are kept for this session only)", file=sys.stderr)
+    return SessionSettings()
+
+
 class Preferences:
     def __init__(self, settings: QtCore.QSettings | None = None):
-        self.settings = settings or QtCore.QSettings()
+        self.settings = settings if settings is not None else default_settings()
 
     def recent_files(self) -> list[str]:
         value = self.settings.value("recentFiles", [])

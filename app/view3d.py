@@ -28,6 +28,8 @@ BALL_STRIPES = np.array([(0.90, 0.20, 0.15), (1.00, 0.80, 0.10), (0.15, 0.45, 0.
                          (0.95, 0.55, 0.10), (0.20, 0.65, 0.30), (0.55, 0.25, 0.70)])
 HEIGHT_MAP = pg.colormap.get("viridis")
 GHOST_ALPHA = 0.3        # the balls of the runs not followed, in compare mode: see-through
+TICK = 0.015             # an axis tick's length as a fraction of the landscape's width
+LABEL_REACH = 8          # ticks beyond the axes that their labels reach (names at 6, text beyond)
 FILL = 0.9               # the framed landscape fills up to this fraction of the view
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
@@ -212,6 +214,17 @@ def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, fov: float,
     return out
 
 
+def _labelled(corners: np.ndarray, box: np.ndarray, center: np.ndarray, elevation: float, azimuth: float,
+              reach: float) -> np.ndarray:
+    """The box's corners and those of its floor moved ``reach`` out towards the camera in x
+    and in y: the axes' numbers and names stand there (``_draw_axes``), and framing them too
+    keeps them in the picture."""
+    eye = look(center, 1.0, elevation, azimuth)
+    out = np.array([np.sign(eye[0] - center[0]) or 1.0, np.sign(eye[1] - center[1]) or 1.0, 0.0]) * reach
+    floor = corners[corners[:, 2] == box[0, 2]]
+    return np.vstack([corners, floor + out * [1, 0, 0], floor + out * [0, 1, 0]])
+
+
 class SceneView(gl.GLViewWidget):
     """Landscape, ball, trail and lift-off marker, with a camera that can follow the ball.
 
@@ -332,18 +345,26 @@ class SceneView(gl.GLViewWidget):
 
     # -- camera ----------------------------------------------------------------------
 
-    def reset_camera(self) -> None:
+    def reset_camera(self, include: np.ndarray | None = None, aspect: float | None = None) -> None:
         """Frame the drawn landscape, its heights included, from the first viewpoint of
         ``VIEWPOINTS`` where the ball, some of the region where it does not fit and the lowest
-        point are in sight (not behind a wall); failing that, without the lowest point."""
+        point are in sight (not behind a wall); failing that, without the lowest point.
+        ``include``: more points (n, 3) the ball's centre passes (an export frames the whole
+        path, also where it leaves the drawn grid); ``aspect``: the framed picture's height over
+        its width (default: the view's)."""
         r = self.ball_radius
-        box = np.array([np.minimum(self.bounds[0], self.ball_center - r),
-                        np.maximum(self.bounds[1], self.ball_center + r)])
+        points = np.vstack([self.ball_center.reshape(1, 3)] + ([] if include is None else
+                                                                [np.asarray(include, dtype=float).reshape(-1, 3)]))
+        points = points[np.all(np.isfinite(points), axis=1)]
+        box = np.array([np.minimum(self.bounds[0], points.min(axis=0) - r),
+                        np.maximum(self.bounds[1], points.max(axis=0) + r)])
         center = box.mean(axis=0)
         corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
-        aspect = self.height() / max(self.width(), 1)
+        aspect = aspect or self.height() / max(self.width(), 1)
         fov = self.opts["fov"]
-        views = [(self._fit_distance(corners, center, elevation, azimuth, fov, aspect), elevation, azimuth)
+        reach = LABEL_REACH * TICK * float(max(box[1, 0] - box[0, 0], box[1, 1] - box[0, 1]))
+        views = [(self._fit_distance(_labelled(corners, box, center, elevation, azimuth, reach), center,
+                                     elevation, azimuth, fov, aspect), elevation, azimuth)
                  for elevation, azimuth in VIEWPOINTS]
         must = (self.ball_center, *self.no_fit_points)
         chosen = next((view for wanted in ((*must, self.lowest_point), must) for view in views
@@ -374,7 +395,7 @@ class SceneView(gl.GLViewWidget):
         ox = x1 if eye[0] > (x0 + x1) / 2 else x0     # the corner nearest the camera
         oy = y1 if eye[1] > (y0 + y1) / 2 else y0
         horizontal = max(x1 - x0, y1 - y0)
-        tick = 0.015 * horizontal
+        tick = TICK * horizontal
         away = np.array([1.0 if ox == x1 else -1.0, 1.0 if oy == y1 else -1.0, 0.0]) * tick
         segments, labels = [], []
         for k, (lo, hi) in enumerate(((x0, x1), (y0, y1), (z0, z1))):

@@ -12,7 +12,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method, resources
 from rollball.examples import example_scenes
-from rollball.files import atomic_write_bytes
+from rollball.files import atomic_write_bytes, write_target
 from rollball.geometry import reachable_height, unit_normal
 from rollball.landscape import landscape_for
 from rollball.simulation import recording
@@ -26,8 +26,8 @@ from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
-from .inputs import ScenePanel
 from .modes import DEFAULT_SIZE, Modes, fitted, place_over
+from .inputs import ScenePanel, compile_reason
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
@@ -392,7 +392,7 @@ class MainWindow(QtWidgets.QMainWindow):
         try:
             landscape.compiled  # noqa: B018 - compile now, so a run starts at once
         except Exception as error:  # numba refused generated code: keep what is shown
-            self._warn("Cannot use this landscape", str(error))
+            self._warn("Cannot use this landscape", compile_reason(error))
             return []
         notes = []
         grid_changed = old is None or old.landscape != scene.landscape or old.view != scene.view
@@ -551,7 +551,8 @@ class MainWindow(QtWidgets.QMainWindow):
         buffer = QtCore.QBuffer(data)
         buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
         image.save(buffer, "PNG")
-        if not self._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data))):
+        keep = [self.document.path] if self.document.path else []  # never over the scene file
+        if not self._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data), keep=keep)):
             return False
         self.show_message(f"Saved {path.name} ({image.width()}×{image.height()})")
         return True
@@ -593,14 +594,23 @@ class MainWindow(QtWidgets.QMainWindow):
         t1 = end if t1 is None else min(t1, end)
         size = size or (self.view.width(), self.view.height())
         times = frame_times(t0, t1, fps)
+        keep = [self.document.path] if self.document.path else []   # never over the scene file
+        write_target(path, keep)   # refused before a frame is drawn
         shown, started = self.controller.play_time, QtCore.QElapsedTimer()
         started.start()
         self.controller.pause()
+        view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
+        # a camera as framed on opening frames the whole path in the video (the ball may leave
+        # the drawn grid); one the user turned, zoomed or set to follow the ball is kept
+        reframe = self.view.framed and not self.view.follow
+        if reframe:
+            self.view.reset_camera(include=self._path(t0, t1), aspect=view_size[1] / max(1, view_size[0]))
         try:
-            view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
             done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
-                          progress, ACCENTS)
+                          progress, ACCENTS, keep=keep)
         finally:
+            if reframe:
+                self.view.reset_camera()
             self.seek(shown)
         if not done:
             self.show_message("Export cancelled; nothing was written")
@@ -609,6 +619,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.show_message(f"Exported {len(times)} frames ({times[-1] - times[0]:.3g} s at {fps:g} per second) "
                           f"to {Path(path).name} in {started.elapsed() / 1000:.1f} s")
         return True
+
+    def _path(self, t0: float, t1: float) -> np.ndarray:
+        """The balls' centres from t0 to t1, every run's (an export frames them all)."""
+        paths = [run.buffer.rows[(run.buffer.t >= t0) & (run.buffer.t <= t1)][:, CENTER]
+                 for run in self.controller.runs if len(run.buffer)]
+        return np.vstack(paths) if paths else np.zeros((0, 3))
 
     # -- running ---------------------------------------------------------------------
 
@@ -649,6 +665,18 @@ class MainWindow(QtWidgets.QMainWindow):
         scene = self.scene
         return self.preparing is not None and (self.compare.active or scene is None
                                                or _spec(scene) not in self.ready_variants)
+
+    def stop_preparing(self) -> None:
+        """Kill the integrator's warm-up (closing): disconnected first, so that nothing it says
+        or its end reaches the window, then waited for and deleted."""
+        process, self.preparing = self.preparing, None
+        if process is None:
+            return
+        for signal in (process.readyReadStandardOutput, process.finished, process.errorOccurred):
+            signal.disconnect()
+        process.kill()
+        process.waitForFinished(5000)
+        process.deleteLater()
 
     def _prepared(self) -> None:
         if self.preparing is None:
@@ -1051,9 +1079,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.speed_window.close()
         self.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
-        if self.preparing is not None:
-            self.preparing.kill()
-            self.preparing.waitForFinished(2000)
+        self.stop_preparing()
         event.accept()
 
 

@@ -12,6 +12,7 @@ import time
 
 from PySide6 import QtCore
 
+from rollball.comparison import compute_clock
 from rollball.warmup import compile_notice
 
 CHUNK_SECONDS = 0.04
@@ -25,7 +26,9 @@ class SimulationThread(QtCore.QThread):
     index, its chunk's new rows passed through that run's
     ``derive`` (an owned array, or None when the chunk has none) and whether the run has
     ended with it (its last rows: the GUI knows a run has ended only when they are there); ``failed`` a one-line message if the core raised (the GUI
-    stays up). ``seconds[i]`` is the time run i's ``advance`` took so far (its compute time);
+    stays up). ``seconds[i]`` is the processor time this thread spent in run i's ``advance``
+    so far (its compute time: ``rollball.comparison.compute_clock``, as the command line
+    measures it; wall-clock time would count whatever else the machine does meanwhile);
     the ``warm_ups`` (tiny runs of the same methods) are run first, untimed, so that loading or
     compiling a method's kernel does not count.
     """
@@ -59,10 +62,10 @@ class SimulationThread(QtCore.QThread):
             if not pending:
                 break
             i = min(pending, key=lambda k: sims[k].progress)
-            started = time.perf_counter()
+            started, cpu = time.perf_counter(), compute_clock()
             rows = sims[i].advance(steps[i])
-            elapsed = time.perf_counter() - started
-            self.seconds[i] += elapsed
+            elapsed = time.perf_counter() - started   # sizes the chunks: a stop is answered in time
+            self.seconds[i] += compute_clock() - cpu    # the run's own processor time, as on the command line
             ended = sims[i].done
             if len(rows) or ended:
                 self.rowsReady.emit(self.token, i, self.derives[i](rows) if len(rows) else None, ended)

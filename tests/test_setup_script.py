@@ -21,3 +21,21 @@ def test_the_test_group_includes_the_app_and_dask_groups():
     assert groups_with_included("app") == {"app"}
     assert groups_with_included("bench", "test") == {"bench", "test", "app", "dask"}
     assert groups_with_included() == set()
+
+
+def test_a_long_silent_step_says_every_few_seconds_that_it_is_still_at_work():
+    """pip says nothing for a minute while it installs large wheels: the setup says it is at work."""
+    script = (ROOT / "scripts" / "setup").read_text()
+    start, end = script.index("say() {"), script.index("\n}\n", script.index("with_heartbeat() {")) + 3
+    step = ("echo one; sleep 2.6; echo 'Requirement already satisfied: numpy'; echo 'ready rk4 mk'; "
+            "echo two; exit $CODE")
+    for code in (0, 3):
+        result = subprocess.run(["bash", "-c", "set -euo pipefail\n" + script[start:end]
+                                 + f'with_heartbeat "pip" bash -c "{step}"'],
+                                capture_output=True, text=True, timeout=60,
+                                env={"PATH": "/usr/bin:/bin", "ROLLBALL_SETUP_EVERY": "1", "CODE": str(code)})
+        lines = result.stderr.splitlines()
+        assert result.returncode == code
+        assert lines[0] == "one" and lines[-1] == "two"
+        assert 2 <= sum(line.startswith("rollball setup: pip: still at work") for line in lines) <= 3
+        assert not any("Requirement" in line or line.startswith("ready") for line in lines)

@@ -205,7 +205,7 @@ def test_headless_record_writes_the_video_and_exits_0(tmp_path):
     out = tmp_path / "hills.mp4"
     env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path), HOME=str(tmp_path))
     result = subprocess.run([sys.executable, "-m", "rollball_app", "flat", "--run-to", "0.5", "--record", str(out),
-                             "--fps", "20", "--size", "160x120"], env=env, capture_output=True, text=True,
+                             "--fps", "20", "--size", "320x240"], env=env, capture_output=True, text=True,
                             timeout=120)
     assert result.returncode == 0, result.stderr
     assert "Exported 11 frames" in result.stdout and "Traceback" not in result.stderr
