@@ -26,8 +26,8 @@ from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
 from .document import Document
-from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .inputs import ScenePanel, compile_reason
+from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
