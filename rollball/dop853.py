@@ -225,7 +225,7 @@ class DensePair(MethodInfo):
         return self.P
 
     def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(W, E, P) as kernel.advance_adaptive reads them: W the stage matrix over all
+        """(W, E, P) as kernel.loops.advance_adaptive reads them: W the stage matrix over all
         sixteen stages (row 12, the derivative at the new state, is b; rows 13 .. 15 the dense
         output's stages), E the two error estimates over stages 0 .. 12, P the dense output."""
         floats = lambda rows: np.array([[float(v) for v in row] for row in rows])  # noqa: E731

@@ -1,63 +1,39 @@
-"""Making the kernel's shipped code: ``python -m rollball.kernel_build`` compiles the entry
-points of kernel.py with numba, in a process of its own with an empty numba cache (code
-numba loads from its cache has no intermediate code left to ship), links their LLVM modules
-into one and writes it beside kernel.py as kernel.bc, with kernel.json saying what it was
-made from (machine_code.py). A developer's step after changing kernel.py: the test suite
-says when they are out of date."""
+"""Making the kernel's shipped code: ``python -m rollball.kernel_build`` compiles the kernel's
+entry points with numba (``machine_code.compile_with_numba``), links their LLVM modules into
+one and writes it into the package as kernel.bc, with kernel.json saying what it was made
+from and how to call it (machine_code.py). A maintainer's step after changing the kernel's
+code (comments and docstrings aside), and a CI's on a platform that wants code of its own: the
+test suite says when they are out of date."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
-import subprocess
 import sys
-import tempfile
 
-from . import kernel
 from .files import atomic_write_bytes, atomic_write_text
-from .machine_code import SHIPPED, STAMP, numba_entry, stamp
+from .machine_code import SHIPPED, STAMP, compile_with_numba, raw_digest, stamp
 
 
 def build(folder) -> dict:
     """Compile the entry points with numba and write their bitcode and its stamp into folder;
-    returns the stamp (numba's cache must be empty: ``main``)."""
-    import llvmlite.binding as llvm
-
-    linked, symbols = None, {}
-    for name in kernel.ENTRIES:
-        compiled = numba_entry(name)
-        symbols[name] = compiled.native_name
-        module = llvm.parse_assembly(compiled.inspect_llvm())
-        if linked is None:
-            linked = module
-        else:
-            linked.link_in(module)
-    linked.verify()
-    bitcode = linked.as_bitcode()
-    facts = stamp(symbols)
-    facts["calls"] = calls(linked)
+    returns the stamp."""
+    bitcode, symbols, needed = compile_with_numba()
+    facts = {**stamp(), "sources": raw_digest(), "bitcode": hashlib.sha256(bitcode).hexdigest(), "entries": symbols,
+             "calls": needed}
     atomic_write_bytes(os.path.join(folder, SHIPPED), bitcode)
     atomic_write_text(os.path.join(folder, STAMP), json.dumps(facts, indent=1) + "\n")
     return facts
 
 
-def calls(module) -> list[str]:
-    """The symbols the module calls but does not hold (numba's helpers, the C library), which
-    the process that runs it must provide (LLVM's own intrinsics aside)."""
-    return sorted(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
-
-
 def main() -> int:
-    """Make kernel.bc and kernel.json anew beside kernel.py."""
+    """Make kernel.bc and kernel.json anew in the package's folder."""
     folder = os.path.dirname(os.path.abspath(__file__))
-    if os.environ.get("_ROLLBALL_BUILD") != "1":
-        with tempfile.TemporaryDirectory() as cache:
-            env = dict(os.environ, NUMBA_CACHE_DIR=cache, _ROLLBALL_BUILD="1")
-            return subprocess.call([sys.executable, "-m", "rollball.kernel_build"], env=env)
     print("rollball: compiling the kernel's entry points with numba (a minute or two) ...", file=sys.stderr)
     facts = build(folder)
     size = os.path.getsize(os.path.join(folder, SHIPPED))
-    print(f"rollball: wrote {SHIPPED} ({size / 1e6:.1f} MB) and {STAMP} for kernel.py {facts['kernel'][:12]}",
+    print(f"rollball: wrote {SHIPPED} ({size / 1e6:.1f} MB) and {STAMP} for the kernel {facts['kernel'][:12]}",
           file=sys.stderr)
     return 0
 

@@ -181,8 +181,8 @@ class Landscape:
         """
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         out = np.empty((6, x.size))
-        call("evaluate_points", self.compiled.address, np.ascontiguousarray(x).ravel(),
-             np.ascontiguousarray(y).ravel(), out, np.empty(6))
+        call("evaluate_points", fn=self.compiled.address, xs=np.ascontiguousarray(x).ravel(),
+             ys=np.ascontiguousarray(y).ravel(), out=out, d=np.empty(6))
         return out.reshape((6,) + x.shape)
 
     def height(self, x, y) -> np.ndarray:

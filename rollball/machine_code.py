@@ -1,27 +1,33 @@
 """The kernel's machine code, and calling it.
 
-numba needs about a minute of processor time to compile kernel.py (typing it and lowering it
-to LLVM's intermediate code takes most of it; its compiled code is kept on disk). RollBall
-therefore ships that intermediate code: ``kernel.bc``, the LLVM bitcode numba made of the
-kernel's entry points (``kernel.ENTRIES``) on x86-64 Linux, optimised, with no particular
-processor's instructions in it. Where it fits (this machine's target, the numba it was made
-with, the kernel.py it was made from: ``kernel.json``), LLVM turns it into machine code for
-this processor in about two seconds, kept on disk too; elsewhere numba compiles the same entry points from
-kernel.py as before (a minute or more, cached too). Both give the same runs.
+numba needs about a minute of processor time to compile the kernel (typing it and lowering it
+to LLVM's intermediate code takes most of it). RollBall therefore ships that intermediate
+code: ``kernel.bc``, the LLVM bitcode numba made of the kernel's entry points
+(``kernel.ENTRIES``) on x86-64 Linux, optimised, with no particular processor's instructions
+in it. ``kernel.json`` says what it was made from: a digest of the kernel package's code
+(comments and docstrings aside), the numba and llvmlite that made it, the target, the
+interface (each entry's arguments) and the SHA-256 of kernel.bc itself. Where all of that
+agrees with this installation, LLVM turns the bitcode into machine code for this processor
+in about two seconds. Elsewhere numba compiles the same entry points here (a minute or more,
+without numba's own disk cache) and LLVM makes machine code of that. Either machine code is
+kept in the cache folder, keyed by what it was made from, so later processes load it in well
+under a second; both give the same runs.
 
-``python -m rollball.kernel_build`` makes kernel.bc and kernel.json anew from kernel.py
-(a developer's step after changing the kernel; a test says when they are out of date).
+``python -m rollball.kernel_build`` makes kernel.bc and kernel.json anew (a maintainer's step
+after changing the kernel; a test says when they are out of date).
 """
 
 from __future__ import annotations
 
+import ast
 import ctypes
 import functools
 import hashlib
-import inspect
+import io
 import json
 import os
 import threading
+import tokenize
 from importlib import resources
 
 import numpy as np
@@ -29,8 +35,11 @@ import numpy as np
 from . import kernel
 from . import cache
 from .cache import cache_dir
+from .kernel import interface
 
 SHIPPED, STAMP = "kernel.bc", "kernel.json"
+FORMAT = "rollball-machine-code"
+FORMAT_VERSION = 2
 
 _ENTRY_TYPE = ctypes.CFUNCTYPE(None, ctypes.c_void_p)   # kernel.ENTRY_SIGNATURE; ctypes drops the GIL
 _lock = threading.Lock()
@@ -38,81 +47,138 @@ _entries: dict[str, object] | None = None   # name -> ctypes function
 _keep: list = []                            # what the entries' code lives in
 listeners: list = []                        # called (no arguments) before machine code is generated
 source: str | None = None                   # where this process's kernel came from: "shipped" or "numba"
+refused: str | None = None                  # why the shipped code was not used (None: it was, or not yet asked)
 
 
-def sources_digest() -> str:
-    """The SHA-256 of kernel.py, everything the entry points are compiled from."""
-    return hashlib.sha256(resources.files("rollball").joinpath("kernel.py").read_bytes()).hexdigest()
+def sources_digest(folder=None) -> str:
+    """The SHA-256 of the kernel package's code (``folder``: the package's, by default),
+    everything the entry points are compiled from, without its comments and docstrings
+    (``_code``): editing those keeps the shipped code."""
+    return _digest(_code, folder)
 
 
-def stamp(entries: dict[str, str] | None = None) -> dict:
-    """What shipped code must agree with to be used here (``entries``: their symbols; the
-    shipped stamp also lists the symbols the code calls, ``calls``)."""
+def raw_digest(folder=None) -> str:
+    """The SHA-256 of the kernel package's files as they are (quick to compute: where it is the
+    one kernel.json records, so is the digest of the code)."""
+    return _digest(lambda text: text, folder)
+
+
+def _digest(normal, folder) -> str:
+    folder = resources.files("rollball").joinpath("kernel") if folder is None else folder
+    digest = hashlib.sha256()
+    for name in sorted(item.name for item in folder.iterdir() if item.name.endswith(".py")):
+        digest.update(f"{name}\0{normal(folder.joinpath(name).read_text(encoding='utf-8'))}\0".encode())
+    return digest.hexdigest()
+
+
+def _code(text: str) -> str:
+    """The tokens of a module's source that make its code, one a line: no comments, blank lines
+    or docstrings (an f-string as one token, as older Pythons give it)."""
+    docstrings = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if (isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+                    and isinstance(first.value.value, str)):
+                docstrings.add((first.lineno, first.col_offset))
+    lines = text.splitlines(keepends=True)
+    out, skip_newline, fstring = [], False, None   # fstring: (depth, start) of an f-string being read
+    for token in tokenize.generate_tokens(io.StringIO(text).readline):
+        kind = tokenize.tok_name[token.type]
+        if kind == "FSTRING_START":
+            fstring = (fstring[0] + 1, fstring[1]) if fstring else (1, token.start)
+            continue
+        if fstring:
+            if kind == "FSTRING_END":
+                fstring = (fstring[0] - 1, fstring[1])
+                if fstring[0] == 0:
+                    (r0, c0), (r1, c1) = fstring[1], token.end
+                    span = "".join(lines[r0 - 1:r1])
+                    out.append("STRING " + span[c0:len(span) - len(lines[r1 - 1]) + c1])
+                    fstring = None
+            continue
+        if kind in ("COMMENT", "NL", "ENCODING"):
+            continue
+        if kind == "STRING" and token.start in docstrings:
+            skip_newline = True
+            continue
+        if skip_newline and kind == "NEWLINE":
+            skip_newline = False
+            continue
+        skip_newline = False
+        out.append(f"{kind} {token.string}")
+    return "\n".join(out)
+
+
+def stamp(shipped: dict | None = None) -> dict:
+    """What shipped code must have been made from to be used here: this kernel's code, its
+    interface, the numba and llvmlite that compile it, and this machine's target. (The digest
+    of the code is taken from ``shipped``, a kernel.json, where its files are byte for byte
+    those it was made from.)"""
+    import llvmlite
     import llvmlite.binding as llvm
     import numba
 
-    facts = {"format": "rollball-machine-code", "version": 1, "kernel": sources_digest(),
-             "numba": numba.__version__, "triple": llvm.get_process_triple()}
-    if entries is not None:
-        facts["entries"] = entries
-    return facts
+    same = shipped is not None and shipped.get("sources") == raw_digest() and isinstance(shipped.get("kernel"), str)
+    return {"format": FORMAT, "version": FORMAT_VERSION, "kernel": shipped["kernel"] if same else sources_digest(),
+            "interface": interface.description(), "numba": numba.__version__, "llvmlite": llvmlite.__version__,
+            "triple": llvm.get_process_triple()}
 
 
 class Arguments:
-    """The arguments of the kernel function ``name`` (a key of ``kernel.ENTRIES``) packed into
-    its entry point's slots: an array as its address and shape, a number as its bits. Calling
-    runs the function on them, without the GIL; ``set`` changes one, by its parameter's name.
-    Packing costs microseconds an array, so a caller that runs a function again and again
-    packs once; the arrays are read and written in place and kept alive here."""
+    """The arguments of the kernel function ``name`` (a key of ``interface.ENTRIES``), each
+    given by its declared name, packed into its entry point's slots: an array as its address
+    and shape, a number as its bits. Calling runs the function on them, without the GIL;
+    ``set`` changes one. Packing costs microseconds an array, so a caller that runs a function
+    again and again packs once; the arrays are read and written in place and kept alive here
+    (``kept``, by name)."""
 
-    def __init__(self, name: str, *args):
+    def __init__(self, name: str, /, **arguments):
         self.name = name
-        self.kinds, self.offsets, self.positions = _layout(name)
-        if len(args) != len(self.kinds):
-            raise TypeError(f"{name}: {len(self.kinds)} arguments expected, {len(args)} given")
-        self.slots = np.zeros(kernel.ENTRY_SLOTS, dtype=np.int64)
+        self.layout = _layout(name)
+        missing = [key for key in self.layout if key not in arguments]
+        unknown = [key for key in arguments if key not in self.layout]
+        if missing or unknown:
+            raise TypeError(f"{name}: " + "; ".join(
+                ([f"missing {', '.join(missing)}"] if missing else []) + ([f"unknown {', '.join(unknown)}"]
+                                                                            if unknown else [])))
+        self.slots = np.zeros(interface.ENTRY_SLOTS, dtype=np.int64)
         self.address = self.slots.ctypes.data
-        self.kept = list(args)
-        for key, value in zip(self.positions, args):
+        self.kept: dict = {}
+        for key, value in arguments.items():
             self.set(key, value)
 
     def set(self, key: str, value) -> None:
-        i, position = self.offsets[key], self.positions[key]
-        kind = self.kinds[position]
-        if kind == "float":
+        try:
+            kind, i = self.layout[key]
+        except KeyError:
+            raise TypeError(f"{self.name}: no argument {key}") from None
+        if kind == interface.FLOAT:
             self.slots.view(np.float64)[i] = float(value)
-        elif kind in _NUMBERS:
+        elif kind in interface.NUMBER_KINDS:
             self.slots[i] = int(value)
         else:
-            ndim, dtype = (2, np.float64) if kind == "matrix" else (1, np.int64 if kind == "ints" else np.float64)
+            ndim = 2 if kind == interface.MATRIX else 1
+            dtype = np.int64 if kind == interface.INTS else np.float64
             if not (isinstance(value, np.ndarray) and value.ndim == ndim and value.dtype == dtype
                     and value.flags.c_contiguous and value.flags.aligned):
                 raise TypeError(f"{self.name}: {key} must be a C-contiguous {kind} of {np.dtype(dtype)}")
             self.slots[i: i + 3] = value.ctypes.data, value.shape[0], value.shape[1] if ndim == 2 else 1
-        self.kept[position] = value
+        self.kept[key] = value
 
     def __call__(self) -> None:
         entries()[self.name](self.address)
 
 
-_NUMBERS = ("float", "int", "address")
-
-
 @functools.cache
-def _layout(name: str) -> tuple[list[str], dict[str, int], dict[str, int]]:
-    """The kinds of the kernel function's arguments, and by parameter name each one's first
-    slot and its position."""
-    kinds = kernel.ENTRIES[name][1].split()
-    names = list(inspect.signature(getattr(kernel, name).py_func).parameters)
-    if len(kinds) != len(names):
-        raise TypeError(f"{name}: kernel.ENTRIES gives {len(kinds)} kinds for {len(names)} parameters")
-    offsets = dict(zip(names, np.cumsum([0] + [1 if k in _NUMBERS else 3 for k in kinds]).tolist()))
-    return kinds, offsets, {key: i for i, key in enumerate(names)}
+def _layout(name: str) -> dict[str, tuple[str, int]]:
+    """Each argument's kind and first slot, by its name."""
+    return {parameter: (kind, slot) for parameter, kind, slot in interface.layout(name)}
 
 
-def call(name: str, *args) -> None:
+def call(name: str, /, **arguments) -> None:
     """Run the kernel function ``name`` once on these arguments (``Arguments``)."""
-    Arguments(name, *args)()
+    Arguments(name, **arguments)()
 
 
 def entries() -> dict:
@@ -125,49 +191,86 @@ def entries() -> dict:
     return _entries
 
 
-def _addresses() -> dict[str, int]:
-    global source
-    shipped = _shipped()
-    if shipped is not None:
-        try:
-            addresses = _from_bitcode(*shipped)
-            source = "shipped"
-            return addresses
-        except (_Unusable, RuntimeError):   # (RuntimeError: LLVM could not read or compile it)
-            pass
-    source = "numba"
-    return {name: numba_entry(name).address for name in kernel.ENTRIES}
-
-
-def numba_entry(name: str):
-    """The entry point ``name`` compiled by numba (a ``cfunc``; cached on disk)."""
-    from numba import cfunc
-
-    compiled = cfunc(kernel.ENTRY_SIGNATURE, cache=True, error_model="numpy")(kernel.ENTRIES[name][0])
-    _keep.append(compiled)
-    return compiled
-
-
 class _Unusable(Exception):
     """The shipped code cannot be used on this machine (numba compiles the kernel instead)."""
 
 
-def _shipped() -> tuple[bytes, dict, list] | None:
-    """The shipped bitcode, its entry points' symbols and the symbols it calls, where they fit
-    this machine and this kernel.py."""
-    if os.environ.get("ROLLBALL_MACHINE_CODE") == "numba":   # (tests of the other way)
-        return None
-    folder = resources.files("rollball")
+def _addresses() -> dict[str, int]:
+    global source, refused
+    try:
+        bitcode, facts = _shipped()
+        addresses = _machine_code(f"shipped {facts['bitcode']}", lambda: (bitcode, facts["entries"], facts["calls"]))
+        source, refused = "shipped", None
+        return addresses
+    except (_Unusable, RuntimeError) as error:   # (RuntimeError: LLVM could not read or compile it)
+        refused = str(error)
+    source = "numba"
+    return _machine_code("numba " + json.dumps(stamp(), sort_keys=True), compile_with_numba)
+
+
+def compile_with_numba() -> tuple[bytes, dict[str, str], list[str]]:
+    """The entry points compiled by numba in this process (no disk cache: every kernel function
+    is compiled here, so its LLVM code is at hand): their LLVM modules linked into one, as
+    bitcode; each entry's symbol; the symbols the code calls (``calls``)."""
+    import llvmlite.binding as llvm
+    from numba import cfunc
+
+    linked, symbols = None, {}
+    for name, entry in kernel.ENTRIES.items():
+        compiled = cfunc(kernel.ENTRY_SIGNATURE, cache=False, error_model="numpy")(entry)
+        _keep.append(compiled)
+        symbols[name] = compiled.native_name
+        module = llvm.parse_assembly(compiled.inspect_llvm())
+        if linked is None:
+            linked = module
+        else:
+            linked.link_in(module)
+    linked.verify()
+    return linked.as_bitcode(), symbols, calls(linked)
+
+
+def calls(module) -> list[str]:
+    """The symbols the module calls but does not hold (numba's helpers, the C library), which
+    the process that runs it must provide (LLVM's own intrinsics aside)."""
+    return sorted(f.name for f in module.functions if f.is_declaration and not f.name.startswith("llvm."))
+
+
+def symbol_prefix(name: str) -> str:
+    """How the symbol of the entry point ``name`` begins: numba's mangling of its function's
+    module and name (the lengths make each entry's prefix unlike every other's)."""
+    entry = kernel.ENTRIES[name]
+    parts = entry.__module__.split(".") + [entry.__qualname__]
+    return "cfunc._ZN" + "".join(f"{len(part)}{part}" for part in parts)
+
+
+def _shipped(folder=None) -> tuple[bytes, dict]:
+    """The shipped bitcode and its stamp (``kernel.json``, in ``folder``: the package's by
+    default) where they fit this machine, this kernel and its interface, and each other; else
+    ``_Unusable``, saying why."""
+    if os.environ.get("ROLLBALL_MACHINE_CODE") == "numba":   # (CI's run of the other way)
+        raise _Unusable("ROLLBALL_MACHINE_CODE=numba")
+    folder = resources.files("rollball") if folder is None else folder
     try:
         facts = json.loads(folder.joinpath(STAMP).read_text(encoding="utf-8"))
         bitcode = folder.joinpath(SHIPPED).read_bytes()
-    except (OSError, ValueError):
-        return None
-    entries, calls = facts.pop("entries", None), facts.pop("calls", None)
-    if (facts != stamp() or not isinstance(entries, dict) or set(entries) != set(kernel.ENTRIES)
-            or not isinstance(calls, list)):
-        return None
-    return bitcode, entries, calls
+    except (OSError, ValueError) as error:
+        raise _Unusable(f"no shipped code: {error}") from None
+    if not isinstance(facts, dict):
+        raise _Unusable(f"{STAMP} is not a stamp")
+    expected = stamp(facts)
+    different = [key for key in expected if facts.get(key) != expected[key]]
+    if different:
+        raise _Unusable(f"made for another {', '.join(different)}")
+    if facts.get("bitcode") != hashlib.sha256(bitcode).hexdigest():
+        raise _Unusable(f"{SHIPPED} is not the code {STAMP} describes (its SHA-256 differs)")
+    symbols, needed = facts.get("entries"), facts.get("calls")
+    if not (isinstance(symbols, dict) and set(symbols) == set(kernel.ENTRIES)
+            and all(isinstance(symbols[name], str) and symbols[name].startswith(symbol_prefix(name))
+                    and symbols[name][len(symbol_prefix(name)):][:1] in ("B", "E") for name in symbols)):
+        raise _Unusable(f"the entry points in {STAMP} are not this kernel's")
+    if not (isinstance(needed, list) and all(isinstance(symbol, str) for symbol in needed)):
+        raise _Unusable(f"{STAMP} does not list the symbols the code calls")
+    return bitcode, facts
 
 
 def _target_machine():
@@ -180,9 +283,11 @@ def _target_machine():
         reloc="static" if target.name.startswith("x86") else "default", codemodel="jitdefault", jit=True)
 
 
-def _from_bitcode(bitcode: bytes, entries: dict[str, str], calls: list[str]) -> dict[str, int]:
-    """The entry points' addresses in machine code made from the bitcode (or kept from an
-    earlier process), under numba's compiler lock: LLVM's state is shared with numba's."""
+def _machine_code(what: str, make) -> dict[str, int]:
+    """The entry points' addresses in machine code made from ``what`` for this processor: kept
+    by an earlier process, else made now from the bitcode ``make()`` returns (with its entries'
+    symbols and the symbols it calls) and kept. Under numba's compiler lock: LLVM's state is
+    shared with numba's."""
     import llvmlite.binding as llvm
     from numba.core.compiler_lock import global_compiler_lock
     from numba.core.registry import cpu_target
@@ -190,28 +295,50 @@ def _from_bitcode(bitcode: bytes, entries: dict[str, str], calls: list[str]) -> 
 
     with global_compiler_lock:
         rtsys.initialize(cpu_target.target_context)   # LLVM initialised, numba's symbols known
-        missing = [name for name in calls if not llvm.address_of_symbol(name)]
-        if missing:   # (MCJIT would end the process on a call it cannot link)
-            raise _Unusable(f"symbols not found here: {', '.join(missing)}")
         machine = _target_machine()
-        key = hashlib.sha256(b"\0".join([bitcode, str(machine.triple).encode(), llvm.get_host_cpu_name().encode(),
-                                         llvm.get_host_cpu_features().flatten().encode(),
-                                         ".".join(map(str, llvm.llvm_version_info)).encode()])).hexdigest()[:32]
+        key = hashlib.sha256("\0".join([what, str(machine.triple), llvm.get_host_cpu_name(),
+                                        llvm.get_host_cpu_features().flatten(),
+                                        ".".join(map(str, llvm.llvm_version_info))]).encode()).hexdigest()[:32]
         path = _object_path(key)
-        code = _read(path)
-        if code is None:
+        kept = _unpack(_read(path))
+        if kept is None:
             for listener in list(listeners):
                 listener()
+            bitcode, symbols, needed = make()
             code = machine.emit_object(llvm.parse_bitcode(bitcode))
-            _write(path, code)
+            _write(path, _pack(symbols, needed, code))
+        else:
+            symbols, needed, code = kept
+        missing = [name for name in needed if not llvm.address_of_symbol(name)]
+        if missing:   # (MCJIT would end the process on a call it cannot link)
+            raise _Unusable(f"symbols not found here: {', '.join(missing)}")
         engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
         engine.add_object_file(llvm.ObjectFileRef.from_data(code))
         engine.finalize_object()
         _keep.append(engine)
-        addresses = {name: engine.get_function_address(symbol) for name, symbol in entries.items()}
-    if not all(addresses.values()):
-        raise _Unusable("an entry point is missing from the shipped code")
+        addresses = {name: engine.get_function_address(symbol) for name, symbol in symbols.items()}
+    if set(addresses) != set(kernel.ENTRIES) or not all(addresses.values()):
+        raise _Unusable("an entry point is missing from the machine code")
     return addresses
+
+
+def _pack(symbols: dict[str, str], needed: list[str], code: bytes) -> bytes:
+    """Machine code as kept on disk: a line of JSON (the entries' symbols, the symbols it calls), then the code."""
+    return json.dumps({"entries": symbols, "calls": needed}).encode() + b"\n" + code
+
+
+def _unpack(data: bytes | None) -> tuple[dict, list, bytes] | None:
+    if data is None:
+        return None
+    head, _, code = data.partition(b"\n")
+    try:
+        facts = json.loads(head)
+        symbols, needed = facts["entries"], facts["calls"]
+    except (ValueError, KeyError, TypeError):
+        return None
+    if not (code and isinstance(symbols, dict) and isinstance(needed, list)):
+        return None
+    return symbols, needed, code
 
 
 def _object_path(key: str):

@@ -28,13 +28,7 @@ FIRST_ROWS = 4096      # adaptive runs recording every step start with this many
 AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
 ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in time
 
-_STATUS = {kernel.OK: Status.OK, kernel.DOES_NOT_FIT: Status.DOES_NOT_FIT,
-           kernel.NONFINITE: Status.NONFINITE}
-_REASON = {kernel.R_NO_FIT: Reason.NO_FIT, kernel.R_SECANT_NO_FIT: Reason.SECANT_NO_FIT, kernel.R_KINK: Reason.KINK,
-           kernel.R_HEIGHT_JUMP: Reason.HEIGHT_JUMP,
-           kernel.R_START_UNDEFINED: Reason.START_UNDEFINED, kernel.R_START_OVERFLOW: Reason.START_OVERFLOW,
-           kernel.R_UNDEFINED: Reason.UNDEFINED, kernel.R_ORIENTATION: Reason.ORIENTATION_OVERFLOW,
-           kernel.R_STEP_UNDERFLOW: Reason.STEP_UNDERFLOW, kernel.R_NOT_CONVERGED: Reason.NOT_CONVERGED}
+_STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES) if code != kernel.RUNNING}
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -179,33 +173,27 @@ class Simulation:
         self.landscape = landscape_for(scene.landscape)
         self._fn = self.landscape.compiled.address
         self._W, self._E, self._P = self.tableau.kernel_arrays()
-        self._error_kind = max(len(self._E) - 1, 0)  # kernel.error_norm: 1 or 2 estimates
+        self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
         self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity,
                                     kernel.TURN_SHARE * self.rtol if self.adaptive else 0.0)
-        n = kernel.state_size(mk)
-        self._z = np.zeros(n)
-        self._R = np.eye(3)
+        arrays = kernel.run_arrays(kernel.state_size(mk), len(self._W), n_rows)
+        self._z, self._R, self._K, self._rows = arrays["z"], arrays["R"], arrays["K"], arrays["rows"]
+        self._ints, self._info = arrays["ints"], arrays["info"]
         alpha, v = initial_state(self.landscape, scene)
         self._z[:2], self._z[2:5] = alpha, v
         if not mk:
             self._z[5:] = self._R.ravel()
-        self._K = np.zeros((kernel.stage_rows(len(self._W)), n))
-        self._probe = np.zeros(kernel.PROBE_SIZE)
-        self._rows = np.empty((n_rows, kernel.ROW_SIZE))
-        self._ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)
-        self._info = np.full(kernel.INFO_SIZE, np.nan)
         self._info[kernel.F_H] = self.dt
-        self._work = np.empty(kernel.work_size(n))
         if self.adaptive:
             self._kernel = machine_code.Arguments(
-                "advance_adaptive", self._fn, self._W, self._E, self._P, self._p, self._error_kind,
-                self.tableau.error_exponent, self.t_end, self.record_dt or 0.0, self.rtol, self.atol, 1,
-                self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info, self._work)
+                "advance_adaptive", fn=self._fn, W=self._W, E=self._E, P=self._P, p=self._p, err_kind=self._error_kind,
+                err_exp=self.tableau.error_exponent, t_end=self.t_end, record_dt=self.record_dt or 0.0,
+                rtol=self.rtol, atol=self.atol, max_steps=1, **arrays)
         else:
             self._kernel = machine_code.Arguments(
-                "advance", self._fn, self._W, self._P, self._p, self.dt, self.t_end, self.n_steps,
-                self.record_every, 1, self._z, self._R, self._K, self._probe, self._rows, self._ints, self._info,
-                self._work, kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
+                "advance", fn=self._fn, W=self._W, P=self._P, p=self._p, dt=self.dt, t_end=self.t_end,
+                n_steps=self.n_steps, every=self.record_every, max_steps=1, **arrays,
+                stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
         self.status: Status | None = None
 
     @property
@@ -229,11 +217,11 @@ class Simulation:
     @property
     def failure(self) -> Failure | None:
         """Why and where the physics stopped the run (None while it has not)."""
-        reason = _REASON.get(int(self._ints[kernel.I_REASON]))
+        reason = kernel.reason_name(int(self._ints[kernel.I_REASON]))
         if reason is None:
             return None
         info = self._info
-        return Failure(reason, float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
+        return Failure(Reason(reason), float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
                        float(info[kernel.F_FAIL_Y]), float(info[kernel.F_FAIL_VALUE]))
 
     @property
@@ -371,39 +359,8 @@ class Simulation:
 
 
 def describe(failure: Failure, radius: float) -> str:
-    """The sentence for a failure, made from its fields."""
-    reason, value = failure.reason, failure.value
-    where = f"t = {failure.time:.6g} s, (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
-    if reason is Reason.NO_FIT:
-        return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: r·κ = {value:.4g} ≥ 1 "
-                f"for a principal curvature κ, so the model cannot go on")
-    if reason is Reason.KINK:
-        return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: a kink or cusp of a valley, "
-                f"where the normal turns by {value:.3g} rad at once, so the model cannot go on")
-    if reason is Reason.SECANT_NO_FIT:
-        return (f"the ball (r = {radius:g} m) does not fit the surface at {where}: the step across it "
-                f"bends like r·κ = {value:.4g} ≥ 1, so the model cannot go on")
-    if reason is Reason.HEIGHT_JUMP:
-        return (f"the landscape jumps in height by {value:.4g} m at {where} (it is not continuous there), "
-                f"so the rolling ball cannot go on")
-    if reason is Reason.START_UNDEFINED:
-        return f"the landscape cannot be evaluated at the start point (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
-    if reason is Reason.START_OVERFLOW:
-        return ("the initial state overflows double precision (energy, angular momentum or angular velocity "
-                "not finite): the start speed or spin, or the ball's radius or mass, is too large")
-    if reason is Reason.ORIENTATION_OVERFLOW:
-        if value == 1.0:
-            return (f"the orientation R overflowed at {where}: the classic matrix update has "
-                    f"left SO(3) far behind (Munthe-Kaas keeps R a rotation)")
-        return (f"the rotation of one step overflowed at {where}: the ball spins too fast for the step")
-    if reason is Reason.NOT_CONVERGED:
-        return (f"the implicit stage equations did not converge at {where}: the step dt = {value:.3g} s "
-                f"is too large for this motion; use a smaller dt")
-    if reason is Reason.STEP_UNDERFLOW:
-        return (f"the adaptive step size fell to {value:.3g} s, below round-off, at {where}: the equations "
-                f"are (nearly) singular there")
-    return (f"the state became non-finite at {where}: the landscape cannot be evaluated "
-            f"there (outside its domain or at a pole) or the step is too large")
+    """The sentence for a failure, made from its fields (``kernel.interface.REASONS``)."""
+    return kernel.sentence(str(failure.reason), failure.value, failure.time, failure.x, failure.y, radius)
 
 
 def simulate(scene: Scene | str | os.PathLike, *, method: str | None = None, munthe_kaas: bool | None = None,

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .files import atomic_write
+from .kernel.interface import REASONS, ROW_ENERGY, ROW_FORCE, ROW_SLICES, ROW_T, STATUSES
 
 COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
@@ -23,53 +24,30 @@ UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
          "energy": "J", "normal_force": "N", "energy_error": "1"}
 HEADER = ",".join(CSV_COLUMNS)
 
-# The one definition of where a row keeps what (use these, never raw column numbers)
-T = 0                        # time
-CONTACT = slice(1, 3)        # contact point (x, y)
-CENTER = slice(3, 6)         # ball centre
-VELOCITY = slice(6, 9)       # centre velocity
-OMEGA = slice(9, 12)         # angular velocity (world frame)
-R = slice(12, 21)            # orientation, row-major 3x3
-ENERGY = 21
-NORMAL_FORCE = 22
+# Where a row keeps what (the kernel's interface declares it once; use these, never raw column numbers)
+T = ROW_T                          # time
+CONTACT = ROW_SLICES["contact"]    # contact point (x, y)
+CENTER = ROW_SLICES["center"]      # ball centre
+VELOCITY = ROW_SLICES["velocity"]  # centre velocity
+OMEGA = ROW_SLICES["omega"]        # angular velocity (world frame)
+R = ROW_SLICES["R"]                # orientation, row-major 3x3
+ENERGY = ROW_ENERGY
+NORMAL_FORCE = ROW_FORCE
 
 ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
 ORTHOGONALITY_WARNING = 1e-3   # likewise ||R^T R - I|| at the end of a run
 
 
-class Status(str, enum.Enum):
-    """How a run ended."""
-
-    OK = "ok"                      # reached its end time
-    DOES_NOT_FIT = "does_not_fit"  # the ball no longer fits a valley: the model breaks down
-    NONFINITE = "nonfinite"        # the landscape or the state could not be evaluated
-    ABORTED = "aborted"            # the caller cancelled
-    ROW_LIMIT = "row_limit"        # recording every step filled the row limit before the end
-
+class _Named(str, enum.Enum):
     def __str__(self) -> str:
         return self.value
 
 
-class Reason(str, enum.Enum):
-    """Why the physics stopped a run (``Failure.reason``); ``Failure.value`` says how far."""
-
-    NO_FIT = "no_fit"                    # r·κ ≥ 1 for a principal curvature κ (value: r·κ)
-    KINK = "kink"                        # a kink or cusp of a valley (value: the angle its
-                                         # normal turns there, rad)
-    SECANT_NO_FIT = "secant_no_fit"      # a step bends tighter than the ball (value: r times
-                                         # the secant curvature)
-    HEIGHT_JUMP = "height_jump"          # the landscape's height jumps (value: the jump, m)
-    START_UNDEFINED = "start_undefined"  # the landscape cannot be evaluated at the start point
-    START_OVERFLOW = "start_overflow"    # the landscape can, but the initial state overflows
-    UNDEFINED = "undefined"              # the state became non-finite: the landscape cannot be
-                                         # evaluated there, or the step is too large
-    ORIENTATION_OVERFLOW = "orientation_overflow"  # only R overflowed (value: 1 classic, 0 Munthe-Kaas)
-    STEP_UNDERFLOW = "step_underflow"    # the adaptive step fell below round-off (value: the step)
-    NOT_CONVERGED = "not_converged"      # an implicit step's stage equations did not converge:
-                                         # the step is too large for the motion (value: the step)
-
-    def __str__(self) -> str:
-        return self.value
+# How a run ended (the kernel's status codes, and aborted and row_limit set by Python), and why
+# the physics stopped a run (``Failure.reason``; ``Failure.value`` says how far): members named
+# from the kernel interface's tables (STATUSES, REASONS), which say what each means.
+Status = _Named("Status", [(name.upper(), name) for name in STATUSES if name != "running"], module=__name__)
+Reason = _Named("Reason", [(name.upper(), name) for name in REASONS], module=__name__)
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,8 @@
 
 The stepping kernel is made into machine code the first time a run needs it: from the code
 RollBall ships, in about two seconds; where that does not fit the machine, numba compiles
-it, which takes a minute or more (machine_code.py). Either is kept on disk, so later
-processes load it in well under a second. ``warm_up`` runs every method once on a tiny run,
+it, which takes a minute or more (machine_code.py). Either machine code is kept in the cache
+folder, so later processes load it in well under a second. ``warm_up`` runs every method once on a tiny run,
 and a tiny sweep, so that this happens now; ``python -m rollball.warmup`` does it with
 progress on stderr (the setup script calls it). ``compile_notice`` tells a caller when the
 kernel starts being compiled.
@@ -35,7 +35,7 @@ def variants() -> list[tuple[str, bool]]:
 
 
 def warm_up(progress=None, first=(), ready=None) -> None:
-    """Compile (or load from numba's disk cache) the kernel for every method, the variants in
+    """Compile (or load from the cache folder) the kernel for every method, the variants in
     ``first`` (``(method, munthe_kaas)`` pairs) before the others. ``progress(done, total,
     text)`` is called before each part, ``ready(method, munthe_kaas)`` after it."""
     scene = Scene.load(DEFAULT_EXAMPLE)
@@ -76,7 +76,7 @@ class _FirstCompile(event.Listener):
 def compile_notice(say):
     """Within the block, call ``say()`` once when RollBall's kernel starts being compiled: its
     shipped code made into machine code for this processor, or numba compiling part of it
-    (nothing is said when it comes from the disk cache)."""
+    (nothing is said when it comes from the cache folder)."""
     first = _FirstCompile(say)
     machine_code.listeners.append(first)
     try:

@@ -2,7 +2,7 @@
 
 ``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
 scenes, computes the initial states for the whole batch at once and runs them all in one
-call of the compiled batch loop (``kernel.advance_batch``, which releases the GIL). The same
+call of the compiled batch loop (``kernel.loops.advance_batch``, which releases the GIL). The same
 batch gives the same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
 first batch, and keeps it for the rest.
 """
@@ -128,11 +128,9 @@ def run(task: Task) -> Result:
                 pass
     outcomes = np.full((runs, len(OUTCOMES)), np.nan)
     W, _, D = method.kernel_arrays()
-    n = kernel.MOTION_SIZE
-    machine_code.call("advance_batch", fn, W, D, z0, p, np.ascontiguousarray(dt), np.ascontiguousarray(t_end),
-                      n_steps, status, outcomes, np.zeros(n), np.eye(3), np.zeros((kernel.stage_rows(len(W)), n)),
-                      np.zeros(kernel.PROBE_SIZE), np.empty((kernel.BATCH_ROWS, kernel.ROW_SIZE)),
-                      np.zeros(kernel.INTS_SIZE, dtype=np.int64), np.empty(kernel.INFO_SIZE),
-                      np.empty(kernel.work_size(n)), np.empty(5))
+    machine_code.call("advance_batch", fn=fn, W=W, P=D, Z0=z0, PARAMS=p, DT=np.ascontiguousarray(dt),
+                      T_END=np.ascontiguousarray(t_end), N_STEPS=n_steps, status=status, out=outcomes,
+                      acc=np.empty(kernel.BATCH_ACCUMULATORS),
+                      **kernel.run_arrays(kernel.MOTION_SIZE, len(W), kernel.BATCH_ROWS))
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)

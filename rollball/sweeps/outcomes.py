@@ -1,6 +1,6 @@
 """What a sweep reports per run: its status and a row of outcomes.
 
-The runs themselves are the kernel's (``kernel.advance_batch``: each run stepped by
+The runs themselves are the kernel's (``kernel.loops.advance_batch``: each run stepped by
 ``simulate``'s own fixed-step loop, in batches without the GIL); here are the
 names of the outcomes and the statuses a sweep adds to the kernel's.
 """

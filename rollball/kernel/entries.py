@@ -1,0 +1,16 @@
+"""The kernel's entry points: what Python calls (by address, through ``machine_code``), one per
+function in ``interface.ENTRIES``, each generated from that declaration (``unpacking``).
+They are plain functions here: machine_code.py compiles them, so importing the kernel
+compiles nothing."""
+
+from __future__ import annotations
+
+from .loops import advance, advance_adaptive, advance_batch
+from .physics import evaluate_points
+from .unpacking import ENTRY_SIGNATURE, make_entry
+
+FUNCTIONS = {"advance": advance, "advance_adaptive": advance_adaptive, "advance_batch": advance_batch,
+             "evaluate_points": evaluate_points}
+ENTRIES = {name: make_entry(name, function) for name, function in FUNCTIONS.items()}
+
+__all__ = ["ENTRIES", "ENTRY_SIGNATURE", "FUNCTIONS"]

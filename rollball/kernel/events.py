@@ -1,0 +1,462 @@
+"""What happens inside a step, found on its dense output: lift-off (F.N = 0), the ball no
+longer fitting (r·κ = 1), kinks and jumps of the surface, and the edge of the no-fit region
+approached in sub-steps (``fold_search``); the last valid state of a stopped run."""
+
+from __future__ import annotations
+
+import math
+
+from .dense import interpolate, state_at, turn
+from .explicit import dense_stages
+from .interface import (
+    DOES_NOT_FIT, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_HELD,
+    I_REASON, I_ROWS, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_SIZE, P_TURN, R_HEIGHT_JUMP,
+    R_KINK, R_NO_FIT, R_SECANT_NO_FIT, SURFACE_SIZE)
+from .lowlevel import COLD, JIT, data_pointer, landscape
+from .physics import curvatures, shape_of
+from .recording import _fail, record, record_last
+from .steps import accept, search_step
+
+
+# -- dense output and events -----------------------------------------------------------------
+#
+# After a step from z at t to t + h, z(t + theta h) = z + h sum_i K_i sum_k P[i, k] theta^(k+1)
+# (P: ``Tableau.dense_output``), and R(t + theta h) = exp(A(u(theta))) R for Munthe-Kaas.
+# Rows at fixed times and the events of a step are read from it. Methods whose dense output
+# needs more stages than the step (DOP853: three) give them as rows of W (and K, P) after
+# ``last``; ``dense_stages`` computes them once per step, only when the step is interpolated.
+
+ROOT_ITERATIONS = 100  # at most this many evaluations to locate one event
+ROOT_TOL = 1e-13       # events are located to this fraction of a step
+BREAK_HALVINGS = 48    # bisections that tell a jump or kink of the surface from a smooth bend
+KINK_SLACK = 1e-3      # a step whose secant curvature r*|kappa| exceeds twice its ends' plus
+                       # this is looked at closer (kinks have no curvature the model can see)
+JUMP_SLACK = 0.1       # likewise a height change off the slopes' by this fraction of the step
+BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by more (relative
+                       # to 1 + |f|), across 2^-48 of a step is a kink or a jump...
+BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
+                       # 1e50 m samples a smooth landscape too coarsely to tell
+# The edge of the no-fit region is a fold of the centre surface: there the contact point's
+# speed grows without bound (as 1 / (1 - r*kappa)) and reaches the edge in finite time, so the
+# stages of a step across it are garbage and its ends may both fit. A step whose contact point
+# raced (moved more than twice what its ends' speeds explain), whose stages raced (a stage's
+# contact velocity off the ends' by more than STAGE_RACE times their size) or that nears the
+# edge (the trend of 1 - r*kappa at its or the last step's ends reaches 0 within a step) is
+# taken again in sub-steps that approach the edge geometrically (``fold_search``).
+STAGE_RACE = 3.0
+FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
+FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is
+JUMP_TOL = 1e-6        # crossed, at once once a sub-step this short fits and does not race)
+FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
+LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's contact points
+# (kinds as floats: numba would compile a function once per integer constant passed to it)
+FORCE_EVENT, FIT_EVENT = 0.0, 1.0
+KINK, JUMP = 0.0, 1.0
+
+
+@COLD
+def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
+    """The landscape under the dense output's contact point at t + theta h, in s (SURFACE_SIZE)."""
+    interpolate(z, h, P, K, theta, Ye)
+    landscape(fn, Ye[0], Ye[1], data_pointer(d))
+    fx, fy = d[1], d[2]
+    iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
+    hi, lo = curvatures(fx, fy, d[3], d[4], d[5], iW)
+    s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7] = Ye[0], Ye[1], d[0], -fx * iW, -fy * iW, iW, r * hi, r * lo
+
+
+@COLD
+def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
+    """g(theta) of an event, negative before it: -F.N (lift-off) or r*kappa - 1 (no fit);
+    +inf where the state is not finite (past any event)."""
+    if kind == FORCE_EVENT:
+        ok = state_at(fn, d, p, z, R, h, P, K, 0.0, theta, Ye, Re, pe)
+        g = -pe[PROBE_FORCE]
+    else:
+        surface_at(fn, d, p[0], z, h, P, K, theta, Ye, s)
+        ok = True
+        g = s[6] - 1.0
+    return g if ok and math.isfinite(g) else math.inf
+
+
+@COLD
+def locate(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, ints):
+    """Shrink [a, b], g(a) < 0 <= g(b), around the event to ROOT_TOL (Illinois, every third
+    try a bisection, so that it never stalls); returns (a, b)."""
+    side = 0
+    for it in range(ROOT_ITERATIONS):
+        if b - a <= ROOT_TOL:
+            break
+        m = 0.5 * (a + b)
+        if it % 3 != 2:
+            secant = (a * gb - b * ga) / (gb - ga)
+            if a < secant < b:
+                m = secant
+        g = event_value(kind, fn, d, p, z, R, h, P, K, m, Ye, Re, pe, s)
+        if kind == FORCE_EVENT:
+            ints[I_EVALS] += 1
+        if g >= 0.0:
+            b, gb = m, g
+            if side == 1:
+                ga *= 0.5
+            side = 1
+        else:
+            a, ga = m, g
+            if side == -1:
+                gb *= 0.5
+            side = -1
+    return a, b
+
+
+@JIT
+def break_measure(kind, sa, sb):
+    """How much of a break of the surface lies between two surface points: the angle the
+    normal turns (KINK), or the height change beyond the slopes' trapezoid (JUMP)."""
+    if kind == KINK:
+        return math.sqrt((sb[3] - sa[3]) ** 2 + (sb[4] - sa[4]) ** 2 + (sb[5] - sa[5]) ** 2)
+    dx, dy = sb[0] - sa[0], sb[1] - sa[1]
+    slope = ((sa[3] / sa[5] + sb[3] / sb[5]) * dx + (sa[4] / sa[5] + sb[4] / sb[5]) * dy) * 0.5
+    return abs(sb[2] - sa[2] + slope)  # grad f = -(N1, N2) / N3
+
+
+@COLD
+def locate_break(kind, fn, d, r, z, h, P, K, Ye, sa, sb, sm, a, b):
+    """Halve [a, b] (fractions of the step) BREAK_HALVINGS times towards the half holding more
+    of the break; returns (a, b, the measure over [a, b]), sa and sb the surface at a and b.
+    A smooth surface's measure vanishes with the interval; a kink's or jump's does not."""
+    surface_at(fn, d, r, z, h, P, K, a, Ye, sa)
+    surface_at(fn, d, r, z, h, P, K, b, Ye, sb)
+    for _ in range(BREAK_HALVINGS):
+        m = 0.5 * (a + b)
+        surface_at(fn, d, r, z, h, P, K, m, Ye, sm)
+        if break_measure(kind, sa, sm) >= break_measure(kind, sm, sb):
+            b = m
+            for q in range(SURFACE_SIZE):
+                sb[q] = sm[q]
+        else:
+            a = m
+            for q in range(SURFACE_SIZE):
+                sa[q] = sm[q]
+    if (sb[0] - sa[0]) ** 2 + (sb[1] - sa[1]) ** 2 > BREAK_SPAN * BREAK_SPAN:
+        return a, b, 0.0
+    return a, b, break_measure(kind, sa, sb)
+
+
+@JIT
+def looks(r, z, probe, zn, pn):
+    """The cheap looks at a step from (z, probe) to (zn, pn), from what its ends know: whether
+    the ball does not fit at the end; whether the step bends sharper than the curvatures at
+    its ends explain (``sharp``: a kink, or a secant curvature with r*kappa >= 1); whether the
+    height changed off the slopes' trapezoid (``jumpy``). Returns them with the bend
+    -(N1 - N0).(phi1 - phi0) and the squared chord |phi1 - phi0|^2."""
+    f0 = probe[PROBE_HEIGHT]
+    dx, dy, df = zn[0] - z[0], zn[1] - z[1], pn[PROBE_HEIGHT] - f0
+    bend = -((pn[0] - probe[0]) * dx + (pn[1] - probe[1]) * dy + (pn[2] - probe[2]) * df)
+    chord2 = dx * dx + dy * dy + df * df
+    worst = max(probe[PROBE_FIT], pn[PROBE_FIT], -probe[PROBE_FIT_LO], -pn[PROBE_FIT_LO])
+    fit_end = pn[PROBE_FIT] >= 1.0
+    sharp = chord2 > 0.0 and (r * bend >= chord2 or r * abs(bend) > chord2 * (2.0 * worst + KINK_SLACK))
+    # the height change against the slopes' trapezoid, grad f = -(N1, N2) / N3; 1 / N3 bounds
+    # 1 and |grad f| (squares: no root per step)
+    w0, w1 = 1.0 / probe[2], 1.0 / pn[2]
+    off = df + 0.5 * ((probe[0] * w0 + pn[0] * w1) * dx + (probe[1] * w0 + pn[1] * w1) * dy)
+    jumpy = off * off > JUMP_SLACK * JUMP_SLACK * (dx * dx + dy * dy) * (w0 + w1) ** 2 + 1e-24 * (1.0 + f0 * f0)
+    return fit_end, sharp, jumpy, bend, chord2
+
+
+@JIT
+def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, segment, Ye,
+                Re, pe, sa, sb, sm, stepping):
+    """The validity checks and events of a finished step from t to t + h, located on its dense
+    output. Returns -1 while the run may go on; otherwise the run stops (status and reason
+    set) and the result is theta, the last valid point of the step (0 <= theta < 1).
+
+    Stops: r*kappa reaches 1 (at the step's end, or inside a step that raced or nears the
+    edge of the no-fit region, where ``fold_search`` takes it again in sub-steps; ``segment``:
+    fixed steps, whose contact point may race); a kink or cusp of a valley; a jump in height. A convex
+    kink (a ridge) is a lift-off there, and F.N turning negative is one: the first is kept.
+    A step bending more sharply than the curvatures at its ends explain is searched for a
+    kink; one whose secant curvature says r*kappa >= 1 stops the run even where smooth.
+    """
+    fit_end, sharp, jumpy, bend, chord2 = looks(p[0], z, probe, zn, pn)
+    raced = segment and contact_raced(h, z, zn, K, 0, last)
+    raced |= stages_raced(K, last)
+    # nearing: the edge is less than a step ahead of this step's end, or of the last step's
+    fold = fold_ahead(t, h, probe, pn)
+    raced |= fold < t + 2.0 * h or info[F_FOLD] < t + 2.0 * h  # (nan before the first step)
+    info[F_FOLD] = fold
+    force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
+    if not (fit_end or sharp or jumpy or raced or force_end):
+        return -1.0  # the usual step: nothing to look at closer
+    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2, stepping)
+
+
+@COLD
+def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, sa, sb, sm,
+                 fit_end, sharp, jumpy, raced, force_end, bend, chord2, stepping):
+    """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
+    n, mk = shape_of(z)
+    r = p[0]
+    dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+
+    stop, valid = 2.0, 0.0
+    # the ball no longer fits: where along the step r*kappa reached 1. The step is taken again
+    # in sub-steps (its own stages may have jumped the edge, its dense output bent around it)
+    if raced or fit_end:
+        edge = fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+                           stepping)
+        if edge >= 0.0:
+            stop, valid = edge, edge
+        else:  # no edge: the step stands, taken again (the search used its buffers)
+            retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+    if fit_end and stop > 1.0:  # the sub-steps all fit: locate the edge on the step's dense output
+        gb = event_value(FIT_EVENT, fn, d, p, z, R, h, P, K, 1.0, Ye, Re, pe, sa)
+        a, b = 0.0, 1.0
+        if gb >= 0.0:  # the dense output agrees: locate the edge on it
+            a, b = locate(FIT_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
+                          probe[PROBE_FIT] - 1.0, 1.0, gb, ints)
+        surface_at(fn, d, r, z, h, P, K, b, Ye, sa)
+        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + b * h, sa[0], sa[1], max(sa[6], 1.0))
+        stop, valid = b, a
+    # a bend sharper than the step's ends explain: a kink, or a bend tighter than the ball
+    if sharp and stop > 1.0:
+        a, b, turn = locate_break(KINK, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+        if turn > BREAK_MIN:
+            phi = (sb[0] - sa[0]) * (sb[3] - sa[3]) + (sb[1] - sa[1]) * (sb[4] - sa[4]) + (sb[2] - sa[2]) * (sb[5] - sa[5])
+            if phi < 0.0:  # the normal turns towards the motion: a valley, where the ball cannot fit
+                _fail(ints, info, DOES_NOT_FIT, R_KINK, t + b * h, sb[0], sb[1], turn)
+                stop, valid = b, a
+            elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
+                info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
+                approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
+                         sm, info[F_LIFTOFF:F_LIFT_Y + 1], stepping)
+                # the run goes on with the whole step, taken again (the approach used its buffers)
+                retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+        elif r * bend >= chord2:
+            _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
+            stop, valid = b, a
+    # a jump in height
+    if jumpy and stop > 1.0:
+        a, b, jump = locate_break(JUMP, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+        if jump > BREAK_MIN * (1.0 + abs(sa[2])):
+            _fail(ints, info, DOES_NOT_FIT, R_HEIGHT_JUMP, t + b * h, sb[0], sb[1], sb[2] - sa[2])
+            stop, valid = b, a
+    # lift-off: F.N turns negative (first time only, before any stop)
+    if force_end and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
+        a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
+                      -probe[PROBE_FORCE], 1.0, -pn[PROBE_FORCE], ints)
+        interpolate(z, h, P, K, b, Ye)
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, Ye[0], Ye[1], 0.0
+    return valid if stop <= 1.0 else -1.0
+
+
+@JIT
+def contact_raced(h, z, zn, K, first, last):
+    """The contact point moved from z to zn by more than twice what its speeds at the step's
+    ends (K[first], K[last]) explain."""
+    dx, dy = zn[0] - z[0], zn[1] - z[1]
+    speed = max(K[first, 0] ** 2 + K[first, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
+    return dx * dx + dy * dy > 4.0 * h * h * speed
+
+
+@JIT
+def fold_ahead(t, h, probe, pn):
+    """When the contact point, from t to t + h with probes probe and pn, reaches the edge of the
+    no-fit region if 1 - r*kappa goes on falling: the earlier of the straight extrapolations
+    of 1 - r*kappa and of its square (the square falls linearly near the edge); inf when it
+    does not fall."""
+    u0, u1 = 1.0 - probe[PROBE_FIT], 1.0 - pn[PROBE_FIT]
+    if not u1 < u0:
+        return math.inf
+    return t + h + h * min(u1 / (u0 - u1), u1 * u1 / (u0 * u0 - u1 * u1))
+
+
+@JIT
+def stages_raced(K, last):
+    """A stage's contact velocity is off the step's start's by more than STAGE_RACE times the
+    larger of the ends' (the stages felt a fold of the centre surface the ends do not show)."""
+    speed = max(K[0, 0] ** 2 + K[0, 1] ** 2, K[last, 0] ** 2 + K[last, 1] ** 2)
+    spread = 0.0
+    for i in range(1, last):
+        spread = max(spread, (K[i, 0] - K[0, 0]) ** 2 + (K[i, 1] - K[0, 1]) ** 2)
+    return spread > STAGE_RACE * STAGE_RACE * speed
+
+
+@COLD
+def line_fits(fn, d, r, z0, z1):
+    """The ball fits at LINE_SAMPLES points evenly inside the straight line between the contact
+    points of z0 and z1 (a sub-step may jump a thin no-fit region with both ends fitting)."""
+    for j in range(1, LINE_SAMPLES + 1):
+        theta = j / (LINE_SAMPLES + 1.0)
+        landscape(fn, z0[0] + theta * (z1[0] - z0[0]), z0[1] + theta * (z1[1] - z0[1]), data_pointer(d))
+        iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+        if not r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] < 1.0:
+            return False
+    return True
+
+
+@COLD
+def retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """Take the step from z again (after a search inside it used the step's buffers)."""
+    search_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if p[P_TURN] == 0.0:  # (carrying omega, the step has taken its dense-output stages again)
+        ints[I_DENSE] = -1
+
+
+@COLD
+def fold_time(fn, d, r, Zs, K, ps):
+    """How long until the contact point, at Zs with velocity K[0] and probe ps, reaches the edge
+    of the no-fit region, if 1 - r*kappa keeps falling as the square root it is near there:
+    (1 - r*kappa) / (2 d(r*kappa)/dt), the rate from a difference along the velocity; inf
+    when r*kappa is not growing."""
+    k1, k2 = K[0, 0], K[0, 1]
+    speed = math.sqrt(k1 * k1 + k2 * k2)
+    if not speed > 0.0:
+        return math.inf
+    delta = 1e-7 * (1.0 + max(abs(Zs[0]), abs(Zs[1])))
+    landscape(fn, Zs[0] + delta * k1 / speed, Zs[1] + delta * k2 / speed, data_pointer(d))
+    iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+    rate = (r * curvatures(d[1], d[2], d[3], d[4], d[5], iW)[0] - ps[PROBE_FIT]) / delta * speed
+    return (1.0 - ps[PROBE_FIT]) / (2.0 * rate) if rate > 0.0 else math.inf
+
+
+@COLD
+def fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Zs, Rs, ps, stepping):
+    """Take the step from t to t + h again in sub-steps that each stay within half the time
+    ``fold_time`` gives to the edge of the no-fit region (a fold of the centre surface, which
+    the contact point reaches at unbounded speed) and are accepted only where they are
+    finite, their contact point does not race and they keep at least half of 1 - r*kappa.
+    Towards the edge the sub-steps shrink geometrically; the edge is where they fall below
+    FOLD_TOL of the step.
+
+    Returns -1 when the sub-steps reach the step's end (no edge; zn, Rn, pn, K spoilt: take
+    the step again). Otherwise the run stops (DOES_NOT_FIT at the edge, ints[I_HELD] set)
+    and the result is the fraction of the step of the last valid sub-state, which zn, Rn,
+    pn hold. Zs, Rs, ps: scratch for the sub-state.
+    """
+    n, mk = shape_of(z)
+    r = p[0]
+    spare = K.shape[0] - 1
+    for q in range(n):
+        Zs[q] = z[q]
+        K[spare, q] = K[0, q]
+    for a in range(3):
+        for c in range(3):
+            Rs[a, c] = R[a, c]
+    for q in range(PROBE_SIZE):
+        ps[q] = probe[q]
+    ts, grow, edge = 0.0, 0.25, -1.0
+    for _ in range(FOLD_TRIES):
+        reach = fold_time(fn, d, r, Zs, K, ps) / h
+        if 0.5 * reach <= FOLD_TOL:  # at the edge
+            edge = min(ts + reach, 1.0)
+            break
+        hs = min(grow, 0.5 * reach, 1.0 - ts)
+        bad = search_step(stepping, fn, d, p, W, P, hs * h, Zs, Rs, K, last, Y, zn, Rn, pn, ints)
+        u0, u1 = 1.0 - ps[PROBE_FIT], 1.0 - pn[PROBE_FIT]
+        steady = bad == 0 and not (contact_raced(hs * h, Zs, zn, K, 0, last) or stages_raced(K, last))
+        across = bad == 0 and (u1 <= 0.0 or not line_fits(fn, d, r, Zs, zn))
+        if not (steady and u1 >= 0.5 * u0) or across:
+            near = u0 < FOLD_NEAR or across
+            if hs > (JUMP_TOL if steady and not near else FOLD_TOL):
+                grow = 0.1 * hs
+                continue
+            if near:
+                edge = min(ts + hs, 1.0)
+                break
+            if bad != 0:  # not finite however short, away from the edge: the step stands
+                break
+            # (else a jump of the curvature, where the ball still fits, is crossed)
+        # the sub-step is taken: its end is the new sub-state (u = 0 again for Munthe-Kaas)
+        ts += hs
+        grow = 2.0 * hs
+        accept(p, mk, n, Zs, Rs, K, last, ps, zn, Rn, pn)
+        if ts >= 1.0 - FOLD_TOL:
+            break
+    for q in range(n):
+        K[0, q] = K[spare, q]
+    ints[I_DENSE] = -1
+    if edge < 0.0:
+        return -1.0
+    for q in range(n):
+        zn[q] = Zs[q]
+    for a in range(3):
+        for c in range(3):
+            Rn[a, c] = Rs[a, c]
+    for q in range(PROBE_SIZE):
+        pn[q] = ps[q]
+    ints[I_HELD] = 1
+    _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + edge * h, Zs[0], Zs[1], max(ps[PROBE_FIT], 1.0))
+    return ts
+
+
+REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a stop
+
+
+@COLD
+def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb, sm,
+             event, stepping):
+    """Reach the last valid state before a break inside a step from t to t + h, first guessed
+    at theta (a fraction of the step) from the step's dense output.
+
+    The dense output of a step across a kink, a jump or the edge of the no-fit region (kind
+    KINK, JUMP or FIT_EVENT) is spoiled by the stages beyond it, so the state is computed by a
+    step of theta h from the step's start instead; while such a step still crosses (its ends'
+    looks say so), the break is located again on its own, less spoiled, dense output and the
+    step shortened to before it; a clean step's dense output, continued a little past its end,
+    times a kink or jump. event = (time, x, y) of the break is updated on the way. Returns the
+    theta of the clean step (zn, Rn, pn hold its end), or 0 when none was found.
+    """
+    n, mk = shape_of(z)
+    r = p[0]
+    for _ in range(REFINE_STEPS):
+        hs = theta * h
+        if not hs > 0.0:
+            break
+        bad = search_step(stepping, fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        if bad != 0:
+            break
+        fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
+        if not (fit_end or sharp or jumpy):
+            if kind != FIT_EVENT and theta < 1.0:
+                a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 1.0, min(1.0 / theta, 2.0))
+                if size > 0.0:
+                    event[0], event[1], event[2] = t + b * hs, sb[0], sb[1]
+            return theta
+        a, b, size = 0.0, 0.0, 0.0
+        if kind == FIT_EVENT:
+            if fit_end:
+                a, b = locate(FIT_EVENT, fn, d, p, z, R, hs, P, K, Ye, Rn, pn, sa, 0.0,
+                              probe[PROBE_FIT] - 1.0, 1.0, pn[PROBE_FIT] - 1.0, ints)
+                surface_at(fn, d, r, z, hs, P, K, b, Ye, sa)
+                event[0], event[1], event[2] = t + b * hs, sa[0], sa[1]
+        elif sharp or jumpy:
+            a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 0.0, 1.0)
+            if size > 0.0:
+                event[0], event[1], event[2] = t + b * hs, sb[0], sb[1]
+        theta *= a if a > 0.0 else 0.5
+    return 0.0
+
+
+@COLD
+def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
+                 Ye, sa, sb, sm, stepping):
+    """A run stopped inside a step: its last valid state, reached by ``approach`` (or else the
+    step's start), is the last row; the stop's time and place are refined on the way."""
+    if ints[I_HELD] == 1:  # the last valid state is known already (``fold_search``)
+        record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
+        ints[I_ROWS] += 1
+        return
+    reason = ints[I_REASON]
+    kind = JUMP if reason == R_HEIGHT_JUMP else FIT_EVENT if reason == R_NO_FIT else KINK
+    event = info[F_FAIL_T:F_FAIL_Y + 1]
+    theta = approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
+                     sm, event, stepping)
+    if theta > 0.0:
+        record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
+        ints[I_ROWS] += 1
+    else:
+        record_last(rows, ints, t, z, R, probe, p)

@@ -1,0 +1,248 @@
+"""The kernel's binary interface, declared once as data: what Python and the compiled kernel
+must agree on. From here come the entry points' argument slots (``machine_code.Arguments``
+packs them, ``entries`` unpacks them), the columns of a recorded row (``trajectory``), the
+run's counters, status codes and failure reasons with their sentences, and the arrays a run
+hands the kernel (``run_arrays``). Plain Python: nothing here is compiled. A change here
+changes the interface's digest (``digest``), which the shipped code's stamp records.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+
+VERSION = 2   # of the slot convention below (kernel.json records it with each entry's layout)
+
+# -- the entry points' arguments -------------------------------------------------------------------
+#
+# Python calls an entry point with one pointer to int64 "slots" (ENTRY_SLOTS of them) holding the
+# arguments of the kernel function it runs, in the declared order: a number in one slot (a float as
+# its bits), an array in three (its data's address, rows, columns: 1 for a vector); arrays
+# C-contiguous, "vector" and "matrix" of float64, "ints" an int64 vector. Calls name every
+# argument (``machine_code.Arguments``), and each entry's names are its function's parameters.
+ADDRESS, INT, FLOAT = "address", "int", "float"   # one slot each (address: the landscape's code)
+VECTOR, MATRIX, INTS = "vector", "matrix", "ints"  # three slots each
+NUMBER_KINDS = (ADDRESS, INT, FLOAT)
+ENTRY_SLOTS = 64
+
+# The arrays of a run every loop takes (``run_arrays`` makes them).
+RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("rows", MATRIX), ("ints", INTS),
+              ("info", VECTOR), ("work", VECTOR))
+
+ENTRIES = {
+    "advance": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("p", VECTOR), ("dt", FLOAT), ("t_end", FLOAT),
+                ("n_steps", INT), ("every", INT), ("max_steps", INT), *RUN_ARRAYS, ("stepping", FLOAT)),
+    "advance_adaptive": (("fn", ADDRESS), ("W", MATRIX), ("E", MATRIX), ("P", MATRIX), ("p", VECTOR),
+                         ("err_kind", INT), ("err_exp", FLOAT), ("t_end", FLOAT), ("record_dt", FLOAT),
+                         ("rtol", FLOAT), ("atol", FLOAT), ("max_steps", INT), *RUN_ARRAYS),
+    "advance_batch": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("Z0", MATRIX), ("PARAMS", MATRIX),
+                      ("DT", VECTOR), ("T_END", VECTOR), ("N_STEPS", INTS), ("status", INTS), ("out", MATRIX),
+                      *RUN_ARRAYS, ("acc", VECTOR)),
+    "evaluate_points": (("fn", ADDRESS), ("xs", VECTOR), ("ys", VECTOR), ("out", MATRIX), ("d", VECTOR)),
+}
+
+
+def layout(name: str) -> tuple[tuple[str, str, int], ...]:
+    """The arguments of the entry point ``name``: (parameter, kind, first slot) each."""
+    slot, out = 0, []
+    for parameter, kind in ENTRIES[name]:
+        out.append((parameter, kind, slot))
+        slot += 1 if kind in NUMBER_KINDS else 3
+    if slot > ENTRY_SLOTS:
+        raise ValueError(f"{name}: {slot} slots, more than ENTRY_SLOTS")
+    return tuple(out)
+
+
+# -- a run's state -------------------------------------------------------------------------------
+
+MOTION_SIZE, MK_SIZE, CLASSIC_SIZE = 5, 8, 14   # the state z: motion only, + u (3), + R (9)
+
+
+def state_size(munthe_kaas: bool) -> int:
+    return MK_SIZE if munthe_kaas else CLASSIC_SIZE
+
+
+P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this tolerance (rad)
+
+
+def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0) -> np.ndarray:
+    """The ball and gravity as the kernel reads them, with the constants it would otherwise
+    recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0; then ``turn``:
+    0 for the Munthe-Kaas increment u in the state, else the tolerance (rad) for the
+    orientation's sub-steps when omega is carried instead (``turn``: the adaptive pairs)."""
+    r, m, g0 = radius, mass, gravity
+    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0,
+                     turn + 0.0 * r])   # (+ 0 r: a column like the others where r is an array, sweeps)
+
+
+# How a method steps (``take_step``). Floats: numba compiles a function anew for every
+# constant bool or int passed to it.
+EXPLICIT, IMPLICIT = 0.0, 1.0
+
+# What one evaluation learns about a state besides its derivative ("probe").
+PROBE_N = 0        # unit normal N (3)
+PROBE_OMEGA = 3    # angular velocity omega (3)
+PROBE_FORCE = 6    # normal force F.N
+PROBE_FIT = 7      # r * largest principal curvature (the ball fits while < 1)
+PROBE_HEIGHT = 8   # f(x, y)
+PROBE_FIT_LO = 9   # r * smallest principal curvature (< 0 where the surface bends away)
+PROBE_SIZE = 10
+
+# Integer run counters (``ints``) and float run facts (``info``).
+# I_DENSE: the step whose extra dense-output stages K holds (they are computed on demand).
+# I_HELD: 1 once a stopped step's last valid state is already in zn, Rn, pn (``fold_search``).
+# I_RETRY: 1 while the adaptive step follows a rejection (kept between calls).
+(I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE, I_HELD,
+ I_RETRY) = range(11)
+# F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
+# F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
+# F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
+F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD = range(11)
+INTS_SIZE, INFO_SIZE = 11, 11
+
+# -- recorded rows: the CSV columns of DESIGN §5 -----------------------------------------------------
+
+ROW_FIELDS = (("t", 1), ("contact", 2), ("center", 3), ("velocity", 3), ("omega", 3), ("R", 9), ("energy", 1),
+              ("normal_force", 1))
+ROW_SLICES = {}   # field -> its slice of a row
+for _name, _width in ROW_FIELDS:
+    _start = sum(c.stop - c.start for c in ROW_SLICES.values())
+    ROW_SLICES[_name] = slice(_start, _start + _width)
+del _name, _width, _start
+ROW_SIZE = sum(width for _, width in ROW_FIELDS)
+(ROW_T, ROW_CONTACT, ROW_CENTER, ROW_VELOCITY, ROW_OMEGA, ROW_R, ROW_ENERGY,
+ ROW_FORCE) = (ROW_SLICES[name].start for name, _ in ROW_FIELDS)
+
+# -- how a run ended ------------------------------------------------------------------------------
+
+# Statuses (``trajectory.Status``): the kernel's codes are their positions in KERNEL_STATUSES
+# (ints[I_STATUS]); the others are set by Python.
+STATUSES = {
+    "running": "still running (the kernel's code while a run goes on)",
+    "ok": "reached its end time",
+    "does_not_fit": "the ball no longer fits a valley: the model breaks down",
+    "nonfinite": "the landscape or the state could not be evaluated",
+    "aborted": "the caller cancelled",
+    "row_limit": "recording every step filled the row limit before the end",
+}
+KERNEL_STATUSES = ("running", "ok", "does_not_fit", "nonfinite")
+RUNNING, OK, DOES_NOT_FIT, NONFINITE = range(len(KERNEL_STATUSES))
+
+# Why the physics stopped a run (``trajectory.Reason``, ``Failure``): its code in ints[I_REASON]
+# is its position here plus 1 (0: none), with the status it gives, what info[F_FAIL_VALUE]
+# holds and the sentence made from the failure's fields ({where}: its time and contact point;
+# two sentences where the value tells two cases apart: value 1, and any other).
+_DOES_NOT_FIT = "the ball (r = {radius:g} m) does not fit the surface at {where}: "
+REASONS = {
+    "no_fit": ("does_not_fit", "r·κ for a principal curvature κ at the end of a step",
+               _DOES_NOT_FIT + "r·κ = {value:.4g} ≥ 1 for a principal curvature κ, so the model cannot go on"),
+    "secant_no_fit": ("does_not_fit", "r times the secant curvature of a step",
+                      _DOES_NOT_FIT + "the step across it bends like r·κ = {value:.4g} ≥ 1, so the model cannot "
+                                      "go on"),
+    "start_undefined": ("nonfinite", "nothing",
+                        "the landscape cannot be evaluated at the start point (x, y) = ({x:.6g}, {y:.6g})"),
+    "start_overflow": ("nonfinite", "nothing",
+                       "the initial state overflows double precision (energy, angular momentum or angular velocity "
+                       "not finite): the start speed or spin, or the ball's radius or mass, is too large"),
+    "undefined": ("nonfinite", "nothing",
+                  "the state became non-finite at {where}: the landscape cannot be evaluated there (outside its "
+                  "domain or at a pole) or the step is too large"),
+    "orientation_overflow": ("nonfinite", "1 for the classic update, 0 for Munthe-Kaas",
+                             ("the orientation R overflowed at {where}: the classic matrix update has left SO(3) "
+                              "far behind (Munthe-Kaas keeps R a rotation)",
+                              "the rotation of one step overflowed at {where}: the ball spins too fast for the step")),
+    "step_underflow": ("nonfinite", "the step (s)",
+                       "the adaptive step size fell to {value:.3g} s, below round-off, at {where}: the equations "
+                       "are (nearly) singular there"),
+    "kink": ("does_not_fit", "the angle the normal turns there (rad)",
+             _DOES_NOT_FIT + "a kink or cusp of a valley, where the normal turns by {value:.3g} rad at once, so the "
+                             "model cannot go on"),
+    "height_jump": ("does_not_fit", "the jump (m)",
+                    "the landscape jumps in height by {value:.4g} m at {where} (it is not continuous there), so the "
+                    "rolling ball cannot go on"),
+    "not_converged": ("nonfinite", "the step (s)",
+                      "the implicit stage equations did not converge at {where}: the step dt = {value:.3g} s is too "
+                      "large for this motion; use a smaller dt"),
+}
+R_NONE = 0
+(R_NO_FIT, R_SECANT_NO_FIT, R_START_UNDEFINED, R_START_OVERFLOW, R_UNDEFINED, R_ORIENTATION, R_STEP_UNDERFLOW,
+ R_KINK, R_HEIGHT_JUMP, R_NOT_CONVERGED) = range(1, len(REASONS) + 1)
+
+
+def reason_name(code: int) -> str | None:
+    """The reason with this code (ints[I_REASON]), or None."""
+    return list(REASONS)[code - 1] if 1 <= code <= len(REASONS) else None
+
+
+def sentence(reason: str, value: float, time: float, x: float, y: float, radius: float) -> str:
+    """The sentence for a failure, made from its fields."""
+    template = REASONS[reason][2]
+    if isinstance(template, tuple):
+        template = template[0] if value == 1.0 else template[1]
+    where = f"t = {time:.6g} s, (x, y) = ({x:.6g}, {y:.6g})"
+    return template.format(where=where, value=value, x=x, y=y, radius=radius)
+
+
+# -- the arrays of a run ----------------------------------------------------------------------------
+
+SURFACE_SIZE = 8   # x, y, f, N (3), r * largest and smallest principal curvature
+# The scratch array's parts, in order (``loops.scratch`` views them): landscape values d, stage
+# state Y, trial state zn, probe pn and orientation Rn, and for the dense output a state Ye,
+# orientation Re, probe pe and three surface points. "n": the state's size; (3, 3) a matrix.
+SCRATCH = (("d", 6), ("Y", "n"), ("zn", "n"), ("pn", PROBE_SIZE), ("Rn", (3, 3)), ("Ye", "n"), ("Re", (3, 3)),
+           ("pe", PROBE_SIZE), ("sa", SURFACE_SIZE), ("sb", SURFACE_SIZE), ("sm", SURFACE_SIZE))
+
+
+def work_size(n: int) -> int:
+    """Length of the scratch array the stepping loops need for a state of size n."""
+    return sum(n if size == "n" else 9 if size == (3, 3) else size for _, size in SCRATCH)
+
+
+def stage_rows(stages: int) -> int:
+    """The rows of K for a method whose W has ``stages`` rows: those, omega's polynomial
+    (three rows, ``omega_polynomial``) and a spare last row for evaluations on the dense output."""
+    return stages + 4
+
+
+def run_arrays(n: int, stages: int, rows: int) -> dict[str, np.ndarray]:
+    """The arrays of one run (RUN_ARRAYS) for a state of size n, a method whose W has ``stages``
+    rows, and ``rows`` rows to record: z zero, R the identity, info not-a-number."""
+    info = np.full(INFO_SIZE, np.nan)
+    return {"z": np.zeros(n), "R": np.eye(3), "K": np.zeros((stage_rows(stages), n)), "probe": np.zeros(PROBE_SIZE),
+            "rows": np.empty((rows, ROW_SIZE)), "ints": np.zeros(INTS_SIZE, dtype=np.int64), "info": info,
+            "work": np.empty(work_size(n))}
+
+
+# -- sweeps: batches of fixed-step runs ----------------------------------------------------------
+#
+# A run of a sweep needs only the motion (contact point and angular momentum): its state has
+# MOTION_SIZE entries. Each run is stepped by ``advance`` itself, so a sweep's runs end exactly
+# where ``simulate`` ends the same scene, every step recorded into a buffer of BATCH_CHUNK rows
+# that is folded into the run's outcomes and reused: memory does not grow with the steps.
+
+NOT_RUN = 11                  # a run of a batch not run yet (sweeps also mark refused runs, 10)
+BATCH_CHUNK = 256             # steps folded into a run's outcomes at a time
+BATCH_ROWS = BATCH_CHUNK + 2  # the buffer: the last row folded, a chunk, a stop's row
+BATCH_ACCUMULATORS = 5        # acc: E0, max |E - E0|, min F.N, max speed, path length
+# One row of outcomes per run, in this order.
+OUTCOMES = ("t_reached", "liftoff_time", "x_end", "y_end", "energy_drift", "min_normal_force",
+            "max_speed", "path_length")
+O_T, O_LIFTOFF, O_X, O_Y, O_DRIFT, O_MIN_FORCE, O_MAX_SPEED, O_PATH = range(len(OUTCOMES))
+
+
+def description() -> dict:
+    """The interface as kernel.json records it: the version and each entry's arguments."""
+    return {"version": VERSION, "slots": ENTRY_SLOTS,
+            "entries": {name: [f"{parameter} {kind}" for parameter, kind in arguments]
+                        for name, arguments in ENTRIES.items()}}
+
+
+def digest() -> str:
+    """SHA-256 of ``description()``."""
+    return hashlib.sha256(json.dumps(description(), sort_keys=True).encode()).hexdigest()
+
+
+__all__ = [name for name, value in list(globals().items())
+           if not name.startswith("_") and name != "annotations" and not type(value).__name__ == "module"]

@@ -1,0 +1,247 @@
+"""The stepping loops: fixed steps (``advance``), an embedded pair with step-size control
+(``advance_adaptive``), and a sweep's batch of fixed-step runs (``advance_batch``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .dense import state_at
+from .events import fold_search, record_valid, step_events
+from .explicit import STEP_NOT_CONVERGED, dense_stages, trial_step_mk
+from .interface import (
+    BATCH_CHUNK, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED, I_RETRY,
+    I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF, O_MAX_SPEED,
+    O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, ROW_CENTER, ROW_ENERGY, ROW_FORCE, ROW_SIZE, ROW_VELOCITY,
+    RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED)
+from .lowlevel import COLD, JIT
+from .physics import shape_of
+from .recording import _fail, record, record_last, start
+from .steps import MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm, take_step
+from .unpacking import scratch
+
+
+@COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
+def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
+            stepping):
+    """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
+
+    W, P: the method (``Tableau.kernel_arrays``); K has ``stage_rows(W.shape[0])`` rows.
+    ``stepping``: IMPLICIT for collocation_step's steps (the
+    Gauss methods, Munthe-Kaas only), EXPLICIT for trial_step's. One compiled loop serves every
+    fixed-step method and both orientation schemes (read from the state's length). On the first
+    call (no rows yet) the initial state is checked and recorded. The run stops early, with
+    ints[I_STATUS] set, where the state turns non-finite or a check fails; the last valid state
+    is then the last row.
+    """
+    n, mk = shape_of(z)
+    last = W.shape[0] - 1
+    d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
+
+    if ints[I_ROWS] == 0:
+        for a in range(3):   # (a state without orientation never writes these: they are checked as R)
+            for c in range(3):
+                Rn[a, c] = Re[a, c] = R[a, c]
+        start(fn, d, p, z, R, K, probe, rows, ints, info)
+        if ints[I_STATUS] != RUNNING:
+            return
+
+    k0 = ints[I_STEPS]
+    k_stop = min(n_steps, k0 + max_steps)
+    for k in range(k0 + 1, k_stop + 1):
+        final = k == n_steps
+        t0 = (k - 1) * dt
+        h = t_end - t0 if final else dt
+        t = t_end if final else k * dt
+        bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+        if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
+            valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
+                                pe, stepping)
+            if valid >= 0.0:
+                record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                             Rn, pn, Ye, sa, sb, sm, stepping)
+                return
+        if bad:
+            if bad == STEP_NOT_CONVERGED:
+                _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+            else:
+                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
+                      0.0 if mk else 1.0)
+            record_last(rows, ints, t0, z, R, probe, p)
+            return
+        valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                            True, Ye, Re, pe, sa, sb, sm, stepping)
+        if valid >= 0.0:
+            record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                         Rn, pn, Ye, sa, sb, sm, stepping)
+            return
+        accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
+        ints[I_STEPS] = k
+        if k - ints[I_LAST_RECORDED] == every or final:  # (no division in the loop)
+            record(rows, ints[I_ROWS], t, z, R, probe, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = k
+    if ints[I_STEPS] == n_steps:
+        ints[I_STATUS] = OK
+
+
+@JIT
+def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K,
+                     probe, rows, ints, info, work):
+    """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
+    (carrying omega, p[P_TURN] > 0); info[F_TIME] is the time reached and info[F_H] the next
+    step to try. The error is controlled on the motion; R follows omega (``turn``).
+
+    The loop is generic over the pair; its plug-in points are data (``Tableau.kernel_arrays``):
+    - W, square: rows 1 .. last-1 the stage coefficients, row ``last`` the weights b (the
+      evaluation at the new state is K[last]; first same as last or not);
+    - E, (estimates x (last + 1)): the error weights; ``last`` is E.shape[1] - 1;
+    - err_kind: how ``error_norm`` combines E's rows (0: one estimate; 1: DOP853's estimates
+      of orders 5 and 3); err_exp = -1/(q + 1) for an estimate of order q;
+    - P, (rows of W x degree): the continuous extension, as scipy's ``P``;
+    - extra dense-output stages (DOP853's three): rows of W and P after ``last``, evaluated by
+      ``dense_stages`` only for steps that are interpolated (a row or an event inside them).
+    K has ``stage_rows(W.shape[0])`` rows.
+
+    Steps are cut only to land on t_end. Rows at the multiples of record_dt are the dense
+    output at those times (record_dt 0: every accepted step is a row). Events are located on
+    the dense output (``step_events``). Returns early, still running, when ``rows`` has fewer
+    than two free rows while recording every step: the caller grows it and calls again.
+    """
+    n = MK_SIZE
+    last = E.shape[1] - 1
+    d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
+    if ints[I_ROWS] == 0:
+        start(fn, d, p, z, R, K, probe, rows, ints, info)
+        info[F_TIME] = 0.0
+        if ints[I_STATUS] != RUNNING:
+            return
+    t, h = info[F_TIME], info[F_H]
+    retry = ints[I_RETRY] == 1  # right after a rejection the step may shrink but not grow (Hairer's rule)
+    for _ in range(max_steps):
+        if record_dt == 0.0 and ints[I_ROWS] >= rows.shape[0] - 2:
+            break
+        land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
+        hs = t_end - t if land else h
+        bad = trial_step_mk(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)  # (the pairs: MK_SIZE)
+        err = math.inf if bad else error_norm(E, err_kind, K, last, MOTION_SIZE, z, zn, hs, rtol, atol)
+        if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
+            ints[I_REJECTED] += 1
+            retry = True
+            h = hs * max(MIN_FACTOR, SAFETY * err ** err_exp) if err < math.inf else MIN_FACTOR * hs
+            ints[I_NONFINITE] += 1 if bad else 0
+            if ints[I_NONFINITE] >= NONFINITE_TRIES:
+                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
+            elif h <= MIN_STEP * max(1.0, abs(t)):
+                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+            else:
+                continue
+            record_last(rows, ints, t, z, R, probe, p)
+            break
+        t_new = t_end if land else t + hs
+        valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                            False, Ye, Re, pe, sa, sb, sm, EXPLICIT)
+        t_stop = t + valid * hs if valid >= 0.0 else t_new
+        theta = 0.0  # Re: the orientation there (the rows' orientations follow on from each other)
+        for a in range(3):
+            for c in range(3):
+                Re[a, c] = R[a, c]
+        while record_dt > 0.0:  # the rows inside the step, from its dense output
+            t_row = ints[I_ROWS] * record_dt
+            if t_end - t_row < 1e-9 * record_dt:
+                t_row = t_end
+            if t_row > t_new or (valid >= 0.0 and t_row >= t_stop) or t_row <= rows[ints[I_ROWS] - 1, 0]:
+                break
+            if t_row == t_new:
+                record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
+                ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
+            else:
+                dense_stages(fn, d, p, W, hs, z, K, last, Ye, pe, ints)
+                state_at(fn, d, p, z, Re, hs, P, K, theta, (t_row - t) / hs, Ye, Re, pe)
+                theta = (t_row - t) / hs
+                record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
+            ints[I_ROWS] += 1
+        if valid >= 0.0:
+            record_valid(fn, d, p, W, t, hs, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                         Rn, pn, Ye, sa, sb, sm, EXPLICIT)
+            break
+        if record_dt == 0.0:
+            record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
+        t = t_new
+        accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
+        ints[I_STEPS] += 1
+        grown = hs * min(1.0 if retry else MAX_FACTOR, SAFETY * err ** err_exp if err > 0.0 else MAX_FACTOR)
+        h = max(h, grown) if land else grown
+        retry = False
+        if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
+            _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+            record_last(rows, ints, t, z, R, probe, p)
+            break
+        if t == t_end:
+            ints[I_STATUS] = OK
+            break
+    info[F_TIME], info[F_H] = t, h
+    ints[I_RETRY] = 1 if retry else 0
+TINY = 2.2250738585072014e-308  # the smallest normal double
+
+
+@JIT
+def fold_rows(rows, first, count, acc):
+    """Fold rows[first:count] into a run's accumulators acc = E0, max |E - E0|, min F.N, max
+    speed, path length; rows[first - 1] is the row before them (first 0 starts them)."""
+    if first == 0:
+        acc[0], acc[1], acc[2], acc[3], acc[4] = rows[0, ROW_ENERGY], 0.0, math.inf, 0.0, 0.0
+    for i in range(first, count):
+        acc[1] = max(acc[1], abs(rows[i, ROW_ENERGY] - acc[0]))
+        acc[2] = min(acc[2], rows[i, ROW_FORCE])
+        v = ROW_VELOCITY
+        acc[3] = max(acc[3], math.sqrt(rows[i, v] ** 2 + rows[i, v + 1] ** 2 + rows[i, v + 2] ** 2))
+        if i > 0:
+            c = ROW_CENTER
+            acc[4] += math.sqrt((rows[i, c] - rows[i - 1, c]) ** 2 + (rows[i, c + 1] - rows[i - 1, c + 1]) ** 2
+                                + (rows[i, c + 2] - rows[i - 1, c + 2]) ** 2)
+
+
+@COLD
+def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K, probe, rows, ints, info,
+                  work, acc):
+    """Run every run of a batch whose status is NOT_RUN, without the GIL; write its status and
+    outcomes (O_T ...). Per run b: Z0[b] the initial motion state, PARAMS[b] the parameters
+    (``parameters``), DT[b], T_END[b], N_STEPS[b] the fixed steps; W, P the explicit method.
+    z (MOTION_SIZE), R, K, probe, rows (BATCH_ROWS), ints, info, work, acc (5): scratch."""
+    n = MOTION_SIZE
+    for b in range(Z0.shape[0]):
+        if status[b] != NOT_RUN:
+            continue
+        p = PARAMS[b]
+        for q in range(n):
+            z[q] = Z0[b, q]
+        for q in range(ints.shape[0]):
+            ints[q] = 0
+        for q in range(info.shape[0]):
+            info[q] = math.nan
+        for q in range(out.shape[1]):
+            out[b, q] = math.nan
+        first = 0
+        while ints[I_STATUS] == RUNNING:
+            # (np.int64: a literal int would compile advance anew for it)
+            advance(fn, W, P, p, DT[b], T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R, K, probe,
+                    rows, ints, info, work, EXPLICIT)
+            count = ints[I_ROWS]
+            if count == 0:  # the initial state is not finite: nothing to report
+                break
+            fold_rows(rows, first, count, acc)
+            for c in range(ROW_SIZE):  # the last row, the one before the next chunk's
+                rows[0, c] = rows[count - 1, c]
+            ints[I_ROWS], first = 1, 1
+        status[b] = ints[I_STATUS]
+        if first == 0:
+            continue
+        o = out[b]
+        o[O_T], o[O_X], o[O_Y] = rows[0, 0], rows[0, 1], rows[0, 2]
+        o[O_LIFTOFF] = info[F_LIFTOFF]
+        o[O_DRIFT] = acc[1] / max(abs(acc[0]), p[0] * p[1] * p[2], TINY)
+        o[O_MIN_FORCE], o[O_MAX_SPEED], o[O_PATH] = acc[2], acc[3], acc[4]

@@ -1,0 +1,193 @@
+"""The physics of one state: the landscape at the contact point, the reduced equations of
+motion (``dynamics``, DESIGN §1), the exact inverse of dexp on so(3), the principal curvatures,
+the Rodrigues formula, and the finiteness checks every step makes."""
+
+from __future__ import annotations
+
+import math
+
+from .interface import MK_SIZE, MOTION_SIZE, P_TURN
+from .lowlevel import COLD, JIT, STEP, data_pointer, landscape
+
+
+# What ``dynamics`` computes: the stage derivative alone, or also the probe. Floats, like mk
+# there (1.0 Munthe-Kaas): numba would compile it anew for every constant bool passed.
+STAGE, FULL = 0.0, 1.0
+
+
+@STEP
+def dynamics(fn, d, p, z, mk, K, row, probe, full):
+    """K[row] = z'(z); with ``full`` (FULL) also fill ``probe`` (normal, omega, F.N, r*kappa,
+    height). Compiled once (numba's inlining copied it into every caller), inlined by LLVM."""
+    r, k, mr, mr2, mg = p[0], p[3], p[4], p[5], p[6]
+    landscape(fn, z[0], z[1], data_pointer(d))
+    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
+    W2 = 1.0 + fx * fx + fy * fy
+    iW = 1.0 / math.sqrt(W2)  # one division, then products
+    n1, n2, n3 = -fx * iW, -fy * iW, iW
+    v1, v2, v3 = z[2], z[3], z[4]
+    # omega = T^-1 v, T^-1 = 5/(7 m r^2) (I + 5/2 N N^T)
+    nv = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
+    o1, o2, o3 = k * (v1 + nv * n1), k * (v2 + nv * n2), k * (v3 + nv * n3)
+    # N' columns: dN/dx = (n_x - N (N . n_x)) / W with n = (-f_x, -f_y, 1)
+    s = n1 * fxx + n2 * fxy
+    Nx1, Nx2, Nx3 = (n1 * s - fxx) * iW, (n2 * s - fxy) * iW, n3 * s * iW
+    s = n1 * fxy + n2 * fyy
+    Ny1, Ny2, Ny3 = (n1 * s - fxy) * iW, (n2 * s - fyy) * iW, n3 * s * iW
+    # C' = phi' + r N', E = C'^T C'
+    Cx1, Cx2, Cx3 = 1.0 + r * Nx1, r * Nx2, fx + r * Nx3
+    Cy1, Cy2, Cy3 = r * Ny1, 1.0 + r * Ny2, fy + r * Ny3
+    E11 = Cx1 * Cx1 + Cx2 * Cx2 + Cx3 * Cx3
+    E12 = Cx1 * Cy1 + Cx2 * Cy2 + Cx3 * Cy3
+    E22 = Cy1 * Cy1 + Cy2 * Cy2 + Cy3 * Cy3
+    idet = 1.0 / (E11 * E22 - E12 * E12)
+    # alpha' = r E^-1 C'^T (omega x N)
+    w1, w2, w3 = o2 * n3 - o3 * n2, o3 * n1 - o1 * n3, o1 * n2 - o2 * n1
+    b1 = r * (Cx1 * w1 + Cx2 * w2 + Cx3 * w3)
+    b2 = r * (Cy1 * w1 + Cy2 * w2 + Cy3 * w3)
+    a1 = (E22 * b1 - E12 * b2) * idet
+    a2 = (E11 * b2 - E12 * b1) * idet
+    # N' alpha', then v' = m r (N x g) - m r^2 (N' alpha') x (N x omega), with N x omega = -w
+    d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
+    K[row, 0] = a1
+    K[row, 1] = a2
+    K[row, 2] = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
+    K[row, 3] = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
+    K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
+    if K.shape[1] == MOTION_SIZE:  # no orientation carried
+        pass
+    elif mk != 0.0 and p[P_TURN] > 0.0:
+        # omega' = k (v' + nv' N + nv N'), N' = d: omega carried as a quadrature of the motion
+        e1, e2, e3 = K[row, 2], K[row, 3], K[row, 4]
+        nve = 2.5 * (d1 * v1 + d2 * v2 + d3 * v3 + n1 * e1 + n2 * e2 + n3 * e3)
+        K[row, 5] = k * (e1 + nve * n1 + nv * d1)
+        K[row, 6] = k * (e2 + nve * n2 + nv * d2)
+        K[row, 7] = k * (e3 + nve * n3 + nv * d3)
+    elif mk != 0.0:
+        K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
+    else:
+        # R' = A(omega) R, column by column
+        for j in range(3):
+            q1, q2, q3 = z[5 + j], z[8 + j], z[11 + j]
+            K[row, 5 + j] = o2 * q3 - o3 * q2
+            K[row, 8 + j] = o3 * q1 - o1 * q3
+            K[row, 11 + j] = o1 * q2 - o2 * q1
+    if full != 0.0:
+        probe[0], probe[1], probe[2] = n1, n2, n3
+        probe[3], probe[4], probe[5] = o1, o2, o3
+        # F.N = m (c'' - g).N with c''.N = r (omega x N').N
+        probe[6] = mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2
+                         + (o1 * d2 - o2 * d1) * n3) + mg * n3
+        hi, lo = curvatures(fx, fy, fxx, fxy, fyy, iW)
+        probe[7] = r * hi
+        probe[8] = d[0]
+        probe[9] = r * lo
+
+
+# Below this |u|^2 the coefficient of dexp^-1 is its series (to round-off for |u| < 0.1).
+DEXPINV_SERIES = 1e-2
+
+
+@JIT
+def dexpinv(u1, u2, u3, o1, o2, o3):
+    """dexp_u^-1(omega) = omega - 1/2 u x omega + c(theta) u x (u x omega) on so(3), exact:
+    c = (1 - (theta/2) cot(theta/2)) / theta^2, theta = |u|, with its series
+    1/12 + theta^2/720 + theta^4/30240 + theta^6/1209600 for small theta. (The truncation
+    after 1/12 limits Munthe-Kaas to order 5; the exact inverse to none.)"""
+    th2 = u1 * u1 + u2 * u2 + u3 * u3
+    if th2 < DEXPINV_SERIES:
+        c = 1.0 / 12.0 + th2 * (1.0 / 720.0 + th2 * (1.0 / 30240.0 + th2 * (1.0 / 1209600.0)))
+    else:
+        x = 0.5 * math.sqrt(th2)
+        c = (1.0 - x * math.cos(x) / math.sin(x)) / th2
+    c1, c2, c3 = u2 * o3 - u3 * o2, u3 * o1 - u1 * o3, u1 * o2 - u2 * o1
+    return (o1 - 0.5 * c1 + c * (u2 * c3 - u3 * c2),
+            o2 - 0.5 * c2 + c * (u3 * c1 - u1 * c3),
+            o3 - 0.5 * c3 + c * (u1 * c2 - u2 * c1))
+
+
+@JIT
+def curvatures(fx, fy, fxx, fxy, fyy, iW):
+    """The largest and smallest principal curvature (> 0 bending up towards the ball),
+    iW = 1 / sqrt(1 + f_x² + f_y²)."""
+    # roots of det(II - kappa G) = 0, G first, II second fundamental form
+    G11, G12, G22 = 1.0 + fx * fx, fx * fy, 1.0 + fy * fy
+    h11, h12, h22 = fxx * iW, fxy * iW, fyy * iW
+    iW2 = iW * iW
+    mean = 0.5 * (G11 * h22 + G22 * h11 - 2.0 * G12 * h12) * iW2
+    gauss = (h11 * h22 - h12 * h12) * iW2
+    root = math.sqrt(max(mean * mean - gauss, 0.0))
+    return mean + root, mean - root
+
+
+@COLD
+def evaluate_points(fn, xs, ys, out, d):
+    """out[:, i] = f, f_x, f_y, f_xx, f_xy, f_yy at (xs[i], ys[i]); d (6): scratch."""
+    for i in range(xs.shape[0]):
+        landscape(fn, xs[i], ys[i], data_pointer(d))
+        for k in range(6):
+            out[k, i] = d[k]
+
+
+@JIT
+def rodrigues(u1, u2, u3, R, out):
+    """out = exp(A(u)) R, exact at any angle, with a series for small |u| (out may be R)."""
+    th2 = u1 * u1 + u2 * u2 + u3 * u3
+    th = math.sqrt(th2)
+    if th < 1e-4:
+        a = 1.0 - th2 / 6.0 * (1.0 - th2 / 20.0)
+        b = 0.5 - th2 / 24.0 * (1.0 - th2 / 30.0)
+    else:
+        a = math.sin(th) / th
+        h = math.sin(0.5 * th) / th
+        b = 2.0 * h * h
+    # Q = I + a A + b A^2, A^2 = u u^T - |u|^2 I
+    q11, q22, q33 = 1.0 + b * (u1 * u1 - th2), 1.0 + b * (u2 * u2 - th2), 1.0 + b * (u3 * u3 - th2)
+    q12, q21 = -a * u3 + b * u1 * u2, a * u3 + b * u1 * u2
+    q13, q31 = a * u2 + b * u1 * u3, -a * u2 + b * u1 * u3
+    q23, q32 = -a * u1 + b * u2 * u3, a * u1 + b * u2 * u3
+    for j in range(3):
+        r1, r2, r3 = R[0, j], R[1, j], R[2, j]
+        out[0, j] = q11 * r1 + q12 * r2 + q13 * r3
+        out[1, j] = q21 * r1 + q22 * r2 + q23 * r3
+        out[2, j] = q31 * r1 + q32 * r2 + q33 * r3
+
+
+@JIT
+def shape_of(z):
+    """(n, munthe_kaas) read from the state's length at run time: the functions compiled once
+    (COLD) take them so, not as the constants of the loops, which would compile them anew
+    for every loop."""
+    n = z.shape[0]
+    return n, n == MK_SIZE
+
+
+@JIT
+def _finite(a, lo, hi):
+    """a[lo:hi] all finite: a chain of cheap ands, no early exit and no floating-point chain."""
+    ok = True
+    for q in range(lo, hi):
+        ok &= math.isfinite(a[q])
+    return ok
+
+
+@JIT
+def _finite_row(K, row, lo, hi):
+    ok = True
+    for q in range(lo, hi):
+        ok &= math.isfinite(K[row, q])
+    return ok
+
+
+@JIT
+def _finite_matrix(R):
+    ok = True
+    for a in range(3):
+        for c in range(3):
+            ok &= math.isfinite(R[a, c])
+    return ok
+
+
+@COLD
+def evaluate(fn, d, p, z, mk, K, row, probe):
+    dynamics(fn, d, p, z, 1.0 if mk else 0.0, K, row, probe, FULL)

@@ -1,0 +1,87 @@
+"""Taking a step (explicit or implicit), the adaptive pairs' error norm and step-size
+control constants, and accepting a step's new state."""
+
+from __future__ import annotations
+
+import math
+
+from .collocation import collocation_step
+from .explicit import trial_step
+from .interface import IMPLICIT, MOTION_SIZE, PROBE_OMEGA, PROBE_SIZE, P_TURN
+from .lowlevel import COLD, JIT
+
+# Step-size control of the embedded pairs: the next step is h * SAFETY * err^exponent,
+# bounded to [MIN_FACTOR, MAX_FACTOR] times h, with exponent -1/(q + 1) for an error
+# estimate of order q (the method's ``error_exponent``).
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 5.0
+MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below t = 1) stop the run
+# An adaptive step that turns the state non-finite is retried 5 times smaller; after this
+# many such steps in a run the ball is pressing against the end of the landscape, and the
+# run stops as a fixed-step run would at the first.
+NONFINITE_TRIES = 50
+
+
+@JIT
+def take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """One step of the method: collocation_step (``stepping`` IMPLICIT) or trial_step (EXPLICIT)."""
+    if stepping == IMPLICIT:
+        return collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+
+
+@COLD
+def search_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """``take_step`` for the searches inside a step (``fold_search``, ``approach``, ``retake``):
+    compiled once and called, where inlined each of them held a copy of every layout's step."""
+    return take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+
+
+@JIT
+def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
+    """The error of a step in units of the tolerance (the step is accepted when <= 1).
+
+    Each estimate is h (E K)_q per component q < n, weighed by scale_q = atol + rtol
+    max(|z_q|, |zn_q|). The pairs pass the motion, alpha and v (n = MOTION_SIZE): omega is a
+    function of it, and R follows omega's dense output held to its own tolerance (``turn``).
+    kind 0: one estimate (E row 0), RMS over the components (Hairer's DOPRI5). kind 1: two
+    estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
+    as Hairer's DOP853 does.
+    """
+    a5, a3 = 0.0, 0.0
+    for q in range(n):
+        scale = atol + rtol * max(abs(z[q]), abs(zn[q]))
+        e = 0.0
+        for i in range(last + 1):
+            e += E[0, i] * K[i, q]
+        a5 += (e / scale) ** 2
+        if kind == 1:
+            e = 0.0
+            for i in range(last + 1):
+                e += E[1, i] * K[i, q]
+            a3 += (e / scale) ** 2
+    if kind == 1:
+        if a5 == 0.0 and a3 == 0.0:
+            return 0.0
+        return abs(h) * a5 / math.sqrt((a5 + 0.01 * a3) * n)
+    return abs(h) * math.sqrt(a5 / n)
+
+
+@JIT
+def accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn):
+    """Make the trial state the current one; K[0] becomes its derivative (the u-part omega;
+    carrying omega, z's omega becomes the exact one of the new state)."""
+    for q in range(n):
+        z[q] = zn[q]
+        K[0, q] = K[last, q]
+    if mk and n > MOTION_SIZE and p[P_TURN] > 0.0:  # the next step starts from the exact omega
+        for q in range(3):
+            z[5 + q] = pn[PROBE_OMEGA + q]
+    elif mk and n > MOTION_SIZE:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
+        for q in range(3):
+            z[5 + q] = 0.0
+            K[0, 5 + q] = pn[PROBE_OMEGA + q]
+    for a in range(3):
+        for c in range(3):
+            R[a, c] = Rn[a, c]
+    for q in range(PROBE_SIZE):
+        probe[q] = pn[q]
