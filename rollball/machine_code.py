@@ -138,10 +138,9 @@ class Arguments:
         self.layout = _layout(name)
         missing = [key for key in self.layout if key not in arguments]
         unknown = [key for key in arguments if key not in self.layout]
-        if missing or unknown:
-            raise TypeError(f"{name}: " + "; ".join(
-                ([f"missing {', '.join(missing)}"] if missing else []) + ([f"unknown {', '.join(unknown)}"]
-                                                                            if unknown else [])))
+        problems = [f"{word} {', '.join(keys)}" for word, keys in (("missing", missing), ("unknown", unknown)) if keys]
+        if problems:
+            raise TypeError(f"{name}: {'; '.join(problems)}")
         self.slots = np.zeros(interface.ENTRY_SLOTS, dtype=np.int64)
         self.address = self.slots.ctypes.data
         self.kept: dict = {}
@@ -218,7 +217,6 @@ def compile_with_numba() -> tuple[bytes, dict[str, str], list[str]]:
     linked, symbols = None, {}
     for name, entry in kernel.ENTRIES.items():
         compiled = cfunc(kernel.ENTRY_SIGNATURE, cache=False, error_model="numpy")(entry)
-        _keep.append(compiled)
         symbols[name] = compiled.native_name
         module = llvm.parse_assembly(compiled.inspect_llvm())
         if linked is None:

@@ -157,6 +157,16 @@ def test_shipped_code_made_from_another_kernel_is_not_used(monkeypatch):
         machine_code._shipped()
 
 
+def test_shipped_code_made_by_another_numba_or_llvmlite_is_not_used(monkeypatch):
+    # (a patch release of either: numba's way instead, with its progress line; not an error)
+    _shipped_or_skip()
+    real = machine_code.stamp
+    for key in ("numba", "llvmlite", "triple"):
+        monkeypatch.setattr(machine_code, "stamp", lambda shipped=None, key=key: {**real(shipped), key: "other"})
+        with pytest.raises(machine_code._Unusable, match=f"made for another {key}"):
+            machine_code._shipped()
+
+
 def _kernel_copy(tmp_path):
     copy = tmp_path / "kernel"
     shutil.copytree(resources.files("rollball").joinpath("kernel"), copy,
@@ -174,7 +184,8 @@ def test_comments_and_docstrings_do_not_change_the_code_digest_and_code_does(tmp
     physics.write_text(text + "# a comment at the end\n")
     assert machine_code.sources_digest(copy) == digest
     assert machine_code.raw_digest(copy) != machine_code.raw_digest()
-    edited = text.replace('def dexpinv(u1, u2, u3, o1, o2, o3):\n    """', 'def dexpinv(u1, u2, u3, o1, o2, o3):\n    """Note. ')
+    signature = 'def dexpinv(u1, u2, u3, o1, o2, o3):\n    """'
+    edited = text.replace(signature, signature + "Note. ")
     assert edited != text
     physics.write_text(edited)
     assert machine_code.sources_digest(copy) == digest
@@ -209,9 +220,12 @@ def test_shipped_code_llvm_cannot_read_leaves_the_kernel_to_numba(monkeypatch, t
     monkeypatch.setattr(machine_code, "_object_path", lambda key: tmp_path / f"kernel-{key}.o")
     monkeypatch.setattr(machine_code, "source", machine_code.source)
     monkeypatch.setattr(machine_code, "refused", machine_code.refused)
+    said = []
+    monkeypatch.setattr(machine_code, "listeners", [lambda: said.append("compiling the integrator")])
     addresses = machine_code._addresses()
     assert set(addresses) == set(kernel.ENTRIES) and all(addresses.values())
     assert machine_code.source == "numba" and machine_code.refused
+    assert said and set(said) == {"compiling the integrator"}   # (the progress line: said once, compile_notice)
     assert len(list(tmp_path.glob("kernel-*.o"))) == 1   # kept for the next process, keyed by the stamp
 
 

@@ -70,7 +70,8 @@ def scratch_source() -> str:
     views, constant, ns = [], 0, 0   # a part starts at constant + ns * n
 
     def offset(constant, ns):
-        return " + ".join(([str(constant)] if constant or not ns else []) + ([f"{ns} * n" if ns > 1 else "n"] if ns else []))
+        terms = [str(constant)] if constant or not ns else []
+        return " + ".join(terms + ([f"{ns} * n" if ns > 1 else "n"] if ns else []))
 
     for _, size in SCRATCH:
         start = offset(constant, ns)
