@@ -102,6 +102,7 @@ def test_row_columns_reasons_and_statuses_come_from_the_interface():
     assert [str(s) for s in trajectory.Status] == [s for s in interface.STATUSES if s != "running"]
     assert [str(r) for r in trajectory.Reason] == list(interface.REASONS)
     assert interface.reason_name(kernel.R_KINK) == "kink" and interface.reason_name(0) is None
+    assert {status for status, _, _ in interface.REASONS.values()} == {"does_not_fit", "nonfinite"}
     failure = trajectory.Failure(trajectory.Reason.ORIENTATION_OVERFLOW, 1.0, 0.5, 0.25, 1.0)
     assert describe(failure, 0.1).startswith("the orientation R overflowed at t = 1 s, (x, y) = (0.5, 0.25)")
 

@@ -2,14 +2,11 @@
 must agree on. From here come the entry points' argument slots (``machine_code.Arguments``
 packs them, ``entries`` unpacks them), the columns of a recorded row (``trajectory``), the
 run's counters, status codes and failure reasons with their sentences, and the arrays a run
-hands the kernel (``run_arrays``). Plain Python: nothing here is compiled. A change here
-changes the interface's digest (``digest``), which the shipped code's stamp records.
+hands the kernel (``run_arrays``). Plain Python: nothing here is compiled. kernel.json records
+``description()``, and the shipped code is used only where it is this one.
 """
 
 from __future__ import annotations
-
-import hashlib
-import json
 
 import numpy as np
 
@@ -239,10 +236,4 @@ def description() -> dict:
                         for name, arguments in ENTRIES.items()}}
 
 
-def digest() -> str:
-    """SHA-256 of ``description()``."""
-    return hashlib.sha256(json.dumps(description(), sort_keys=True).encode()).hexdigest()
-
-
-__all__ = [name for name, value in list(globals().items())
-           if not name.startswith("_") and name != "annotations" and not type(value).__name__ == "module"]
+__all__ = [name for name in dir() if not name.startswith("_") and name not in ("annotations", "np")]
