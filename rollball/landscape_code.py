@@ -20,7 +20,6 @@ import ctypes
 import hashlib
 import json
 import math
-import threading
 import types
 
 from . import cache
@@ -28,18 +27,40 @@ from . import cache
 SYMBOL = "rollball_landscape"
 LIMIT = 64 << 20    # bytes a landscape's cached machine code may have (a few kB to a few MB)
 _CTYPE = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double))
-_lock = threading.Lock()
+
+
+def llvm_lock():
+    """The one lock every use of LLVM in this process takes: numba's compiler lock, which its
+    own compiles and the kernel's machine code (machine_code.py) take too. LLVM's global state
+    (the global context, the symbol table, engines being made or disposed of) is not safe to use
+    from two threads at once: an app that checks a formula in one thread while a run makes the
+    kernel's machine code, or frees a landscape, in another would otherwise abort."""
+    from numba.core.compiler_lock import global_compiler_lock
+
+    return global_compiler_lock
 
 
 class LandscapeCode:
     """The compiled ``landscape(x, y, out)``: ``address`` for the kernel, ``ctypes`` to call it
-    from Python. Holding this object keeps the code; dropping the last reference frees it."""
+    from Python. Holding this object keeps the code; dropping the last reference frees it (its
+    engine disposed of under ``llvm_lock``, in whichever thread drops it)."""
 
     def __init__(self, engine, address: int, unwritten: str | None = None):
         self._engine = engine
         self.address = address
         self.ctypes = _CTYPE(address)
         self.unwritten = unwritten   # why the code could not be kept in the cache folder, if so
+
+    def __del__(self):
+        engine, self._engine = self._engine, None
+        if engine is None:
+            return
+        try:
+            lock = llvm_lock()
+        except ImportError:   # the interpreter is shutting down: the process frees it all
+            return
+        with lock:
+            engine.close()
 
 
 def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
@@ -50,7 +71,7 @@ def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
 
     from .machine_code import _target_machine
 
-    with _lock:
+    with llvm_lock():
         _initialise()
         machine = _target_machine()
         key = _key(text, machine)
@@ -123,15 +144,13 @@ def _compile(text: str, name: str, machine) -> tuple[list[str], bytes]:
     library is never finalised), so nothing of it stays in numba's engine."""
     from numba.core import sigutils
     from numba.core.ccallback import CFunc
-    from numba.core.compiler_lock import global_compiler_lock
-
     from .kernel import LANDSCAPE_SIGNATURE
 
     module = types.ModuleType(name)
     exec(compile(text, f"<{name}>", "exec"), module.__dict__)  # our generated code, checked, not user text
     callback = CFunc(module.landscape, sigutils.normalize_signature(LANDSCAPE_SIGNATURE), locals={},
                      options={"error_model": "numpy"})
-    with global_compiler_lock:
+    with llvm_lock():
         result = callback._compile_uncached()
         library = result.library
         for other in library._linking_libraries:

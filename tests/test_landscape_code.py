@@ -102,3 +102,37 @@ def test_new_formulas_in_one_process_do_not_keep_their_memory(tmp_path):
     assert result.returncode == 0, result.stderr
     grown = json.loads(result.stdout.strip().splitlines()[-1])["grown"]
     assert grown < count * 50_000, f"{grown / count / 1e3:.0f} kB a formula"
+
+
+THREADS = r"""
+import gc, sys, threading
+from rollball import machine_code, simulate
+from rollball.landscape import Landscape
+from rollball.scene import Scene
+
+def formulas(k):   # new formulas made and dropped, their engines disposed of as they go
+    for i in range(int(sys.argv[1])):
+        Landscape(f"0.{k}{i + 1}*sin(x)*cos({i + 2}*y)").compiled
+        gc.collect()
+
+scene = Scene.load(sys.argv[2])
+threads = [threading.Thread(target=formulas, args=(k,)) for k in (1, 2)]
+threads.append(threading.Thread(target=lambda: simulate(scene, t_end=0.5)))  # makes the kernel's code
+for thread in threads:
+    thread.start()
+for thread in threads:
+    thread.join()
+print(machine_code.source)
+"""
+
+
+def test_formulas_made_and_freed_in_threads_while_a_run_makes_the_kernel_code(tmp_path):
+    """Every use of LLVM takes one lock: landscapes compiled and freed in two threads while a
+    third makes the kernel's machine code from the shipped code, with an empty cache folder
+    (unlocked, LLVM's global state is raced and the process aborts)."""
+    from rollball.examples import scene_path
+
+    env = dict(os.environ, ROLLBALL_CACHE_DIR=str(tmp_path / "cache"))
+    result = subprocess.run([sys.executable, "-c", THREADS, "15", str(scene_path("hills"))], env=env,
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr[-2000:]
