@@ -194,7 +194,7 @@ class RunController(QtCore.QObject):
             self._take_seconds()
             self.thread.finished.disconnect(self._computed)
             self.thread.stop()
-            self.thread.deleteLater()
+            _retire(self.thread)
             self.thread = None
 
     def _rows_ready(self, runs: list, index: int, block, ended: bool) -> None:
@@ -219,7 +219,7 @@ class RunController(QtCore.QObject):
         self.computed, self.compiling = True, False
         if self.thread is not None:
             self._take_seconds()
-            self.thread.deleteLater()
+            _retire(self.thread)
             self.thread = None
         self.stateChanged.emit(self.state)
         self._measure()
@@ -232,7 +232,7 @@ class RunController(QtCore.QObject):
         thread.done.connect(lambda trajectory, estimate: self._reference_done(thread, trajectory, estimate))
         thread.failed.connect(lambda message: thread is self._reference_thread and self.failed.emit(
             f"The reference run failed: {message}"))
-        thread.finished.connect(lambda: (RunController._references.discard(thread), thread.deleteLater()))
+        thread.finished.connect(lambda: (RunController._references.discard(thread), _retire(thread)))
         thread.start()
 
     def _reference_done(self, thread, trajectory: Trajectory, estimate: float) -> None:
@@ -290,3 +290,12 @@ class RunController(QtCore.QObject):
     def _set_state(self, state: str) -> None:
         self.state = state
         self.stateChanged.emit(state)
+
+
+def _retire(thread: QtCore.QThread) -> None:
+    """Let go of a worker thread whose work has ended. ``finished`` is emitted from inside the
+    thread, just before it ends: the object may be deleted (its last Python reference dropped)
+    only once the thread has really ended, else Qt aborts the process ("QThread: Destroyed
+    while thread is still running"). The wait is for the few instructions after ``finished``."""
+    thread.wait()
+    thread.deleteLater()
