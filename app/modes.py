@@ -25,6 +25,7 @@ FRAME_ROOM = (8, 40)         # pixels of the available screen left for a window 
 SETTLE_MS = 3000             # after leaving full screen, the window manager's moves are undone this long
 ERROR_PLOTS_SHARE = 0.4      # of the view's and plots' height, at least, for compare mode's plots
 PRESENTATION_PLOTS_SHARE = 0.47   # the same in presentation, where their text is larger
+PLOTS_ENOUGH = 380           # pixels: the error plots need no more (a large screen's view takes the rest)
 
 
 @dataclass(frozen=True)
@@ -221,8 +222,8 @@ class Modes:
         if self._editing_sizes is None and total:
             self._editing_sizes = sizes
         share = PRESENTATION_PLOTS_SHARE if self.presentation else ERROR_PLOTS_SHARE
-        if shown.error_plots and total and sizes[1] < share * total:
-            below = round(share * total)
+        below = min(round(share * total), PLOTS_ENOUGH)   # on a large screen the view takes the rest
+        if shown.error_plots and total and (sizes[1] < below or self.presentation and sizes[1] != below):
             splitter.setSizes([total - below, below])
 
     # -- what is remembered ----------------------------------------------------------

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, get_method, resources
+from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, resources
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes, write_target
 from rollball.geometry import reachable_height, unit_normal
@@ -25,18 +25,17 @@ from .closeup import CloseUp
 from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from .dialogs import AnimationDialog, ImageDialog
-from .document import Document
 from .inputs import ScenePanel, compile_reason
 from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
+from .session import SceneSession, changes, run_spec
 from .readouts import Readouts
 from .speed_window import SpeedWindow
 from .sweep_dialog import SweepDialog
 from .timeline import Marker, TimeSlider
-from .undo import SceneChange
 from .view3d import SceneView
 
 PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
@@ -55,9 +54,9 @@ class MainWindow(QtWidgets.QMainWindow):
     def __init__(self, preferences: Preferences | None = None):
         super().__init__()
         self.preferences = preferences or Preferences()
-        self.document = Document()
+        self.session = SceneSession(self.show_scene, self)
+        self.document = self.session.document
         self.landscape = None
-        self.shown_scene: Scene | None = None   # what the view and the run belong to
         self.drawn_index = -1                # the row the view shows
         self.plotted_at = -math.inf          # when the plots were last brought up to the shown time
         self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
@@ -85,7 +84,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots = LivePlots()
         self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.readouts = Readouts()
-        self.undo_stack = QtGui.QUndoStack(self)
+        self.undo_stack = self.session.undo
         self.undo_stack.cleanChanged.connect(lambda _clean: self._update_controls())
         self.help_window: helps.HelpWindow | None = None
         self.view.installEventFilter(self)   # keeps the close-up in the view's corner
@@ -354,8 +353,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if not self._may_discard():
             return False
         self.reset()
-        self.undo_stack.clear()
-        self.document.opened(path, scene, example=not remember)
+        self.session.opened(path, scene, example=not remember)
         if remember:
             self.preferences.add_recent(path)
             self.preferences.set_last_folder(path)
@@ -366,10 +364,9 @@ class MainWindow(QtWidgets.QMainWindow):
         return True
 
     def _scene_edited(self, scene: Scene) -> None:
-        old = self.shown_scene
+        old = self.session.shown
         self._use_scene(scene)
-        if old is not None and old != scene:
-            self.undo_stack.push(SceneChange(self.show_scene, old, scene))
+        self.session.edited(old, scene)
 
     def show_scene(self, scene: Scene) -> None:
         """Put a scene into the fields and the view (undo, redo, revert)."""
@@ -378,16 +375,14 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def revert(self) -> None:
         """Back to the scene as opened or last saved (itself undoable)."""
-        saved = self.document.saved_scene
-        if saved is None or not self.dirty:
+        if not self.session.revert(self.scene):
             return
-        self.undo_stack.push(SceneChange(self.show_scene, self.scene, saved, "Revert to saved", applied=False))
         self.show_message(f"Reverted to {self.document.name}")
 
     def _use_scene(self, scene: Scene, redraw_camera: bool = False) -> list[str]:
         """Show a valid scene; a change to what a run depends on resets the run. Returns notes
         on what the drawn landscape shows (no-fit and undefined regions)."""
-        old = self.shown_scene
+        old = self.session.shown
         landscape = landscape_for(scene.landscape)
         try:
             landscape.compiled  # noqa: B018 - compile now, so a run starts at once
@@ -395,10 +390,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self._warn("Cannot use this landscape", compile_reason(error))
             return []
         notes = []
-        grid_changed = old is None or old.landscape != scene.landscape or old.view != scene.view
-        surface_changed = (grid_changed or old.ball.radius != scene.ball.radius or old.start != scene.start
-                           or old.gravity != scene.gravity)   # the cut follows the ball's energy
-        if surface_changed:
+        changed = changes(old, scene)
+        if changed.surface:
             self.landscape = landscape
             start = landscape.evaluate(scene.start.x, scene.start.y)
             reachable = reachable_height(start, scene) if np.all(np.isfinite(start)) else np.inf
@@ -415,14 +408,13 @@ class MainWindow(QtWidgets.QMainWindow):
                              "choose a smaller area or spacing")
             self.show_message("; ".join(notes).capitalize())
         self.plots.set_duration(scene.duration)
-        run_changed = old is None or _physics(old) != _physics(scene)
-        if run_changed:
+        if changed.run:
             if self.controller.state in (RUNNING, PAUSED):
                 self.show_message("Scene changed: the run was reset")
             self.reset()
-        if redraw_camera or grid_changed:
+        if redraw_camera or changed.grid:
             self.view.reset_camera()   # after reset(), so the ball stands at the start
-        self.shown_scene = scene
+        self.session.shown = scene
         self.compare.scene_changed(scene)
         self._update_title()
         return notes
@@ -638,7 +630,7 @@ class MainWindow(QtWidgets.QMainWindow):
         Start meanwhile waits until its method is ready, saying so with a busy indicator, and
         the run starts by itself."""
         scene = self.scene
-        first = [] if scene is None else [str(_spec(scene))]
+        first = [] if scene is None else [str(run_spec(scene))]
         command = command or [sys.executable, "-m", "rollball.warmup", *first]
         process = QtCore.QProcess(self)
         process.setProcessChannelMode(QtCore.QProcess.ProcessChannelMode.ForwardedErrorChannel)
@@ -664,7 +656,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """Whether a Start now would compile what the background process is compiling."""
         scene = self.scene
         return self.preparing is not None and (self.compare.active or scene is None
-                                               or _spec(scene) not in self.ready_variants)
+                                               or run_spec(scene) not in self.ready_variants)
 
     def stop_preparing(self) -> None:
         """Kill the integrator's warm-up (closing): disconnected first, so that nothing it says
@@ -754,9 +746,7 @@ class MainWindow(QtWidgets.QMainWindow):
             integrator.update(rtol=result.rtol, atol=result.atol)
         scene = Scene.from_dict(data)
         self.compare_action.setChecked(False)
-        if scene != self.scene:
-            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Speed against Error",
-                                             applied=False))
+        self.session.load(self.scene, scene, "Load Run from Speed against Error")
         self.start()
         self.activateWindow()
 
@@ -929,9 +919,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def load_start(self, scene: Scene) -> None:
         """Show a run of a sweep in the fields and the view, ready to run (undoable, not saved)."""
-        if scene != self.scene:
-            self.undo_stack.push(SceneChange(self.show_scene, self.scene, scene, "Load Run from Sweep",
-                                             applied=False))
+        self.session.load(self.scene, scene, "Load Run from Sweep")
         self.show_message("Start loaded from the sweep: press Start to run it")
 
     def show_message(self, text: str, warning: bool = False) -> None:
@@ -1083,18 +1071,6 @@ class MainWindow(QtWidgets.QMainWindow):
         event.accept()
 
 
-def _spec(scene: Scene) -> RunSpec:
-    """The method and orientation update a run of the scene uses."""
-    method = get_method(scene.integrator.method)
-    return RunSpec(method.name, scene.integrator.munthe_kaas or not method.classic_allowed)
-
-
 def _plain(text: str) -> str:
     """Text that a message box cannot take for rich text (it guesses from tags like <b>)."""
     return text.replace("<", "\u2039").replace(">", "\u203a") if QtGui.Qt.mightBeRichText(text) else text
-
-
-def _physics(scene: Scene) -> tuple:
-    """What a run depends on (not the drawn grid or the description)."""
-    return (scene.landscape, scene.gravity, scene.ball, scene.start, scene.integrator, scene.duration)
-
