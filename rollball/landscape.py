@@ -1,6 +1,6 @@
 """A landscape z = f(x, y): its formula, derivatives, and their compiled form.
 
-sympy derives f_x, f_y, f_xx, f_xy, f_yy once; common subexpressions are shared and
+sympy's rules derive f_x, f_y, f_xx, f_xy, f_yy once (``derivative``); common subexpressions are shared and
 printed as a small scalar function, compiled as a C callback (landscape_code.py) that the
 one stepping kernel calls. A new formula therefore costs a small compile, not a recompile of
 the integrator; a formula seen in an earlier run loads its machine code from the cache folder;
@@ -21,6 +21,8 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 from sympy.core import cache as sympy_cache
+from sympy.core.function import ArgumentIndexError, Function
+from sympy.functions.elementary.miscellaneous import MinMaxBase
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
@@ -105,6 +107,50 @@ def _sizes(exprs, var=None) -> tuple[int, int]:
     return sum(size[e] for e in exprs), sum(dsize[e] for e in exprs)
 
 
+_PLAIN_CHAIN_RULE = {Function._eval_derivative, MinMaxBase._eval_derivative}
+
+
+def derivative(expr: sp.Expr, var: sp.Symbol, done: dict) -> sp.Expr:
+    """``sp.diff(expr, var)``, rule for rule and node for node the same expression, about three
+    times faster: sympy asks after every node whether its derivative is zero (``is_zero``, an
+    assumption query that is two thirds of its time) and then uses it all the same. ``done``
+    keeps the derivatives by ``var`` already made, so a subexpression shared by f and f_x (or
+    by several terms) is differentiated once. Constructs without a rule here go to sympy."""
+    result = done.get(expr)
+    if result is not None:
+        return result
+    if var not in expr.free_symbols:
+        result = sp.S.Zero
+    elif expr == var:
+        result = sp.S.One
+    elif isinstance(expr, sp.Add):
+        result = sp.Add(*[derivative(a, var, done) for a in expr.args])
+    elif isinstance(expr, sp.Mul):   # sympy's Leibniz rule for n = 1
+        args = expr.args
+        result = sp.Add(*[sp.Mul(*[derivative(a, var, done) if j == i else a for j, a in enumerate(args)])
+                          for i in range(len(args))])
+    elif isinstance(expr, sp.Pow):
+        base, exp = expr.args
+        dbase, dexp = derivative(base, var, done), derivative(exp, var, done)
+        result = expr * (dexp * sp.log(base) + dbase * exp / base)
+    elif isinstance(expr, Function) and type(expr)._eval_derivative in _PLAIN_CHAIN_RULE:
+        terms = []
+        for i, a in enumerate(expr.args, 1):
+            da = derivative(a, var, done)
+            if da.is_zero:
+                continue
+            try:
+                df = expr.fdiff(i)
+            except ArgumentIndexError:
+                df = Function.fdiff(expr, i)
+            terms.append(df * da)
+        result = sp.Add(*terms)
+    else:
+        result = sp.diff(expr, var)
+    done[expr] = result
+    return result
+
+
 class Landscape:
     """A parsed, differentiated landscape formula. Raises ``FormulaError`` for bad text, or for
     a formula whose derivatives would exceed ``MAX_DERIVATIVE_NODES`` (checked before each
@@ -117,9 +163,10 @@ class Landscape:
         try:
             # sympy builds first derivatives slowest, node by node: a tenth of the budget
             self._within_budget(_sizes([f], X)[1] + _sizes([f], Y)[1], MAX_DERIVATIVE_NODES // 10)
-            fx, fy = sp.diff(f, X), sp.diff(f, Y)
+            by_x, by_y = {}, {}   # each subexpression differentiated once by x and once by y
+            fx, fy = derivative(f, X, by_x), derivative(f, Y, by_y)
             self._within_budget(_sizes([fx], X)[1] + _sizes([fx, fy], Y)[1])
-            exprs = (f, fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
+            exprs = (f, fx, fy, derivative(fx, X, by_x), derivative(fx, Y, by_y), derivative(fy, Y, by_y))
             self.derivatives = tuple(_without_delta(e) for e in exprs)
             self._within_budget(_sizes(self.derivatives[3:])[0])
         except FormulaError:

@@ -13,8 +13,12 @@ import weakref
 import numpy as np
 import pytest
 
+import sympy as sp
+
 from rollball import Scene, Simulation, landscape_code
-from rollball.landscape import _COMPILED, Landscape, landscape_for
+from rollball.examples import EXAMPLES_DIR
+from rollball.formula import X, Y, FormulaError, parse_formula
+from rollball.landscape import _COMPILED, Landscape, derivative, landscape_for
 from rollball.machine_code import _target_machine
 from rollball.scene import Start
 
@@ -24,6 +28,7 @@ FORMULAS = ["0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "x^3*y - 2*x*y^2 + 7", "at
             "asinh(x) + acosh(2+y^2) + atanh(x/5)", "hypot(x, y)", "x^0.3 + 2^x", "max(x, y, 1) - min(x, 2, y)",
             "-abs(x)", "x/abs(x)", "exp(20*(x-1))", "x^17*y^5 + x^(-7)", "tan(x)", "sqrt(1 - x^2 - y^2)",
             "pi*x + e*y"]
+EXAMPLE_FORMULAS = sorted({json.loads(path.read_text())["landscape"] for path in EXAMPLES_DIR.glob("*.json")})
 
 
 def _values(calls_code, points):
@@ -41,7 +46,7 @@ def _values(calls_code, points):
     return out
 
 
-@pytest.mark.parametrize("text", FORMULAS)
+@pytest.mark.parametrize("text", FORMULAS + EXAMPLE_FORMULAS)
 def test_the_translation_gives_numbas_numbers_bit_for_bit(text):
     points = np.concatenate([np.random.default_rng(7).uniform(-3, 3, (50, 2)),
                              [[0, 0], [1, 1], [0, 1], [1, 0], [-1, 0], [2, 2]]])
@@ -51,6 +56,41 @@ def test_the_translation_gives_numbas_numbers_bit_for_bit(text):
     ours = _values(landscape_code._object_code(source, machine), points)
     numbas = _values(landscape_code._compile(source, "rollball_landscape_test", machine), points)
     assert np.array_equal(ours, numbas, equal_nan=True)
+
+
+def _random_formulas(count, seed=5):
+    rng = np.random.default_rng(seed)
+    functions = ["sin", "cos", "exp", "tanh", "sqrt", "abs", "atan", "log", "asinh"]
+
+    def formula(depth):
+        if depth == 0:
+            return str(rng.choice(["x", "y", "pi", str(round(rng.uniform(-3, 3), 3))]))
+        kind = rng.integers(6)
+        if kind == 0:
+            return f"{rng.choice(functions)}({formula(depth - 1)})"
+        if kind == 1:
+            return f"({formula(depth - 1)})^{rng.choice(['2', '3', '-1', '0.5', 'y', '-2'])}"
+        if kind == 2:
+            return f"{rng.choice(['max', 'min', 'atan2', 'hypot'])}({formula(depth - 1)}, {formula(depth - 1)})"
+        if kind == 3:
+            return f"({formula(depth - 1)})*({formula(depth - 1)})"
+        return f"({formula(depth - 1)}) {rng.choice(list('+-/'))} ({formula(depth - 1)})"
+    return [formula(3) for _ in range(count)]
+
+
+def test_derivatives_are_sympys_node_for_node():
+    # the same expressions as sympy's diff, so the same generated source and the same numbers
+    for text in FORMULAS + EXAMPLE_FORMULAS + _random_formulas(60) + ["x^y", "exp(x)^y", "log10(x*y)", "2^(x*y)"]:
+        try:
+            f = parse_formula(text)
+        except FormulaError:   # a random one may be a constant that is undefined
+            continue
+        fx, fy = sp.diff(f, X), sp.diff(f, Y)
+        theirs = (fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
+        by_x, by_y = {}, {}
+        gx, gy = derivative(f, X, by_x), derivative(f, Y, by_y)
+        ours = (gx, gy, derivative(gx, X, by_x), derivative(gx, Y, by_y), derivative(gy, Y, by_y))
+        assert ours == theirs, text
 
 
 def test_what_the_translation_does_not_know_numba_compiles():
