@@ -3,6 +3,7 @@
 freed after, so that a long session of new formulas does not grow without bound."""
 
 import ctypes
+import re
 import gc
 import json
 import os
@@ -31,7 +32,7 @@ FORMULAS = ["0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "x^3*y - 2*x*y^2 + 7", "at
 EXAMPLE_FORMULAS = sorted({json.loads(path.read_text())["landscape"] for path in EXAMPLES_DIR.glob("*.json")})
 
 
-def _values(calls_code, points):
+def _values(calls_code, points, values=(0.0,)):
     import llvmlite.binding as llvm
 
     calls, code = calls_code
@@ -41,8 +42,10 @@ def _values(calls_code, points):
     engine.finalize_object()
     function = landscape_code._CTYPE(engine.get_function_address(landscape_code.SYMBOL))
     out = np.zeros((len(points), 6))
+    values = np.asarray(values, dtype=float)
     for row, (x, y) in zip(out, points):
-        function(x, y, row.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        function(x, y, values.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                 row.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
     return out
 
 
@@ -78,6 +81,32 @@ def _random_formulas(count, seed=5):
     return [formula(3) for _ in range(count)]
 
 
+PARAMETRIC = [("a*sin(k*x)*cos(y)", ("a", "k"), (0.5, 2.0)), ("exp(-(x^2 + y^2)/w^2)", ("w",), (1.3,)),
+              ("h*max(x, y) + abs(x - c)^q", ("h", "c", "q"), (0.7, -0.2, 2.5)), ("x^n", ("n",), (3.0,))]
+
+
+@pytest.mark.parametrize("text, names, values", PARAMETRIC)
+def test_parameters_are_arguments_with_numbas_numbers_and_the_constants_numbers(text, names, values):
+    points = np.random.default_rng(3).uniform(-2, 2, (40, 2))
+    source = "import math\n\n\n" + Landscape(text, names).source
+    machine = _target_machine()
+    landscape_code._initialise()
+    ours = _values(landscape_code._object_code(source, machine), points, values)
+    numbas = _values(landscape_code._compile(source, "rollball_landscape_test_p", machine), points, values)
+    assert np.array_equal(ours, numbas, equal_nan=True)
+    # the same as the formula with the values written in it, to round-off
+    constant = text
+    for name, value in zip(names, values):
+        constant = re.sub(rf"\b{name}\b", f"({value!r})", constant)
+    assert np.allclose(Landscape(text, names).evaluate(points[:, 0], points[:, 1], values),
+                       Landscape(constant).evaluate(points[:, 0], points[:, 1]), rtol=1e-12, atol=1e-12, equal_nan=True)
+
+
+def test_a_parameter_needs_its_value():
+    with pytest.raises(ValueError, match="takes 2 parameter values"):
+        Landscape("a*x + b", ("a", "b")).evaluate(0.0, 0.0)
+
+
 def test_derivatives_are_sympys_node_for_node():
     # the same expressions as sympy's diff, so the same generated source and the same numbers
     for text in FORMULAS + EXAMPLE_FORMULAS + _random_formulas(60) + ["x^y", "exp(x)^y", "log10(x*y)", "2^(x*y)"]:
@@ -94,12 +123,12 @@ def test_derivatives_are_sympys_node_for_node():
 
 
 def test_what_the_translation_does_not_know_numba_compiles():
-    source = "import math\n\n\ndef landscape(x, y, out):\n    out[0] = math.gamma(x) + y\n"
+    source = "import math\n\n\ndef landscape(x, y, p, out):\n    out[0] = math.gamma(x) + y\n"
     with pytest.raises(landscape_code._Unsupported):
         landscape_code._ir(source)
     code = landscape_code.load(source, "rollball_landscape_gamma", cached=False)
     out = np.zeros(6)
-    code.ctypes(4.0, 0.5, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+    code.ctypes(4.0, 0.5, None, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
     assert out[0] == 6.5
 
 
