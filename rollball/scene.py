@@ -288,6 +288,7 @@ def _number(key: str, value) -> float:
 def _parameters(given) -> tuple[Parameter, ...]:
     """``parameters`` as a file holds it (name -> number or {"value", "min", "max"}) or as
     ``Parameter``s, checked: names as formula.check_parameter_names, finite numbers, min < max."""
+    objects = set()   # names given as {"value", ...}: their value's key is NAME.value
     if isinstance(given, dict):
         items = []
         for name, spec in given.items():
@@ -301,6 +302,7 @@ def _parameters(given) -> tuple[Parameter, ...]:
                 if ("min" in spec) != ("max" in spec):
                     raise SceneError(f"{key}.{'max' if 'min' in spec else 'min'}", "missing (a range has both ends)")
                 items.append(Parameter(name, spec["value"], spec.get("min"), spec.get("max")))
+                objects.add(name)
             else:
                 items.append(Parameter(name, spec))
     elif isinstance(given, (tuple, list)) and all(isinstance(p, Parameter) for p in given):
@@ -315,7 +317,7 @@ def _parameters(given) -> tuple[Parameter, ...]:
     checked = []
     for p in items:
         key = f"parameters.{p.name}"
-        value = _number(key if p.min is None else f"{key}.value", p.value)
+        value = _number(f"{key}.value" if p.name in objects or p.min is not None else key, p.value)
         low = high = None
         if p.min is not None or p.max is not None:
             low, high = _number(f"{key}.min", p.min), _number(f"{key}.max", p.max)
