@@ -123,3 +123,23 @@ def test_a_sweep_refuses_a_parameter_the_scene_lacks():
         sweep(Scene.from_dict(V3), {"parameters.b": [1.0]})
     with pytest.raises(ValueError, match="cannot vary 'parameters.sin'"):
         Grid.of({"parameters.sin": [1.0]})
+
+
+def test_cli_sweeps_a_parameter_with_one_compile(tmp_path, capsys, monkeypatch):
+    from rollball import landscape as landscape_module
+    from rollball.cli import main
+
+    path = tmp_path / "p.json"
+    Scene.from_dict({**V3, "landscape": "a*sin(k*x)*cos(y) + 0.0123*x", "duration": 0.5}).save(path)
+    compiles = []
+    real = landscape_module._compile_or_refuse
+    monkeypatch.setattr(landscape_module, "_compile_or_refuse", lambda source: compiles.append(source) or real(source))
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--vary", "parameters.a=0:1:21", "--vary", "parameters.k=0.5:4:3",
+                 "--workers", "2", "--out", str(out)]) == 0
+    assert "63 of 63 runs" in capsys.readouterr().out and len(compiles) == 1
+    rows = (out / "sweep.csv").read_text().splitlines()
+    assert rows[0].startswith("parameters.a,parameters.k,status") and len(rows) == 64
+    assert json.loads((out / "sweep.json").read_text())["scene"]["parameters"]["k"]["max"] == 4.0
+    assert main(["sweep", str(path), "--vary", "parameters.b=0:1:2", "--out", str(out)]) == 2
+    assert "no parameter 'b'" in capsys.readouterr().err
