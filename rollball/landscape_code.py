@@ -1,4 +1,4 @@
-"""A landscape's machine code: the generated source of ``landscape(x, y, out)`` (landscape.py)
+"""A landscape's machine code: the generated source of ``landscape(x, y, p, out)`` (landscape.py)
 made into a C callback, kept in the cache folder, and loaded into an LLVM engine of its own
 that is freed with it (docs/design.md §8).
 
@@ -25,6 +25,7 @@ import types
 from . import cache
 
 SYMBOL = "rollball_landscape"
+_MACHINE = None     # the target machine that emits landscapes' object code (under llvm_lock)
 LIMIT = 64 << 20    # bytes a landscape's cached machine code may have (a few kB to a few MB)
 _CTYPE = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double),
                           ctypes.POINTER(ctypes.c_double))   # kernel/interface.py: LANDSCAPE_ARGUMENTS
@@ -72,9 +73,10 @@ def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
 
     from .machine_code import _target_machine
 
+    global _MACHINE
     with llvm_lock():
         _initialise()
-        machine = _target_machine()
+        machine = _MACHINE = _MACHINE or _target_machine()   # made once (0.7 ms); an engine owns its own
         key = _key(text, machine)
         path = cache.cache_dir() / f"landscape-{key}.o"
         entry = _unpack(cache.read(path, LIMIT, "machine code of a landscape")) if cached else None
