@@ -304,7 +304,15 @@ def landscape_of(scene) -> Landscape:
     return landscape_for(scene.landscape, scene.parameter_names)
 
 
-@lru_cache(maxsize=64)
 def landscape_for(text: str, parameters: tuple[str, ...] = ()) -> Landscape:
     """The (shared, cached) landscape of a formula with the parameters of these names."""
-    return Landscape(text, tuple(parameters))
+    return _landscape_for(text, tuple(parameters))
+
+
+@lru_cache(maxsize=64)
+def _landscape_for(text: str, parameters: tuple[str, ...]) -> Landscape:
+    return Landscape(text, parameters)
+
+
+landscape_for.cache_clear = _landscape_for.cache_clear   # (as before, for tests and the app)
+landscape_for.cache_info = _landscape_for.cache_info

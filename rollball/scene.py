@@ -256,12 +256,15 @@ def _v2_to_v3(body: dict) -> dict:
     """Version 3 added ``parameters`` (named numbers in the formula); a version-2 scene has
     none and runs as it did. Keys version 3 added are still unknown in a version-2 file."""
     for key in V3_KEYS:
-        if key in body:
+        group, _, name = key.rpartition(".")
+        holder = body.get(group) if group else body
+        if isinstance(holder, dict) and name in holder:
             raise SceneError(key, "unknown key in a version-2 scene (it came with version 3)")
     return body
 
 
-V3_KEYS = ("parameters",)   # (room for the contact model and start.omega of the same version)
+# The (dotted) keys version 3 added; the contact model and start.omega of the same version go here too.
+V3_KEYS = ("parameters",)
 
 # MIGRATIONS[k] takes version k + 1 to version k + 2; a file of version v runs MIGRATIONS[v - 1:].
 MIGRATIONS = [_v1_to_v2, _v2_to_v3]

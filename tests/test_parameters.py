@@ -143,3 +143,11 @@ def test_cli_sweeps_a_parameter_with_one_compile(tmp_path, capsys, monkeypatch):
     assert json.loads((out / "sweep.json").read_text())["scene"]["parameters"]["k"]["max"] == 4.0
     assert main(["sweep", str(path), "--vary", "parameters.b=0:1:2", "--out", str(out)]) == 2
     assert "no parameter 'b'" in capsys.readouterr().err
+
+
+def test_a_formula_is_derived_once_however_it_is_asked_for():
+    from rollball.landscape import landscape_for
+
+    scene = Scene(landscape="0.0321*x*y")
+    assert landscape_for("0.0321*x*y") is landscape_of(scene) is landscape_for("0.0321*x*y", [])
+    assert landscape_for("a*x", ("a",)) is landscape_of(Scene.from_dict({**V3, "landscape": "a*x", "parameters": {"a": 3}}))
