@@ -225,6 +225,7 @@ def _sweep(args) -> int:
     from .files import NotReplaced
     from .scene import Scene
     from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+    from .sweeps.grid import check_keys
     from .sweeps import table as sweep_files
 
     try:
@@ -243,6 +244,10 @@ def _sweep(args) -> int:
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
+    try:
+        check_keys(scene, grid.keys)   # parameters.NAME: the scene must declare NAME
+    except ValueError as e:
+        return _fail(str(e))
     out = Path(args.out)
     try:  # before the first run: a refused folder or file must not cost the runs
         sweep_files.check(out, keep=[scene_path(args.scene)])

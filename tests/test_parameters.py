@@ -142,7 +142,8 @@ def test_cli_sweeps_a_parameter_with_one_compile(tmp_path, capsys, monkeypatch):
     assert rows[0].startswith("parameters.a,parameters.k,status") and len(rows) == 64
     assert json.loads((out / "sweep.json").read_text())["scene"]["parameters"]["k"]["max"] == 4.0
     assert main(["sweep", str(path), "--vary", "parameters.b=0:1:2", "--out", str(out)]) == 2
-    assert "no parameter 'b'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no parameter 'b'" in err and "run/s" not in err   # refused before any progress bar
 
 
 def test_a_formula_is_derived_once_however_it_is_asked_for():
