@@ -117,7 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("scene", metavar="SCENE.json", help="scene file (a fixed-step method)")
     sweep.add_argument("--vary", action="append", required=True, metavar="KEY=START:STOP:N",
                        help=f"N evenly spaced values from START to STOP (both included); "
-                            f"repeat for a grid. KEY: {', '.join(SWEEP_KEYS)}")
+                            f"repeat for a grid. KEY: {', '.join(SWEEP_KEYS)}, or parameters.NAME (a parameter of "
+                            f"the scene's formula)")
     sweep.add_argument("--color", default="liftoff_time", metavar="OUTCOME",
                        help="the outcome the map of two varied keys is coloured by "
                             "(default liftoff_time)")
@@ -224,6 +225,7 @@ def _sweep(args) -> int:
     from .files import NotReplaced
     from .scene import Scene
     from .sweeps import OUTCOMES, Grid, parse_vary, sweep
+    from .sweeps.grid import check_keys
     from .sweeps import table as sweep_files
 
     try:
@@ -242,6 +244,10 @@ def _sweep(args) -> int:
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
+    try:
+        check_keys(scene, grid.keys)   # parameters.NAME: the scene must declare NAME
+    except ValueError as e:
+        return _fail(str(e))
     out = Path(args.out)
     try:  # before the first run: a refused folder or file must not cost the runs
         sweep_files.check(out, keep=[scene_path(args.scene)])
@@ -355,10 +361,10 @@ def _compare(args) -> int:
 
 def _compiles(scene) -> str | None:
     """None when the scene's landscape compiles, else why not (one line): before any run."""
-    from .landscape import landscape_for
+    from .landscape import landscape_of
 
     try:
-        landscape_for(scene.landscape).compiled
+        landscape_of(scene).compiled
     except ValueError as e:  # FormulaError
         return str(e)
     return None

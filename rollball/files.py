@@ -143,10 +143,12 @@ def _removed_on_termination(tmp: list):
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], binary: bool = False,
-                 keep: Iterable[str | os.PathLike] = ()) -> None:
+                 keep: Iterable[str | os.PathLike] = (), durable: bool = True) -> None:
     """Create or replace the file ``path`` with what ``write(stream)`` writes (UTF-8 text
     with \\n line ends, or bytes when ``binary``), by the rules in this module's docstring.
-    ``keep``: paths that must not be overwritten (e.g. the input scene)."""
+    ``keep``: paths that must not be overwritten (e.g. the input scene). ``durable``: on disk
+    before the rename (fsync); only files that check themselves when read (the cache's, by
+    their SHA-256) skip it, as a crash may leave them empty or torn."""
     target = write_target(path, keep)
     try:
         info = target.stat()
@@ -164,7 +166,8 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], binary: b
                   else os.fdopen(fd, "w", encoding="utf-8", newline="\n")) as stream:
                 write(stream)
                 stream.flush()
-                os.fsync(stream.fileno())
+                if durable:
+                    os.fsync(stream.fileno())
             if info is None:
                 os.chmod(name, 0o666 & ~_umask())
             else:
@@ -186,8 +189,9 @@ def atomic_write_text(path: str | os.PathLike, text: str, keep: Iterable[str | o
     atomic_write(path, lambda stream: stream.write(text), keep=keep)
 
 
-def atomic_write_bytes(path: str | os.PathLike, data: bytes, keep: Iterable[str | os.PathLike] = ()) -> None:
-    atomic_write(path, lambda stream: stream.write(data), binary=True, keep=keep)
+def atomic_write_bytes(path: str | os.PathLike, data: bytes, keep: Iterable[str | os.PathLike] = (),
+                       durable: bool = True) -> None:
+    atomic_write(path, lambda stream: stream.write(data), binary=True, keep=keep, durable=durable)
 
 
 def open_regular(path: str | os.PathLike) -> IO[bytes]:

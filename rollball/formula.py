@@ -31,6 +31,44 @@ LARGEST_CONSTANT = 1e300
 
 CONSTANTS = {"x": X, "y": Y, "pi": sp.pi, "e": sp.E}
 
+# Named parameters (scene version 3): identifiers, at most MAX_PARAMETERS of them; in the
+# expression the k-th is the symbol ``parameter_symbol(k)``, whatever its name, so a name never
+# reaches generated code.
+MAX_PARAMETERS = 32
+MAX_PARAMETER_NAME = 32
+_PARAMETER_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
+def parameter_symbol(index: int) -> sp.Symbol:
+    return sp.Symbol(f"p_{index}", real=True)
+
+
+def parameter_problem(name) -> str | None:
+    """Why ``name`` cannot name a parameter, or None when it can."""
+    if not isinstance(name, str) or not _PARAMETER_NAME.fullmatch(name):
+        return "a parameter's name must be an identifier (a letter, then letters, digits or _)"
+    if len(name) > MAX_PARAMETER_NAME:
+        return f"a parameter's name has at most {MAX_PARAMETER_NAME} characters"
+    if name in CONSTANTS:
+        return f"{name!r} is taken by the formula's own {'variables' if name in 'xy' else 'constants'}"
+    if name in FUNCTIONS:
+        return f"{name!r} is the name of a function"
+    return None
+
+
+def check_parameter_names(names) -> tuple[str, ...]:
+    """The names, checked (``FormulaError`` for the first bad one, or too many)."""
+    names = tuple(names)
+    if len(names) > MAX_PARAMETERS:
+        raise FormulaError(f"at most {MAX_PARAMETERS} parameters (got {len(names)})")
+    for name in names:
+        problem = parameter_problem(name)
+        if problem:
+            raise FormulaError(problem)
+    if len(set(names)) != len(names):
+        raise FormulaError("a parameter's name appears twice")
+    return names
+
 
 class _RealFunction(sp.Function):
     """A function of one real argument; on a constant it is sympy's own ``constant``."""
@@ -143,7 +181,8 @@ def _power(base: sp.Expr, exponent: sp.Expr, position: int) -> sp.Expr:
 
 
 class _Parser:
-    def __init__(self, tokens: list[_Token]):
+    def __init__(self, tokens: list[_Token], parameters: dict[str, sp.Symbol] | None = None):
+        self.parameters = parameters or {}
         self.tokens = tokens
         self.i = 0
         self.depth = 0
@@ -237,10 +276,10 @@ class _Parser:
         raise FormulaError(f"unexpected {tok.text!r}", tok.position)
 
     def name(self, tok: _Token) -> sp.Expr:
-        if tok.text in CONSTANTS:
+        if tok.text in CONSTANTS or tok.text in self.parameters:
             if self.tok.text == "(":
                 raise FormulaError(f"{tok.text!r} is not a function", tok.position)
-            return CONSTANTS[tok.text]
+            return CONSTANTS[tok.text] if tok.text in CONSTANTS else self.parameters[tok.text]
         if tok.text not in FUNCTIONS:
             raise FormulaError(f"unknown name {tok.text!r}", tok.position)
         func, arity = FUNCTIONS[tok.text]
@@ -277,16 +316,18 @@ class _Parser:
         return result
 
 
-def parse_formula(text: str) -> sp.Expr:
-    """Parse a landscape formula z = f(x, y) into a sympy expression in ``X`` and ``Y``.
+def parse_formula(text: str, parameters=()) -> sp.Expr:
+    """Parse a landscape formula z = f(x, y) into a sympy expression in ``X`` and ``Y`` (and
+    ``parameter_symbol(k)`` for the k-th of the names ``parameters``).
 
     Raises ``FormulaError`` (a ``ValueError``) naming the position and the reason.
     """
+    names = check_parameter_names(parameters)
     if not isinstance(text, str):
         raise FormulaError("formula must be text")
     if len(text) > MAX_LENGTH:
         raise FormulaError(f"formula is too long ({len(text)} characters, at most {MAX_LENGTH})")
-    expr = _Parser(_tokenize(text)).parse()
+    expr = _Parser(_tokenize(text), {n: parameter_symbol(k) for k, n in enumerate(names)}).parse()
     check_constants(expr)
     return expr
 

@@ -1,6 +1,6 @@
 """A landscape z = f(x, y): its formula, derivatives, and their compiled form.
 
-sympy derives f_x, f_y, f_xx, f_xy, f_yy once; common subexpressions are shared and
+sympy's rules derive f_x, f_y, f_xx, f_xy, f_yy once (``derivative``); common subexpressions are shared and
 printed as a small scalar function, compiled as a C callback (landscape_code.py) that the
 one stepping kernel calls. A new formula therefore costs a small compile, not a recompile of
 the integrator; a formula seen in an earlier run loads its machine code from the cache folder;
@@ -21,12 +21,16 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 from sympy.core import cache as sympy_cache
+from sympy.core.function import ArgumentIndexError, Function
+from sympy.functions.elementary.miscellaneous import MinMaxBase
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
 from . import landscape_code
 from .cache import cache_dir
-from .formula import X, Y, FormulaError, check_constants, code_constant, parse_formula
+from .formula import (X, Y, FormulaError, check_constants, check_parameter_names, code_constant, parameter_symbol,
+                      parse_formula)
+from .kernel.interface import landscape_record
 from .landscape_code import LandscapeCode
 from .machine_code import call
 from .text import shown
@@ -70,7 +74,7 @@ class _Printer(PythonCodePrinter):
 
 _PRINTER = _Printer({"standard": "python3", "strict": True})
 _GENERATED_NAMES = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
-_SAFE_NAMES = {"def", "landscape", "x", "y", "out", "math", "abs", "min", "max",
+_SAFE_NAMES = {"def", "landscape", "x", "y", "p", "out", "math", "abs", "min", "max",
                "if", "else", "and", "or", "not"} | {n for n in dir(math) if not n.startswith("_")}
 
 
@@ -105,21 +109,69 @@ def _sizes(exprs, var=None) -> tuple[int, int]:
     return sum(size[e] for e in exprs), sum(dsize[e] for e in exprs)
 
 
-class Landscape:
-    """A parsed, differentiated landscape formula. Raises ``FormulaError`` for bad text, or for
-    a formula whose derivatives would exceed ``MAX_DERIVATIVE_NODES`` (checked before each
-    round of differentiation, so a refusal comes within a second or two)."""
+_PLAIN_CHAIN_RULE = {Function._eval_derivative, MinMaxBase._eval_derivative}
 
-    def __init__(self, text: str):
+
+def derivative(expr: sp.Expr, var: sp.Symbol, done: dict) -> sp.Expr:
+    """``sp.diff(expr, var)``, rule for rule and node for node the same expression, about three
+    times faster: sympy asks after every node whether its derivative is zero (``is_zero``, an
+    assumption query that is two thirds of its time) and then uses it all the same. ``done``
+    keeps the derivatives by ``var`` already made, so a subexpression shared by f and f_x (or
+    by several terms) is differentiated once. Constructs without a rule here go to sympy."""
+    result = done.get(expr)
+    if result is not None:
+        return result
+    if var not in expr.free_symbols:
+        result = sp.S.Zero
+    elif expr == var:
+        result = sp.S.One
+    elif isinstance(expr, sp.Add):
+        result = sp.Add(*[derivative(a, var, done) for a in expr.args])
+    elif isinstance(expr, sp.Mul):   # sympy's Leibniz rule for n = 1
+        args = expr.args
+        result = sp.Add(*[sp.Mul(*[derivative(a, var, done) if j == i else a for j, a in enumerate(args)])
+                          for i in range(len(args))])
+    elif isinstance(expr, sp.Pow):
+        base, exp = expr.args
+        dbase, dexp = derivative(base, var, done), derivative(exp, var, done)
+        result = expr * (dexp * sp.log(base) + dbase * exp / base)
+    elif isinstance(expr, Function) and type(expr)._eval_derivative in _PLAIN_CHAIN_RULE:
+        terms = []
+        for i, a in enumerate(expr.args, 1):
+            da = derivative(a, var, done)
+            if da.is_zero:
+                continue
+            try:
+                df = expr.fdiff(i)
+            except ArgumentIndexError:
+                df = Function.fdiff(expr, i)
+            terms.append(df * da)
+        result = sp.Add(*terms)
+    else:
+        result = sp.diff(expr, var)
+    done[expr] = result
+    return result
+
+
+class Landscape:
+    """A parsed, differentiated landscape formula, with the names of its parameters (scene
+    version 3: their values are arguments of the compiled code, so new values compile nothing).
+    Raises ``FormulaError`` for bad text or names, or for a formula whose derivatives would
+    exceed ``MAX_DERIVATIVE_NODES`` (checked before each round of differentiation, so a refusal
+    comes within a second or two)."""
+
+    def __init__(self, text: str, parameters: tuple[str, ...] = ()):
         self.text = text
-        self.expr = parse_formula(text)
+        self.parameters = check_parameter_names(parameters)
+        self.expr = parse_formula(text, self.parameters)
         f = self.expr
         try:
             # sympy builds first derivatives slowest, node by node: a tenth of the budget
             self._within_budget(_sizes([f], X)[1] + _sizes([f], Y)[1], MAX_DERIVATIVE_NODES // 10)
-            fx, fy = sp.diff(f, X), sp.diff(f, Y)
+            by_x, by_y = {}, {}   # each subexpression differentiated once by x and once by y
+            fx, fy = derivative(f, X, by_x), derivative(f, Y, by_y)
             self._within_budget(_sizes([fx], X)[1] + _sizes([fx, fy], Y)[1])
-            exprs = (f, fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
+            exprs = (f, fx, fy, derivative(fx, X, by_x), derivative(fx, Y, by_y), derivative(fy, Y, by_y))
             self.derivatives = tuple(_without_delta(e) for e in exprs)
             self._within_budget(_sizes(self.derivatives[3:])[0])
         except FormulaError:
@@ -133,7 +185,7 @@ class Landscape:
         _bound_sympy_cache()
 
     def __repr__(self) -> str:
-        return f"Landscape({self.text!r})"
+        return f"Landscape({self.text!r}{f', {self.parameters!r}' if self.parameters else ''})"
 
     @staticmethod
     def _within_budget(nodes: int, budget: int = MAX_DERIVATIVE_NODES) -> None:
@@ -142,11 +194,13 @@ class Landscape:
                                f"{nodes:,} operations, at most {budget:,})")
 
     def _generate_source(self) -> str:
-        """Python source of ``landscape(x, y, out)`` filling out[0:6] with f and its derivatives."""
+        """Python source of ``landscape(x, y, p, out)`` filling out[0:6] with f and its
+        derivatives, the parameters' values read from p[0], p[1], ... (kernel/interface.py)."""
         replacements, reduced = sp.cse(list(self.derivatives), symbols=sp.numbered_symbols("t"))
         # plain pointer stores (no carray, no slices, no conversions): numba types and
         # compiles this in about half the time; NaN first, in case an evaluation raises
-        lines = ["def landscape(x, y, out):"] + [f"    out[{i}] = math.nan" for i in range(6)]
+        lines = (["def landscape(x, y, p, out):"] + [f"    out[{i}] = math.nan" for i in range(6)]
+                 + [f"    {parameter_symbol(k)} = p[{k}]" for k in range(len(self.parameters))])
         try:
             for sym, value in replacements:
                 lines.append(f"    {sym} = {_PRINTER.doprint(value)}")
@@ -156,7 +210,7 @@ class Landscape:
             raise FormulaError(f"cannot compile the formula ({e})") from None
         source = "\n".join(lines) + "\n"
         unknown = {n for n in _GENERATED_NAMES.findall(source)
-                   if n not in _SAFE_NAMES and not re.fullmatch(r"t\d+|e\d*", n)}
+                   if n not in _SAFE_NAMES and not re.fullmatch(r"t\d+|e\d*|p_\d+", n)}
         if unknown:  # a construct the printer spelled in a way we did not vouch for
             raise FormulaError(f"cannot compile the formula (uses {', '.join(sorted(unknown))})")
         return source
@@ -174,19 +228,30 @@ class Landscape:
                 code = self._compiled = _COMPILED[self.source] = code
         return code
 
-    def evaluate(self, x, y) -> np.ndarray:
-        """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y): an array of shape (6,) + broadcast shape.
+    def record(self, values=()) -> np.ndarray:
+        """What the kernel takes as the landscape (``fn`` is its address): the compiled code's
+        address and the parameters' ``values`` (kernel/interface.py). The caller keeps this
+        landscape (its code) and the record alive while the kernel runs."""
+        values = np.asarray(values, dtype=float).ravel()
+        if values.size != len(self.parameters):
+            raise ValueError(f"{self!r} takes {len(self.parameters)} parameter values, not {values.size}")
+        return landscape_record(self.compiled.address, values)
+
+    def evaluate(self, x, y, values=()) -> np.ndarray:
+        """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y) (with the parameters' ``values``): an array of
+        shape (6,) + broadcast shape.
 
         The compiled code the integrator uses; points outside the formula's domain give NaN.
         """
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         out = np.empty((6, x.size))
-        call("evaluate_points", fn=self.compiled.address, xs=np.ascontiguousarray(x).ravel(),
+        record = self.record(values)
+        call("evaluate_points", fn=record.ctypes.data, xs=np.ascontiguousarray(x).ravel(),
              ys=np.ascontiguousarray(y).ravel(), out=out, d=np.empty(6))
         return out.reshape((6,) + x.shape)
 
-    def height(self, x, y) -> np.ndarray:
-        return self.evaluate(x, y)[0]
+    def height(self, x, y, values=()) -> np.ndarray:
+        return self.evaluate(x, y, values)[0]
 
 
 def _bound_sympy_cache() -> None:
@@ -234,7 +299,20 @@ def _compile_or_refuse(source: str) -> LandscapeCode:
         raise FormulaError(f"cannot compile the formula ({first})") from None
 
 
+def landscape_of(scene) -> Landscape:
+    """The (shared, cached) landscape of a scene: its formula with its parameters' names."""
+    return landscape_for(scene.landscape, scene.parameter_names)
+
+
+def landscape_for(text: str, parameters: tuple[str, ...] = ()) -> Landscape:
+    """The (shared, cached) landscape of a formula with the parameters of these names."""
+    return _landscape_for(text, tuple(parameters))
+
+
 @lru_cache(maxsize=64)
-def landscape_for(text: str) -> Landscape:
-    """The (shared, cached) landscape of a formula."""
-    return Landscape(text)
+def _landscape_for(text: str, parameters: tuple[str, ...]) -> Landscape:
+    return Landscape(text, parameters)
+
+
+landscape_for.cache_clear = _landscape_for.cache_clear   # (as before, for tests and the app)
+landscape_for.cache_info = _landscape_for.cache_info

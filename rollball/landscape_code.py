@@ -1,4 +1,4 @@
-"""A landscape's machine code: the generated source of ``landscape(x, y, out)`` (landscape.py)
+"""A landscape's machine code: the generated source of ``landscape(x, y, p, out)`` (landscape.py)
 made into a C callback, kept in the cache folder, and loaded into an LLVM engine of its own
 that is freed with it (docs/design.md §8).
 
@@ -25,8 +25,10 @@ import types
 from . import cache
 
 SYMBOL = "rollball_landscape"
+_MACHINE = None     # the target machine that emits landscapes' object code (under llvm_lock)
 LIMIT = 64 << 20    # bytes a landscape's cached machine code may have (a few kB to a few MB)
-_CTYPE = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double))
+_CTYPE = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double),
+                          ctypes.POINTER(ctypes.c_double))   # kernel/interface.py: LANDSCAPE_ARGUMENTS
 
 
 def llvm_lock():
@@ -41,7 +43,7 @@ def llvm_lock():
 
 
 class LandscapeCode:
-    """The compiled ``landscape(x, y, out)``: ``address`` for the kernel, ``ctypes`` to call it
+    """The compiled ``landscape(x, y, p, out)``: ``address`` for the kernel, ``ctypes`` to call it
     from Python. Holding this object keeps the code; dropping the last reference frees it (its
     engine disposed of under ``llvm_lock``, in whichever thread drops it)."""
 
@@ -71,9 +73,10 @@ def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
 
     from .machine_code import _target_machine
 
+    global _MACHINE
     with llvm_lock():
         _initialise()
-        machine = _target_machine()
+        machine = _MACHINE = _MACHINE or _target_machine()   # made once (0.7 ms); an engine owns its own
         key = _key(text, machine)
         path = cache.cache_dir() / f"landscape-{key}.o"
         entry = _unpack(cache.read(path, LIMIT, "machine code of a landscape")) if cached else None
@@ -165,8 +168,8 @@ def _compile(text: str, name: str, machine) -> tuple[list[str], bytes]:
 
 # -- the generated source as LLVM IR ------------------------------------------------------
 #
-# The generated ``landscape`` is straight-line arithmetic: assignments of numbers, x, y, earlier
-# names, + - * / **, calls of math functions and abs/min/max, comparisons, and/or/not and
+# The generated ``landscape`` is straight-line arithmetic: assignments of numbers, x, y, the
+# parameters' values p[k], earlier names, + - * / **, calls of math functions and abs/min/max, comparisons, and/or/not and
 # conditional expressions. It is translated here as numba would compile it (floats throughout;
 # an integer constant exponent by repeated squaring, any other power by pow; conditional
 # expressions evaluate both sides, which cannot fail), in an LLVM context of its own that is
@@ -186,18 +189,19 @@ _MAX_SQUARING = 0x10000    # numba's cut-off: larger integer exponents go to pow
 
 
 def _ir(text: str) -> str:
-    """LLVM IR of ``landscape(x, y, out)`` from the generated module ``text``, as ``SYMBOL``."""
+    """LLVM IR of ``landscape(x, y, p, out)`` from the generated module ``text``, as ``SYMBOL``."""
     import ast
 
     from llvmlite import ir
 
     tree = ast.parse(text)
     functions = [node for node in tree.body if isinstance(node, ast.FunctionDef)]
-    if len(functions) != 1 or [a.arg for a in functions[0].args.args] != ["x", "y", "out"]:
-        raise _Unsupported("not one landscape(x, y, out)")
+    if len(functions) != 1 or [a.arg for a in functions[0].args.args] != ["x", "y", "p", "out"]:
+        raise _Unsupported("not one landscape(x, y, p, out)")
     double, boolean = ir.DoubleType(), ir.IntType(1)
     module = ir.Module(name="landscape")
-    function = ir.Function(module, ir.FunctionType(ir.VoidType(), [double, double, ir.PointerType()]), SYMBOL)
+    function = ir.Function(module, ir.FunctionType(ir.VoidType(), [double, double, ir.PointerType(),
+                                                                   ir.PointerType()]), SYMBOL)
     builder = ir.IRBuilder(function.append_basic_block("entry"))
     names = {"x": function.args[0], "y": function.args[1]}
     declared = {}
@@ -246,6 +250,11 @@ def _ir(text: str) -> str:
             if node.id not in names:
                 raise _Unsupported(f"name {node.id}")
             return names[node.id]
+        if (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id == "p"
+                and integer(node.slice) is not None and integer(node.slice) >= 0):   # a parameter's value
+            slot = builder.gep(function.args[2], [ir.Constant(ir.IntType(64), integer(node.slice))],
+                               source_etype=double)
+            return builder.load(slot, typ=double)
         if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "math":
             constants = {"pi": math.pi, "e": math.e, "tau": math.tau, "inf": math.inf, "nan": math.nan}
             if node.attr not in constants:
@@ -320,7 +329,7 @@ def _ir(text: str) -> str:
             names[target.id] = result
         elif (isinstance(target, ast.Subscript) and isinstance(target.value, ast.Name) and target.value.id == "out"
               and integer(target.slice) is not None and 0 <= integer(target.slice) < 6):
-            slot = builder.gep(function.args[2], [ir.Constant(ir.IntType(64), integer(target.slice))],
+            slot = builder.gep(function.args[3], [ir.Constant(ir.IntType(64), integer(target.slice))],
                                source_etype=double)
             builder.store(result, slot)
         else:

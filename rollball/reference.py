@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .landscape import landscape_for
+from .landscape import landscape_of
 from .scene import Scene
 from .simulation import initial_state
 
@@ -19,14 +19,15 @@ def _skew(u: np.ndarray) -> np.ndarray:
 
 def reference_rhs(scene: Scene):
     """The right-hand side f(t, y) for y = (alpha, v, R row-major): 14 numbers."""
-    landscape = landscape_for(scene.landscape)
+    landscape = landscape_of(scene)
+    values = scene.parameter_values
     r, m = scene.ball.radius, scene.ball.mass
     g = np.array([0.0, 0.0, -scene.gravity])
     eye = np.eye(3)
 
     def rhs(t, y):
         alpha, v, R = y[:2], y[2:5], y[5:].reshape(3, 3)
-        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1])
+        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1], values)
         n = np.array([-fx, -fy, 1.0])
         W = np.linalg.norm(n)
         N = n / W
@@ -49,7 +50,7 @@ def reference_solution(scene: Scene, t_eval, rtol: float = 1e-12, atol: float = 
     from scipy.integrate import solve_ivp
 
     t_eval = np.asarray(t_eval, dtype=float)
-    alpha, v = initial_state(landscape_for(scene.landscape), scene)
+    alpha, v = initial_state(landscape_of(scene), scene)
     y0 = np.concatenate([alpha, v, np.eye(3).ravel()])
     sol = solve_ivp(reference_rhs(scene), (0.0, float(t_eval[-1])), y0, method="DOP853",
                     t_eval=t_eval, rtol=rtol, atol=atol)

@@ -19,13 +19,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .files import atomic_write_text, open_regular
-from .formula import FormulaError
+from .formula import FormulaError, check_parameter_names
 from .landscape import landscape_for
 from .tableaus import METHODS, get_method
 from .text import shown
 
 FORMAT = "rollball-scene"
-VERSION = 2
+VERSION = 3
 MAX_FILE_SIZE = 1 << 20
 MIN_RTOL = 10 * sys.float_info.epsilon   # tighter relative tolerances are below round-off
 MAX_GRID_POINTS = 401   # per side of the drawn landscape (the app draws it; the core refuses more)
@@ -69,6 +69,16 @@ class Integrator:
 
 
 @dataclass(frozen=True)
+class Parameter:
+    """A named number the formula uses (scene version 3). ``min``/``max``: the range a slider
+    offers (both or neither); the value may lie outside it (a sweep may go beyond)."""
+    name: str
+    value: float
+    min: float | None = None
+    max: float | None = None
+
+
+@dataclass(frozen=True)
 class View:
     min: float = -3.0
     max: float = 3.0
@@ -101,9 +111,9 @@ def _known_method(v):
     return None
 
 
-def _formula(v):
+def _formula(v, parameters=()):
     try:
-        landscape_for(v)  # parsed, differentiated and printed: ready to compile
+        landscape_for(v, parameters)  # parsed, differentiated and printed: ready to compile
     except FormulaError as e:
         return str(e)
     return None
@@ -134,8 +144,10 @@ class Scene:
     integrator: Integrator = field(default_factory=Integrator)
     duration: float = 10.0
     view: View = field(default_factory=View)
+    parameters: tuple[Parameter, ...] = ()   # version 3; also given as a dict as in a file
 
     def __post_init__(self):
+        object.__setattr__(self, "parameters", _parameters(self.parameters))
         _check(self, "")
         if self.view.min >= self.view.max:
             raise SceneError("view.min", "must be less than view.max")
@@ -149,8 +161,24 @@ class Scene:
 
     # -- dictionaries and files -------------------------------------------------------
 
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.parameters)
+
+    @property
+    def parameter_values(self) -> tuple[float, ...]:
+        return tuple(p.value for p in self.parameters)
+
     def to_dict(self) -> dict:
-        return {"format": FORMAT, "version": VERSION, **dataclasses.asdict(self)}
+        """The scene as a file holds it, always in the newest version (``VERSION``); keys at
+        their defaults are written too, but ``parameters`` only when there are any."""
+        body = dataclasses.asdict(self)
+        del body["parameters"]
+        if self.parameters:
+            shown = {p.name: p.value if p.min is None else {"value": p.value, "min": p.min, "max": p.max}
+                     for p in self.parameters}
+            body = {"landscape": body.pop("landscape"), "parameters": shown, **body}
+        return {"format": FORMAT, "version": VERSION, **body}
 
     @classmethod
     def from_dict(cls, data) -> "Scene":
@@ -224,13 +252,82 @@ def _v1_to_v2(body: dict) -> dict:
     return body
 
 
+def _v2_to_v3(body: dict) -> dict:
+    """Version 3 added ``parameters`` (named numbers in the formula); a version-2 scene has
+    none and runs as it did. Keys version 3 added are still unknown in a version-2 file."""
+    for key in V3_KEYS:
+        group, _, name = key.rpartition(".")
+        holder = body.get(group) if group else body
+        if isinstance(holder, dict) and name in holder:
+            raise SceneError(key, "unknown key in a version-2 scene (it came with version 3)")
+    return body
+
+
+# The (dotted) keys version 3 added; the contact model and start.omega of the same version go here too.
+V3_KEYS = ("parameters",)
+
 # MIGRATIONS[k] takes version k + 1 to version k + 2; a file of version v runs MIGRATIONS[v - 1:].
-MIGRATIONS = [_v1_to_v2]
+MIGRATIONS = [_v1_to_v2, _v2_to_v3]
 assert len(MIGRATIONS) == VERSION - 1
 
 
 # Field types, resolved once: loading a scene evaluates nothing.
 _HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View)}
+
+
+def _number(key: str, value) -> float:
+    """A finite number from a file or a caller (a bool is not one), as a plain float."""
+    if isinstance(value, bool) or not isinstance(value, (numbers.Real, decimal.Decimal)):
+        raise SceneError(key, f"must be a number, not {_kind(value)}")
+    try:
+        number = float(value)
+    except OverflowError:
+        raise SceneError(key, "number is too large") from None
+    if not math.isfinite(number):
+        raise SceneError(key, "must be a finite number")
+    return number
+
+
+def _parameters(given) -> tuple[Parameter, ...]:
+    """``parameters`` as a file holds it (name -> number or {"value", "min", "max"}) or as
+    ``Parameter``s, checked: names as formula.check_parameter_names, finite numbers, min < max."""
+    objects = set()   # names given as {"value", ...}: their value's key is NAME.value
+    if isinstance(given, dict):
+        items = []
+        for name, spec in given.items():
+            key = f"parameters.{name}"
+            if isinstance(spec, dict):
+                unknown = [k for k in spec if k not in ("value", "min", "max")]
+                if unknown:
+                    raise SceneError(f"{key}.{unknown[0]}", "unknown key")
+                if "value" not in spec:
+                    raise SceneError(f"{key}.value", "missing")
+                if ("min" in spec) != ("max" in spec):
+                    raise SceneError(f"{key}.{'max' if 'min' in spec else 'min'}", "missing (a range has both ends)")
+                items.append(Parameter(name, spec["value"], spec.get("min"), spec.get("max")))
+                objects.add(name)
+            else:
+                items.append(Parameter(name, spec))
+    elif isinstance(given, (tuple, list)) and all(isinstance(p, Parameter) for p in given):
+        items = list(given)
+    else:
+        raise SceneError("parameters", f"must be an object (name: number), not {_kind(given)}")
+    try:
+        check_parameter_names([p.name for p in items])
+    except FormulaError as e:
+        bad = next((p.name for p in items if isinstance(p.name, str) and e.reason.startswith(repr(p.name))), None)
+        raise SceneError(f"parameters.{bad}" if bad else "parameters", e.reason) from None
+    checked = []
+    for p in items:
+        key = f"parameters.{p.name}"
+        value = _number(f"{key}.value" if p.name in objects or p.min is not None else key, p.value)
+        low = high = None
+        if p.min is not None or p.max is not None:
+            low, high = _number(f"{key}.min", p.min), _number(f"{key}.max", p.max)
+            if not low < high:
+                raise SceneError(f"{key}.min", f"must be less than max (got {low!r} and {high!r})")
+        checked.append(Parameter(p.name, value, low, high))
+    return tuple(checked)
 
 
 def _kind(value) -> str:
@@ -278,6 +375,8 @@ def _check(obj, prefix: str) -> None:
     hints = _HINTS[type(obj)]
     for f in dataclasses.fields(obj):
         key, value, kind = prefix + f.name, getattr(obj, f.name), hints[f.name]
+        if key == "parameters":   # checked by _parameters
+            continue
         if dataclasses.is_dataclass(kind):
             if not isinstance(value, kind):
                 raise SceneError(key, "must be an object")
@@ -299,7 +398,10 @@ def _check(obj, prefix: str) -> None:
             raise SceneError(key, f"must be true or false, not {_kind(value)}")
         elif kind is str and type(value) is not str:
             raise SceneError(key, f"must be text, not {_kind(value)}")
-        problem = CONSTRAINTS.get(key, lambda v: None)(value)
+        if key == "landscape":   # with the names of the scene's parameters
+            problem = _formula(value, tuple(p.name for p in getattr(obj, "parameters", ())))
+        else:
+            problem = CONSTRAINTS.get(key, lambda v: None)(value)
         if problem:
             raise SceneError(key, f"{problem} (got {value!r})" if kind is float else problem)
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import __version__, kernel, machine_code
 from .geometry import unit_normal
-from .landscape import Landscape, landscape_for
+from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene
 from .tableaus import MethodKind, get_method
 from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
@@ -104,7 +104,7 @@ def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.nd
     """Contact point and angular momentum about it, from the scene's start values."""
     s, r, m = scene.start, scene.ball.radius, scene.ball.mass
     with np.errstate(all="ignore"):  # an overflow is reported by the kernel's start check
-        v = initial_momentum(landscape.evaluate(s.x, s.y), s.vx, s.vy, s.spin, r, m)
+        v = initial_momentum(landscape.evaluate(s.x, s.y, scene.parameter_values), s.vx, s.vy, s.spin, r, m)
     return np.array([s.x, s.y]), v
 
 
@@ -170,8 +170,9 @@ class Simulation:
         n_rows = math.ceil(rows)
         self._busy = threading.Lock()
 
-        self.landscape = landscape_for(scene.landscape)
-        self._fn = self.landscape.compiled.address
+        self.landscape = landscape_of(scene)
+        self._landscape_record = self.landscape.record(scene.parameter_values)   # held while the kernel runs
+        self._fn = self._landscape_record.ctypes.data
         self._W, self._E, self._P = self.tableau.kernel_arrays()
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
         self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity,

@@ -49,10 +49,12 @@ def _step(tab, scene, h, z, R):
     n = kernel.MK_SIZE
     K = np.zeros((len(W), n))
     pn = np.zeros(kernel.PROBE_SIZE)
-    kernel.dynamics(land.compiled.address, np.zeros(6), p, z, True, K, 0, pn, True)
+    record = land.record()   # the landscape as the kernel takes it (held while it runs)
+    fn = record.ctypes.data
+    kernel.dynamics(fn, np.zeros(6), p, z, True, K, 0, pn, True)
     zn, Rn = np.zeros(n), np.zeros((3, 3))
     ints = np.zeros(kernel.INTS_SIZE, dtype=np.int64)
-    code = collocation_step(land.compiled.address, np.zeros(6), p, W, h, z, R, K, tab.last, np.zeros(n), zn, Rn, pn,
+    code = collocation_step(fn, np.zeros(6), p, W, h, z, R, K, tab.last, np.zeros(n), zn, Rn, pn,
                             ints)
     zn[5:] = 0.0  # the next step starts from u = 0
     return code, zn, Rn, ints[kernel.I_EVALS]

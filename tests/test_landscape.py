@@ -12,7 +12,7 @@ from rollball.landscape import Landscape, landscape_for
 
 def compiled_values(landscape, x, y):
     out = np.zeros(6)
-    landscape.compiled.ctypes(x, y, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+    landscape.compiled.ctypes(x, y, None, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
     return out
 
 
@@ -60,8 +60,10 @@ def test_outside_the_domain_is_nan_not_an_exception():
 
 def test_generated_source_uses_only_known_names():
     source = Landscape("abs(x) + max(x, y^2) + atan2(y, x) + log10(2 + x)").source
-    assert source.startswith("def landscape(x, y, out):")
-    assert "import" not in source and "__" not in source
+    assert source.startswith("def landscape(x, y, p, out):")
+    assert "import" not in source and "__" not in source and "p[" not in source
+    named = Landscape("import_*x + out + math", ("import_", "out", "math")).source   # names never reach the code
+    assert "p_0 = p[0]" in named and "p_2 = p[2]" in named and "import_" not in named
 
 
 def test_the_same_formula_is_compiled_once():

@@ -3,6 +3,7 @@
 freed after, so that a long session of new formulas does not grow without bound."""
 
 import ctypes
+import re
 import gc
 import json
 import os
@@ -13,8 +14,12 @@ import weakref
 import numpy as np
 import pytest
 
+import sympy as sp
+
 from rollball import Scene, Simulation, landscape_code
-from rollball.landscape import _COMPILED, Landscape, landscape_for
+from rollball.examples import EXAMPLES_DIR
+from rollball.formula import X, Y, FormulaError, parse_formula
+from rollball.landscape import _COMPILED, Landscape, derivative, landscape_for
 from rollball.machine_code import _target_machine
 from rollball.scene import Start
 
@@ -24,9 +29,10 @@ FORMULAS = ["0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "x^3*y - 2*x*y^2 + 7", "at
             "asinh(x) + acosh(2+y^2) + atanh(x/5)", "hypot(x, y)", "x^0.3 + 2^x", "max(x, y, 1) - min(x, 2, y)",
             "-abs(x)", "x/abs(x)", "exp(20*(x-1))", "x^17*y^5 + x^(-7)", "tan(x)", "sqrt(1 - x^2 - y^2)",
             "pi*x + e*y"]
+EXAMPLE_FORMULAS = sorted({json.loads(path.read_text())["landscape"] for path in EXAMPLES_DIR.glob("*.json")})
 
 
-def _values(calls_code, points):
+def _values(calls_code, points, values=(0.0,)):
     import llvmlite.binding as llvm
 
     calls, code = calls_code
@@ -36,12 +42,14 @@ def _values(calls_code, points):
     engine.finalize_object()
     function = landscape_code._CTYPE(engine.get_function_address(landscape_code.SYMBOL))
     out = np.zeros((len(points), 6))
+    values = np.asarray(values, dtype=float)
     for row, (x, y) in zip(out, points):
-        function(x, y, row.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        function(x, y, values.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                 row.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
     return out
 
 
-@pytest.mark.parametrize("text", FORMULAS)
+@pytest.mark.parametrize("text", FORMULAS + EXAMPLE_FORMULAS)
 def test_the_translation_gives_numbas_numbers_bit_for_bit(text):
     points = np.concatenate([np.random.default_rng(7).uniform(-3, 3, (50, 2)),
                              [[0, 0], [1, 1], [0, 1], [1, 0], [-1, 0], [2, 2]]])
@@ -53,13 +61,74 @@ def test_the_translation_gives_numbas_numbers_bit_for_bit(text):
     assert np.array_equal(ours, numbas, equal_nan=True)
 
 
+def _random_formulas(count, seed=5):
+    rng = np.random.default_rng(seed)
+    functions = ["sin", "cos", "exp", "tanh", "sqrt", "abs", "atan", "log", "asinh"]
+
+    def formula(depth):
+        if depth == 0:
+            return str(rng.choice(["x", "y", "pi", str(round(rng.uniform(-3, 3), 3))]))
+        kind = rng.integers(6)
+        if kind == 0:
+            return f"{rng.choice(functions)}({formula(depth - 1)})"
+        if kind == 1:
+            return f"({formula(depth - 1)})^{rng.choice(['2', '3', '-1', '0.5', 'y', '-2'])}"
+        if kind == 2:
+            return f"{rng.choice(['max', 'min', 'atan2', 'hypot'])}({formula(depth - 1)}, {formula(depth - 1)})"
+        if kind == 3:
+            return f"({formula(depth - 1)})*({formula(depth - 1)})"
+        return f"({formula(depth - 1)}) {rng.choice(list('+-/'))} ({formula(depth - 1)})"
+    return [formula(3) for _ in range(count)]
+
+
+PARAMETRIC = [("a*sin(k*x)*cos(y)", ("a", "k"), (0.5, 2.0)), ("exp(-(x^2 + y^2)/w^2)", ("w",), (1.3,)),
+              ("h*max(x, y) + abs(x - c)^q", ("h", "c", "q"), (0.7, -0.2, 2.5)), ("x^n", ("n",), (3.0,))]
+
+
+@pytest.mark.parametrize("text, names, values", PARAMETRIC)
+def test_parameters_are_arguments_with_numbas_numbers_and_the_constants_numbers(text, names, values):
+    points = np.random.default_rng(3).uniform(-2, 2, (40, 2))
+    source = "import math\n\n\n" + Landscape(text, names).source
+    machine = _target_machine()
+    landscape_code._initialise()
+    ours = _values(landscape_code._object_code(source, machine), points, values)
+    numbas = _values(landscape_code._compile(source, "rollball_landscape_test_p", machine), points, values)
+    assert np.array_equal(ours, numbas, equal_nan=True)
+    # the same as the formula with the values written in it, to round-off
+    constant = text
+    for name, value in zip(names, values):
+        constant = re.sub(rf"\b{name}\b", f"({value!r})", constant)
+    assert np.allclose(Landscape(text, names).evaluate(points[:, 0], points[:, 1], values),
+                       Landscape(constant).evaluate(points[:, 0], points[:, 1]), rtol=1e-12, atol=1e-12, equal_nan=True)
+
+
+def test_a_parameter_needs_its_value():
+    with pytest.raises(ValueError, match="takes 2 parameter values"):
+        Landscape("a*x + b", ("a", "b")).evaluate(0.0, 0.0)
+
+
+def test_derivatives_are_sympys_node_for_node():
+    # the same expressions as sympy's diff, so the same generated source and the same numbers
+    for text in FORMULAS + EXAMPLE_FORMULAS + _random_formulas(60) + ["x^y", "exp(x)^y", "log10(x*y)", "2^(x*y)"]:
+        try:
+            f = parse_formula(text)
+        except FormulaError:   # a random one may be a constant that is undefined
+            continue
+        fx, fy = sp.diff(f, X), sp.diff(f, Y)
+        theirs = (fx, fy, sp.diff(fx, X), sp.diff(fx, Y), sp.diff(fy, Y))
+        by_x, by_y = {}, {}
+        gx, gy = derivative(f, X, by_x), derivative(f, Y, by_y)
+        ours = (gx, gy, derivative(gx, X, by_x), derivative(gx, Y, by_y), derivative(gy, Y, by_y))
+        assert ours == theirs, text
+
+
 def test_what_the_translation_does_not_know_numba_compiles():
-    source = "import math\n\n\ndef landscape(x, y, out):\n    out[0] = math.gamma(x) + y\n"
+    source = "import math\n\n\ndef landscape(x, y, p, out):\n    out[0] = math.gamma(x) + y\n"
     with pytest.raises(landscape_code._Unsupported):
         landscape_code._ir(source)
     code = landscape_code.load(source, "rollball_landscape_gamma", cached=False)
     out = np.zeros(6)
-    code.ctypes(4.0, 0.5, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+    code.ctypes(4.0, 0.5, None, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
     assert out[0] == 6.5
 
 

@@ -15,8 +15,12 @@ from rollball.kernel import interface, unpacking
 from rollball.landscape import landscape_for
 
 
+_RECORDS = []   # the landscapes' records, held while the kernel may run them
+
+
 def _points(xs, ys):
-    return machine_code.Arguments("evaluate_points", fn=landscape_for("x^2 + 3*y").compiled.address, xs=xs, ys=ys,
+    _RECORDS.append(landscape_for("x^2 + 3*y").record())
+    return machine_code.Arguments("evaluate_points", fn=_RECORDS[-1].ctypes.data, xs=xs, ys=ys,
                                   out=np.empty((6, len(xs))), d=np.empty(6))
 
 

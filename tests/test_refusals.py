@@ -92,7 +92,7 @@ def test_simulate_takes_a_scene_or_its_path(tmp_path):
 
 
 def test_a_full_cache_folder_compiles_without_it_and_says_so_once(monkeypatch):
-    def full(path, data, keep=()):
+    def full(path, data, keep=(), durable=True):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
     monkeypatch.setattr(cache, "atomic_write_bytes", full)

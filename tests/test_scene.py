@@ -60,7 +60,7 @@ def test_constructed_scenes_are_validated_too():
         Scene(landscape="import os")
 
 
-def test_version_1_files_are_migrated_and_saved_as_version_2(tmp_path):
+def test_version_1_files_are_migrated_and_saved_as_the_newest_version(tmp_path):
     old = {"format": "rollball-scene", "version": 1, "landscape": "x*y",
            "integrator": {"method": "adaptive", "munthe_kaas": True, "rtol": 1e-8}}
     scene = Scene.from_dict(old)
@@ -69,21 +69,22 @@ def test_version_1_files_are_migrated_and_saved_as_version_2(tmp_path):
     path = tmp_path / "new.json"
     scene.save(path)
     saved = json.loads(path.read_text(encoding="utf-8"))
-    assert saved["version"] == 2 and saved["integrator"]["method"] == "dopri5"
+    assert saved["version"] == 3 and saved["integrator"]["method"] == "dopri5" and "parameters" not in saved
     assert old["integrator"]["method"] == "adaptive"  # the migration does not change its input
 
 
 def test_the_migration_steps_cover_every_version():
-    from rollball.scene import MIGRATIONS, VERSION, _v1_to_v2
+    from rollball.scene import MIGRATIONS, VERSION, _v1_to_v2, _v2_to_v3
 
-    assert VERSION == 2 and MIGRATIONS == [_v1_to_v2]
+    assert VERSION == 3 and MIGRATIONS == [_v1_to_v2, _v2_to_v3]
+    assert _v2_to_v3({"landscape": "x", "gravity": 1}) == {"landscape": "x", "gravity": 1}
     assert _v1_to_v2({"landscape": "x"}) == {"landscape": "x"}
     assert _v1_to_v2({"integrator": "bad"}) == {"integrator": "bad"}  # refused later, by key
 
 
 def test_a_newer_version_is_refused_in_words():
-    with pytest.raises(SceneError, match="^version: 3 is newer than this RollBall understands"):
-        Scene.from_dict({**MINIMAL, "version": 3})
+    with pytest.raises(SceneError, match="^version: 4 is newer than this RollBall understands"):
+        Scene.from_dict({**MINIMAL, "version": 4})
 
 
 def test_the_alias_is_read_in_version_2_too():

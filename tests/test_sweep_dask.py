@@ -32,6 +32,18 @@ def test_a_dask_sweep_equals_the_local_one_bit_for_bit(scheduler):
     assert remote.workers == 2 and remote.scheduler == scheduler and calls[-1] == 27
 
 
+def test_a_dask_sweep_over_parameters_equals_the_local_one_bit_for_bit(scheduler):
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "a*sin(k*x)*cos(y)",
+                             "parameters": {"a": 0.5, "k": {"value": 1.0, "min": 0.5, "max": 4.0}},
+                             "duration": 1.0})
+    vary = {"parameters.a": np.linspace(0, 1, 5), "parameters.k": [0.5, 2.0]}
+    remote = sweep(scene, vary, scheduler=scheduler)
+    local = sweep(scene, vary, workers=2)
+    np.testing.assert_array_equal(remote.codes, local.codes)
+    np.testing.assert_array_equal(remote.outcomes, local.outcomes)
+    assert not remote.messages and len(set(local.outcomes[:, 2])) > 1
+
+
 def test_an_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(ValueError, match="cannot reach the Dask scheduler"):
         sweep(Scene.load(EXAMPLES_DIR / "liftoff.json"), {"start.vx": [1.0]}, scheduler="tcp://127.0.0.1:9",

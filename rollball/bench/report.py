@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..comparison_report import draw_work_precision, findings, legend_below, machine, new_figure, png
+from .targets import LATENCY_GOAL
 from .workprecision import SceneResult
 
 
@@ -35,8 +36,10 @@ def _targets(t: dict) -> list[str]:
                      f"{c['ns_c']:.0f} ns; after 1000 steps the two agree to {c['same_step']:.0e} m) | ≤ 1.2× |")
     lines += [
         f"| real time at h = 1e-4 | **{t['real_time']:.0f}×**{_missed(t['real_time'] >= 300)} | ≥ 300× |",
-        f"| a formula never seen before, warm process (parse, derive, compile, validate, run) | "
-        f"**{t['latency'] * 1e3:.0f} ms**{_missed(t['latency'] <= 0.1)} | ≤ 100 ms |",
+        f"| new formula latency: a formula never seen before, warm process (parse, derive, compile, "
+        f"validate, 100 steps; median) | **{t['latency'] * 1e3:.0f} ms**{_missed(t['latency'] <= LATENCY_GOAL)}"
+        + (f" ({t['latency_cpu'] * 1e3:.0f} ms of CPU time)" if t.get("latency_cpu") is not None else "")
+        + f" | ≤ {LATENCY_GOAL * 1e3:.0f} ms |",
         f"| peak memory, 10⁷ steps recording every 100th | **{t['memory'] / 2**20:.0f} MB**"
         f"{_missed(t['memory'] < 300 * 2**20)} | < 300 MB |",
         _app_line(t.get("app")),

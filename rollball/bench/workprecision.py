@@ -13,7 +13,7 @@ import numpy as np
 
 from ..comparison import ATOL_PER_RTOL, Comparison, compare, compute_clock
 from ..examples import EXAMPLES_DIR
-from ..landscape import landscape_for
+from ..landscape import landscape_of
 from ..reference import reference_rhs
 from ..scene import Scene
 from ..simulation import initial_state
@@ -42,7 +42,7 @@ def _scipy_run(scene: Scene, rtol: float, times: np.ndarray):
     from scipy.integrate import solve_ivp
 
     rhs = reference_rhs(scene)
-    alpha, v = initial_state(landscape_for(scene.landscape), scene)
+    alpha, v = initial_state(landscape_of(scene), scene)
     y0 = np.concatenate([alpha, v, np.eye(3).ravel()])
     start = compute_clock()  # as for rollball's own runs
     sol = solve_ivp(rhs, (0.0, times[-1]), y0, method="DOP853", rtol=rtol, atol=rtol * ATOL_PER_RTOL,

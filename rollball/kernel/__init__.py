@@ -3,8 +3,9 @@ for every tableau (classic and Munthe-Kaas), fixed or adaptive steps, validity c
 recording.
 
 Everything here is landscape-independent and compiled once; the landscape arrives as the
-address of its compiled code ``f(x, y, out)`` writing f and its first and second derivatives
-to out[0:6] (``lowlevel.landscape``). Python calls the kernel only through its entry points
+address of its record: the address of its compiled code ``f(x, y, parameters, out)``, then
+its parameters' values (``interface.LANDSCAPE_ARGUMENTS``); the code writes f and its first and
+second derivatives to out[0:6] (``lowlevel.landscape`` calls it). Python calls the kernel only through its entry points
 (``entries.ENTRIES``), whose arguments, rows, codes and arrays ``interface`` declares;
 machine_code.py makes them into machine code: from the LLVM code shipped with RollBall where
 it fits this machine, else compiled here by numba (and kept on disk).

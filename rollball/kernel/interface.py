@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-VERSION = 2   # of the slot convention below (kernel.json records it with each entry's layout)
+VERSION = 3   # of the slot convention and the landscape's record below (kernel.json records it)
 
 # -- the entry points' arguments -------------------------------------------------------------------
 #
@@ -19,7 +19,7 @@ VERSION = 2   # of the slot convention below (kernel.json records it with each e
 # its bits), an array in three (its data's address, rows, columns: 1 for a vector); arrays
 # C-contiguous, "vector" and "matrix" of float64, "ints" an int64 vector. Calls name every
 # argument (``machine_code.Arguments``), and each entry's names are its function's parameters.
-ADDRESS, INT, FLOAT = "address", "int", "float"   # one slot each (address: the landscape's code)
+ADDRESS, INT, FLOAT = "address", "int", "float"   # one slot each (address: the landscape's record)
 VECTOR, MATRIX, INTS = "vector", "matrix", "ints"  # three slots each
 NUMBER_KINDS = (ADDRESS, INT, FLOAT)
 ENTRY_SLOTS = 64
@@ -50,6 +50,28 @@ def layout(name: str) -> tuple[tuple[str, str, int], ...]:
     if slot > ENTRY_SLOTS:
         raise ValueError(f"{name}: {slot} slots, more than ENTRY_SLOTS")
     return tuple(out)
+
+
+# -- the landscape ------------------------------------------------------------------------------
+#
+# The entries take a landscape as ``fn``: the address of its record, float64 words whose first holds
+# the address of the landscape's machine code (an int64, its bits) and the rest the values of the
+# formula's parameters in their declared order (none for a formula without parameters). The code is
+# the C function LANDSCAPE_ARGUMENTS, f(x, y, parameters, out): ``parameters`` points at the record's
+# values, and it writes f, f_x, f_y, f_xx, f_xy, f_yy to out[0:LANDSCAPE_OUTPUTS]. New values are a
+# new record for the same code: nothing is compiled.
+POINTER = "pointer"   # a C pointer to float64 (only in the landscape's arguments)
+LANDSCAPE_ARGUMENTS = (("x", FLOAT), ("y", FLOAT), ("parameters", POINTER), ("out", POINTER))
+LANDSCAPE_RECORD_CODE, LANDSCAPE_RECORD_VALUES = 0, 1   # word of the code's address, first value
+LANDSCAPE_OUTPUTS = 6
+
+
+def landscape_record(address: int, values=()) -> np.ndarray:
+    """A landscape's record (see above): its code's ``address``, then its parameters' ``values``."""
+    record = np.empty(LANDSCAPE_RECORD_VALUES + len(values))
+    record[LANDSCAPE_RECORD_CODE:LANDSCAPE_RECORD_VALUES].view(np.int64)[0] = address
+    record[LANDSCAPE_RECORD_VALUES:] = values
+    return record
 
 
 # -- a run's state -------------------------------------------------------------------------------
@@ -232,6 +254,7 @@ O_T, O_LIFTOFF, O_X, O_Y, O_DRIFT, O_MIN_FORCE, O_MAX_SPEED, O_PATH = range(len(
 def description() -> dict:
     """The interface as kernel.json records it: the version and each entry's arguments."""
     return {"version": VERSION, "slots": ENTRY_SLOTS,
+            "landscape": [f"{parameter} {kind}" for parameter, kind in LANDSCAPE_ARGUMENTS],
             "entries": {name: [f"{parameter} {kind}" for parameter, kind in arguments]
                         for name, arguments in ENTRIES.items()}}
 

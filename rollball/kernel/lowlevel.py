@@ -8,8 +8,11 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
+from .interface import FLOAT, LANDSCAPE_ARGUMENTS, LANDSCAPE_RECORD_CODE, LANDSCAPE_RECORD_VALUES, POINTER
 
-LANDSCAPE_SIGNATURE = types.void(types.float64, types.float64, types.CPointer(types.float64))
+# The landscape's code as a C function, from its declaration (interface.LANDSCAPE_ARGUMENTS).
+LANDSCAPE_SIGNATURE = types.void(*[{FLOAT: types.float64, POINTER: types.CPointer(types.float64)}[kind]
+                                   for _, kind in LANDSCAPE_ARGUMENTS])
 
 # numpy's error model: a division by zero gives inf/nan (caught by the checks) instead of
 # a branch and an exception on every division. Nothing here allocates, so it runs without
@@ -57,13 +60,18 @@ def data_pointer(typingctx, array):
 
 @intrinsic
 def landscape(typingctx, address, x, y, out):
-    """Call the landscape's compiled code (LANDSCAPE_SIGNATURE) at ``address``: f and its
-    derivatives at (x, y) into out[0:6]. An address, not a function object, so that the
-    kernel's compiled code holds nothing of this process and can be shipped."""
+    """Call the landscape whose record is at ``address`` (interface: the code's address, then
+    the parameters' values): its code (LANDSCAPE_SIGNATURE) gives f and its derivatives at
+    (x, y) into out[0:6]. Addresses, not a function object, so that the kernel's compiled code
+    holds nothing of this process and can be shipped."""
     def codegen(context, builder, signature, args):
-        double = ir.DoubleType()
-        code = ir.FunctionType(ir.VoidType(), [double, double, double.as_pointer()])
-        builder.call(builder.inttoptr(args[0], code.as_pointer()), args[1:])
+        double, word = ir.DoubleType(), ir.IntType(64)
+        code = ir.FunctionType(ir.VoidType(), [double, double, double.as_pointer(), double.as_pointer()])
+        record = builder.inttoptr(args[0], word.as_pointer())
+        function = builder.load(builder.gep(record, [ir.Constant(word, LANDSCAPE_RECORD_CODE)]))
+        values = builder.bitcast(builder.gep(record, [ir.Constant(word, LANDSCAPE_RECORD_VALUES)]),
+                                 double.as_pointer())
+        builder.call(builder.inttoptr(function, code.as_pointer()), [args[1], args[2], values, args[3]])
         return context.get_dummy_value()
     return types.void(types.int64, types.float64, types.float64, types.CPointer(types.float64)), codegen
 

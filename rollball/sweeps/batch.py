@@ -16,11 +16,11 @@ from functools import lru_cache
 import numpy as np
 
 from .. import kernel, machine_code
-from ..landscape import landscape_for
+from ..landscape import landscape_of
 from ..scene import Scene, SceneError
 from ..simulation import initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
-from .grid import KEYS, Grid, value_of, with_values
+from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
 from .outcomes import INVALID, NOT_RUN, OUTCOMES
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
@@ -56,8 +56,9 @@ class Result:
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
     """Every sweepable key's value per run: the varied column or the scene's own value."""
+    keys = list(KEYS) + [PARAMETER_PREFIX + name for name in scene.parameter_names]
     return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
-            for key in KEYS}
+            for key in keys}
 
 
 def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
@@ -92,10 +93,13 @@ def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
     return None
 
 
-def _landscape(text: str):
-    """The landscape's machine code; the caller holds it while the kernel runs it."""
+def _landscape(scene: Scene):
+    """The scene's landscape, its machine code made: one compile for every run of a sweep
+    (parameters' values are arguments). The caller holds it while the kernel runs it."""
     with _COMPILE_LOCK:
-        return landscape_for(text).compiled
+        landscape = landscape_of(scene)
+        landscape.compiled  # noqa: B018 - made now, under the lock
+        return landscape
 
 
 def run(task: Task) -> Result:
@@ -107,14 +111,21 @@ def run(task: Task) -> Result:
     status = np.full(runs, NOT_RUN, dtype=np.int64)
     status[list(messages)] = INVALID
     c = _columns(scene, grid, values)
-    code = _landscape(scene.landscape)   # held while the kernel runs it: its machine code lives as long
-    fn = code.address
+    landscape = _landscape(scene)   # held while the kernel runs it: its machine code lives as long
+    names = [PARAMETER_PREFIX + name for name in scene.parameter_names]
+    parameter_values = np.stack([c[key] for key in names], axis=1) if names else np.empty((runs, 0))
+    # the runs of one set of parameter values share a landscape record: a kernel call each
+    sets, of_set = np.unique(parameter_values, axis=0, return_inverse=True)
+    of_set = of_set.ravel()
     r, m = c["ball.radius"], c["ball.mass"]
     with np.errstate(all="ignore"):  # refused runs may hold any value; they are not run
         z0 = np.empty((runs, kernel.MOTION_SIZE))
         z0[:, 0], z0[:, 1] = c["start.x"], c["start.y"]
-        d = landscape_for(scene.landscape).evaluate(c["start.x"], c["start.y"])
-        z0[:, 2:5] = initial_momentum(d, c["start.vx"], c["start.vy"], c["start.spin"], r, m).T
+        for k, values_k in enumerate(sets):
+            these = of_set == k
+            d = landscape.evaluate(c["start.x"][these], c["start.y"][these], values_k)
+            z0[these, 2:5] = initial_momentum(d, c["start.vx"][these], c["start.vy"][these], c["start.spin"][these],
+                                              r[these], m[these]).T
         p = np.ascontiguousarray(kernel.parameters(r, m, c["gravity"]).T)
     dt, t_end = c["integrator.dt"], c["duration"]
     n_steps = np.ones(runs, dtype=np.int64)
@@ -128,9 +139,18 @@ def run(task: Task) -> Result:
                 pass
     outcomes = np.full((runs, len(OUTCOMES)), np.nan)
     W, _, D = method.kernel_arrays()
-    machine_code.call("advance_batch", fn=fn, W=W, P=D, Z0=z0, PARAMS=p, DT=np.ascontiguousarray(dt),
-                      T_END=np.ascontiguousarray(t_end), N_STEPS=n_steps, status=status, out=outcomes,
-                      acc=np.empty(kernel.BATCH_ACCUMULATORS),
-                      **kernel.run_arrays(kernel.MOTION_SIZE, len(W), kernel.BATCH_ROWS))
+    for k, values_k in enumerate(sets):
+        these = np.flatnonzero(of_set == k)
+        whole = len(these) == runs   # (no copies for a sweep of one set of values)
+        part = (lambda a: a) if whole else (lambda a: np.ascontiguousarray(a[these]))
+        record = landscape.record(values_k)
+        part_status, part_outcomes = part(status), part(outcomes)
+        machine_code.call("advance_batch", fn=record.ctypes.data, W=W, P=D, Z0=part(z0), PARAMS=part(p),
+                          DT=part(np.ascontiguousarray(dt)), T_END=part(np.ascontiguousarray(t_end)),
+                          N_STEPS=part(n_steps), status=part_status, out=part_outcomes,
+                          acc=np.empty(kernel.BATCH_ACCUMULATORS),
+                          **kernel.run_arrays(kernel.MOTION_SIZE, len(W), kernel.BATCH_ROWS))
+        if not whole:
+            status[these], outcomes[these] = part_status, part_outcomes
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)

@@ -7,7 +7,8 @@ import math
 
 import numpy as np
 
-from ..scene import Scene
+from ..formula import parameter_problem
+from ..scene import Parameter, Scene
 
 # The scene keys a sweep may vary (dotted, as in scene files), with their units.
 KEYS: dict[str, str] = {
@@ -53,9 +54,30 @@ def parse_vary(text: str) -> tuple[str, np.ndarray]:
     return key, (np.array([lo]) if n == 1 else np.linspace(lo, hi, n))
 
 
+PARAMETER_PREFIX = "parameters."   # parameters.NAME: a parameter of the scene's formula (version 3)
+
+
 def _known(key) -> None:
+    if key.startswith(PARAMETER_PREFIX):
+        if parameter_problem(key[len(PARAMETER_PREFIX):]) is None:
+            return
     if key not in KEYS:
-        raise ValueError(f"cannot vary {key!r}; the keys a sweep varies: {', '.join(KEYS)}")
+        raise ValueError(f"cannot vary {key!r}; the keys a sweep varies: {', '.join(KEYS)}, "
+                         f"and parameters.NAME for a parameter of the scene")
+
+
+def unit(key: str) -> str:
+    """The unit of a varied key (a parameter's is the formula's business: none)."""
+    return KEYS.get(key, "")
+
+
+def check_keys(scene: Scene, keys) -> None:
+    """Refuse (ValueError) varying a parameter the scene does not declare."""
+    for key in keys:
+        if key.startswith(PARAMETER_PREFIX) and key[len(PARAMETER_PREFIX):] not in scene.parameter_names:
+            declared = ", ".join(scene.parameter_names) or "none"
+            raise ValueError(f"cannot vary {key!r}: the scene has no parameter "
+                             f"{key[len(PARAMETER_PREFIX):]!r} (its parameters: {declared})")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,6 +136,9 @@ class Grid:
 
 def value_of(scene: Scene, key: str) -> float:
     """The scene's value of a dotted key."""
+    if key.startswith(PARAMETER_PREFIX):
+        check_keys(scene, [key])
+        return scene.parameter_values[scene.parameter_names.index(key[len(PARAMETER_PREFIX):])]
     obj = scene
     for part in key.split("."):
         obj = getattr(obj, part)
@@ -122,6 +147,11 @@ def value_of(scene: Scene, key: str) -> float:
 
 def with_value(scene: Scene, key: str, value: float) -> Scene:
     """The scene with one dotted key set (validated like a scene file: ``SceneError``)."""
+    if key.startswith(PARAMETER_PREFIX):
+        check_keys(scene, [key])
+        name = key[len(PARAMETER_PREFIX):]
+        return dataclasses.replace(scene, parameters=tuple(
+            Parameter(p.name, value, p.min, p.max) if p.name == name else p for p in scene.parameters))
     group, _, name = key.rpartition(".")
     if not group:
         return dataclasses.replace(scene, **{name: value})

@@ -22,7 +22,7 @@ import numpy as np
 from ..scene import Scene
 from ..simulation import MAX_STEPS, step_count
 from . import batch
-from .grid import Grid
+from .grid import Grid, check_keys
 from .outcomes import NOT_RUN, OUTCOMES
 from .table import SweepTable
 
@@ -104,6 +104,7 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
     ValueError for a bad grid, a method a sweep cannot run, or bad ``workers``.
     """
     grid = Grid.of(vary)
+    check_keys(scene, grid.keys)
     batch.sweep_method(scene)
     if scheduler is not None:
         scheduler = check_address(scheduler)
