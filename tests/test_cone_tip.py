@@ -73,3 +73,14 @@ def test_adaptive_runs_stop_or_lift_off_at_the_tip():
         where = traj.liftoff if traj.status == "ok" else traj.failure
         assert where is not None, (method, rtol, traj.message)
         assert abs(where.time - t_tip) < 1e-6 and np.hypot(where.x, where.y) < 1e-6, (method, rtol, where)
+
+
+@pytest.mark.parametrize("dt", [1e-3, 1e-5])
+def test_the_energy_jump_over_a_lopsided_roof_is_the_landscapes(dt):
+    # a 1-D roof whose sides differ: the model's centre jumps across the kink and the energy with
+    # it, 5 % at any step
+    traj = simulate(make_scene("min(0.5*x, -0.1*x)", x=-0.5, vx=2.0, duration=0.5, dt=dt))
+    assert traj.liftoff is not None and traj.liftoff.kink and abs(traj.liftoff.x) < 1e-9
+    assert 0.04 < traj.energy_drift < 0.06
+    notes = traj.warnings()
+    assert len(notes) == 1 and "the landscape's, not the step's" in notes[0]
