@@ -161,12 +161,30 @@ class Trajectory:
         notes = []
         drift = self.energy_drift
         if drift > ENERGY_WARNING:
-            notes.append(f"energy changed by {drift:.2g} of its scale: the step is too large for this method")
+            notes.append(self._energy_note(drift))
         orth = float(self.orthogonality_error()[-1]) if len(self) else 0.0
         if orth > ORTHOGONALITY_WARNING:
             notes.append(f"‖RᵀR − I‖ = {orth:.2g}: R is no longer a rotation (classic update; "
                          f"Munthe-Kaas keeps it one)")
         return notes
+
+    def _energy_note(self, drift: float) -> str:
+        """Whose the energy error is. Where most of it is one jump between two rows, across the
+        kink or cone tip where the run's lift-off was found, the model's ball jumps there (its
+        centre moves across at once, however short the step): the landscape's, not the step's.
+        Otherwise it is the step's."""
+        error = self.energy_error()
+        jumps = np.abs(np.diff(error))
+        lift = self.liftoff
+        if lift is not None and lift.kink and len(jumps):
+            i = int(np.argmax(jumps))
+            # (a step across the tip may already move the energy before the one that jumps)
+            if jumps[i] >= 0.5 * drift and self.t[max(i - 1, 0)] <= lift.time <= self.t[min(i + 2, len(self) - 1)]:
+                return (f"energy changed by {drift:.2g} of its scale, {jumps[i]:.2g} of it at once at "
+                        f"t = {lift.time:.6g} s, (x, y) = ({lift.x:.6g}, {lift.y:.6g}), where the ball passes a kink "
+                        f"or the tip of a cone and the model's ball jumps over it: this is the landscape's, "
+                        f"not the step's (a smaller step does not reduce it)")
+        return f"energy changed by {drift:.2g} of its scale: the step is too large for this method"
 
     def to_csv(self, path: str | os.PathLike, keep=()) -> None:
         """Write the CSV of docs/design.md §5 atomically, numbers at full precision (``keep``: paths

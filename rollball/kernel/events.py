@@ -10,7 +10,7 @@ from .dense import interpolate, state_at, turn
 from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_HELD,
-    I_REASON, I_ROWS, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_SIZE, P_TURN, R_HEIGHT_JUMP,
+    I_REASON, I_ROWS, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_OMEGA, PROBE_SIZE, P_TURN, R_HEIGHT_JUMP,
     R_KINK, R_NO_FIT, R_SECANT_NO_FIT, SURFACE_SIZE)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import curvatures, shape_of
@@ -36,6 +36,7 @@ BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by 
                        # to 1 + |f|), across 2^-48 of a step is a kink or a jump...
 BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
                        # 1e50 m samples a smooth landscape too coarsely to tell
+JOLT_MIN = 1e-6        # a centre jump (``centre_jolted``) shorter than this times r is not looked at
 # The edge of the no-fit region is a fold of the centre surface: there the contact point's
 # speed grows without bound (as 1 / (1 - r*kappa)) and reaches the edge in finite time, so the
 # stages of a step across it are garbage and its ends may both fit. A step whose contact point
@@ -186,15 +187,66 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     raced |= fold < t + 2.0 * h or info[F_FOLD] < t + 2.0 * h  # (nan before the first step)
     info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
-    if not (fit_end or sharp or jumpy or raced or force_end):
+    jolted = math.isnan(info[F_LIFTOFF]) and centre_jolted(p[0], h, z, probe, zn, pn)
+    if not (fit_end or sharp or jumpy or raced or force_end or jolted):
         return -1.0  # the usual step: nothing to look at closer
     return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
-                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, bend, chord2, stepping)
+                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping)
+
+
+@JIT
+def centre_jolted(r, h, z, probe, zn, pn):
+    """The ball's centre moved from the step's start to its end by more than twice what its
+    speeds there explain. The centre's speed is continuous and bounded by the energy, so the
+    exact motion cannot do that: the contact point passed (within round-off of the step) a
+    point where the normal turns through a finite angle, as beside the tip of a cone, where
+    the model's centre jumps across however short the step."""
+    c0 = r * (probe[PROBE_OMEGA + 1] * probe[2] - probe[PROBE_OMEGA + 2] * probe[1])
+    c1 = r * (probe[PROBE_OMEGA + 2] * probe[0] - probe[PROBE_OMEGA] * probe[2])
+    c2 = r * (probe[PROBE_OMEGA] * probe[1] - probe[PROBE_OMEGA + 1] * probe[0])
+    s0 = c0 * c0 + c1 * c1 + c2 * c2
+    c0 = r * (pn[PROBE_OMEGA + 1] * pn[2] - pn[PROBE_OMEGA + 2] * pn[1])
+    c1 = r * (pn[PROBE_OMEGA + 2] * pn[0] - pn[PROBE_OMEGA] * pn[2])
+    c2 = r * (pn[PROBE_OMEGA] * pn[1] - pn[PROBE_OMEGA + 1] * pn[0])
+    s1 = c0 * c0 + c1 * c1 + c2 * c2
+    dx = zn[0] - z[0] + r * (pn[0] - probe[0])
+    dy = zn[1] - z[1] + r * (pn[1] - probe[1])
+    dz = pn[PROBE_HEIGHT] - probe[PROBE_HEIGHT] + r * (pn[2] - probe[2])
+    moved = dx * dx + dy * dy + dz * dz
+    return moved > 4.0 * h * h * max(s0, s1) and moved > (JOLT_MIN * r) ** 2
+
+
+@COLD
+def locate_jolt(fn, d, r, z, h, P, K, Ye, sa, sb, sm):
+    """Halve the step BREAK_HALVINGS times towards the half in which the centre moves more;
+    returns the fraction of the step where it jumps (sb: the surface there)."""
+    a, b = 0.0, 1.0
+    surface_at(fn, d, r, z, h, P, K, a, Ye, sa)
+    surface_at(fn, d, r, z, h, P, K, b, Ye, sb)
+    for _ in range(BREAK_HALVINGS):
+        m = 0.5 * (a + b)
+        surface_at(fn, d, r, z, h, P, K, m, Ye, sm)
+        if centre_moved(r, sa, sm) >= centre_moved(r, sm, sb):
+            b = m
+            for q in range(SURFACE_SIZE):
+                sb[q] = sm[q]
+        else:
+            a = m
+            for q in range(SURFACE_SIZE):
+                sa[q] = sm[q]
+    return a, b
+
+
+@JIT
+def centre_moved(r, sa, sb):
+    """How far the centre moves between two surface points (squared)."""
+    return ((sb[0] - sa[0] + r * (sb[3] - sa[3])) ** 2 + (sb[1] - sa[1] + r * (sb[4] - sa[4])) ** 2
+            + (sb[2] - sa[2] + r * (sb[5] - sa[5])) ** 2)
 
 
 @COLD
 def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, sa, sb, sm,
-                 fit_end, sharp, jumpy, raced, force_end, bend, chord2, stepping):
+                 fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping):
     """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
     n, mk = shape_of(z)
     r = p[0]
@@ -244,6 +296,12 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
         if jump > BREAK_MIN * (1.0 + abs(sa[2])):
             _fail(ints, info, DOES_NOT_FIT, R_HEIGHT_JUMP, t + b * h, sb[0], sb[1], sb[2] - sa[2])
             stop, valid = b, a
+    # the centre jumped: the contact point passed the tip of a cone or a like point where the
+    # normal turns through a finite angle. Where the ball fits, such a point is convex: the real
+    # ball leaves the surface there (a lift-off at a kink); the step stands
+    if jolted and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
+        a, b = locate_jolt(fn, d, r, z, h, P, K, Ye, sa, sb, sm)
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sb[0], sb[1], 1.0
     # lift-off: F.N turns negative (first time only, before any stop)
     if force_end and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
         a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,

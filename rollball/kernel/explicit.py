@@ -21,9 +21,11 @@ def combine(n, z, h, W, row, K, s, out):
                 out[q] += c * K[i, q]
 
 
-def _trial_step(n: int, mk: bool):
+def _trial_step(n: int, mk: bool, defer: bool = False):
     """The explicit step for one state layout: with n and mk constants of the compiled code,
-    its stage loops unroll as in hand-written C."""
+    its stage loops unroll as in hand-written C. ``defer``: carrying omega, leave R to the
+    caller (``carry_orientation`` once the step is accepted: a rejected try does not pay
+    for the dense-output stages)."""
     orientation = n > MOTION_SIZE
 
     @STEP
@@ -55,7 +57,7 @@ def _trial_step(n: int, mk: bool):
                 for c in range(3):
                     Rn[a, c] = zn[5 + 3 * a + c]
         code = end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
-        if carry and code == 0:
+        if carry and code == 0 and not defer:
             code = carry_orientation(fn, d, p, W, P, h, z, R, K, last, Y, Rn, pn, ints)
         return code
 
@@ -63,6 +65,7 @@ def _trial_step(n: int, mk: bool):
 
 
 trial_step_mk = _trial_step(MK_SIZE, True)
+trial_step_pair = _trial_step(MK_SIZE, True, True)  # the pairs' tries (``advance_adaptive``)
 trial_step_classic = _trial_step(CLASSIC_SIZE, False)
 trial_step_motion = _trial_step(MOTION_SIZE, False)
 

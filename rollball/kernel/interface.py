@@ -118,8 +118,10 @@ PROBE_SIZE = 10
 # F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
 # F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
 # F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
-F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD = range(11)
-INTS_SIZE, INFO_SIZE = 11, 11
+# F_ERR_OLD: the adaptive step-size control's error of the last accepted step (PI control).
+(F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD,
+ F_ERR_OLD) = range(12)
+INTS_SIZE, INFO_SIZE = 11, 12
 
 # -- recorded rows: the CSV columns of DESIGN §5 -----------------------------------------------------
 

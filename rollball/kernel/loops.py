@@ -9,7 +9,7 @@ import numpy as np
 
 from .dense import state_at
 from .events import fold_search, record_valid, step_events
-from .explicit import STEP_NOT_CONVERGED, dense_stages, trial_step_mk
+from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, trial_step_pair
 from .interface import (
     BATCH_CHUNK, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED, I_RETRY,
     I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF, O_MAX_SPEED,
@@ -18,7 +18,8 @@ from .interface import (
 from .lowlevel import COLD, JIT
 from .physics import shape_of
 from .recording import _fail, record, record_last, start
-from .steps import MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm, take_step
+from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
+                    next_step_factor, take_step)
 from .unpacking import scratch
 
 
@@ -124,8 +125,11 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        bad = trial_step_mk(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)  # (the pairs: MK_SIZE)
+        bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)  # (the pairs: MK_SIZE)
         err = math.inf if bad else error_norm(E, err_kind, K, last, MOTION_SIZE, z, zn, hs, rtol, atol)
+        if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
+            bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
+            err = math.inf if bad else err
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
             ints[I_REJECTED] += 1
             retry = True
@@ -173,7 +177,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
         t = t_new
         accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] += 1
-        grown = hs * min(1.0 if retry else MAX_FACTOR, SAFETY * err ** err_exp if err > 0.0 else MAX_FACTOR)
+        grown = hs * min(1.0 if retry else MAX_FACTOR, next_step_factor(err, err_kind, err_exp, info))
         h = max(h, grown) if land else grown
         retry = False
         if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
