@@ -123,7 +123,7 @@ PROBE_SIZE = 10
  F_ERR_OLD) = range(12)
 INTS_SIZE, INFO_SIZE = 11, 12
 
-# -- recorded rows: the CSV columns of DESIGN §5 -----------------------------------------------------
+# -- recorded rows: the CSV columns of docs/design.md §5 ------------------------------------------
 
 ROW_FIELDS = (("t", 1), ("contact", 2), ("center", 3), ("velocity", 3), ("omega", 3), ("R", 9), ("energy", 1),
               ("normal_force", 1))

@@ -1,5 +1,5 @@
 """The physics of one state: the landscape at the contact point, the reduced equations of
-motion (``dynamics``, DESIGN §1), the exact inverse of dexp on so(3), the principal curvatures,
+motion (``dynamics``, docs/design.md §1), the exact inverse of dexp on so(3), the principal curvatures,
 the Rodrigues formula, and the finiteness checks every step makes."""
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from .physics import FULL, _finite, _finite_row, dynamics, shape_of
 
 @JIT
 def record(rows, i, t, z, R, probe, p):
-    """Write one trajectory row (the CSV columns of DESIGN §5)."""
+    """Write one trajectory row (the CSV columns of docs/design.md §5)."""
     r, m, g0 = p[0], p[1], p[2]
     n1, n2, n3 = probe[0], probe[1], probe[2]
     o1, o2, o3 = probe[3], probe[4], probe[5]
