@@ -168,14 +168,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], binary: b
                 stream.flush()
                 if durable:
                     os.fsync(stream.fileno())
-            if info is None:
-                os.chmod(name, 0o666 & ~_umask())
-            else:
-                os.chmod(name, stat.S_IMODE(info.st_mode))
-                try:
-                    os.chown(name, info.st_uid, info.st_gid)
-                except OSError:  # only root may give a file away; the group where allowed
-                    pass
+            _take_mode(name, info)
             os.replace(name, target)
         except BaseException:
             try:
@@ -373,11 +366,17 @@ def _stage(name: str, content, target: Path) -> None:
         stream.write(content)
         stream.flush()
         os.fsync(stream.fileno())
+    _take_mode(name, info)
+
+
+def _take_mode(name: str, info: os.stat_result | None) -> None:
+    """Give a file about to replace another that one's mode (owner and group where allowed),
+    or, replacing nothing (``info`` None), the umask's for a new file."""
     if info is None:
         os.chmod(name, 0o666 & ~_umask())
-    else:
-        os.chmod(name, stat.S_IMODE(info.st_mode))
-        try:
-            os.chown(name, info.st_uid, info.st_gid)
-        except OSError:
-            pass
+        return
+    os.chmod(name, stat.S_IMODE(info.st_mode))
+    try:
+        os.chown(name, info.st_uid, info.st_gid)
+    except OSError:  # only root may give a file away; the group where allowed
+        pass

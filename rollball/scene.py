@@ -383,14 +383,7 @@ def _check(obj, prefix: str) -> None:
             _check(value, key + ".")
             continue
         if kind is float:
-            if isinstance(value, bool) or not isinstance(value, (numbers.Real, decimal.Decimal)):
-                raise SceneError(key, f"must be a number, not {_kind(value)}")
-            try:
-                number = float(value)
-            except OverflowError:
-                raise SceneError(key, "number is too large") from None
-            if not math.isfinite(number):
-                raise SceneError(key, "must be a finite number")
+            number = _number(key, value)
             if type(value) is not float:  # int, numpy numbers: stored as a plain float
                 object.__setattr__(obj, f.name, number)
             value = number
