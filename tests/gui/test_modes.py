@@ -83,8 +83,11 @@ def test_the_layouts_of_the_modes():
 
 def test_the_scene_panel_comes_back_after_compare_and_after_a_restart(qtbot, window, preferences):
     ctrl_k = (QtCore.Qt.Key.Key_K, QtCore.Qt.KeyboardModifier.ControlModifier)
+    window.activateWindow()   # a shortcut reaches the active window only (another test's may have been)
+    qtbot.waitUntil(window.isActiveWindow, timeout=10_000)
     qtbot.keyClick(window, *ctrl_k)
-    assert window.compare.dock.isVisible() and window.bottom.currentWidget() is window.compare.error_plots
+    qtbot.waitUntil(window.compare.dock.isVisible, timeout=10_000)
+    assert window.bottom.currentWidget() is window.compare.error_plots
     qtbot.keyClick(window, *ctrl_k)
     assert editing_layout(window)
     qtbot.keyClick(window, *ctrl_k)   # and quit while comparing
