@@ -18,6 +18,8 @@ from rollball import FormulaError, Scene, SceneError
 from rollball.landscape import landscape_for
 from rollball import METHODS, MethodKind
 
+from .parameters import ParameterRows
+
 # (dotted scene key, label, unit, tooltip), by group
 NUMBER_FIELDS = {
     "Ball": (
@@ -132,14 +134,16 @@ class ScenePanel(QtWidgets.QWidget):
     """
 
     sceneChanged = QtCore.Signal(object)
-    _formulaChecked = QtCore.Signal(str, object)  # from the checking thread: text, refusal or None
+    _formulaChecked = QtCore.Signal(object, object)  # from the checking thread: (text, names), refusal or None
 
     def __init__(self, parent=None):
         super().__init__(parent)
         self._scene: Scene | None = None
         self._filling = False
-        self._checked: dict[str, str | None] = {}  # formula -> why it is refused (None: ready)
-        self._checking: str | None = None          # the formula being checked in the background
+        # (formula, parameter names) -> why it is refused (None: ready)
+        self._checked: dict[tuple[str, tuple[str, ...]], str | None] = {}
+        self._checking: tuple[str, tuple[str, ...]] | None = None   # being checked in the background
+        self.gesture = None                        # while a slider's change is applied: its drag
         self._formulaChecked.connect(self._formula_checked)
         self.numbers: dict[str, QtWidgets.QLineEdit] = {}
         self.messages: dict[str, QtWidgets.QLabel] = {}      # under each field, by key
@@ -183,8 +187,12 @@ class ScenePanel(QtWidgets.QWidget):
         self.description = QtWidgets.QLineEdit(objectName="description")
         self.description.setPlaceholderText("Description (shown in the Examples menu)")
         self.description.textEdited.connect(lambda: self._edited())
+        self.parameter_rows = ParameterRows()
+        self.parameter_rows.edited.connect(lambda name: self._edited(f"parameters.{name}"))
+        self.parameter_rows.dragged.connect(self._dragged)
         box.addWidget(self.formula)
         box.addWidget(self.formula_error)
+        box.addWidget(self.parameter_rows)
         box.addWidget(self.description)
         return group
 
@@ -267,11 +275,12 @@ class ScenePanel(QtWidgets.QWidget):
         self._timer.stop()
         self._scene = scene
         self._edits = []
-        self._checked[scene.landscape] = None  # a Scene's formula is valid and derived
+        self._checked[(scene.landscape, scene.parameter_names)] = None  # a Scene's formula is valid
         data = scene.to_dict()
         self._filling = True
         try:
             self.formula.setText(scene.landscape)
+            self.parameter_rows.set_parameters(scene.parameters)
             self.description.setText(scene.description)
             self.description.setCursorPosition(0)   # its beginning, not its end
             for key, edit in self.numbers.items():
@@ -291,6 +300,22 @@ class ScenePanel(QtWidgets.QWidget):
             self._edits = [k for k in self._edits if k != key] + [key]
         self._timer.start()
 
+    def _dragged(self, name: str) -> None:
+        """A slider moved: applied at once (no typing pause), one undo step a drag."""
+        if self._filling:
+            return
+        key = f"parameters.{name}"
+        self._edits = [k for k in self._edits if k != key] + [key]
+        self.gesture = ("slider", self.parameter_rows.gesture)
+        try:
+            self.apply()
+        finally:
+            self.gesture = None
+
+    def parameter_names(self) -> tuple[str, ...]:
+        """The names the formula may use: the scene's parameters, as the panel shows them."""
+        return tuple(self.parameter_rows.rows)
+
     @property
     def checking(self) -> bool:
         """A formula is being checked in the background."""
@@ -301,7 +326,7 @@ class ScenePanel(QtWidgets.QWidget):
         formula not checked yet is checked in the background first (None meanwhile)."""
         self._timer.stop()
         text = self._formula_text()
-        if text not in self._checked:
+        if (text, self.parameter_names()) not in self._checked:
             self._check_formula(text)
             return None
         scene, key, message = self.read()
@@ -320,24 +345,25 @@ class ScenePanel(QtWidgets.QWidget):
         self.formula_error.setText(CHECKING)
         self.formula_error.show()
         if self._checking is None:  # one check at a time; the latest text follows it
-            self._checking = text
-            threading.Thread(target=self._check_in_background, args=(text,), daemon=True,
+            self._checking = (text, self.parameter_names())
+            threading.Thread(target=self._check_in_background, args=self._checking, daemon=True,
                              name="formula check").start()
 
-    def _check_in_background(self, text: str) -> None:
+    def _check_in_background(self, text: str, names: tuple[str, ...] = ()) -> None:
         try:
-            landscape_for(text).compiled  # noqa: B018 - parse, differentiate and compile
+            landscape_for(text, names).compiled  # noqa: B018 - parse, differentiate and compile
             problem = None
         except FormulaError as error:
             problem = str(error)
         except Exception as error:  # e.g. numba refusing generated code
             problem = f"cannot compile the formula: {compile_reason(error)}"
-        self._formulaChecked.emit(text, problem)  # queued to the GUI thread
+        self._formulaChecked.emit((text, names), problem)  # queued to the GUI thread
 
-    def _formula_checked(self, text: str, problem: str | None) -> None:
-        self._checked[text] = problem
+    def _formula_checked(self, checked: tuple, problem: str | None) -> None:
+        self._checked[checked] = problem
         self._checking = None
-        if self._formula_text() == text or self._formula_text() not in self._checked:
+        now = (self._formula_text(), self.parameter_names())
+        if now == checked or now not in self._checked:
             self.apply()
 
     def _formula_text(self) -> str:
@@ -345,17 +371,21 @@ class ScenePanel(QtWidgets.QWidget):
 
     def read(self) -> tuple[Scene | None, str | None, str | None]:
         """(scene, None, None) from the fields, or (None, offending key, message)."""
-        text = self._formula_text()
-        problem = self._checked.get(text)
-        if problem is None and text not in self._checked:
+        text, names = self._formula_text(), self.parameter_names()
+        problem = self._checked.get((text, names))
+        if problem is None and (text, names) not in self._checked:
             try:
-                landscape_for(text)
+                landscape_for(text, names)
             except FormulaError as error:
                 problem = str(error)
         if problem is not None:
             return None, "landscape", problem
         data = (self._scene or Scene(landscape="0")).to_dict()
         data["landscape"] = text
+        if names:
+            data["parameters"], key, message = self.parameter_rows.specs()
+            if key is not None:
+                return None, key, message
         data["description"] = self.description.text()
         for key, edit in self.numbers.items():
             try:
@@ -415,15 +445,19 @@ class ScenePanel(QtWidgets.QWidget):
     def _show_errors(self, key: str | None, message: str | None, mark: str = "error") -> None:
         """Mark the field ``key`` (None: none) as refused (or with a notice) and show
         ``message`` right under it."""
+        if key is not None and key.startswith("parameters."):   # parameters.a.value: the field of a
+            key = ".".join(key.split(".")[:2])
         self.marked, self.noticed = (key, None) if mark == "error" else (None, key)
         field_style, label_style, message_style = MARKS[mark]
-        fields = {"landscape": self.formula, **self.numbers}
+        rows = self.parameter_rows
+        fields = {"landscape": self.formula, **self.numbers, **rows.edits}
         for name, edit in fields.items():
             edit.setStyleSheet(field_style if name == key else "")
-        for name, label in self.row_labels.items():
+        for name, label in {**self.row_labels, **rows.labels}.items():
             label.setStyleSheet(label_style if name == key else "")
-        shown_at = self.messages.get(key, self.error) if key is not None else None
-        for label in (*self.messages.values(), self.error):
+        messages = self._all_messages()
+        shown_at = messages.get(key, self.error) if key is not None else None
+        for label in (*messages.values(), self.error):
             label.setStyleSheet(message_style)
             label.setVisible(label is shown_at)
         if key == "landscape":
@@ -443,14 +477,18 @@ class ScenePanel(QtWidgets.QWidget):
     @property
     def notice_text(self) -> str:
         """The notice on a field of a valid scene (empty when there is none)."""
-        return self.messages[self.noticed].text() if self.noticed else ""
+        return self._all_messages()[self.noticed].text() if self.noticed else ""
+
+    def _all_messages(self) -> dict[str, QtWidgets.QLabel]:
+        """The message under each field, the parameters' too, by key."""
+        return {**self.messages, **self.parameter_rows.messages}
 
     @property
     def error_text(self) -> str:
         """The message currently shown (empty when the fields are valid)."""
         if self.noticed:
             return ""
-        for label in (*self.messages.values(), self.error):
+        for label in (*self._all_messages().values(), self.error):
             if not label.isHidden():
                 return label.text()
         return ""

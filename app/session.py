@@ -23,7 +23,8 @@ from .undo import SceneChange
 
 def physics(scene: Scene) -> tuple:
     """What a run depends on (not the drawn grid or the description)."""
-    return (scene.landscape, scene.gravity, scene.ball, scene.start, scene.integrator, scene.duration)
+    return (scene.landscape, scene.parameters, scene.gravity, scene.ball, scene.start, scene.integrator,
+            scene.duration)
 
 
 def run_spec(scene: Scene) -> RunSpec:
@@ -36,7 +37,8 @@ def run_spec(scene: Scene) -> RunSpec:
 class Changes:
     """What going from one scene to another touches."""
     grid: bool      # the drawn landscape's formula or grid: redraw it and reset the camera
-    surface: bool   # the surface as drawn for this ball (its cut follows the ball's energy)
+    surface: bool   # the surface as drawn for this ball (its cut follows the ball's energy), or
+                    # with new parameter values (redrawn, the camera kept: a slider is dragged)
     run: bool       # what a run depends on: the run is reset
 
 
@@ -44,8 +46,8 @@ def changes(old: Scene | None, new: Scene) -> Changes:
     if old is None:
         return Changes(True, True, True)
     grid = old.landscape != new.landscape or old.view != new.view
-    surface = (grid or old.ball.radius != new.ball.radius or old.start != new.start
-               or old.gravity != new.gravity)
+    surface = (grid or old.parameters != new.parameters or old.ball.radius != new.ball.radius
+               or old.start != new.start or old.gravity != new.gravity)
     return Changes(grid, surface, physics(old) != physics(new))
 
 
@@ -64,10 +66,11 @@ class SceneSession(QtCore.QObject):
         self.undo.clear()
         self.document.opened(path, scene, example)
 
-    def edited(self, old: Scene | None, new: Scene) -> None:
-        """The fields were changed from ``old`` to ``new`` (already shown): one undo step."""
+    def edited(self, old: Scene | None, new: Scene, gesture=None) -> None:
+        """The fields were changed from ``old`` to ``new`` (already shown): one undo step; the
+        changes of one ``gesture`` (a slider's drag) make one step together."""
         if old is not None and old != new:
-            self.undo.push(SceneChange(self.show, old, new))
+            self.undo.push(SceneChange(self.show, old, new, gesture=gesture))
 
     def load(self, current: Scene | None, scene: Scene, text: str) -> bool:
         """Put ``scene`` in place of ``current`` as one undo step named ``text``; False if it is

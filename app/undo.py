@@ -17,7 +17,7 @@ from .inputs import NUMBER_FIELDS
 
 LABELS = {key: f"{group.lower()} {label}" if group in ("Start", "Grid") else label.lower()
           for group, fields in NUMBER_FIELDS.items() for key, label, _, _ in fields}
-LABELS.update({"landscape": "landscape", "description": "description",
+LABELS.update({"landscape": "landscape", "description": "description", "parameters": "parameters",
                "integrator.method": "method", "integrator.munthe_kaas": "Munthe-Kaas"})
 
 
@@ -40,19 +40,41 @@ def changed_keys(old: Scene, new: Scene) -> list[str]:
 def describe(old: Scene, new: Scene) -> str:
     keys = changed_keys(old, new)
     if len(keys) == 1:
-        return f"Change {LABELS.get(keys[0], keys[0])}"
+        key = keys[0]
+        if key.startswith("parameters.") and key not in LABELS:   # parameters.k or parameters.k.value
+            return f"Change parameter {key.split('.')[1]}"
+        return f"Change {LABELS.get(key, key)}"
     return f"Change {len(keys)} fields"
+
+
+GESTURE_ID = 1   # QUndoCommand.id of changes that merge with the previous one of their gesture
 
 
 class SceneChange(QtGui.QUndoCommand):
     """From scene ``old`` to ``new`` through ``show(scene)``. ``applied``: the change was already
-    made (a field edit), so the first ``redo``, which ``QUndoStack.push`` calls, does nothing."""
+    made (a field edit), so the first ``redo``, which ``QUndoStack.push`` calls, does nothing.
+    Changes of the same ``gesture`` (a slider's drag) merge into one step, from the scene before
+    the drag to the scene after it."""
 
     def __init__(self, show: Callable[[Scene], None], old: Scene, new: Scene, text: str | None = None,
-                 applied: bool = True):
+                 applied: bool = True, gesture=None):
         super().__init__(text or describe(old, new))
         self.show, self.old, self.new = show, old, new
         self._done = applied
+        self.gesture = gesture
+
+    def id(self) -> int:
+        return GESTURE_ID if self.gesture is not None else -1
+
+    def mergeWith(self, other) -> bool:
+        if not isinstance(other, SceneChange) or other.gesture != self.gesture or self.gesture is None:
+            return False
+        self.new = other.new
+        if self.old == self.new:
+            self.setObsolete(True)   # dragged back to where it was: no step
+        else:
+            self.setText(describe(self.old, self.new))
+        return True
 
     def redo(self) -> None:
         if self._done:

@@ -14,7 +14,6 @@ from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__
 from rollball.examples import example_scenes
 from rollball.files import atomic_write_bytes, write_target
 from rollball.geometry import reachable_height, unit_normal
-from rollball.landscape import landscape_for
 from rollball.simulation import recording
 from rollball.text import shown
 from rollball.trajectory import CENTER, CONTACT, R
@@ -27,6 +26,7 @@ from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunContr
 from .dialogs import AnimationDialog, ImageDialog
 from .inputs import ScenePanel, compile_reason
 from .modes import DEFAULT_SIZE, Modes, fitted, place_over
+from .parameters import valued
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
@@ -366,7 +366,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _scene_edited(self, scene: Scene) -> None:
         old = self.session.shown
         self._use_scene(scene)
-        self.session.edited(old, scene)
+        self.session.edited(old, scene, self.panel.gesture)
 
     def show_scene(self, scene: Scene) -> None:
         """Put a scene into the fields and the view (undo, redo, revert)."""
@@ -383,7 +383,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """Show a valid scene; a change to what a run depends on resets the run. Returns notes
         on what the drawn landscape shows (no-fit and undefined regions)."""
         old = self.session.shown
-        landscape = landscape_for(scene.landscape)
+        landscape = valued(scene)   # with the parameters' values: new values compile nothing
         try:
             landscape.compiled  # noqa: B018 - compile now, so a run starts at once
         except Exception as error:  # numba refused generated code: keep what is shown

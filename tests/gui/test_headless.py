@@ -252,7 +252,7 @@ def test_a_formula_the_compiler_refuses_says_why_in_one_clean_line(qtbot, window
         @property
         def compiled(self):
             raise RuntimeError(noisy)
-    monkeypatch.setattr(inputs, "landscape_for", lambda text: Refused())
+    monkeypatch.setattr(inputs, "landscape_for", lambda text, names=(): Refused())
     set_field(qtbot, window, "landscape", "x*y + 1")
     text = window.panel.formula_error.text()
     assert text.startswith("cannot compile the formula: no version of gamma takes float64, float64"), text

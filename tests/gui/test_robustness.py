@@ -147,9 +147,9 @@ def test_a_formula_is_checked_off_the_gui_thread(qtbot, window, monkeypatch):
     release = threading.Event()
     real = rollball_app.inputs.landscape_for
 
-    def slow(text):
+    def slow(text, names=()):
         release.wait(30)  # as long as the test wants: the check must not block the window
-        return real(text)
+        return real(text, names)
 
     monkeypatch.setattr(rollball_app.inputs, "landscape_for", slow)
     scene = window.scene
