@@ -1,10 +1,19 @@
-"""How responsive the window stays while a long run is computed and played, for ``rollball bench``.
+"""How responsive the window is, for ``rollball bench``: while a long run is computed and played,
+and from an edit of the landscape to the landscape drawn (``latency``).
 
 ``python -m rollball_app.responsiveness`` opens the main window on the hills example with h = 1e-4 for
 100 s (10⁶ steps), plays it as fast as it is computed, and meanwhile lets a 5 ms timer tick on
 the GUI thread. It prints one line of JSON: the longest and the median gap between ticks
 (painting included: under Xvfb the GL view is rendered in software, on the same cores as the
-integrator). It needs a display (or Xvfb) and writes nothing.
+integrator), and the latencies of ``latency`` (``--latency``: those alone). It needs a display
+(or Xvfb) and writes nothing.
+
+The latency is timed from the change to the 3-D view's next frame on screen (``frameSwapped``,
+Xvfb's software GL included), on the ripples example (a sin(k x) cos(k y), a 81 × 81 grid):
+a parameter's slider moved (the scene made anew, the surface evaluated with the new values
+and redrawn, the run reset: nothing compiled), and a formula keystroke, counted from the end
+of the typing pause (``inputs.DEBOUNCE_MS`` more from the key itself) — to a formula seen before
+(the app's own part) and to one never seen (parsed, derived and compiled in the background).
 """
 
 from __future__ import annotations
@@ -18,6 +27,7 @@ import time
 import numpy as np
 
 TICK_MS = 5
+LATENCY_GOAL_MS = 150      # from an edit to the landscape drawn, the app's part (issue 25)
 
 
 def measure() -> dict:
@@ -63,5 +73,88 @@ def measure() -> dict:
             "median_gap_ms": float(1e3 * np.median(gaps))}
 
 
+def latency(repeats: int = 9) -> dict:
+    """Milliseconds from an edit to the landscape drawn (medians and longest of ``repeats``), and
+    how many landscapes were compiled while the sliders moved (none is right)."""
+    import random
+
+    from PySide6 import QtCore, QtTest
+
+    from rollball import landscape as core
+    from rollball.examples import scene_path
+
+    from .inputs import DEBOUNCE_MS
+    from .main import application
+    from .preferences import Preferences
+    from .window import MainWindow
+
+    app = application()
+    with tempfile.TemporaryDirectory() as folder:
+        settings = QtCore.QSettings(f"{folder}/preferences.ini", QtCore.QSettings.Format.IniFormat)
+        window = MainWindow(Preferences(settings))
+        window.open_scene(scene_path("ripples"), remember=False)
+        window.show()
+        frames = [0]
+        window.view.frameSwapped.connect(lambda: frames.__setitem__(0, frames[0] + 1))
+
+        def settle(seconds: float = 0.3) -> None:
+            end = time.perf_counter() + seconds
+            while time.perf_counter() < end:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 20)
+
+        def drawn_after(change, done=lambda: True) -> float:
+            """Seconds from ``change()`` to the view's next frame on screen once ``done()``."""
+            settle()
+            started = time.perf_counter()
+            change()
+            deadline = started + 120
+            while not done() and time.perf_counter() < deadline:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
+            seen = frames[0]
+            while frames[0] == seen and time.perf_counter() < deadline:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
+            return time.perf_counter() - started
+
+        settle(1.0)
+        compiles = []
+        real = core._compile
+        core._compile = lambda source: compiles.append(source) or real(source)
+        try:
+            slider = window.panel.parameter_rows.rows["a"].slider
+            slider_s = [drawn_after(lambda p=p: slider.setValue(p)) for p in
+                        (100 + 800 * (i % 2) + 10 * i for i in range(repeats))]
+            slider_compiles = len(compiles)
+            field, panel = window.panel.formula, window.panel
+            base = window.scene.landscape
+            seen = [f"{base}+0.1*x", f"{base}-0.1*x"]
+            for text in seen:   # compiled once, beforehand
+                field.setText(text)
+                panel.apply()
+                while panel.checking:
+                    app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
+
+            def keystroke(text: str) -> None:   # the formula's last key, then the typing pause ends
+                field.setText(text[:-1])
+                field.setCursorPosition(len(text) - 1)
+                QtTest.QTest.keyClicks(field, text[-1])
+                panel.apply()
+            seen_s = [drawn_after(lambda t=seen[i % 2]: keystroke(t), lambda t=seen[i % 2]: window.scene.landscape == t)
+                      for i in range(repeats)]
+            fresh = [f"{base}+{random.randrange(10**8, 10**9)}e-10*x" for _ in range(repeats)]   # never seen
+            new_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t) for t in fresh]
+        finally:
+            core._compile = real
+        window.document.saved_scene = window.scene  # nothing to ask when it closes
+        window.close()
+
+    def ms(values):
+        return {"median_ms": float(1e3 * np.median(values)), "longest_ms": float(1e3 * np.max(values))}
+    return {"slider": ms(slider_s), "slider_compiles": slider_compiles, "formula_seen": ms(seen_s),
+            "formula_new": ms(new_s), "debounce_ms": DEBOUNCE_MS, "goal_ms": LATENCY_GOAL_MS, "repeats": repeats}
+
+
 if __name__ == "__main__":
-    print(json.dumps(measure()))
+    if "--latency" in sys.argv[1:]:
+        print(json.dumps(latency()))
+    else:
+        print(json.dumps({**measure(), "latency": latency()}))

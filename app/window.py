@@ -327,7 +327,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _build_status(self) -> None:
         self.state_label = QtWidgets.QLabel(objectName="state")
         self.state_label.setFixedWidth(150)  # text changes must not re-lay out the window
-        self.message = QtWidgets.QLabel(objectName="message")
+        self.message = StatusMessage(objectName="message")
         self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
         self.message.setWordWrap(True)   # a long message takes a second line rather than being cut
         self.statusBar().addWidget(self.message, 1)
@@ -1069,6 +1069,17 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.shutdown()
         self.stop_preparing()
         event.accept()
+
+
+class StatusMessage(QtWidgets.QLabel):
+    """The status bar's message, always two lines high (its tooltip holds all of a longer one):
+    a message coming and going (as a slider is dragged) never resizes the 3-D view, which
+    re-frames its camera on a resize (a second under software GL)."""
+
+    def event(self, event) -> bool:
+        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.Polish):
+            self.setFixedHeight(2 * self.fontMetrics().lineSpacing())
+        return super().event(event)
 
 
 def _plain(text: str) -> str:
