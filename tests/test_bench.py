@@ -79,3 +79,16 @@ def test_the_report_marks_each_figure_that_misses_its_goal():
                         ({"latency": 0.045}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory")]:
         missed = [line for line in _targets(**change).splitlines() if "missed" in line]
         assert len(missed) == 1 and row in missed[0], (change, missed)
+
+
+def test_the_report_states_the_apps_latency_against_its_goal():
+    def figure(ms):
+        return {"median_ms": ms, "longest_ms": 2 * ms}
+    latency = {"slider": figure(40.0), "slider_compiles": 0, "formula_seen": figure(90.0),
+               "formula_new": figure(120.0), "debounce_ms": 250, "goal_ms": 150, "repeats": 9}
+    app = {"longest_gap_ms": 90.0, "median_gap_ms": 20.0, "latency": latency}
+    text = _targets(app=app)
+    assert "slider moved" in text and "**40 ms**" in text and "missed" not in text
+    latency["formula_seen"] = figure(200.0)
+    missed = [line for line in _targets(app=app).splitlines() if "missed" in line]
+    assert len(missed) == 1 and "seen before" in missed[0]

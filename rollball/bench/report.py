@@ -21,6 +21,27 @@ def _app_line(app: dict | None) -> str:
             f"(median {app['median_gap_ms']:.0f} ms) | ≤ 250 ms |")
 
 
+APP_LATENCY_GOAL_MS = 150   # an edit to the landscape drawn, the app's part
+
+
+def _app_latency_lines(app: dict | None) -> list[str]:
+    """The app's latency, from an edit of the landscape to its next frame on screen (measured
+    by ``python -m rollball_app.responsiveness``, on the ripples example)."""
+    latency = (app or {}).get("latency")
+    if not latency:
+        return []
+    goal = f"≤ {APP_LATENCY_GOAL_MS} ms"
+    rows = [("a parameter's slider moved (nothing compiled: "
+             f"{latency['slider_compiles']} compiles)", latency["slider"]),
+            ("a formula keystroke, after the typing pause, to a formula seen before (the app's part)",
+             latency["formula_seen"]),
+            ("the same to a formula never seen (its compile in the background included)", latency["formula_new"])]
+    return [f"| app latency: {what}, to the landscape drawn (median of {latency['repeats']}) | "
+            f"**{v['median_ms']:.0f} ms**{_missed(v['median_ms'] <= APP_LATENCY_GOAL_MS)} "
+            f"(longest {v['longest_ms']:.0f} ms) | {goal} |" for what, v in rows] + [
+            f"| the typing pause before a keystroke is applied | {latency['debounce_ms']} ms | — |"]
+
+
 def _targets(t: dict) -> list[str]:
     c, cold = t["c"], t["cold"]
     lines = ["## Speed targets", "",
@@ -43,6 +64,7 @@ def _targets(t: dict) -> list[str]:
         f"| peak memory, 10⁷ steps recording every 100th | **{t['memory'] / 2**20:.0f} MB**"
         f"{_missed(t['memory'] < 300 * 2**20)} | < 300 MB |",
         _app_line(t.get("app")),
+        *_app_latency_lines(t.get("app")),
         f"| compiling every method in one process, empty caches (CPU time; once per machine, "
         f"`scripts/setup` does it; from the shipped kernel code) | **{cold['all_methods_cold_cache']:.1f} s**"
         f"{_missed(cold['all_methods_cold_cache'] <= 10)} | ≤ 10 s |",

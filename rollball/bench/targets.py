@@ -181,7 +181,8 @@ XVFB = ["xvfb-run", "-a", "-s", "-screen 0 1400x900x24 +extension GLX +render"]
 
 
 def app_responsiveness() -> dict:
-    """The window's longest event-loop gap while 10⁶ steps are computed and played, measured in
+    """The window's longest event-loop gap while 10⁶ steps are computed and played, and its
+    latency from an edit of the landscape to the landscape drawn (``latency``), measured in
     a child process (``python -m rollball_app.responsiveness``; under Xvfb when there is no display), or
     why it could not be measured. The core imports no Qt: the app does this in its own process."""
     import shutil

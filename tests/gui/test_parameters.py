@@ -170,3 +170,27 @@ def test_a_scene_without_parameters_shows_no_rows(qtbot, window):
     assert window.panel.parameter_rows.isVisibleTo(window.panel)
     assert window.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
     assert not window.panel.parameter_rows.isVisibleTo(window.panel)
+
+
+def test_the_faster_redraw_draws_what_pyqtgraph_would():
+    """Vertex normals made in numpy are pyqtgraph's own (to float32 rounding), and the camera's
+    distance in closed form is where the bisection it replaced ended."""
+    import pyqtgraph.opengl as gl
+
+    from rollball_app.view3d import FILL, SceneView, look, project, surface_mesh
+
+    axis = np.linspace(-2, 2, 41)
+    xs, ys = np.meshgrid(axis, axis, indexing="ij")
+    z = np.sin(xs) * np.cos(ys) + xs * xs
+    mesh = surface_mesh(axis, z, np.ones(z.shape + (4,)), cap=3.0)
+    reference = gl.MeshData(vertexes=mesh.vertexes(), faces=mesh.faces()).vertexNormals()
+    assert np.abs(mesh.vertexNormals() - reference).max() < 1e-5
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        corners = rng.normal(size=(8, 3)) * rng.uniform(0.1, 5)
+        center = corners.mean(axis=0)
+        elevation, azimuth, aspect = rng.uniform(-10, 89), rng.uniform(0, 360), rng.uniform(0.4, 1.5)
+        d = SceneView._fit_distance(corners, center, elevation, azimuth, 60.0, aspect)
+        seen = project(corners, look(center, d * (1 + 1e-9), elevation, azimuth), center, 60.0, aspect)
+        closer = project(corners, look(center, d * (1 - 1e-6), elevation, azimuth), center, 60.0, aspect)
+        assert np.abs(seen).max() <= FILL and np.abs(closer).max() > FILL
