@@ -367,11 +367,7 @@ class SceneView(gl.GLViewWidget):
         path, also where it leaves the drawn grid); ``aspect``: the framed picture's height over
         its width (default: the view's)."""
         r = self.ball_radius
-        points = np.vstack([self.ball_center.reshape(1, 3)] + ([] if include is None else
-                                                                [np.asarray(include, dtype=float).reshape(-1, 3)]))
-        points = points[np.all(np.isfinite(points), axis=1)]
-        box = np.array([np.minimum(self.bounds[0], points.min(axis=0) - r),
-                        np.maximum(self.bounds[1], points.max(axis=0) + r)])
+        box = self._box(include)
         center = box.mean(axis=0)
         corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
         aspect = aspect or self.height() / max(self.width(), 1)
@@ -391,6 +387,22 @@ class SceneView(gl.GLViewWidget):
         self._draw_axes(box, look(center, distance, elevation, azimuth))
         self.framed = True
         self.update()
+
+    def _box(self, include: np.ndarray | None = None) -> np.ndarray:
+        """The box framed: the drawn landscape, the ball and ``include`` (n, 3)."""
+        r = self.ball_radius
+        points = np.vstack([self.ball_center.reshape(1, 3)] + ([] if include is None else
+                                                                [np.asarray(include, dtype=float).reshape(-1, 3)]))
+        points = points[np.all(np.isfinite(points), axis=1)]
+        return np.array([np.minimum(self.bounds[0], points.min(axis=0) - r),
+                         np.maximum(self.bounds[1], points.max(axis=0) + r)])
+
+    def refresh_axes(self) -> None:
+        """The axes around the landscape as now drawn, the camera left where it is (a slider
+        reshaping the landscape: its heights change, the view does not jump)."""
+        if self.axis_labels:   # the axes were drawn (by reset_camera) before
+            eye = self.cameraPosition()
+            self._draw_axes(self._box(), np.array([eye.x(), eye.y(), eye.z()]))
 
     @staticmethod
     def _fit_distance(corners, center, elevation, azimuth, fov, aspect) -> float:

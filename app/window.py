@@ -414,6 +414,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.reset()
         if redraw_camera or changed.grid:
             self.view.reset_camera()   # after reset(), so the ball stands at the start
+        elif changed.surface:
+            self.view.refresh_axes()   # new heights (a slider): the camera stays
         self.session.shown = scene
         self.compare.scene_changed(scene)
         self._update_title()

@@ -194,3 +194,17 @@ def test_the_faster_redraw_draws_what_pyqtgraph_would():
         seen = project(corners, look(center, d * (1 + 1e-9), elevation, azimuth), center, 60.0, aspect)
         closer = project(corners, look(center, d * (1 - 1e-6), elevation, azimuth), center, 60.0, aspect)
         assert np.abs(seen).max() <= FILL and np.abs(closer).max() > FILL
+
+
+def test_a_slider_keeps_the_camera_and_the_height_axis_follows(qtbot, ripples):
+    window = ripples
+    view = window.view
+    view.orbit(30, 10)   # the user turned the camera
+    camera = (view.opts["distance"], view.opts["elevation"], view.opts["azimuth"])
+
+    def top():   # the height axis's upper end
+        return float(view.axes.pos[:, 2].max())
+    low = top()
+    window.panel.parameter_rows.rows["a"].slider.setValue(SLIDER_STEPS)   # a = 1: twice as high
+    assert (view.opts["distance"], view.opts["elevation"], view.opts["azimuth"]) == camera
+    assert top() > low + 0.1   # (the surface is cut at the height the ball can reach)
