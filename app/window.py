@@ -1083,6 +1083,9 @@ class StatusMessage(QtWidgets.QLabel):
             self.setFixedHeight(2 * self.fontMetrics().lineSpacing())
         return super().event(event)
 
+    def minimumSizeHint(self) -> QtCore.QSize:   # nor widens the window for a long message
+        return QtCore.QSize(0, super().minimumSizeHint().height())
+
 
 def _plain(text: str) -> str:
     """Text that a message box cannot take for rich text (it guesses from tags like <b>)."""

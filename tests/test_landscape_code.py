@@ -29,7 +29,10 @@ FORMULAS = ["0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "x^3*y - 2*x*y^2 + 7", "at
             "asinh(x) + acosh(2+y^2) + atanh(x/5)", "hypot(x, y)", "x^0.3 + 2^x", "max(x, y, 1) - min(x, 2, y)",
             "-abs(x)", "x/abs(x)", "exp(20*(x-1))", "x^17*y^5 + x^(-7)", "tan(x)", "sqrt(1 - x^2 - y^2)",
             "pi*x + e*y"]
-EXAMPLE_FORMULAS = sorted({json.loads(path.read_text())["landscape"] for path in EXAMPLES_DIR.glob("*.json")})
+# every example's formula with the names of its parameters (if any)
+EXAMPLES = sorted({(data["landscape"], tuple(data.get("parameters", {})))
+                   for data in (json.loads(path.read_text()) for path in EXAMPLES_DIR.glob("*.json"))})
+EXAMPLE_FORMULAS = [text for text, names in EXAMPLES if not names]
 
 
 def _values(calls_code, points, values=(0.0,)):
@@ -49,15 +52,16 @@ def _values(calls_code, points, values=(0.0,)):
     return out
 
 
-@pytest.mark.parametrize("text", FORMULAS + EXAMPLE_FORMULAS)
-def test_the_translation_gives_numbas_numbers_bit_for_bit(text):
+@pytest.mark.parametrize("text, names", [(text, ()) for text in FORMULAS] + EXAMPLES)
+def test_the_translation_gives_numbas_numbers_bit_for_bit(text, names):
     points = np.concatenate([np.random.default_rng(7).uniform(-3, 3, (50, 2)),
                              [[0, 0], [1, 1], [0, 1], [1, 0], [-1, 0], [2, 2]]])
-    source = "import math\n\n\n" + Landscape(text).source
+    source = "import math\n\n\n" + Landscape(text, names).source
+    values = np.linspace(0.7, 1.3, len(names)) if names else (0.0,)
     machine = _target_machine()
     landscape_code._initialise()
-    ours = _values(landscape_code._object_code(source, machine), points)
-    numbas = _values(landscape_code._compile(source, "rollball_landscape_test", machine), points)
+    ours = _values(landscape_code._object_code(source, machine), points, values)
+    numbas = _values(landscape_code._compile(source, "rollball_landscape_test", machine), points, values)
     assert np.array_equal(ours, numbas, equal_nan=True)
 
 
