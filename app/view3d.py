@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pyqtgraph as pg
 import pyqtgraph.opengl as gl
+from OpenGL import GL
 from PySide6 import QtGui
 
 from rollball.geometry import fit_ratio
@@ -31,6 +32,12 @@ GHOST_ALPHA = 0.3        # the balls of the runs not followed, in compare mode: 
 TICK = 0.015             # an axis tick's length as a fraction of the landscape's width
 LABEL_REACH = 8          # ticks beyond the axes that their labels reach (names at 6, text beyond)
 FILL = 0.9               # the framed landscape fills up to this fraction of the view
+MARK_PIXELS = 30         # a ball smaller than this on screen is marked by a ring this wide around it
+MARK_EDGE = (0.10, 0.10, 0.10, 0.85)   # the ring's edge (a run's own colour in compare mode)
+MARK_FILL = (1.0, 1.0, 1.0, 0.55)      # its inside, behind the ball
+MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,   # never hidden by the surface
+           "glBlendFuncSeparate": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)}
+BALL_DEPTH, MARK_DEPTH, GHOST_DEPTH = 0.6, 0.5, 1.0   # drawing order: surface, marks, ball, ghosts
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
@@ -273,6 +280,8 @@ class SceneView(gl.GLViewWidget):
         self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=3.0, antialias=True, mode="line_strip")
         self.liftoff = gl.GLScatterPlotItem(color=LIFTOFF_COLOR, size=16.0, pxMode=True)
         self.liftoff.setGLOptions("translucent")
+        self.liftoff.setDepthValue(BALL_DEPTH + 0.1)   # over the ball's mark
+        self.ball.setDepthValue(BALL_DEPTH)
         for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
@@ -283,6 +292,8 @@ class SceneView(gl.GLViewWidget):
         self.trails_shown = True
         self.label_scale = 1.0   # the axis labels' text size, times 8 pt
         self.colors: list | None = None   # the runs' colours in compare mode
+        self.marks_shown = True   # a ring around a ball too small to be seen from afar
+        self.marks = [self._mark(MARK_EDGE)]   # one per ball
 
     @property
     def ball_center(self) -> np.ndarray:
@@ -476,9 +487,10 @@ class SceneView(gl.GLViewWidget):
 
     def set_runs(self, colors: list | None) -> None:
         """One ball and trail per colour (compare mode), or None: the single striped ball."""
-        for item in self.balls[1:] + self.trails[1:]:
+        for item in self.balls[1:] + self.trails[1:] + self.marks[1:]:
             self.removeItem(item)
-        self.balls, self.trails = [self.ball], [self.trail]
+        self.balls, self.trails, self.marks = [self.ball], [self.trail], self.marks[:1]
+        self._color_mark(self.marks[0], MARK_EDGE if colors is None else colors[0])
         self.ball.setMeshData(meshdata=ball_mesh() if colors is None else run_ball_mesh(colors[0]))
         self.trail.setData(color=TRAIL_COLOR if colors is None else pg.mkColor(colors[0]).getRgbF())
         # one trail is added onto the surface; several keep their own colours where they cross
@@ -487,6 +499,10 @@ class SceneView(gl.GLViewWidget):
             ball = gl.GLMeshItem(meshdata=run_ball_mesh(color), smooth=False, shader="shaded",
                                  glOptions="opaque")
             ball.setTransform(self.ball.transform())   # at the start until its run's first row
+            ball.setDepthValue(BALL_DEPTH)
+            mark = self._mark(color, len(self.marks))
+            mark.setData(pos=self.marks[0].pos)
+            self.marks.append(mark)
             trail = gl.GLLinePlotItem(color=pg.mkColor(color).getRgbF(), width=3.0, antialias=True,
                                       mode="line_strip", glOptions="translucent")
             self.addItem(ball)
@@ -513,11 +529,61 @@ class SceneView(gl.GLViewWidget):
             ghost = k != self.followed
             ball.setMeshData(meshdata=run_ball_mesh(color, GHOST_ALPHA if ghost else 1.0))
             ball.setGLOptions("translucent" if ghost else "opaque")
-            ball.setDepthValue(1 if ghost else 0)
+            ball.setDepthValue(GHOST_DEPTH if ghost else BALL_DEPTH)
 
     def set_run_visible(self, index: int, visible: bool) -> None:
         self.balls[index].setVisible(visible)
         self.trails[index].setVisible(visible and self.trails_shown)
+
+    # -- the ball's mark: seen from the back of the room, the ball itself drawn to scale ----
+
+    def _mark(self, edge, k: int = 0) -> gl.GLScatterPlotItem:
+        """A ring MARK_PIXELS wide around a ball's centre, drawn over the surface and under the
+        ball: a dark (or the run's) edge, a pale inside. Run k's ring is 6k pixels wider and drawn
+        before those of the runs before it, so where balls stand together every ring shows."""
+        mark = gl.GLScatterPlotItem(pos=np.zeros((2, 3)), size=np.array([MARK_PIXELS + 5.0, MARK_PIXELS]) + 6 * k,
+                                    pxMode=True)
+        self._color_mark(mark, edge)
+        mark.setGLOptions(MARK_GL)
+        mark.setDepthValue(MARK_DEPTH - 0.01 * k)
+        mark.setVisible(False)
+        self.addItem(mark)
+        return mark
+
+    @staticmethod
+    def _color_mark(mark: gl.GLScatterPlotItem, edge) -> None:
+        edge = np.asarray(pg.mkColor(edge).getRgbF() if isinstance(edge, str) else edge, dtype=float)
+        edge[3] = MARK_EDGE[3]
+        mark.setData(color=np.array([edge, MARK_FILL]))
+
+    def ball_pixels(self, index: int = 0) -> float:
+        """A ball's diameter on screen in pixels, true to scale: its centre and a point one
+        radius from it across the line of sight, projected with the view's own matrices."""
+        w, h = self.width(), self.height()
+        m = np.array((self.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * self.viewMatrix()).data()).reshape(4, 4).T
+        right = np.array(self.viewMatrix().row(0).toVector3D().toTuple())   # the camera's x axis in the world
+        center = self.centers[index]
+        points = np.array([[*center, 1.0], [*(center + self.ball_radius * right), 1.0]]) @ m.T
+        if np.any(points[:, 3] <= 0):
+            return 0.0   # behind the camera
+        ndc = points[:, :2] / points[:, 3:]
+        return float(np.linalg.norm((ndc[1] - ndc[0]) * [w / 2, h / 2])) * 2
+
+    def set_marks_visible(self, on: bool) -> None:
+        self.marks_shown = on
+        self.update()
+
+    def _place_marks(self) -> None:
+        """A ball is marked while it is shown smaller than MARK_PIXELS (changed only when it
+        changes: a change asks for one more frame)."""
+        for k, (ball, mark) in enumerate(zip(self.balls, self.marks)):
+            wanted = self.marks_shown and ball.visible() and self.ball_pixels(k) < MARK_PIXELS
+            if mark.visible() != wanted:
+                mark.setVisible(wanted)
+
+    def paintGL(self) -> None:
+        self._place_marks()
+        super().paintGL()
 
     def set_label_scale(self, scale: float) -> None:
         """The axis labels at ``scale`` times their normal size."""
@@ -538,6 +604,7 @@ class SceneView(gl.GLViewWidget):
         """Place a run's ball (see ``ball_transform``)."""
         self.balls[index].setTransform(ball_transform(center, R, radius))
         self.centers[index] = np.asarray(center, dtype=float)
+        self.marks[index].setData(pos=np.tile(self.centers[index], (2, 1)))
         self.ball_radius = radius
         if self.follow and index == self.followed:
             self.opts["center"] = QtGui.QVector3D(*map(float, center))

@@ -210,6 +210,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.trail_action = self._action("Show &Trail", self.view.set_trails_visible, "T",
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
+        self.mark_action = self._action("Ball &Marker", self.view.set_marks_visible, "M",
+                                        "A ring around the ball where it is drawn smaller than 30 pixels (a mark "
+                                        "to see it from afar; the ball inside is to scale)", checkable=True,
+                                        name="ball_marker")
+        self.mark_action.setChecked(True)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
                                               "The equations of motion, lift-off, no-fit, Munthe-Kaas")
         self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
@@ -276,7 +281,7 @@ class MainWindow(QtWidgets.QMainWindow):
             action.triggered.connect(lambda _=False, k=scale: self._set_text_size(k, remember=True))
             self.text_size_group.addAction(action)
         view.addSeparator()
-        view.addActions([self.follow_action, self.trail_action, self.camera_action])
+        view.addActions([self.follow_action, self.trail_action, self.mark_action, self.camera_action])
         view.addSeparator()
         view.addActions([self.scene_panel_action, self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")
