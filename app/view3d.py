@@ -38,6 +38,7 @@ MARK_FILL = (1.0, 1.0, 1.0, 0.55)      # its inside, behind the ball
 MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,   # never hidden by the surface
            "glBlendFuncSeparate": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)}
 BALL_DEPTH, MARK_DEPTH, GHOST_DEPTH = 0.6, 0.5, 1.0   # drawing order: surface, marks, ball, ghosts
+LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's framebuffer unbound
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
@@ -468,6 +469,7 @@ class SceneView(gl.GLViewWidget):
         self.axis_labels = [gl.GLTextItem(pos=np.asarray(pos, dtype=float), text=text, color=TEXT_COLOR,
                                           font=font, glOptions="translucent") for pos, text in labels]
         for item in self.axis_labels:
+            item.setDepthValue(LABEL_DEPTH)
             self.addItem(item)
 
     def resizeEvent(self, event) -> None:
