@@ -313,7 +313,7 @@ def record(app, window, path: Path, args, specs, problems: list, stopped: list) 
     if problems:
         return problems[0]
     try:
-        done = window.export_animation(Path(args.record), fps=args.fps, size=args.size,
+        done = window.exports.export_animation(Path(args.record), fps=args.fps, size=args.size,
                                        progress=lambda _done, _total: not stopped)
     except (OSError, ValueError) as error:
         return f"{args.record}: {_reason(error)}"

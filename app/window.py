@@ -12,22 +12,19 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, resources
 from rollball.examples import example_scenes
-from rollball.files import atomic_write_bytes, write_target
 from rollball.geometry import reachable_height, unit_normal
 from rollball.simulation import recording
 from rollball.text import shown
 from rollball.trajectory import CENTER, CONTACT, R
 
 from . import help as helps
-from .animation import DEFAULT_FPS, frame_times, record
 from .closeup import CloseUp
 from .compare_mode import CompareMode
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
-from .dialogs import AnimationDialog, ImageDialog
+from .exports import Exports
 from .inputs import ScenePanel, compile_reason
 from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .parameters import valued
-from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 from .plots import LivePlots
 from .preferences import Preferences
 from .presentation import TEXT_SIZES, Presentation
@@ -42,7 +39,6 @@ PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at e
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 SCENE_FILTER = "RollBall scenes (*.json);;All files (*)"
-CSV_FILTER = "CSV files (*.csv);;All files (*)"
 LIFTOFF_COLOR, STOP_COLOR = "#ff8c00", "#c0392b"   # markers on the time slider
 START_WORDS = {READY: ("Start", "Start the run from t = 0"),                # what Start does, by state
                PAUSED: ("Resume", "Resume playback from where it was paused"),
@@ -87,6 +83,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.undo_stack = self.session.undo
         self.undo_stack.cleanChanged.connect(lambda _clean: self._update_controls())
         self.help_window: helps.HelpWindow | None = None
+        self.exports = Exports(self)   # CSV, PNG, MP4 and GIF
         self.view.installEventFilter(self)   # keeps the close-up in the view's corner
         self._build_layout()
         self._build_actions()
@@ -152,11 +149,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.save_action = self._action("&Save Scene", self.save, keys.Save, "Save the scene")
         self.save_as_action = self._action("Save Scene &As…", self.save_as, keys.SaveAs,
                                            "Save the scene under a new name")
-        self.export_action = self._action("&Export Trajectory CSV…", self.export_dialog, "Ctrl+E",
+        self.export_action = self._action("&Export Trajectory CSV…", self.exports.export_dialog, "Ctrl+E",
                                           "Write the computed trajectory as CSV")
-        self.image_action = self._action("Save &Image…", self.save_image_dialog, "Ctrl+Shift+I",
+        self.image_action = self._action("Save &Image…", self.exports.save_image_dialog, "Ctrl+Shift+I",
                                          "Save the 3-D view as a PNG image (1×, 2×, 4×; caption; plots)")
-        self.animation_action = self._action("Export &Animation…", self.export_animation_dialog, "Ctrl+Shift+E",
+        self.animation_action = self._action("Export &Animation…", self.exports.export_animation_dialog, "Ctrl+Shift+E",
                                              "Write the run's playback as an MP4 video or a GIF")
         self.revert_action = self._action("Re&vert Scene", self.revert, None,
                                           "Back to the scene as it was opened or last saved")
@@ -501,129 +498,6 @@ class MainWindow(QtWidgets.QMainWindow):
             return False
         self.preferences.set_last_folder(path)
         return True
-
-    def export_dialog(self) -> None:
-        suggestion = str(Path(self.preferences.last_folder()) / f"{self.document.stem or 'trajectory'}.csv")
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export trajectory", suggestion, CSV_FILTER)
-        if path:
-            self.export_csv(Path(path))
-
-    def export_csv(self, path: Path) -> bool:
-        simulation = self.controller.simulation
-        if simulation is None or not (self.controller.computed or self.state == STOPPED):
-            return False   # what a stopped run computed is exported as it stands
-        trajectory = simulation.trajectory()
-        keep = [self.document.path] if self.document.path else []  # never over the scene file
-        if not self._write("export trajectory", path, lambda target: trajectory.to_csv(target, keep=keep)):
-            return False
-        self.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
-        return True
-
-    def _suggest(self, suffix: str) -> Path:
-        """A file name saying the scene and the time shown, in the last folder used."""
-        t = self.controller.play_time if self.controller.runs else 0.0
-        return Path(self.preferences.last_folder()) / f"{self.document.stem or 'rollball'}-t{t:.2f}s{suffix}"
-
-    def save_image_dialog(self) -> None:
-        dialog = ImageDialog(self._suggest(".png"), self)
-        if dialog.exec() == QtWidgets.QDialog.DialogCode.Accepted:
-            self.save_image(dialog.path, **dialog.options())
-
-    def picture(self, size: tuple[int, int], caption: bool = False, plots: bool = False) -> QtGui.QImage:
-        """The 3-D view at ``size`` as shown (with the close-up when it is on), optionally with a
-        caption and the plots."""
-        return compose(self.view, size, inset=self.closeup if self.closeup.isVisible() else None,
-                       caption=self.caption() if caption else None,
-                       plots=self.bottom.currentWidget() if plots else None)
-
-    def caption(self) -> str | None:
-        """What is shown, in one line: formula, method(s) and step, time."""
-        runs = self.controller.runs
-        scene = runs[0].simulation.scene if runs else self.scene
-        methods = [run.label for run in runs] if self.compare.active and runs else None
-        return caption_text(scene, self.controller.play_time, methods) if scene else None
-
-    def save_image(self, path: Path, scale: int = 1, caption: bool = False, plots: bool = False) -> bool:
-        """The 3-D view as a PNG at ``scale`` times its size on screen, written atomically."""
-        image = self.picture((scale * self.view.width(), scale * self.view.height()), caption, plots)
-        data = QtCore.QByteArray()
-        buffer = QtCore.QBuffer(data)
-        buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
-        image.save(buffer, "PNG")
-        keep = [self.document.path] if self.document.path else []  # never over the scene file
-        if not self._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data), keep=keep)):
-            return False
-        self.show_message(f"Saved {path.name} ({image.width()}×{image.height()})")
-        return True
-
-    def export_animation_dialog(self) -> None:
-        if not self.controller.runs:
-            return
-        size = (self.view.width() - self.view.width() % 2, self.view.height() - self.view.height() % 2)
-        dialog = AnimationDialog(self._suggest(".mp4").with_name(f"{self.document.stem or 'rollball'}.mp4"),
-                                 size, self.controller.end_time, self)
-        if dialog.exec() != QtWidgets.QDialog.DialogCode.Accepted:
-            return
-        options = dialog.options()
-        progress = QtWidgets.QProgressDialog("Exporting animation…", "Cancel", 0, 100, self)
-        progress.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
-        progress.setMinimumDuration(300)
-
-        def report(done: int, total: int) -> bool:
-            progress.setMaximum(total)
-            progress.setValue(done)
-            return not progress.wasCanceled()
-        try:
-            self.export_animation(dialog.path, progress=report, **options)
-        except (OSError, ValueError) as error:
-            self._warn("Cannot export animation", f"{dialog.path}: {getattr(error, 'strerror', None) or error}. "
-                                                  "Nothing was changed.")
-        finally:
-            progress.close()
-
-    def export_animation(self, path: Path, fps: float = DEFAULT_FPS, t0: float = 0.0, t1: float | None = None,
-                         size: tuple[int, int] | None = None, caption: bool = True, progress=None) -> bool:
-        """Play the computed run from t0 to t1 into an MP4 or GIF, ``fps`` frames per simulated
-        second, each frame the 3-D view at ``size`` (default: as on screen). False if there is
-        no run or it was cancelled; OSError or ValueError if it cannot be written. Either way a
-        file is written whole or not at all."""
-        if not self.controller.runs:
-            return False
-        end = self.controller.end_time
-        t1 = end if t1 is None else min(t1, end)
-        size = size or (self.view.width(), self.view.height())
-        times = frame_times(t0, t1, fps)
-        keep = [self.document.path] if self.document.path else []   # never over the scene file
-        write_target(path, keep)   # refused before a frame is drawn
-        shown, started = self.controller.play_time, QtCore.QElapsedTimer()
-        started.start()
-        self.controller.pause()
-        view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
-        # a camera as framed on opening frames the whole path in the video (the ball may leave
-        # the drawn grid); one the user turned, zoomed or set to follow the ball is kept
-        reframe = self.view.framed and not self.view.follow
-        if reframe:
-            self.view.reset_camera(include=self._path(t0, t1), aspect=view_size[1] / max(1, view_size[0]))
-        try:
-            done = record(path, times, fps, size, self.seek, lambda: rgb_array(self.picture(view_size, caption)),
-                          progress, ACCENTS, keep=keep)
-        finally:
-            if reframe:
-                self.view.reset_camera()
-            self.seek(shown)
-        if not done:
-            self.show_message("Export cancelled; nothing was written")
-            return False
-        self.preferences.set_last_folder(path)
-        self.show_message(f"Exported {len(times)} frames ({times[-1] - times[0]:.3g} s at {fps:g} per second) "
-                          f"to {Path(path).name} in {started.elapsed() / 1000:.1f} s")
-        return True
-
-    def _path(self, t0: float, t1: float) -> np.ndarray:
-        """The balls' centres from t0 to t1, every run's (an export frames them all)."""
-        paths = [run.buffer.rows[(run.buffer.t >= t0) & (run.buffer.t <= t1)][:, CENTER]
-                 for run in self.controller.runs if len(run.buffer)]
-        return np.vstack(paths) if paths else np.zeros((0, 3))
 
     # -- running ---------------------------------------------------------------------
 

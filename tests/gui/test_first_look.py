@@ -147,7 +147,7 @@ def test_what_a_stopped_run_computed_can_be_exported(qtbot, window, tmp_path):
     window.stop()
     assert window.export_action.isEnabled() and "can be exported" in window.message.text()
     out = tmp_path / "stopped.csv"
-    assert window.export_csv(out)
+    assert window.exports.export_csv(out)
     assert len(out.read_text().splitlines()) > 10
 
 

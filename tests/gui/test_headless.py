@@ -153,10 +153,10 @@ def test_pictures_carry_the_axis_numbers_and_names(qtbot, window, tmp_path):
     size = (4 * view.width(), 4 * view.height())   # Save Image at 4×
     placed = labels_at(view, size)
     assert {"x (m)", "y (m)"} <= {item.text for _, _, item in placed}
-    with_labels = window.picture(size)
+    with_labels = window.exports.picture(size)
     for item in view.axis_labels:
         item.setVisible(False)
-    without = window.picture(size)
+    without = window.exports.picture(size)
     for item in view.axis_labels:
         item.setVisible(True)
     changed = [x for x, y, item in placed
@@ -165,7 +165,7 @@ def test_pictures_carry_the_axis_numbers_and_names(qtbot, window, tmp_path):
                       if 0 <= int(x) + dx < size[0] and 0 <= int(y) - dy < size[1])]
     assert len(changed) >= 0.8 * len(placed)   # (labels beyond the frame's edge cannot show)
     path = tmp_path / "four.png"
-    assert window.save_image(path, scale=4)
+    assert window.exports.save_image(path, scale=4)
     assert QtGui.QImage(str(path)).size() == QtCore.QSize(*size)
 
 
@@ -196,7 +196,7 @@ def test_an_exported_video_keeps_the_ball_in_frame_when_it_leaves_the_grid(qtbot
         p = matrix.map(QtGui.QVector4D(*map(float, view.ball_center), 1.0))
         spots.append((p.x() / p.w(), p.y() / p.w()))
         return True
-    assert window.export_animation(tmp_path / "liftoff.gif", fps=10, size=size, progress=where)
+    assert window.exports.export_animation(tmp_path / "liftoff.gif", fps=10, size=size, progress=where)
     assert len(spots) == 21 and np.all(np.abs(spots) < 0.95), spots
     assert view.framed and view.bounds[1, 0] == pytest.approx(3.0, abs=0.2)   # the window's camera is back
 
@@ -204,11 +204,11 @@ def test_an_exported_video_keeps_the_ball_in_frame_when_it_leaves_the_grid(qtbot
 def test_nothing_is_exported_over_the_open_scene(qtbot, window, scene_file, dialogs):
     before = scene_file.read_bytes()
     assert window.open_scene(scene_file)
-    assert not window.save_image(scene_file)
+    assert not window.exports.save_image(scene_file)
     assert "scene being run" in dialogs[-1][2]
     run_to_end(qtbot, window)
     with pytest.raises(OSError, match="scene being run"):
-        window.export_animation(scene_file, fps=5, size=(320, 240))
+        window.exports.export_animation(scene_file, fps=5, size=(320, 240))
     assert scene_file.read_bytes() == before
 
 

@@ -128,7 +128,7 @@ def test_exported_animation_has_every_frame_and_the_ball_moves(qtbot, window, tm
     run_to_end(qtbot, window)
     window.seek(0.6)
     path = tmp_path / f"run{suffix}"
-    assert window.export_animation(path, fps=10, t0=0.2, t1=0.9, size=(200, 150), caption=False)
+    assert window.exports.export_animation(path, fps=10, t0=0.2, t1=0.9, size=(200, 150), caption=False)
     frames = frames_of(path)
     assert frames.shape == (8, 150, 200, 3)                      # 0.2, 0.3, ..., 0.9 s
     moved = np.argwhere(np.abs(frames[-1].astype(int) - frames[0]).sum(axis=2) > 100)
@@ -143,18 +143,18 @@ def test_a_cancelled_export_writes_nothing(qtbot, window, tmp_path):
     run_to_end(qtbot, window)
     path = tmp_path / "keep.gif"
     path.write_bytes(b"old")
-    assert not window.export_animation(path, fps=10, size=(64, 48), progress=lambda done, total: done < 3)
+    assert not window.exports.export_animation(path, fps=10, size=(64, 48), progress=lambda done, total: done < 3)
     assert path.read_bytes() == b"old" and list(tmp_path.iterdir()) == [path]
     with pytest.raises(ValueError, match=".mp4 or .gif"):
-        window.export_animation(tmp_path / "run.avi", fps=10, size=(64, 48))
+        window.exports.export_animation(tmp_path / "run.avi", fps=10, size=(64, 48))
 
 
 def test_image_at_twice_the_size_with_caption_and_plots(qtbot, window, tmp_path):
     set_field(qtbot, window, "duration", "0.5")
     run_to_end(qtbot, window)
-    assert window._suggest(".png").name == "hills-t0.50s.png"
+    assert window.exports.suggest(".png").name == "hills-t0.50s.png"
     path = tmp_path / "slide.png"
-    assert window.save_image(path, scale=2, caption=True, plots=True)
+    assert window.exports.save_image(path, scale=2, caption=True, plots=True)
     image = QtGui.QImage(str(path))
     assert image.width() == 2 * window.view.width()
     assert image.height() > 2 * window.view.height() + window.plots.height()
@@ -235,7 +235,7 @@ def test_compare_mode_records_every_ball(qtbot, window, tmp_path):
     set_field(qtbot, window, "duration", "1")
     compare_to_end(qtbot, window, "euler/classic,rk4")
     path = tmp_path / "compare.gif"
-    assert window.export_animation(path, fps=5, size=(160, 120))
+    assert window.exports.export_animation(path, fps=5, size=(160, 120))
     assert frames_of(path).shape == (6, 120, 160, 3)
-    assert window.picture((160, 120), caption=True).height() > 120
-    assert all(run.label in window.caption() for run in window.controller.runs)
+    assert window.exports.picture((160, 120), caption=True).height() > 120
+    assert all(run.label in window.exports.caption() for run in window.controller.runs)

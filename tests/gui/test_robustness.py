@@ -214,5 +214,5 @@ def test_export_never_overwrites_the_open_scene(qtbot, window, dialogs, tmp_path
     assert window.save_to(path)
     text = path.read_text()
     run_to_end(qtbot, window)
-    assert not window.export_csv(path)
+    assert not window.exports.export_csv(path)
     assert "scene being run" in dialogs[-1][2] and path.read_text() == text

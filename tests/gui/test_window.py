@@ -148,7 +148,7 @@ def test_a_run_plays_to_its_end_and_exports_its_rows(qtbot, window, tmp_path):
     assert window.message.text() == "Finished: reached t = 0.5 s in 500 steps"
     assert window.progress.value() == 1000
     out = tmp_path / "run.csv"
-    assert window.export_csv(out)
+    assert window.exports.export_csv(out)
     data = read_csv(out)
     assert data.shape == (501, 23)
     assert data[0, 0] == 0.0 and data[-1, 0] == 0.5
@@ -211,11 +211,11 @@ def test_save_failure_is_reported_and_the_old_file_stays(qtbot, window, dialogs,
 
 def test_save_image_writes_a_png_atomically(qtbot, window, dialogs, tmp_path, monkeypatch):
     path = tmp_path / "view.png"
-    assert window.save_image(path)
+    assert window.exports.save_image(path)
     image = QtGui.QImage(str(path))
     assert image.width() == window.view.width() and image.height() == window.view.height()
     monkeypatch.setattr(os, "replace", lambda *args: (_ for _ in ()).throw(OSError(28, "No space left")))
-    assert not window.save_image(path)
+    assert not window.exports.save_image(path)
     assert QtGui.QImage(str(path)).width() == image.width()      # the old image stays
     assert "No space left" in dialogs[-1][2] and list(tmp_path.iterdir()) == [path]
 
