@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball import RunSpec, Scene, SceneError, Simulation, Status, __version__, resources
+from rollball import Scene, SceneError, Simulation, Status, __version__, resources
 from rollball.examples import example_scenes
 from rollball.geometry import reachable_height, unit_normal
 from rollball.simulation import recording
@@ -34,6 +33,7 @@ from .speed_window import SpeedWindow
 from .sweep_dialog import SweepDialog
 from .timeline import Marker, TimeSlider
 from .view3d import SceneView
+from .warmup import WarmUp
 
 PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
@@ -55,9 +55,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.landscape = None
         self.drawn_index = -1                # the row the view shows
         self.plotted_at = -math.inf          # when the plots were last brought up to the shown time
-        self.preparing: QtCore.QProcess | None = None   # compiling the integrator in the background
-        self.ready_variants: set[RunSpec] = set()         # what it has compiled so far
-        self.start_waiting = False                        # Start was pressed meanwhile
+        self.warmup = WarmUp(self)          # compiling the integrator in the background
+        self.warmup.readied.connect(self._warmed)
+        self.warmup.ended.connect(self._warmed)
+        self.start_waiting = False          # Start was pressed meanwhile
 
         self.controller = RunController(self)
         self.controller.stateChanged.connect(self._state_changed)
@@ -505,59 +506,31 @@ class MainWindow(QtWidgets.QMainWindow):
     def state(self) -> str:
         return self.controller.state
 
-    def prepare_integrator(self, command: list[str] | None = None) -> None:
-        """Compile the integrator for every method in a process of its own, from launch (its
-        machine code is kept on disk, where a run finds it), the current scene's method first. A
-        Start meanwhile waits until its method is ready, saying so with a busy indicator, and
-        the run starts by itself."""
-        scene = self.scene
-        first = [] if scene is None else [str(run_spec(scene))]
-        command = command or [sys.executable, "-m", "rollball.warmup", *first]
-        process = QtCore.QProcess(self)
-        process.setProcessChannelMode(QtCore.QProcess.ProcessChannelMode.ForwardedErrorChannel)
-        process.readyReadStandardOutput.connect(self._variant_ready)
-        process.finished.connect(self._prepared)
-        process.errorOccurred.connect(lambda _error: self._prepared())
-        self.preparing, self.ready_variants = process, set()
-        process.start(command[0], command[1:])
+    @property
+    def preparing(self) -> QtCore.QProcess | None:
+        """The integrator's warm-up process while it runs."""
+        return self.warmup.process
 
-    def _variant_ready(self) -> None:
-        """The warm-up said ``ready METHOD mk|classic``: a start waiting for it goes."""
-        if self.preparing is None:
-            return
-        for line in bytes(self.preparing.readAllStandardOutput()).decode(errors="replace").splitlines():
-            words = line.split()
-            if len(words) == 3 and words[0] == "ready":
-                self.ready_variants.add(RunSpec(words[1], words[2] == "mk"))
-        if self.start_waiting and not self._must_wait():
-            self.start_waiting = False
-            self.start()
+    def prepare_integrator(self, command: list[str] | None = None) -> None:
+        """Compile the integrator for every method in a process of its own, from launch, the
+        current scene's method first (``WarmUp``). A Start meanwhile waits until its method is
+        ready, saying so with a busy indicator, and the run starts by itself."""
+        scene = self.scene
+        self.warmup.start(command or WarmUp.command(None if scene is None else run_spec(scene)))
 
     def _must_wait(self) -> bool:
-        """Whether a Start now would compile what the background process is compiling."""
+        """Whether a Start now would compile what the warm-up is compiling."""
         scene = self.scene
-        return self.preparing is not None and (self.compare.active or scene is None
-                                               or run_spec(scene) not in self.ready_variants)
+        return self.warmup.must_wait(None if self.compare.active or scene is None else run_spec(scene))
 
     def stop_preparing(self) -> None:
-        """Kill the integrator's warm-up (closing): disconnected first, so that nothing it says
-        or its end reaches the window, then waited for and deleted."""
-        process, self.preparing = self.preparing, None
-        if process is None:
-            return
-        for signal in (process.readyReadStandardOutput, process.finished, process.errorOccurred):
-            signal.disconnect()
-        process.kill()
-        process.waitForFinished(5000)
-        process.deleteLater()
+        self.warmup.stop()
 
-    def _prepared(self) -> None:
-        if self.preparing is None:
-            return
-        self.preparing.deleteLater()
-        self.preparing = None
-        self.progress.setRange(0, 1000)
-        if self.start_waiting:
+    def _warmed(self) -> None:
+        """A variant is ready (or the warm-up has ended): a start waiting for it goes."""
+        if self.warmup.process is None:
+            self.progress.setRange(0, 1000)
+        if self.start_waiting and not self._must_wait():
             self.start_waiting = False
             self.start()
 
