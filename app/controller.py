@@ -24,7 +24,7 @@ from PySide6 import QtCore
 from rollball import Scene, Simulation, Trajectory
 
 from .playback import RunBuffer
-from .worker import ReferenceThread, SimulationThread
+from .worker import SimulationThread, Worker, reference_worker, retire
 
 READY, RUNNING, PAUSED, FINISHED, STOPPED = "ready", "running", "paused", "finished", "stopped"
 FRAME_MS = 16              # advance the clock and redraw at most ~60 Hz
@@ -75,7 +75,7 @@ class RunController(QtCore.QObject):
         self.play_time = 0.0
         self.speed = 1.0               # simulated seconds per wall-clock second (inf: as computed)
         self.reference: tuple[Trajectory, float] | None = None   # trajectory, its error estimate
-        self._reference_thread: ReferenceThread | None = None
+        self._reference_thread: Worker | None = None
         self._last_tick = self._frame_started = time.perf_counter()
         self.timer = QtCore.QTimer(self, interval=FRAME_MS, timerType=QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self._tick)
@@ -194,7 +194,7 @@ class RunController(QtCore.QObject):
             self._take_seconds()
             self.thread.finished.disconnect(self._computed)
             self.thread.stop()
-            _retire(self.thread)
+            retire(self.thread)
             self.thread = None
 
     def _rows_ready(self, runs: list, index: int, block, ended: bool) -> None:
@@ -219,7 +219,7 @@ class RunController(QtCore.QObject):
         self.computed, self.compiling = True, False
         if self.thread is not None:
             self._take_seconds()
-            _retire(self.thread)
+            retire(self.thread)
             self.thread = None
         self.stateChanged.emit(self.state)
         self._measure()
@@ -227,12 +227,12 @@ class RunController(QtCore.QObject):
     # -- the reference ---------------------------------------------------------------
 
     def _start_reference(self, scene: Scene, t_end: float, record_dt: float) -> None:
-        thread = self._reference_thread = ReferenceThread(scene, t_end, record_dt)
+        thread = self._reference_thread = reference_worker(scene, t_end, record_dt)
         RunController._references.add(thread)
-        thread.done.connect(lambda trajectory, estimate: self._reference_done(thread, trajectory, estimate))
+        thread.done.connect(lambda result: self._reference_done(thread, *result))
         thread.failed.connect(lambda message: thread is self._reference_thread and self.failed.emit(
             f"The reference run failed: {message}"))
-        thread.finished.connect(lambda: (RunController._references.discard(thread), _retire(thread)))
+        thread.finished.connect(lambda: (RunController._references.discard(thread), retire(thread)))
         thread.start()
 
     def _reference_done(self, thread, trajectory: Trajectory, estimate: float) -> None:
@@ -291,11 +291,3 @@ class RunController(QtCore.QObject):
         self.state = state
         self.stateChanged.emit(state)
 
-
-def _retire(thread: QtCore.QThread) -> None:
-    """Let go of a worker thread whose work has ended. ``finished`` is emitted from inside the
-    thread, just before it ends: the object may be deleted (its last Python reference dropped)
-    only once the thread has really ended, else Qt aborts the process ("QThread: Destroyed
-    while thread is still running"). The wait is for the few instructions after ``finished``."""
-    thread.wait()
-    thread.deleteLater()

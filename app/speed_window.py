@@ -9,7 +9,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -17,10 +16,11 @@ import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
 from rollball import METHODS, Scene, compare
-from rollball.comparison import Cancelled, RunResult
+from rollball.comparison import RunResult
 
 from .compare_runs import COLORS
 from .plots import DecadeAxis, fit_decades
+from .worker import Worker, retire
 
 CSV_NAME = "compare.csv"
 SPEC_COLORS = COLORS + ("#e377c2", "#7f7f7f", "#bcbd22", "#17becf")   # one per method, as the CLI's figure
@@ -31,35 +31,6 @@ LEGEND_CORNERS = (((0, 1), (0, 1), (10, -10)), ((1, 1), (1, 1), (-10, -10)),
                   ((1, 0), (1, 0), (-10, 10)), ((0, 0), (0, 0), (10, 10)))
 SAMPLES_PER_SEGMENT = 16
 PICK_PIXELS = 8              # a point this near the mouse is the one its tooltip and click mean
-
-
-class CompareThread(QtCore.QThread):
-    """``rollball.compare`` in a thread: ``progress(done, total, text)``, then ``done(comparison)``,
-    ``failed(message)`` or ``cancelled()``."""
-
-    progress = QtCore.Signal(int, int, str)
-    done = QtCore.Signal(object)
-    failed = QtCore.Signal(str)
-    cancelled = QtCore.Signal()
-
-    def __init__(self, scene: Scene, quick: bool, parent=None):
-        super().__init__(parent)
-        self.scene, self.quick = scene, quick
-        self.cancel_event = threading.Event()
-
-    def run(self) -> None:
-        try:
-            result = compare(self.scene, quick=self.quick, progress=self.progress.emit, cancel=self.cancel_event)
-        except Cancelled:
-            self.cancelled.emit()
-        except Exception as error:  # noqa: BLE001 - a refusal or a defect is shown, not raised into Qt
-            self.failed.emit(str(error))
-        else:
-            self.done.emit(result)
-
-    def cancel(self) -> None:
-        self.cancel_event.set()
-        self.wait()
 
 
 def runs_csv(comparison) -> str:
@@ -95,7 +66,7 @@ class SpeedWindow(QtWidgets.QWidget):
         self.setWindowTitle("Speed against error — RollBall")
         self.resize(1100, 560)
         self.scene: Scene | None = None
-        self.thread: CompareThread | None = None
+        self.thread: Worker | None = None
         self.comparison = None
         layout = QtWidgets.QVBoxLayout(self)
         bar = QtWidgets.QHBoxLayout()
@@ -178,8 +149,10 @@ class SpeedWindow(QtWidgets.QWidget):
     def run(self) -> None:
         if self.scene is None or self.thread is not None:
             return
-        self.thread = CompareThread(self.scene, self.quick.isChecked(), self)
-        self.thread.progress.connect(self._progress)
+        scene, quick = self.scene, self.quick.isChecked()
+        self.thread = Worker(lambda progress, cancel: compare(scene, quick=quick, progress=progress, cancel=cancel),
+                             self)
+        self.thread.progressed.connect(lambda args: self._progress(*args))
         self.thread.done.connect(self._done)
         self.thread.failed.connect(lambda message: self._ended(f"Cannot compare: {message}"))
         self.thread.cancelled.connect(lambda: self._ended("Cancelled"))
@@ -200,8 +173,7 @@ class SpeedWindow(QtWidgets.QWidget):
 
     def _ended(self, text: str) -> None:
         if self.thread is not None:
-            self.thread.wait()
-            self.thread.deleteLater()
+            retire(self.thread)
             self.thread = None
         self.progress.setMaximum(1)
         self.progress.setValue(1 if self.comparison is not None else 0)

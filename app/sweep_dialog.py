@@ -8,8 +8,6 @@ emits ``startChosen`` with the scene of that run, which the main window loads re
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
@@ -21,6 +19,7 @@ from rollball.sweeps.grid import value_of, with_values
 from rollball.sweeps.plot import label
 
 from .inputs import format_number
+from .worker import Worker, retire
 
 # What a fresh dialog offers: (key, half-width around the scene's value, N), first and second
 DEFAULTS = (("start.vx", 2.0, 41), ("start.spin", 4.0, 21))
@@ -47,29 +46,6 @@ def method_text(scene: Scene) -> str:
     return (f"Each run: {method.label}, step h = {scene.integrator.dt:g} s, to t = {scene.duration:g} s "
             f"(the scene's method and step; the ball's turning is not followed, so Munthe-Kaas or "
             f"classic makes no difference)")
-
-
-class SweepThread(QtCore.QThread):
-    """Runs one sweep; ``progressed(done, total)`` while it runs, then ``done(table)`` or
-    ``failed(message)``."""
-
-    progressed = QtCore.Signal(int, int)
-    done = QtCore.Signal(object)
-    failed = QtCore.Signal(str)
-
-    def __init__(self, scene: Scene, vary: dict, parent=None):
-        super().__init__(parent)
-        self.scene, self.vary = scene, vary
-        self.cancel = threading.Event()
-
-    def run(self) -> None:
-        try:
-            table = sweep(self.scene, self.vary, cancel=self.cancel,
-                          progress=lambda done, total, text: self.progressed.emit(done, total))
-        except Exception as error:  # bad input or a defect: said in the dialog, never a crash
-            self.failed.emit(str(error))
-            return
-        self.done.emit(table)
 
 
 class AxisRow:
@@ -119,7 +95,7 @@ class SweepDialog(QtWidgets.QDialog):
         self.setObjectName("sweepDialog")
         self.scene = scene
         self.table = None
-        self.thread: SweepThread | None = None
+        self.thread: Worker | None = None
 
         form = QtWidgets.QFormLayout()
         rows = []
@@ -195,8 +171,9 @@ class SweepDialog(QtWidgets.QDialog):
         self.progress.setMaximum(grid.size)
         self.progress.setValue(0)
         self.status.setText(f"Running {grid.size:,} runs…")
-        self.thread = SweepThread(self.scene, vary, self)
-        self.thread.progressed.connect(lambda done, total: self.progress.setValue(done))
+        scene = self.scene
+        self.thread = Worker(lambda progress, cancel: sweep(scene, vary, cancel=cancel, progress=progress), self)
+        self.thread.progressed.connect(lambda args: self.progress.setValue(args[0]))
         self.thread.done.connect(self._finished)
         self.thread.failed.connect(self._failed)
         self.thread.finished.connect(self._thread_ended)
@@ -206,9 +183,10 @@ class SweepDialog(QtWidgets.QDialog):
 
     def cancel(self) -> None:
         if self.thread is not None:
-            self.thread.cancel.set()
+            self.thread.cancel(wait=False)
 
     def _thread_ended(self) -> None:
+        retire(self.thread)
         self.thread = None
         self.run_button.setEnabled(True)
         self.cancel_button.setEnabled(False)
@@ -296,8 +274,7 @@ class SweepDialog(QtWidgets.QDialog):
 
     def closeEvent(self, event) -> None:
         if self.thread is not None:
-            self.thread.cancel.set()
-            self.thread.wait()
+            self.thread.cancel()
         super().closeEvent(event)
 
 

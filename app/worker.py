@@ -1,18 +1,30 @@
-"""The integrators in a worker thread, handing over chunks of recorded rows.
+"""The app's background work: one ``Worker`` runs a function in a thread of its own, and
+``SimulationThread`` hands over the integrators' recorded rows chunk by chunk.
 
-The compiled kernel releases the GIL, so the GUI thread keeps serving events while a chunk
-is computed. Chunks are sized to take about ``CHUNK_SECONDS`` each, so a stop request is
-answered within that time. Several runs share the thread: the one furthest behind in
-simulated time goes next, so they are computed in step with each other.
+``Worker`` (a function run in a QThread: progress, a result or a failure, a cancel flag) serves
+the comparison's reference run, Speed against Error and sweeps. ``SimulationThread`` streams
+rows while it computes: the compiled kernel releases the GIL, so the GUI thread keeps serving
+events while a chunk is computed. Chunks are sized to take about ``CHUNK_SECONDS`` each, so a
+stop request is answered within that time. Several runs share the thread: the one furthest
+behind in simulated time goes next, so they are computed in step with each other.
+
+Two kinds of background work stay apart on purpose: the integrator's warm-up is a process of
+its own (``warmup.WarmUp``: it compiles and caches every method while the window is used), and
+a formula's check is a daemon thread (``inputs.ScenePanel``: a compile cannot be interrupted
+and must never hold up quitting).
+
+Every thread is let go of with ``retire`` once its work has ended.
 """
 
 from __future__ import annotations
 
+import threading
 import time
+from typing import Callable
 
 from PySide6 import QtCore
 
-from rollball.comparison import compute_clock
+from rollball.comparison import Cancelled, compute_clock
 from rollball.warmup import compile_notice
 
 CHUNK_SECONDS = 0.04
@@ -80,27 +92,58 @@ class SimulationThread(QtCore.QThread):
         self.wait()
 
 
-class ReferenceThread(QtCore.QThread):
-    """Computes the reference run of a comparison (``rollball.comparison.reference_run``).
+def retire(thread: QtCore.QThread) -> None:
+    """Let go of a worker thread whose work has ended. ``finished`` is emitted from inside the
+    thread, just before it ends: the object may be deleted (its last Python reference dropped)
+    only once the thread has really ended, else Qt aborts the process ("QThread: Destroyed
+    while thread is still running"). The wait is for the few instructions after ``finished``."""
+    thread.wait()
+    thread.deleteLater()
 
-    ``done`` carries the reference trajectory and its own error estimate; ``failed`` a
-    one-line message. It cannot be interrupted (it takes seconds): a reference no longer
-    wanted is left to finish, and its result is ignored.
-    """
 
-    done = QtCore.Signal(object, float)
+class Worker(QtCore.QThread):
+    """``function(progress, cancel)`` in a thread of its own: ``progress(*args)`` reaches the
+    GUI thread as ``progressed(args)``; then ``done(result)``, ``cancelled()`` (the function
+    raised ``Cancelled``) or ``failed(message)`` (any other exception: one line, never raised
+    into Qt). ``cancel`` is a ``threading.Event`` the function checks; ``cancel()`` sets it.
+    ``describe`` makes the failure's message from the exception (default: its text)."""
+
+    progressed = QtCore.Signal(tuple)
+    done = QtCore.Signal(object)
     failed = QtCore.Signal(str)
+    cancelled = QtCore.Signal()
 
-    def __init__(self, scene, t_end: float, record_dt: float, parent=None):
+    def __init__(self, function: Callable, parent=None, describe: Callable[[Exception], str] = str):
         super().__init__(parent)
-        self.scene, self.t_end, self.record_dt = scene, t_end, record_dt
+        self.function, self.describe = function, describe
+        self.cancel_event = threading.Event()
 
     def run(self) -> None:
-        from rollball.comparison import reference_run
-
         try:
-            trajectory, estimate = reference_run(self.scene, self.t_end, self.record_dt)
-        except Exception as error:  # noqa: BLE001 - shown, never raised into Qt
-            self.failed.emit(f"{type(error).__name__}: {error}")
-            return
-        self.done.emit(trajectory, estimate)
+            result = self.function(lambda *args: self.progressed.emit(args), self.cancel_event)
+        except Cancelled:
+            self.cancelled.emit()
+        except Exception as error:  # noqa: BLE001 - a refusal or a defect is shown, not raised into Qt
+            self.failed.emit(self.describe(error))
+        else:
+            self.done.emit(result)
+
+    def cancel(self, wait: bool = True) -> None:
+        """Ask the function to stop; with ``wait``, wait until the thread has ended."""
+        self.cancel_event.set()
+        if wait:
+            self.wait()
+
+
+def one_line(error: Exception) -> str:
+    """An unexpected exception as a one-line message: its type and text."""
+    return f"{type(error).__name__}: {error}"
+
+
+def reference_worker(scene, t_end: float, record_dt: float, parent=None) -> Worker:
+    """The reference run of a comparison (``rollball.comparison.reference_run``): ``done``
+    carries (trajectory, its own error estimate). It cannot be cancelled (it takes seconds): a
+    reference no longer wanted is left to finish, and its result is ignored."""
+    from rollball.comparison import reference_run
+
+    return Worker(lambda _progress, _cancel: reference_run(scene, t_end, record_dt), parent, describe=one_line)
