@@ -36,6 +36,8 @@ BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by 
                        # to 1 + |f|), across 2^-48 of a step is a kink or a jump...
 BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
                        # 1e50 m samples a smooth landscape too coarsely to tell
+TIP_MIN = 1e-3        # a stop is put down to a tip where the normal turns by more than this (rad)
+                      # over BREAK_SPAN: a finite angle, not a smooth bend however steep
 TIP_REACH = 1e-6      # a tip is looked for at least this far (m, relative to 1 + |x| + |y|) around a stop
 JOLT_MIN = 1e-6        # a centre jump (``centre_jolted``) shorter than this times r is not looked at
 # The edge of the no-fit region is a fold of the centre surface: there the contact point's
@@ -180,7 +182,8 @@ def find_tip(fn, d, x, y, half):
     corners' normals spread most, until it
     is at most BREAK_SPAN wide; a smooth surface's spread vanishes with the square, a tip's or
     kink's does not. Returns (the spread there, its centre x, y, whether the surface is convex
-    there: higher than the mean of a ring around it)."""
+    there: higher than the mean of a ring around it); spread 0 where the landscape is not finite
+    on that ring (the edge of its domain, which is not a tip)."""
     cx, cy, spread = x, y, 0.0
     for _ in range(200):
         if not 2.0 * half > BREAK_SPAN:
@@ -201,7 +204,9 @@ def find_tip(fn, d, x, y, half):
     for k in range(8):
         landscape(fn, cx + rho * math.cos(k * math.pi / 4.0), cy + rho * math.sin(k * math.pi / 4.0),
                   data_pointer(d))
-        ring += d[0] / 8.0
+        ring += (d[0] + 0.0 * (d[1] + d[2])) / 8.0
+    if not math.isfinite(ring + f0):  # the landscape ends there (a domain's edge): no tip
+        return 0.0, cx, cy, False
     return spread, cx, cy, f0 > ring
 
 
@@ -210,12 +215,12 @@ def tip_stop(fn, d, ints, info, t, x, y, half, speed):
     """Before a run stops because its step cannot pass (the adaptive step underflows, the
     implicit stage equations do not converge, a step's secant says the ball does not fit):
     whether a tip or kink of the surface lies within ``half`` of the contact point (x, y),
-    where the normal turns by more than BREAK_MIN over a vanishing span. A convex one is the
+    where the normal turns by more than TIP_MIN over a vanishing span. A convex one is the
     real ball's lift-off (reported, at the time the contact point at ``speed`` would reach it
     from t) and the stop's reason (R_TIP); a valley's is a kink where the ball does not fit.
     Returns whether one was found (the failure is then set)."""
     turn, tx, ty, convex = find_tip(fn, d, x, y, half)
-    if not turn > BREAK_MIN:
+    if not turn > TIP_MIN:
         return False
     reach = math.sqrt((tx - x) ** 2 + (ty - y) ** 2)
     when = t + reach / speed if speed > 0.0 else t
@@ -376,12 +381,12 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
             # a step passing a tip of the surface within round-off of its stages bends like that too
             # (the normal turns through a finite angle over a span the dense output cannot resolve)
             turn, tx, ty, convex = find_tip(fn, d, sb[0], sb[1], max(math.sqrt(chord2), BREAK_SPAN))
-            if turn > BREAK_MIN and convex:  # the real ball leaves the surface there: a lift-off and a stop
+            if turn > TIP_MIN and convex:  # the real ball leaves the surface there: a lift-off and a stop
                 if math.isnan(info[F_LIFTOFF]):
                     info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, tx, ty, 1.0
                 _fail(ints, info, DOES_NOT_FIT, R_TIP, t + b * h, tx, ty, turn)
                 stop, valid = b, a
-            elif turn > BREAK_MIN:
+            elif turn > TIP_MIN:
                 _fail(ints, info, DOES_NOT_FIT, R_KINK, t + b * h, tx, ty, turn)
                 stop, valid = b, a
             else:
