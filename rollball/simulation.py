@@ -7,6 +7,7 @@ import math
 import numbers
 import operator
 import os
+import dataclasses
 import threading
 
 import numpy as np
@@ -16,7 +17,7 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene
 from .tableaus import MethodKind, get_method
-from .trajectory import Failure, Liftoff, Reason, Status, Trajectory
+from .trajectory import CONTACT, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory
 
 # 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
 # recording every adaptive step grows its buffer by doubling up to the limit, holding the
@@ -196,6 +197,8 @@ class Simulation:
                 n_steps=self.n_steps, every=self.record_every, max_steps=1, **arrays,
                 stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
         self.status: Status | None = None
+        self._energy_check: EnergyCheck | None = None
+        self.judge_energy = True  # whether the finished run looks at whose its energy error is
 
     @property
     def done(self) -> bool:
@@ -295,6 +298,9 @@ class Simulation:
             if code != kernel.RUNNING:
                 self.status = _STATUS[code]
                 break
+        if self.judge_energy and self.status in (Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
+            # (here, where the run runs: never in the thread that reads the trajectory)
+            self._energy_check = energy_check(self)
         return self._rows[first: self._ints[kernel.I_ROWS]].copy()
 
     def cancel(self) -> None:
@@ -356,7 +362,74 @@ class Simulation:
         return Trajectory(self.rows, status=status, message=message,
                           liftoff=self.liftoff, steps=self.steps, rejected=self.rejected,
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
-                          radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance)
+                          radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance,
+                          energy_check=self._energy_check)
+
+
+SHORTER = 4            # energy_check takes the interval again with a step this many times shorter...
+TIGHTER = 1e4          # ...or, adaptive, with tolerances this many times tighter
+MIN_TOLERANCE = 1e-15  # (not below this)
+
+
+def energy_check(run: Simulation) -> EnergyCheck | None:
+    """Whose a finished run's energy error is, where one recorded interval holds most of it
+    (at least half; None otherwise, or where the error is below the warning).
+
+    The interval is taken again from its first row's state (a rolling state is its contact
+    point, its centre's horizontal velocity and its spin about the normal: ``Start``), with the
+    same method and step, and with a step SHORTER times shorter (adaptive: tolerances TIGHTER
+    times tighter). On a smooth landscape the energy's change shrinks as the method's order p
+    predicts, SHORTER^p (TIGHTER); where the landscape has a kink, a jump of its curvature or
+    the like within the interval, it does not. Judged as the landscape's where it shrinks by
+    less than the square root of that."""
+    rows = run.rows
+    if len(rows) < 2:
+        return None
+    scene = run.scene
+    energy = rows[:, ENERGY]
+    scale = max(abs(energy[0]), scene.ball.mass * scene.gravity * scene.ball.radius, np.finfo(float).tiny)
+    error = (energy - energy[0]) / scale
+    with np.errstate(invalid="ignore"):
+        drift = float(np.nanmax(np.abs(error)))
+        jumps = np.abs(np.diff(error))
+    if not (drift > ENERGY_WARNING and np.isfinite(jumps).any()):
+        return None
+    i = int(np.nanargmax(jumps))
+    if not jumps[i] >= 0.5 * drift:
+        return None
+    row = rows[i]
+    t0, t1 = float(row[T]), float(rows[i + 1][T])
+    x, y = (float(value) for value in row[CONTACT])
+    d = run.landscape.evaluate(x, y, scene.parameter_values)
+    normal = unit_normal(d)
+    spin = float(np.dot(row[OMEGA], normal))
+    vx, vy = (float(value) for value in row[VELOCITY][:2])
+    try:
+        again = dataclasses.replace(scene, start=dataclasses.replace(scene.start, x=x, y=y, vx=vx, vy=vy, spin=spin),
+                                    duration=t1 - t0)
+    except ValueError:
+        return None
+    changes = []
+    for shorter in (False, True):
+        if run.adaptive:
+            tighter = TIGHTER if shorter else 1.0
+            redo = Simulation(again, method=run.tableau.name, dt=run.dt,
+                              rtol=max(run.rtol / tighter, MIN_TOLERANCE),
+                              atol=max(run.atol / tighter, MIN_TOLERANCE * 1e-3), record_dt=t1 - t0)
+        else:
+            redo = Simulation(again, method=run.tableau.name, munthe_kaas=run.munthe_kaas,
+                              dt=run.dt / SHORTER if shorter else run.dt, record_every=MAX_STEPS)
+        redo.judge_energy = False  # (the check's own runs are not checked)
+        redo.advance()
+        e = redo.rows[:, ENERGY]
+        if redo.status is not Status.OK or len(e) < 2:
+            return None
+        changes.append(abs(float(e[-1] - e[0])) / scale)
+    expected = TIGHTER if run.adaptive else float(SHORTER ** run.tableau.order)
+    shrink = changes[0] / changes[1] if changes[1] > 0.0 else math.inf
+    finer = f"tolerances {TIGHTER:.0e} times tighter" if run.adaptive else f"a step {SHORTER} times shorter"
+    return EnergyCheck(t0, t1, x, y, float(jumps[i]), float(shrink), expected, not shrink >= math.sqrt(expected),
+                       finer.replace("1e+04", "10⁴"))
 
 
 def describe(failure: Failure, radius: float) -> str:

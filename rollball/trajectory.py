@@ -71,6 +71,24 @@ class Failure:
     value: float  # what crossed its limit (see Reason); nan where nothing is measured
 
 
+@dataclass(frozen=True)
+class EnergyCheck:
+    """Whose a run's energy error is, found by taking again the recorded interval where most of
+    it happened (``simulation.energy_check``): with the run's step and a step 4 times shorter
+    (tolerances 10^4 times tighter for the adaptive methods). A smooth landscape's error shrinks
+    as the method's order predicts (``expected``); one that does not shrink is the landscape's."""
+
+    time: float        # s: the start of the interval
+    end: float         # s: its end
+    x: float           # contact point at its start (m)
+    y: float
+    jump: float        # the energy's change across it, relative to its scale
+    shrink: float      # the change there with the run's step over that with the shorter one
+    expected: float    # what a smooth landscape's shrinks by
+    landscape: bool    # True: the error does not shrink with the step: the landscape's
+    finer: str = "a step 4 times shorter"  # what the interval was taken again with
+
+
 @dataclass
 class Trajectory:
     """Recorded rows (shape (n, 23)) and the facts of the run that produced them."""
@@ -87,6 +105,7 @@ class Trajectory:
     radius: float = 0.1
     gravity: float = 9.81
     provenance: dict = field(default_factory=dict)
+    energy_check: EnergyCheck | None = None  # set by the run where one interval's jump dominates
 
     @property
     def liftoff_time(self) -> float | None:
@@ -172,7 +191,8 @@ class Trajectory:
         """Whose the energy error is. Where most of it is one jump between two rows, across the
         kink or cone tip where the run's lift-off was found, the model's ball jumps there (its
         centre moves across at once, however short the step): the landscape's, not the step's.
-        Otherwise it is the step's."""
+        Else where the run's ``energy_check`` found that the jump does not shrink with the step:
+        the landscape's too. Otherwise it is the step's."""
         error = self.energy_error()
         jumps = np.abs(np.diff(error))
         lift = self.liftoff
@@ -184,6 +204,16 @@ class Trajectory:
                         f"t = {lift.time:.6g} s, (x, y) = ({lift.x:.6g}, {lift.y:.6g}), where the ball passes a kink "
                         f"or the tip of a cone and the model's ball jumps over it: this is the landscape's, "
                         f"not the step's (a smaller step does not reduce it)")
+        check = self.energy_check
+        if check is not None and check.landscape:
+            return (f"energy changed by {drift:.2g} of its scale, {check.jump:.2g} of it between t = {check.time:.6g} "
+                    f"and {check.end:.6g} s from (x, y) = ({check.x:.6g}, {check.y:.6g}), and that does not shrink "
+                    f"when the step does (taken again with {check.finer} it changes by 1/{check.shrink:.3g} "
+                    f"as much, where a smooth landscape gives 1/{check.expected:.3g}): the landscape is not smooth "
+                    f"there; this is the landscape's, not the step's")
+        if check is not None:
+            return (f"energy changed by {drift:.2g} of its scale: the step is too large for this method ({check.finer} "
+                    f"shrinks its largest jump, at t = {check.time:.6g} s, {check.shrink:.3g}-fold)")
         return f"energy changed by {drift:.2g} of its scale: the step is too large for this method"
 
     def to_csv(self, path: str | os.PathLike, keep=()) -> None:

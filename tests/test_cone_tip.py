@@ -84,3 +84,24 @@ def test_the_energy_jump_over_a_lopsided_roof_is_the_landscapes(dt):
     assert 0.04 < traj.energy_drift < 0.06
     notes = traj.warnings()
     assert len(notes) == 1 and "the landscape's, not the step's" in notes[0]
+
+
+@pytest.mark.parametrize("y0", [0.01, 0.0])
+@pytest.mark.parametrize("method, options, slack", [
+    ("dopri5", dict(rtol=1e-10, atol=1e-13, record_dt=0.01), 1e-6),
+    ("dop853", dict(rtol=1e-10, atol=1e-13, record_dt=0.01), 1e-6),
+    ("gauss4", dict(dt=1e-3), 1e-3),
+    ("gauss6", dict(dt=1e-3), 1e-3)])
+def test_tight_runs_report_the_tip(y0, method, options, slack):
+    # where a step cannot pass the tip (the adaptive step underflows, the implicit stage
+    # equations do not converge, a step's secant bends like r·κ >= 1), the tip is found around it:
+    # a lift-off at the apex, and a stop that says why, not a step's failure
+    t_tip = reference_tip_time(cone(y0))
+    traj = simulate(cone(y0), method=method, **options)
+    lift = traj.liftoff
+    assert lift is not None and abs(lift.time - t_tip) < slack, (traj.message, lift)
+    assert np.hypot(lift.x, lift.y) < (1e-6 if slack < 1e-3 else 1e-3), lift
+    assert traj.status == "ok" or traj.failure.reason == "tip", traj.message
+    if traj.failure is not None:
+        assert np.hypot(traj.failure.x, traj.failure.y) < 1e-8 and abs(traj.failure.time - t_tip) < slack
+        assert "the tip of a cone" in traj.message and "too large" not in traj.message

@@ -11,7 +11,7 @@ from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_HELD,
     I_REASON, I_ROWS, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_OMEGA, PROBE_SIZE, P_TURN, R_HEIGHT_JUMP,
-    R_KINK, R_NO_FIT, R_SECANT_NO_FIT, SURFACE_SIZE)
+    R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import curvatures, shape_of
 from .recording import _fail, record, record_last
@@ -36,6 +36,9 @@ BREAK_MIN = 1e-6       # a normal turning by more (rad), or a height jumping by 
                        # to 1 + |f|), across 2^-48 of a step is a kink or a jump...
 BREAK_SPAN = 1e-9      # ...if that is a stretch of at most this (m): a state racing off to
                        # 1e50 m samples a smooth landscape too coarsely to tell
+TIP_MIN = 1e-3        # a stop is put down to a tip where the normal turns by more than this (rad)
+                      # over BREAK_SPAN: a finite angle, not a smooth bend however steep
+TIP_REACH = 1e-6      # a tip is looked for at least this far (m, relative to 1 + |x| + |y|) around a stop
 JOLT_MIN = 1e-6        # a centre jump (``centre_jolted``) shorter than this times r is not looked at
 # The edge of the no-fit region is a fold of the centre surface: there the contact point's
 # speed grows without bound (as 1 / (1 - r*kappa)) and reaches the edge in finite time, so the
@@ -141,6 +144,93 @@ def locate_break(kind, fn, d, r, z, h, P, K, Ye, sa, sb, sm, a, b):
     if (sb[0] - sa[0]) ** 2 + (sb[1] - sa[1]) ** 2 > BREAK_SPAN * BREAK_SPAN:
         return a, b, 0.0
     return a, b, break_measure(kind, sa, sb)
+
+
+@COLD
+def normal_at(fn, d, x, y):
+    """The unit upward normal of the surface at (x, y) (nan where it is not finite)."""
+    landscape(fn, x, y, data_pointer(d))
+    iW = 1.0 / math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+    return -d[1] * iW, -d[2] * iW, iW
+
+
+@JIT
+def chord(ax, ay, az, bx, by, bz):
+    """The squared distance between two unit normals (0 where either is not finite)."""
+    g = (ax - bx) ** 2 + (ay - by) ** 2 + (az - bz) ** 2
+    return g if math.isfinite(g) else 0.0
+
+
+@COLD
+def normal_spread(fn, d, x0, y0, side):
+    """The largest distance between the unit normals at the corners of the square of this side
+    whose lower left corner is (x0, y0) (corners where the landscape is not finite left out)."""
+    ax, ay, az = normal_at(fn, d, x0, y0)
+    bx, by, bz = normal_at(fn, d, x0 + side, y0)
+    cx, cy, cz = normal_at(fn, d, x0, y0 + side)
+    ex, ey, ez = normal_at(fn, d, x0 + side, y0 + side)
+    worst = max(chord(ax, ay, az, bx, by, bz), chord(ax, ay, az, cx, cy, cz), chord(ax, ay, az, ex, ey, ez),
+                chord(bx, by, bz, cx, cy, cz), chord(bx, by, bz, ex, ey, ez), chord(cx, cy, cz, ex, ey, ez))
+    return math.sqrt(worst)
+
+
+@COLD
+def find_tip(fn, d, x, y, half):
+    """Look for a tip or kink of the surface in the square of half-width ``half`` around
+    (x, y): a point where the normal turns through a finite angle over a vanishing span.
+    The square is halved, keeping of its nine overlapping half-size squares the one whose
+    corners' normals spread most, until it
+    is at most BREAK_SPAN wide; a smooth surface's spread vanishes with the square, a tip's or
+    kink's does not. Returns (the spread there, its centre x, y, whether the surface is convex
+    there: higher than the mean of a ring around it); spread 0 where the landscape is not finite
+    on that ring (the edge of its domain, which is not a tip)."""
+    cx, cy, spread = x, y, 0.0
+    for _ in range(200):
+        if not 2.0 * half > BREAK_SPAN:
+            break
+        spread, bi, bj = -1.0, 0, 0
+        for i in range(3):  # (overlapping halves: a tip lies at least a quarter inside one of them)
+            for j in range(3):
+                g = normal_spread(fn, d, cx + (0.5 * i - 1.0) * half, cy + (0.5 * j - 1.0) * half, half)
+                if g > spread:
+                    spread, bi, bj = g, i, j
+        cx += 0.5 * (bi - 1) * half
+        cy += 0.5 * (bj - 1) * half
+        half *= 0.5
+    # convex (a ridge or the tip of a cone pointing up) where the surface stands above a ring
+    landscape(fn, cx, cy, data_pointer(d))
+    f0, ring = d[0], 0.0
+    rho = 16.0 * BREAK_SPAN
+    for k in range(8):
+        landscape(fn, cx + rho * math.cos(k * math.pi / 4.0), cy + rho * math.sin(k * math.pi / 4.0),
+                  data_pointer(d))
+        ring += (d[0] + 0.0 * (d[1] + d[2])) / 8.0
+    if not math.isfinite(ring + f0):  # the landscape ends there (a domain's edge): no tip
+        return 0.0, cx, cy, False
+    return spread, cx, cy, f0 > ring
+
+
+@COLD
+def tip_stop(fn, d, ints, info, t, x, y, half, speed):
+    """Before a run stops because its step cannot pass (the adaptive step underflows, the
+    implicit stage equations do not converge, a step's secant says the ball does not fit):
+    whether a tip or kink of the surface lies within ``half`` of the contact point (x, y),
+    where the normal turns by more than TIP_MIN over a vanishing span. A convex one is the
+    real ball's lift-off (reported, at the time the contact point at ``speed`` would reach it
+    from t) and the stop's reason (R_TIP); a valley's is a kink where the ball does not fit.
+    Returns whether one was found (the failure is then set)."""
+    turn, tx, ty, convex = find_tip(fn, d, x, y, half)
+    if not turn > TIP_MIN:
+        return False
+    reach = math.sqrt((tx - x) ** 2 + (ty - y) ** 2)
+    when = t + reach / speed if speed > 0.0 else t
+    if convex:
+        if math.isnan(info[F_LIFTOFF]):
+            info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = when, tx, ty, 1.0
+        _fail(ints, info, DOES_NOT_FIT, R_TIP, when, tx, ty, turn)
+    else:
+        _fail(ints, info, DOES_NOT_FIT, R_KINK, when, tx, ty, turn)
+    return True
 
 
 @JIT
@@ -288,8 +378,20 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                 retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
                 dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
-            _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
-            stop, valid = b, a
+            # a step passing a tip of the surface within round-off of its stages bends like that too
+            # (the normal turns through a finite angle over a span the dense output cannot resolve)
+            turn, tx, ty, convex = find_tip(fn, d, sb[0], sb[1], max(math.sqrt(chord2), BREAK_SPAN))
+            if turn > TIP_MIN and convex:  # the real ball leaves the surface there: a lift-off and a stop
+                if math.isnan(info[F_LIFTOFF]):
+                    info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, tx, ty, 1.0
+                _fail(ints, info, DOES_NOT_FIT, R_TIP, t + b * h, tx, ty, turn)
+                stop, valid = b, a
+            elif turn > TIP_MIN:
+                _fail(ints, info, DOES_NOT_FIT, R_KINK, t + b * h, tx, ty, turn)
+                stop, valid = b, a
+            else:
+                _fail(ints, info, DOES_NOT_FIT, R_SECANT_NO_FIT, t + b * h, sb[0], sb[1], r * bend / chord2)
+                stop, valid = b, a
     # a jump in height
     if jumpy and stop > 1.0:
         a, b, jump = locate_break(JUMP, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)

@@ -186,10 +186,14 @@ REASONS = {
     "not_converged": ("nonfinite", "the step (s)",
                       "the implicit stage equations did not converge at {where}: the step dt = {value:.3g} s is too "
                       "large for this motion; use a smaller dt"),
+    "tip": ("does_not_fit", "the angle the normal turns there (rad)",
+            "the ball reaches a point of the surface at {where} where the normal turns by {value:.3g} rad at once "
+            "(the tip of a cone, or a like point): a real ball leaves the surface there (the lift-off), and the "
+            "model cannot step across it"),
 }
 R_NONE = 0
 (R_NO_FIT, R_SECANT_NO_FIT, R_START_UNDEFINED, R_START_OVERFLOW, R_UNDEFINED, R_ORIENTATION, R_STEP_UNDERFLOW,
- R_KINK, R_HEIGHT_JUMP, R_NOT_CONVERGED) = range(1, len(REASONS) + 1)
+ R_KINK, R_HEIGHT_JUMP, R_NOT_CONVERGED, R_TIP) = range(1, len(REASONS) + 1)
 
 
 def reason_name(code: int) -> str | None:

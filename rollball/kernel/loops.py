@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .dense import state_at
-from .events import fold_search, record_valid, step_events
+from .events import TIP_REACH, fold_search, record_valid, step_events, tip_stop
 from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, trial_step_pair
 from .interface import (
     BATCH_CHUNK, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED, I_RETRY,
@@ -21,6 +21,19 @@ from .recording import _fail, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
 from .unpacking import scratch
+
+
+@JIT
+def speed_of(K):
+    """The contact point's speed at the step's start (K[0]: the state's derivative there)."""
+    return math.sqrt(K[0, 0] * K[0, 0] + K[0, 1] * K[0, 1])
+
+
+@JIT
+def reach_of(K, h, z):
+    """How far around the contact point a step of h that cannot pass looks for a tip of the
+    surface: twice the step's travel, at least TIP_REACH (relative to 1 + |x| + |y|)."""
+    return max(2.0 * h * speed_of(K), TIP_REACH * (1.0 + abs(z[0]) + abs(z[1])))
 
 
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
@@ -65,7 +78,9 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
                 return
         if bad:
             if bad == STEP_NOT_CONVERGED:
-                _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+                # (unless the step would pass a tip of the surface: that is the landscape's)
+                if not tip_stop(fn, d, ints, info, t0, z[0], z[1], reach_of(K, h, z), speed_of(K)):
+                    _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
             else:
                 _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
                       0.0 if mk else 1.0)
@@ -138,7 +153,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             if ints[I_NONFINITE] >= NONFINITE_TRIES:
                 _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
             elif h <= MIN_STEP * max(1.0, abs(t)):
-                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+                if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K)):
+                    _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
             else:
                 continue
             record_last(rows, ints, t, z, R, probe, p)
@@ -181,7 +197,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
         h = max(h, grown) if land else grown
         retry = False
         if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
-            _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+            if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K)):
+                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
             record_last(rows, ints, t, z, R, probe, p)
             break
         if t == t_end:

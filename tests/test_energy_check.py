@@ -1,0 +1,79 @@
+"""Whose an energy error is: where one recorded interval holds most of it, the run takes that
+interval again with a shorter step (tighter tolerances, adaptive). On a smooth landscape the
+error shrinks as the method's order predicts and is the step's; over a kink or a jump of the
+curvature it does not shrink and is the landscape's (docs/design.md §1)."""
+
+import threading
+
+import pytest
+
+from conftest import make_scene
+from rollball import simulate, simulation
+from rollball.simulation import Simulation
+
+BUMP = "0.3*exp(-(x/0.3)^2)"  # smooth
+
+
+def bump(dt):
+    return make_scene(BUMP, x=-0.8, vx=3.0, duration=0.5, dt=dt)
+
+
+def test_a_smooth_landscape_at_too_large_a_step_is_the_steps():
+    traj = simulate(bump(0.15), method="rk4")
+    check = traj.energy_check
+    assert check is not None and not check.landscape
+    assert check.shrink > 16.0  # rk4: 4^4 = 256 for a step 4 times shorter
+    notes = traj.warnings()
+    assert len(notes) == 1 and "the step is too large" in notes[0] and "landscape" not in notes[0]
+
+
+def test_a_smooth_landscape_at_loose_tolerances_is_the_steps():
+    traj = simulate(bump(0.05), method="dopri5", rtol=1e-3, atol=1e-4)
+    check = traj.energy_check
+    assert check is not None and not check.landscape, check
+    assert "the step is too large" in traj.warnings()[0]
+
+
+@pytest.mark.parametrize("method", ["rk4", "euler", "dopri5"])
+def test_a_kink_is_the_landscapes(method):
+    options = dict(rtol=1e-3, atol=1e-4) if method == "dopri5" else {}
+    traj = simulate(make_scene("min(0.5*x, -0.1*x)", x=-0.5, vx=2.0, duration=0.5, dt=1e-3), method=method,
+                    **options)
+    check = traj.energy_check
+    assert check is not None and check.landscape
+    assert check.time <= traj.liftoff.time <= check.end  # where the run crossed the kink
+    assert "the landscape's, not the step's" in traj.warnings()[0]
+
+
+def test_a_jump_of_the_curvature_is_the_landscapes():
+    # f'' jumps from 0 to 8 at x = 0 (f and its slope are continuous): no kink, no lift-off
+    traj = simulate(make_scene("4*max(x,0)^2", x=-0.5, vx=2.0, duration=0.5, dt=0.05), method="rk4")
+    assert traj.liftoff is None
+    check = traj.energy_check
+    assert check is not None and check.landscape and check.shrink < 16.0
+    assert check.time <= 0.25 <= check.end and abs(check.x) < 0.1
+    notes = traj.warnings()
+    assert len(notes) == 1 and "the landscape is not smooth there" in notes[0]
+    assert f"t = {check.time:.6g}" in notes[0] and "the step is too large" not in notes[0]
+
+
+def test_no_check_where_the_energy_is_kept():
+    assert simulate(bump(0.01), method="rk4").energy_check is None
+
+
+def test_the_check_runs_where_the_run_runs(monkeypatch):
+    threads = []
+    real = simulation.energy_check
+
+    def spy(run):
+        threads.append(threading.get_ident())
+        return real(run)
+
+    monkeypatch.setattr(simulation, "energy_check", spy)
+    run = Simulation(bump(0.15), method="rk4")
+    worker = threading.Thread(target=run.advance)
+    worker.start()
+    worker.join()
+    assert len(threads) == 1 and threads[0] == worker.ident
+    assert run.trajectory().energy_check is not None  # reading it computes nothing
+    assert len(threads) == 1
