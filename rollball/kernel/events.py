@@ -55,7 +55,7 @@ FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it i
 LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's contact points
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
 FORCE_EVENT, FIT_EVENT = 0.0, 1.0
-KINK, JUMP = 0.0, 1.0
+KINK, JUMP, JOLT = 0.0, 1.0, 2.0   # what locate_break bisects towards (JOLT: the centre jumping)
 
 
 @COLD
@@ -113,9 +113,19 @@ def locate(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, ints):
 
 
 @JIT
-def break_measure(kind, sa, sb):
+def centre_moved(r, sa, sb):
+    """How far the centre moves between two surface points (squared)."""
+    return ((sb[0] - sa[0] + r * (sb[3] - sa[3])) ** 2 + (sb[1] - sa[1] + r * (sb[4] - sa[4])) ** 2
+            + (sb[2] - sa[2] + r * (sb[5] - sa[5])) ** 2)
+
+
+@JIT
+def break_measure(kind, r, sa, sb):
     """How much of a break of the surface lies between two surface points: the angle the
-    normal turns (KINK), or the height change beyond the slopes' trapezoid (JUMP)."""
+    normal turns (KINK), the height change beyond the slopes' trapezoid (JUMP), or how far the
+    centre moves (JOLT, squared: the tip of a cone)."""
+    if kind == JOLT:
+        return centre_moved(r, sa, sb)
     if kind == KINK:
         return math.sqrt((sb[3] - sa[3]) ** 2 + (sb[4] - sa[4]) ** 2 + (sb[5] - sa[5]) ** 2)
     dx, dy = sb[0] - sa[0], sb[1] - sa[1]
@@ -133,7 +143,7 @@ def locate_break(kind, fn, d, r, z, h, P, K, Ye, sa, sb, sm, a, b):
     for _ in range(BREAK_HALVINGS):
         m = 0.5 * (a + b)
         surface_at(fn, d, r, z, h, P, K, m, Ye, sm)
-        if break_measure(kind, sa, sm) >= break_measure(kind, sm, sb):
+        if break_measure(kind, r, sa, sm) >= break_measure(kind, r, sm, sb):
             b = m
             for q in range(SURFACE_SIZE):
                 sb[q] = sm[q]
@@ -143,7 +153,7 @@ def locate_break(kind, fn, d, r, z, h, P, K, Ye, sa, sb, sm, a, b):
                 sa[q] = sm[q]
     if (sb[0] - sa[0]) ** 2 + (sb[1] - sa[1]) ** 2 > BREAK_SPAN * BREAK_SPAN:
         return a, b, 0.0
-    return a, b, break_measure(kind, sa, sb)
+    return a, b, break_measure(kind, r, sa, sb)
 
 
 @COLD
@@ -307,34 +317,6 @@ def centre_jolted(r, h, z, probe, zn, pn):
 
 
 @COLD
-def locate_jolt(fn, d, r, z, h, P, K, Ye, sa, sb, sm):
-    """Halve the step BREAK_HALVINGS times towards the half in which the centre moves more;
-    returns the fraction of the step where it jumps (sb: the surface there)."""
-    a, b = 0.0, 1.0
-    surface_at(fn, d, r, z, h, P, K, a, Ye, sa)
-    surface_at(fn, d, r, z, h, P, K, b, Ye, sb)
-    for _ in range(BREAK_HALVINGS):
-        m = 0.5 * (a + b)
-        surface_at(fn, d, r, z, h, P, K, m, Ye, sm)
-        if centre_moved(r, sa, sm) >= centre_moved(r, sm, sb):
-            b = m
-            for q in range(SURFACE_SIZE):
-                sb[q] = sm[q]
-        else:
-            a = m
-            for q in range(SURFACE_SIZE):
-                sa[q] = sm[q]
-    return a, b
-
-
-@JIT
-def centre_moved(r, sa, sb):
-    """How far the centre moves between two surface points (squared)."""
-    return ((sb[0] - sa[0] + r * (sb[3] - sa[3])) ** 2 + (sb[1] - sa[1] + r * (sb[4] - sa[4])) ** 2
-            + (sb[2] - sa[2] + r * (sb[5] - sa[5])) ** 2)
-
-
-@COLD
 def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, sa, sb, sm,
                  fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping):
     """``step_events`` for a step its cheap looks have flagged: locate what happens in it."""
@@ -402,7 +384,7 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
     # normal turns through a finite angle. Where the ball fits, such a point is convex: the real
     # ball leaves the surface there (a lift-off at a kink); the step stands
     if jolted and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
-        a, b = locate_jolt(fn, d, r, z, h, P, K, Ye, sa, sb, sm)
+        a, b, _ = locate_break(JOLT, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sb[0], sb[1], 1.0
     # lift-off: F.N turns negative (first time only, before any stop)
     if force_end and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
