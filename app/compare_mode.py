@@ -24,7 +24,7 @@ class CompareMode:
         self.panel = ComparePanel()
         self.error_plots = ErrorPlots()
         self.summary = SummaryTable()
-        self.panel.compareRequested.connect(w.start)
+        self.panel.compareRequested.connect(w.runs.start)
         self.panel.runsChanged.connect(self._runs_edited)
         self.panel.shownChanged.connect(self.show_run)
         w.controller.measured.connect(self._measured)
@@ -61,7 +61,7 @@ class CompareMode:
         """Entering or leaving: the run so far is dropped (the window's ``Modes`` shows and
         hides the panels)."""
         w = self.window
-        w.reset()
+        w.runs.reset()
         if on and not self.panel.rows and w.scene is not None:
             self.panel.use_preset(next(iter(compare_runs.PRESETS)))
         w.show_message("Compare mode: set the runs, then Compare (F5)" if on else "")
@@ -113,7 +113,7 @@ class CompareMode:
 
     def _runs_edited(self) -> None:
         if self.active and self.window.controller.runs:
-            self.window.reset()   # the runs shown no longer are the ones set
+            self.window.runs.reset()   # the runs shown no longer are the ones set
 
     def _measured(self) -> None:
         """The reference is known: name it, and plot and tabulate every run's true error."""

@@ -48,11 +48,11 @@ class Exports:
     def export_csv(self, path: Path) -> bool:
         w = self.window
         simulation = w.controller.simulation
-        if simulation is None or not (w.controller.computed or w.state == STOPPED):
+        if simulation is None or not (w.controller.computed or w.runs.state == STOPPED):
             return False   # what a stopped run computed is exported as it stands
         trajectory = simulation.trajectory()
         keep = self._keep()
-        if not w._write("export trajectory", path, lambda target: trajectory.to_csv(target, keep=keep)):
+        if not w.files.write("export trajectory", path, lambda target: trajectory.to_csv(target, keep=keep)):
             return False
         w.show_message(f"Exported {len(trajectory):,} rows to {Path(path).name}")
         return True
@@ -95,7 +95,7 @@ class Exports:
         buffer.open(QtCore.QIODevice.OpenModeFlag.WriteOnly)
         image.save(buffer, "PNG")
         keep = self._keep()
-        if not w._write("save image", path, lambda target: atomic_write_bytes(target, bytes(data), keep=keep)):
+        if not w.files.write("save image", path, lambda target: atomic_write_bytes(target, bytes(data), keep=keep)):
             return False
         w.show_message(f"Saved {path.name} ({image.width()}×{image.height()})")
         return True
@@ -153,12 +153,12 @@ class Exports:
         if reframe:
             w.view.reset_camera(include=self.path(t0, t1), aspect=view_size[1] / max(1, view_size[0]))
         try:
-            done = record(path, times, fps, size, w.seek, lambda: rgb_array(self.picture(view_size, caption)),
+            done = record(path, times, fps, size, w.runs.seek, lambda: rgb_array(self.picture(view_size, caption)),
                           progress, ACCENTS, keep=keep)
         finally:
             if reframe:
                 w.view.reset_camera()
-            w.seek(shown)
+            w.runs.seek(shown)
         if not done:
             w.show_message("Export cancelled; nothing was written")
             return False

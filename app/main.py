@@ -167,8 +167,8 @@ def main(argv: list[str] | None = None) -> int:
 
     window = MainWindow()
     named_file = args.scene is not None and str(path) == args.scene   # not an example's name
-    window.open_scene(path, remember=named_file)
-    window.prepare_integrator()   # compiled in the background while the user looks around
+    window.files.open_scene(path, remember=named_file)
+    window.runs.prepare_integrator()   # compiled in the background while the user looks around
     if specs is not None:
         from .compare_runs import CompareRun
 
@@ -264,7 +264,7 @@ def close_down(app, window) -> None:
     if window.isVisible():
         window.close()   # an interactive window closed by the user has had its closeEvent
     window.controller.shutdown()
-    window.stop_preparing()
+    window.runs.stop_preparing()
     app.processEvents()   # what is queued runs while every object it may touch is whole
     for widget in [window, *app.topLevelWidgets()]:
         widget.hide()
@@ -294,7 +294,7 @@ def record(app, window, path: Path, args, specs, problems: list, stopped: list) 
 
     from .controller import FINISHED, READY
 
-    if not window.open_scene(path, remember=False):
+    if not window.files.open_scene(path, remember=False):
         return problems[0] if problems else f"cannot open {path}"
     if specs is not None:
         from .compare_runs import CompareRun
@@ -303,10 +303,10 @@ def record(app, window, path: Path, args, specs, problems: list, stopped: list) 
     window.show()
     scene = window.scene
     if args.run_to is not None and args.run_to != scene.duration:
-        window.show_scene(replace(scene, duration=args.run_to))
+        window.files.show_scene(replace(scene, duration=args.run_to))
     window.speed.setCurrentIndex(window.speed.count() - 1)   # as fast as computed
-    window.start()
-    if window.state == READY:
+    window.runs.start()
+    if window.runs.state == READY:
         return problems[0] if problems else "the run did not start"
     if not wait_until(app, lambda: window.controller.state == FINISHED or problems, stopped):
         return None if stopped else f"the run did not end within {RUN_TIMEOUT:g} s"
@@ -338,7 +338,7 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
     window._warn = lambda title, text: problems.append(f"{title.lower()}: {text}")   # no dialogs
     app = QtWidgets.QApplication.instance()
     window.resize(*size)
-    if not window.open_scene(scene, remember=False):
+    if not window.files.open_scene(scene, remember=False):
         return problems[0] if problems else f"cannot open {scene}"
     if compare is not None:
         from .compare_runs import CompareRun
@@ -349,7 +349,7 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
     if run_to is not None:
         controller = window.controller
         window.speed.setCurrentIndex(window.speed.count() - 1)   # as fast as computed
-        window.start()
+        window.runs.start()
         controller.pause()   # the worker computes on; the picture is taken at run_to
         started = time.monotonic()
         while not (controller.computed or controller.end_time >= run_to or problems):
@@ -367,7 +367,7 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
             wait_until(app, lambda: controller.state != RUNNING, stopped)
         else:
             controller.play_time = run_to
-            window.stop()
+            window.runs.stop()
         if compare is not None:   # the true errors need the reference
             wait_until(app, lambda: controller.reference is not None or problems, stopped)
         if stopped:

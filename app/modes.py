@@ -181,7 +181,7 @@ class Modes:
             return
         if not self.presentation:
             self.closeup_wanted = on
-        self.window.show_closeup(on)
+        self.window.drawing.show_closeup(on)
 
     # -- applying --------------------------------------------------------------------
 
@@ -199,7 +199,7 @@ class Modes:
                 w.scene_dock.raise_()
             w.scene_panel_action.setChecked(shown.scene_panel)
             w.closeup_action.setChecked(shown.closeup)
-            w.show_closeup(shown.closeup)
+            w.drawing.show_closeup(shown.closeup)
             w.bottom.setCurrentWidget(w.compare.error_plots if shown.error_plots else w.plots)
             self._share_height(shown)
             w.compare_action.setChecked(self.compare)

@@ -47,14 +47,14 @@ def measure() -> dict:
         scene = Scene.load(DEFAULT_EXAMPLE)
         scene = dataclasses.replace(scene, duration=100.0,
                                     integrator=dataclasses.replace(scene.integrator, method="rk4", dt=1e-4))
-        window.open_scene(DEFAULT_EXAMPLE, remember=False)
-        window.show_scene(scene)
+        window.files.open_scene(DEFAULT_EXAMPLE, remember=False)
+        window.files.show_scene(scene)
         window.speed.setCurrentIndex(window.speed.count() - 1)  # as fast as computed
         window.show()
         ticks: list[float] = []
         timer = QtCore.QTimer(interval=TICK_MS)
         timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
-        window.start()
+        window.runs.start()
         controller = window.controller
         deadline = time.monotonic() + 600
         while not (controller.buffer is not None and len(controller.buffer) > 0) and time.monotonic() < deadline:
@@ -92,7 +92,7 @@ def latency(repeats: int = 9) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         settings = QtCore.QSettings(f"{folder}/preferences.ini", QtCore.QSettings.Format.IniFormat)
         window = MainWindow(Preferences(settings))
-        window.open_scene(scene_path("ripples"), remember=False)
+        window.files.open_scene(scene_path("ripples"), remember=False)
         window.show()
         frames = [0]
         window.view.frameSwapped.connect(lambda: frames.__setitem__(0, frames[0] + 1))

@@ -57,7 +57,7 @@ def window(qtbot, dialogs, preferences):
     """The main window on the hills example, shown."""
     w = MainWindow(preferences)
     qtbot.addWidget(w)
-    w.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
+    w.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
     w.show()
     qtbot.waitExposed(w)
     yield w

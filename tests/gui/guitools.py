@@ -16,7 +16,7 @@ FASTEST = len(SPEEDS) - 1
 def run_to_end(qtbot, window, timeout=30_000):
     """Start (at the fastest playback) and wait until the run has played to its end."""
     window.speed.setCurrentIndex(FASTEST)
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=timeout)
 
 

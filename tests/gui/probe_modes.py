@@ -48,7 +48,7 @@ def rect(r: QtCore.QRect) -> list[int]:
 
 def open_window(settings: str) -> MainWindow:
     window = MainWindow(Preferences(QtCore.QSettings(settings, QtCore.QSettings.Format.IniFormat)))
-    window.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
+    window.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
     window.show()
     settle(1.0)
     window.activateWindow()
@@ -114,7 +114,7 @@ def main() -> None:
     window.compare_action.trigger()
     settle(0.3)
     window.speed.setCurrentIndex(len(SPEEDS) - 1)
-    window.start()
+    window.runs.start()
     wait_until(lambda: window.controller.state == FINISHED)
     settle(0.5)
     report["compare"] = state(window)

@@ -14,7 +14,7 @@ from rollball.examples import EXAMPLES_DIR, example_scenes
 
 
 def _framed(qtbot, window, name):
-    window.open_scene(EXAMPLES_DIR / f"{name}.json", remember=False)
+    window.files.open_scene(EXAMPLES_DIR / f"{name}.json", remember=False)
     window.resize(QtCore.QSize(*DEFAULT_SIZE))   # the default window on a 1400×900 screen
     qtbot.waitUntil(lambda: window.view.framed)
     window.view.reset_camera()

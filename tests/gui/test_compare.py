@@ -21,7 +21,7 @@ def compare_to_end(qtbot, window, specs=SPECS, timeout=60_000):
     window.compare.enter([CompareRun.of(spec, window.scene) for spec in parse_runs(specs)])
     window.speed.setCurrentIndex(FASTEST)
     with qtbot.waitSignal(window.controller.measured, timeout=timeout):
-        window.start()
+        window.runs.start()
         qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=timeout)
 
 
@@ -134,11 +134,11 @@ def test_the_command_line_refuses_a_bad_spec(capsys):
 
 def test_every_ball_stands_at_the_start_until_its_run_has_rows(qtbot, window):
     window.compare.enter([CompareRun.of(spec, window.scene) for spec in parse_runs(SPECS)])
-    window.start()   # the runs' first rows arrive through the event loop, not yet
+    window.runs.start()   # the runs' first rows arrive through the event loop, not yet
     view = window.view
     first = view.balls[0].transform()
     assert len(view.balls) == 3 and all(ball.transform() == first for ball in view.balls)
     center = first.map(QtGui.QVector3D(0, 0, 0))
     assert np.allclose([center.x(), center.y(), center.z()], view.centers[0])
     assert first.map(QtGui.QVector3D(1, 0, 0)).distanceToPoint(center) == pytest.approx(window.scene.ball.radius)
-    window.reset()
+    window.runs.reset()

@@ -59,7 +59,7 @@ def test_every_example_opens_in_a_picture_with_the_ball_in_view_and_in_sight(win
 
 
 def test_the_no_fit_region_is_in_sight_on_opening(qtbot, window):
-    assert window.open_scene(scene_path("too_big"), remember=False)
+    assert window.files.open_scene(scene_path("too_big"), remember=False)
     qtbot.wait(20)
     window.view.ball.setVisible(False)   # its stripes are red too
     r, g, b = np.moveaxis(_view_image(window.view), -1, 0)
@@ -69,7 +69,7 @@ def test_the_no_fit_region_is_in_sight_on_opening(qtbot, window):
 
 
 def test_heights_the_ball_cannot_reach_are_cut_away(qtbot, window):
-    assert window.open_scene(scene_path("valley"), remember=False)
+    assert window.files.open_scene(scene_path("valley"), remember=False)
     view = window.view
     assert view.cap < 3.0   # the walls of 4 y² reach 64 m on this grid; the ball starts below 2 m
     assert view.bounds[1, 2] <= view.cap and len(view.cut_edge.pos) > 0
@@ -102,22 +102,22 @@ def test_the_command_line_fails_in_one_line(tmp_path, args, words):
 
 
 def test_start_while_the_integrator_is_prepared_waits_visibly_then_runs(qtbot, window):
-    window.prepare_integrator([sys.executable, "-c", "import time; time.sleep(2)"])
-    window.start()
-    assert window.state == "ready" and "Preparing the integrator (first run only)" in window.message.text()
+    window.runs.prepare_integrator([sys.executable, "-c", "import time; time.sleep(2)"])
+    window.runs.start()
+    assert window.runs.state == "ready" and "Preparing the integrator (first run only)" in window.message.text()
     assert window.progress.maximum() == 0 and window.state_label.text() == "Preparing…"   # busy
-    qtbot.waitUntil(lambda: window.state != "ready", timeout=20_000)
-    assert window.state in ("running", "finished") and window.progress.maximum() == 1000
-    assert window.preparing is None
+    qtbot.waitUntil(lambda: window.runs.state != "ready", timeout=20_000)
+    assert window.runs.state in ("running", "finished") and window.progress.maximum() == 1000
+    assert window.runs.preparing is None
 
 
 def test_reset_while_waiting_for_the_integrator_cancels_the_start(qtbot, window):
-    window.prepare_integrator([sys.executable, "-c", "import time; time.sleep(1)"])
-    window.start()
-    window.reset()
-    qtbot.waitUntil(lambda: window.preparing is None, timeout=20_000)
+    window.runs.prepare_integrator([sys.executable, "-c", "import time; time.sleep(1)"])
+    window.runs.start()
+    window.runs.reset()
+    qtbot.waitUntil(lambda: window.runs.preparing is None, timeout=20_000)
     qtbot.wait(100)
-    assert window.state == "ready"
+    assert window.runs.state == "ready"
 
 
 def test_a_grid_too_coarse_for_the_landscape_is_said(qtbot, window):
@@ -129,22 +129,22 @@ def test_a_grid_too_coarse_for_the_landscape_is_said(qtbot, window):
 
 
 def test_typing_in_a_text_field_neither_fires_shortcuts_nor_resets_the_run(qtbot, window):
-    window.start()
-    window.toggle_pause()
+    window.runs.start()
+    window.runs.toggle_pause()
     field = window.panel.formula
     field.setFocus()
     qtbot.keyClicks(field, " ")
     qtbot.keyClick(field, QtCore.Qt.Key.Key_F)
     qtbot.keyClick(field, QtCore.Qt.Key.Key_Backspace)
     qtbot.wait(600)   # past the fields' settling delay
-    assert field.text().endswith(" ") and window.state == "paused"   # typed, and the run stays
+    assert field.text().endswith(" ") and window.runs.state == "paused"   # typed, and the run stays
     assert not window.follow_action.isChecked()
 
 
 def test_what_a_stopped_run_computed_can_be_exported(qtbot, window, tmp_path):
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: len(window.controller.buffer) > 10, timeout=20_000)
-    window.stop()
+    window.runs.stop()
     assert window.export_action.isEnabled() and "can be exported" in window.message.text()
     out = tmp_path / "stopped.csv"
     assert window.exports.export_csv(out)
@@ -152,7 +152,7 @@ def test_what_a_stopped_run_computed_can_be_exported(qtbot, window, tmp_path):
 
 
 def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window):
-    assert window.open_scene(scene_path("cylinder"), remember=False)
+    assert window.files.open_scene(scene_path("cylinder"), remember=False)
     run_to_end(qtbot, window)
     text = window.message.text()
     assert text.startswith("Stopped early") and "lift-off at t = " in text
@@ -160,9 +160,9 @@ def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window):
 
 def test_start_goes_as_soon_as_its_method_is_ready(qtbot, window):
     says = "import time; print('ready euler mk', flush=True); time.sleep(0.5); print('ready rk4 mk', flush=True); time.sleep(30)"
-    window.prepare_integrator([sys.executable, "-c", says])
-    window.start()   # hills: rk4 with Munthe-Kaas
-    assert window.state == "ready"
-    qtbot.waitUntil(lambda: window.state != "ready", timeout=20_000)   # long before the process ends
-    assert window.preparing is not None
-    window.preparing.kill()
+    window.runs.prepare_integrator([sys.executable, "-c", says])
+    window.runs.start()   # hills: rk4 with Munthe-Kaas
+    assert window.runs.state == "ready"
+    qtbot.waitUntil(lambda: window.runs.state != "ready", timeout=20_000)   # long before the process ends
+    assert window.runs.preparing is not None
+    window.runs.preparing.kill()

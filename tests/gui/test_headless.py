@@ -109,10 +109,10 @@ def test_sigterm_during_record_removes_its_temporary_files_and_writes_nothing(tm
 
 def test_close_down_deletes_the_window_while_python_is_whole(qtbot, qapp, preferences):
     window = MainWindow(preferences)
-    window.open_scene(scene_path("hills"), remember=False)
+    window.files.open_scene(scene_path("hills"), remember=False)
     window.show()
     qtbot.waitExposed(window)
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: len(window.controller.buffer or ()) > 0, timeout=30_000)
     window.document.saved_scene = window.scene
     view, plots = window.view, window.plots
@@ -124,11 +124,11 @@ def test_close_down_deletes_the_window_while_python_is_whole(qtbot, qapp, prefer
 
 
 def test_closing_while_the_integrator_is_prepared_says_nothing(qtbot, window):
-    window.prepare_integrator([sys.executable, "-c", "import time; print('ready euler mk', flush=True); "
+    window.runs.prepare_integrator([sys.executable, "-c", "import time; print('ready euler mk', flush=True); "
                                                      "time.sleep(30)"])
     qtbot.wait(50)
     window.close()   # pytest-qt fails the test on any exception raised in a Qt callback
-    assert window.preparing is None
+    assert window.runs.preparing is None
     qtbot.wait(200)
 
 
@@ -173,7 +173,7 @@ def test_the_axis_numbers_and_names_are_framed_with_the_landscape(qtbot, window)
     from rollball.examples import example_names
 
     for name in example_names():
-        assert window.open_scene(scene_path(name), remember=False)
+        assert window.files.open_scene(scene_path(name), remember=False)
         w, h = window.view.width(), window.view.height()
         placed = labels_at(window.view, (w, h))
         assert any(item.text == "x (m)" for _, _, item in placed), name
@@ -183,7 +183,7 @@ def test_the_axis_numbers_and_names_are_framed_with_the_landscape(qtbot, window)
 
 
 def test_an_exported_video_keeps_the_ball_in_frame_when_it_leaves_the_grid(qtbot, window, tmp_path):
-    assert window.open_scene(scene_path("liftoff"), remember=False)
+    assert window.files.open_scene(scene_path("liftoff"), remember=False)
     set_field(qtbot, window, "duration", "2")
     run_to_end(qtbot, window)
     view, size = window.view, (320, 240)
@@ -203,7 +203,7 @@ def test_an_exported_video_keeps_the_ball_in_frame_when_it_leaves_the_grid(qtbot
 
 def test_nothing_is_exported_over_the_open_scene(qtbot, window, scene_file, dialogs):
     before = scene_file.read_bytes()
-    assert window.open_scene(scene_file)
+    assert window.files.open_scene(scene_file)
     assert not window.exports.save_image(scene_file)
     assert "scene being run" in dialogs[-1][2]
     run_to_end(qtbot, window)

@@ -96,12 +96,12 @@ def test_the_slider_shows_a_chosen_time(qtbot, window):
     np.testing.assert_allclose(drawn_center(window), trajectory.center[-1], rtol=0, atol=1e-6)  # float32 transform; a row apart is ~1e-3 m
     qtbot.keyClick(window, QtCore.Qt.Key.Key_Home)
     assert window.controller.play_time == 0.0
-    window.toggle_pause()                                       # replay from here
+    window.runs.toggle_pause()                                       # replay from here
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=10_000)
 
 
 def test_lift_off_is_a_marker_to_jump_to(qtbot, window):
-    window.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
+    window.files.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
     run_to_end(qtbot, window)
     liftoff = window.controller.simulation.liftoff_time
     [(position, marker)] = window.timeline.slider.markers
@@ -109,7 +109,7 @@ def test_lift_off_is_a_marker_to_jump_to(qtbot, window):
     assert "lift-off" in window.timeline.events.text()
     window.timeline.events.linkActivated.emit(repr(liftoff))     # the link beside the slider
     assert window.controller.play_time == liftoff
-    window.seek(0.0)
+    window.runs.seek(0.0)
     window.liftoff_action.trigger()                             # and the key L
     assert window.controller.play_time == liftoff
 
@@ -126,7 +126,7 @@ def frames_of(path) -> np.ndarray:
 def test_exported_animation_has_every_frame_and_the_ball_moves(qtbot, window, tmp_path, suffix):
     set_field(qtbot, window, "duration", "1")
     run_to_end(qtbot, window)
-    window.seek(0.6)
+    window.runs.seek(0.6)
     path = tmp_path / f"run{suffix}"
     assert window.exports.export_animation(path, fps=10, t0=0.2, t1=0.9, size=(200, 150), caption=False)
     frames = frames_of(path)
@@ -219,7 +219,7 @@ def test_headless_record_writes_the_video_and_exits_0(tmp_path):
 def test_arrow_and_home_keys_still_edit_text_in_a_field(qtbot, window):
     set_field(qtbot, window, "duration", "0.5")
     run_to_end(qtbot, window)
-    window.seek(0.25)
+    window.runs.seek(0.25)
     edit = window.panel.formula
     edit.setFocus()
     edit.setCursorPosition(3)

@@ -44,7 +44,7 @@ def compared(qtbot, window):
                           for spec in parse_runs("euler/classic,rk4/classic,rk4")])
     window.speed.setCurrentIndex(FASTEST)
     with qtbot.waitSignal(window.controller.measured, timeout=60_000):
-        window.start()
+        window.runs.start()
         qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=60_000)
     return window
 
@@ -56,7 +56,7 @@ def restarted(qtbot, window, preferences) -> MainWindow:
     again = MainWindow(Preferences(QtCore.QSettings(preferences.settings.fileName(),
                                                     QtCore.QSettings.Format.IniFormat)))
     qtbot.addWidget(again)
-    again.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
+    again.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
     again.show()
     qtbot.waitExposed(again)
     return again
@@ -164,7 +164,7 @@ def test_f11_and_esc_cycles_put_everything_back(qtbot, window):
 def test_scrubbing_in_compare_mode_moves_the_slider_and_says_one_time(qtbot, compared):
     w = compared
     assert w.timeline.slider.isEnabled() and w.timeline.t_end == 1.0
-    w.seek(0.5)
+    w.runs.seek(0.5)
     assert abs(w.timeline.slider.value() - STEPS // 2) <= 1
     label = w.timeline.label.text()
     assert label.endswith(" s / 1 s")
@@ -184,9 +184,9 @@ def test_one_time_on_screen_when_rows_are_sparse(qtbot, window):
     set_field(qtbot, window, "duration", "2")
     window.panel.record_every.setValue(40)   # rows every 0.04 s: the played time falls between them
     window.speed.setCurrentIndex(FASTEST)
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=30_000)
-    window.seek(1.23)
+    window.runs.seek(1.23)
     readout = window.readouts["t"].text()
     assert window.timeline.label.text() == f"{readout} / 2 s" and readout != "1.2300 s"
 
@@ -194,12 +194,12 @@ def test_one_time_on_screen_when_rows_are_sparse(qtbot, window):
 def test_opening_another_scene_in_compare_mode_drops_the_old_results(qtbot, compared):
     w = compared
     assert w.compare.summary.columnCount() == 3
-    assert w.open_scene(EXAMPLES_DIR / "bowl.json", remember=False)
+    assert w.files.open_scene(EXAMPLES_DIR / "bowl.json", remember=False)
     assert w.compare.active and w.compare.dock.isVisible() and len(w.compare.panel.rows) == 3
     assert w.compare.summary.columnCount() == 0 and w.compare.error_plots.curves == []
     assert not w.controller.runs and not w.timeline.slider.isEnabled()
     assert len(w.view.balls) == 1
-    w.start()   # and a comparison on the new scene fills them again
+    w.runs.start()   # and a comparison on the new scene fills them again
     qtbot.waitUntil(lambda: w.controller.state == FINISHED, timeout=60_000)
     assert w.compare.summary.columnCount() == 3
 
@@ -214,7 +214,7 @@ def test_the_followed_ball_is_solid_and_the_others_ghosts(qtbot, compared):
     qtbot.waitUntil(lambda: alphas()[2] == 1.0)
     assert max(alphas()[:2]) < 1.0
     w.closeup_action.trigger()
-    w.seek(0.5)
+    w.runs.seek(0.5)
     assert w.closeup.color == w.controller.runs[2].color   # the close-up in the followed run's colours
 
 
@@ -278,10 +278,10 @@ def test_an_energy_gain_is_drawn_apart_from_a_loss(qtbot, window):
     apply_fields(qtbot, window)
     assert window.scene.integrator.method == "euler"
     window.speed.setCurrentIndex(FASTEST)
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=30_000)
-    window.seek(float("inf"))
-    window._plot()
+    window.runs.seek(float("inf"))
+    window.drawing.plot()
     t, gain = window.plots.curves["energy_gain"].getOriginalDataset()
     drift = window.controller.runs[0].buffer.energy_error
     assert np.isfinite(gain).sum() > 0 and (drift > 0).any()

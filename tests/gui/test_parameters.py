@@ -25,7 +25,7 @@ def drawn_heights(window):
 
 @pytest.fixture
 def ripples(window):
-    assert window.open_scene(RIPPLES, remember=False)
+    assert window.files.open_scene(RIPPLES, remember=False)
     return window
 
 
@@ -48,7 +48,7 @@ def test_a_scene_with_parameters_is_drawn_with_its_values_runs_and_saves_them(qt
     window.panel._edited("parameters.a")
     apply_fields(qtbot, window)
     assert window.scene.parameter_values == (0.25, 1.0)
-    assert window.save_to(path)
+    assert window.files.save_to(path)
     saved = json.loads(path.read_text())
     assert saved["version"] == 3
     assert saved["parameters"] == {"a": {"value": 0.25, "min": 0.0, "max": 1.0},
@@ -145,12 +145,12 @@ def test_a_parameter_without_a_range_gets_one_around_its_value(qtbot, window, tm
     data["parameters"] = {"a": 0.5, "k": 1.0}
     path = tmp_path / "plain.json"
     path.write_text(json.dumps(data))
-    assert window.open_scene(path)
+    assert window.files.open_scene(path)
     row = window.panel.parameter_rows.rows["k"]
     assert (row.low, row.high) == (0.0, 2.0) and row.slider.value() == SLIDER_STEPS // 2
     row.slider.setValue(SLIDER_STEPS)
     assert window.scene.parameter_values == (0.5, 2.0)
-    assert window.save_to(path)
+    assert window.files.save_to(path)
     assert json.loads(path.read_text())["parameters"] == {"a": 0.5, "k": 2.0}
 
 
@@ -166,9 +166,9 @@ def test_the_parameter_rows_follow_the_text_size(qtbot, ripples):
 
 def test_a_scene_without_parameters_shows_no_rows(qtbot, window):
     assert not window.panel.parameter_rows.isVisibleTo(window.panel) and window.panel.parameter_rows.rows == {}
-    assert window.open_scene(RIPPLES, remember=False)
+    assert window.files.open_scene(RIPPLES, remember=False)
     assert window.panel.parameter_rows.isVisibleTo(window.panel)
-    assert window.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
+    assert window.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
     assert not window.panel.parameter_rows.isVisibleTo(window.panel)
 
 

@@ -10,7 +10,7 @@ from rollball_app import help as helps
 from rollball_app.controller import PAUSED, RUNNING
 from rollball_app.plots import FLOOR, LivePlots
 from rollball_app.playback import RunBuffer
-from rollball_app.window import PLOT_INTERVAL
+from rollball_app.drawing import PLOT_INTERVAL
 from rollball.trajectory import T
 
 from .guitools import assert_legible, exponent
@@ -89,13 +89,13 @@ def test_plots_follow_the_ball_while_playing(qtbot, window):
         if controller.state == RUNNING and len(buffer) and x is not None and len(x):
             frames[-1] += [time.perf_counter(), buffer.t[buffer.index_at(controller.play_time)], x[-1]]
 
-    controller.frameReady.disconnect(window._draw)   # measure around the window's own drawing
+    controller.frameReady.disconnect(window.drawing.draw)   # measure around the window's own drawing
     controller.frameReady.connect(begin)
-    controller.frameReady.connect(window._draw)
+    controller.frameReady.connect(window.drawing.draw)
     controller.frameReady.connect(end)
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: sum(len(f) == 4 for f in frames) >= 25, timeout=120_000)
-    window.toggle_pause()
+    window.runs.toggle_pause()
     drawn = [f for f in frames if len(f) == 4]
     plotted_at, updates, ball = -np.inf, 0, None
     for started, done, ball_t, plot_t in drawn:

@@ -27,10 +27,10 @@ def rss_mb() -> float:
 def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
     def cycles(n):
         for i in range(n):
-            window.start()
+            window.runs.start()
             if i % 2:
                 qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0, timeout=30_000)
-            window.stop() if i % 3 else window.reset()
+            window.runs.stop() if i % 3 else window.runs.reset()
         qtbot.wait(50)  # deleteLater of the finished threads
         gc.collect()
 
@@ -47,9 +47,9 @@ def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
 
 
 def test_opening_a_scene_during_a_run_replaces_it(qtbot, window):
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=30_000)
-    assert window.open_scene(EXAMPLES_DIR / "bowl.json", remember=False)
+    assert window.files.open_scene(EXAMPLES_DIR / "bowl.json", remember=False)
     assert window.controller.state == READY and window.controller.thread is None
     assert window.scene == Scene.load(EXAMPLES_DIR / "bowl.json")
     run_to_end(qtbot, window)
@@ -58,11 +58,11 @@ def test_opening_a_scene_during_a_run_replaces_it(qtbot, window):
 
 @pytest.mark.parametrize("text, key", [(t, k) for group in SCENE_TEXTS.values() for t, k in group][::4])
 def test_a_hostile_scene_file_opened_during_a_run_changes_nothing(qtbot, window, dialogs, tmp_path, text, key):
-    window.toggle_pause() if window.controller.state == RUNNING else window.start()
+    window.runs.toggle_pause() if window.controller.state == RUNNING else window.runs.start()
     scene, state = window.scene, window.controller.state
     path = tmp_path / "hostile.json"
     path.write_text(text, encoding="utf-8")
-    assert not window.open_scene(path)
+    assert not window.files.open_scene(path)
     assert dialogs[-1][0] == "warning" and f"hostile.json: {shown(key)}" in dialogs[-1][2]
     assert window.scene == scene and window.controller.state == state and window.controller.thread is not None or window.controller.computed
 
@@ -73,7 +73,7 @@ def test_binary_scene_files_are_refused(window, dialogs, tmp_path, data):
     path = tmp_path / "binary.json"
     path.write_bytes(payload)
     scene = window.scene
-    assert not window.open_scene(path)
+    assert not window.files.open_scene(path)
     assert dialogs and "binary.json" in dialogs[-1][2]
     assert window.scene == scene
 
@@ -99,7 +99,7 @@ def test_pasting_hostile_formulas_shows_the_refusal_and_keeps_the_landscape(qtbo
 
 def test_fields_left_invalid_do_not_stop_a_start(qtbot, window):
     set_field(qtbot, window, "ball.radius", "-1")
-    window.start()
+    window.runs.start()
     assert window.controller.simulation.scene.ball.radius == 0.1      # the last valid scene runs
     assert "Radius: must be greater than 0" in window.panel.error_text
 
@@ -131,11 +131,11 @@ def test_the_adaptive_method_runs_with_tolerances_and_exact_row_times(qtbot, win
 
 
 def test_pause_survives_a_finished_computation(qtbot, window):
-    window.start()
-    window.toggle_pause()
+    window.runs.start()
+    window.runs.toggle_pause()
     qtbot.waitUntil(lambda: window.controller.computed, timeout=10_000)
     assert window.controller.state == PAUSED and window.export_action.isEnabled()
-    window.toggle_pause()
+    window.runs.toggle_pause()
     assert window.controller.state == RUNNING
 
 
@@ -180,7 +180,7 @@ def test_a_formula_too_complex_is_refused_in_the_field(qtbot, window):
 def test_every_refusal_on_start_is_shown(qtbot, window, dialogs):
     set_field(qtbot, window, "duration", "1e300")
     set_field(qtbot, window, "integrator.dt", "1e-10")
-    window.start()
+    window.runs.start()
     assert dialogs[-1][:2] == ("warning", "Cannot start") and "too many" in dialogs[-1][2]
     assert window.controller.state == READY
 
@@ -195,7 +195,7 @@ def test_opening_a_refused_file_says_why_and_changes_nothing(qtbot, window, dial
     else:  # 12,001 grid points per side: gigabytes to draw
         path.write_text('{"format": "rollball-scene", "version": 2, "landscape": "x", "view": {"step": 0.0005}}')
     scene = window.scene
-    assert not window.open_scene(path)
+    assert not window.files.open_scene(path)
     words = {"fifo": "is a named pipe", "grid": "view.step: 12,001 grid points", "folder": "is a folder"}[kind]
     assert dialogs[-1][:2] == ("warning", "Cannot open scene") and words in dialogs[-1][2]
     assert window.scene == scene and not window.isWindowModified()
@@ -205,13 +205,13 @@ def test_opening_a_refused_file_says_why_and_changes_nothing(qtbot, window, dial
 def test_markup_in_a_file_is_shown_as_text(qtbot, window, dialogs, tmp_path):
     path = tmp_path / "scene.json"
     path.write_text('{"format": "rollball-scene", "version": 2, "landscape": "x", "<b>big</b>": 1}')
-    assert not window.open_scene(path)
+    assert not window.files.open_scene(path)
     assert "<b>" not in dialogs[-1][2] and "big" in dialogs[-1][2]
 
 
 def test_export_never_overwrites_the_open_scene(qtbot, window, dialogs, tmp_path):
     path = tmp_path / "mine.json"
-    assert window.save_to(path)
+    assert window.files.save_to(path)
     text = path.read_text()
     run_to_end(qtbot, window)
     assert not window.exports.export_csv(path)

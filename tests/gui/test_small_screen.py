@@ -38,7 +38,7 @@ def test_compare_mode_with_four_runs_fits_1024_by_700(qtbot, window):
     set_field(qtbot, window, "duration", "0.2")
     window.compare.enter([CompareRun.of(spec, window.scene) for spec in parse_runs(FOUR)])
     window.speed.setCurrentIndex(FASTEST)
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=60_000)
     qtbot.waitUntil(lambda: window.compare.summary.value("Max error (m)", 3) not in ("…", ""), timeout=60_000)
     hint = window.minimumSizeHint()

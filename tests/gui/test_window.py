@@ -71,29 +71,29 @@ def test_method_radio_and_munthe_kaas_reach_the_run(qtbot, window):
     qtbot.mouseClick(window.panel.munthe_kaas, QtCore.Qt.MouseButton.LeftButton)
     window.panel.apply()
     assert window.scene.integrator.method == "lawson5" and not window.scene.integrator.munthe_kaas
-    window.start()
+    window.runs.start()
     assert window.controller.simulation.tableau.name == "lawson5" and not window.controller.simulation.munthe_kaas
 
 
 def test_start_pause_step_stop_reset(qtbot, window):
-    window.start()
+    window.runs.start()
     assert window.controller.state == RUNNING
     qtbot.waitUntil(lambda: window.controller.play_time > 0.05, timeout=30_000)
-    window.toggle_pause()
+    window.runs.toggle_pause()
     assert window.controller.state == PAUSED
     paused_at = window.controller.play_time
     qtbot.wait(150)
     assert window.controller.play_time == paused_at                       # playback holds
-    window.step_frame()
+    window.runs.step_frame()
     assert window.controller.play_time == pytest.approx(paused_at + 0.016)  # one frame at real time
     assert window.readouts["t"].text() != "—"
-    window.toggle_pause()
+    window.runs.toggle_pause()
     assert window.controller.state == RUNNING
     qtbot.waitUntil(lambda: window.controller.play_time > paused_at + 0.1, timeout=30_000)
-    window.stop()
+    window.runs.stop()
     assert window.controller.state == STOPPED and window.controller.thread is None
     assert window.export_action.isEnabled()
-    window.reset()
+    window.runs.reset()
     assert window.controller.state == READY and window.controller.buffer is None and window.controller.play_time == 0.0
     assert window.readouts["t"].text() == "0 s"
 
@@ -107,34 +107,34 @@ def test_start_and_pause_say_what_they_do_in_each_state(qtbot, window):
 
     assert shown() == [("Start", True, False), ("Pause", False, False)]
     window.start_action.trigger()
-    assert window.state == RUNNING and shown() == [("Start", False, False), ("Pause", True, False)]
+    assert window.runs.state == RUNNING and shown() == [("Start", False, False), ("Pause", True, False)]
     window.pause_action.trigger()
-    assert window.state == PAUSED and shown() == [("Resume", True, False), ("Pause", True, True)]
+    assert window.runs.state == PAUSED and shown() == [("Resume", True, False), ("Pause", True, True)]
     window.pause_action.trigger()   # pressed again: playback resumes
-    assert window.state == RUNNING and shown()[1] == ("Pause", True, False)
+    assert window.runs.state == RUNNING and shown()[1] == ("Pause", True, False)
     window.activateWindow()
     qtbot.waitActive(window)
     window.view.setFocus()   # not a text field, where Space types a space
     qtbot.waitUntil(window.view.hasFocus)
     qtbot.keyClick(window, QtCore.Qt.Key.Key_Space)   # the shortcut pauses too
-    assert window.state == PAUSED and shown()[1] == ("Pause", True, True)
+    assert window.runs.state == PAUSED and shown()[1] == ("Pause", True, True)
     window.start_action.trigger()   # Resume
-    assert window.state == RUNNING and shown()[1] == ("Pause", True, False)
+    assert window.runs.state == RUNNING and shown()[1] == ("Pause", True, False)
     run_to_end(qtbot, window)
     assert shown() == [("Restart", True, False), ("Pause", False, False)]
 
 
 def test_step_from_ready_starts_paused(qtbot, window):
-    window.step_frame()
+    window.runs.step_frame()
     assert window.controller.state == PAUSED
     qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 1, timeout=30_000)
-    window.step_frame()
+    window.runs.step_frame()
     assert window.controller.play_time > 0
 
 
 def test_playback_speed_sets_simulated_seconds_per_second(qtbot, window):
     window.speed.setCurrentIndex(window.speed.findText("2×"))
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.computed, timeout=10_000)
     t0, w0 = window.controller.play_time, time.perf_counter()
     qtbot.wait(1000)
@@ -162,14 +162,14 @@ def test_save_and_open_give_the_same_scene(qtbot, window, tmp_path, preferences)
     qtbot.mouseClick(window.panel.findChild(QtWidgets.QRadioButton, "method.euler"), QtCore.Qt.MouseButton.LeftButton)
     window.panel.apply()
     path = tmp_path / "mine.json"
-    assert window.save_to(path)
+    assert window.files.save_to(path)
     assert not window.isWindowModified() and "mine.json" in window.windowTitle()
     saved = Scene.load(path)
     assert saved == window.scene
     assert saved.ball.radius == 0.25 and saved.start.spin == 3.5 and saved.integrator.method == "euler"
     other = MainWindow(preferences)
     qtbot.addWidget(other)
-    assert other.open_scene(path)
+    assert other.files.open_scene(path)
     assert other.scene == saved
     assert other.panel.numbers["ball.radius"].text() == "0.25"
     assert str(path.resolve()) == preferences.recent_files()[0]
@@ -177,7 +177,7 @@ def test_save_and_open_give_the_same_scene(qtbot, window, tmp_path, preferences)
 
 def test_every_example_opens(qtbot, window, dialogs):
     for path, scene in example_scenes():
-        assert window.open_scene(path, remember=False)
+        assert window.files.open_scene(path, remember=False)
         assert window.scene == scene
         assert f"{path.stem} (example)" in window.windowTitle()
     assert dialogs == []
@@ -191,7 +191,7 @@ def test_a_broken_scene_file_is_refused_and_the_scene_stays(qtbot, window, dialo
     data = Scene.load(EXAMPLES_DIR / "hills.json").to_dict()
     data["ball"]["radius"] = -1
     bad.write_text(json.dumps(data))
-    assert not window.open_scene(bad)
+    assert not window.files.open_scene(bad)
     assert dialogs and "ball.radius" in dialogs[-1][2]
     assert window.scene == scene
 
@@ -203,7 +203,7 @@ def test_save_failure_is_reported_and_the_old_file_stays(qtbot, window, dialogs,
     def refuse(*args):
         raise PermissionError(13, "Permission denied")
     monkeypatch.setattr(os, "replace", refuse)
-    assert not window.save_to(path)
+    assert not window.files.save_to(path)
     assert path.read_text() == "precious"
     assert dialogs[-1][0] == "warning" and "Permission denied" in dialogs[-1][2]
     assert list(tmp_path.iterdir()) == [path]
@@ -221,24 +221,24 @@ def test_save_image_writes_a_png_atomically(qtbot, window, dialogs, tmp_path, mo
 
 
 def test_changing_the_scene_during_a_run_resets_it(qtbot, window):
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=30_000)
     set_field(qtbot, window, "start.x", "0.5")
     assert window.controller.state == READY and window.controller.thread is None
     assert "reset" in window.message.text()
-    window.start()
+    window.runs.start()
     assert window.controller.simulation.scene.start.x == 0.5
 
 
 def test_view_only_changes_keep_the_run(qtbot, window):
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.play_time > 0.02, timeout=30_000)
     set_field(qtbot, window, "view.step", "0.2")
     assert window.controller.state == RUNNING
 
 
 def test_liftoff_is_marked_and_said(qtbot, window):
-    window.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
+    window.files.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
     run_to_end(qtbot, window)
     assert window.view.liftoff.visible()
     assert window.message.text().startswith("Finished: reached t = ")
@@ -246,7 +246,7 @@ def test_liftoff_is_marked_and_said(qtbot, window):
 
 
 def test_a_run_that_stops_early_says_why(qtbot, window):
-    window.open_scene(EXAMPLES_DIR / "too_big.json", remember=False)
+    window.files.open_scene(EXAMPLES_DIR / "too_big.json", remember=False)
     assert "(red: the ball does not fit there)" in window.message.text()
     run_to_end(qtbot, window)
     text = window.message.text()
@@ -279,13 +279,13 @@ def ball_pixels(window, qtbot):
 def test_the_gl_view_shows_the_ball_moving(qtbot, window):
     window.follow_action.setChecked(False)
     window.view.reset_camera()
-    window.start()
+    window.runs.start()
     qtbot.waitUntil(lambda: window.controller.play_time > 0.3, timeout=30_000)
-    window.toggle_pause()
+    window.runs.toggle_pause()
     first = ball_pixels(window, qtbot)
-    window.toggle_pause()
+    window.runs.toggle_pause()
     qtbot.waitUntil(lambda: window.controller.play_time > 1.2, timeout=30_000)
-    window.toggle_pause()
+    window.runs.toggle_pause()
     second = ball_pixels(window, qtbot)
     assert len(first) > 20 and len(second) > 20          # the ball is visible
     moved = np.linalg.norm(first.mean(axis=0) - second.mean(axis=0))
@@ -297,7 +297,7 @@ def test_the_gl_view_shows_the_ball_moving(qtbot, window):
 def test_closing_during_a_run_ends_the_worker(qtbot, window):
     set_field(qtbot, window, "integrator.dt", "0.0001")
     set_field(qtbot, window, "duration", "1000")
-    window.start()
+    window.runs.start()
     thread = window.controller.thread
     qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 10, timeout=30_000)
     started = time.perf_counter()
@@ -320,7 +320,7 @@ def test_the_event_loop_keeps_serving_during_a_million_step_run(qtbot, window):
     timer = QtCore.QTimer(interval=5)
     timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
     timer.start()
-    window.start()
+    window.runs.start()
     assert window.controller.simulation.n_steps == 1_000_000
     qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0, timeout=10_000)
     ticks.clear()  # from the first chunk on: the run is under way
@@ -346,7 +346,7 @@ def test_the_bench_measures_the_app_responsiveness():
 
 def test_preferences_remember_geometry_and_recent_files(qtbot, window, preferences, tmp_path):
     path = tmp_path / "a.json"
-    window.save_to(path)
+    window.files.save_to(path)
     window.resize(1200, 820)
     window.close()
     again = MainWindow(preferences)

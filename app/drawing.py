@@ -1,0 +1,138 @@
+"""What the window draws of the runs: the ball (or every run's ball) at the moment shown, its
+trail and close-up, the readouts, the time slider, the plots and the progress bar; before any
+run, the ball at its start.
+
+The run controller says when the moment shown has moved (``frameReady``); ``draw`` shows it,
+and brings the plots up to it at most every ``PLOT_INTERVAL``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from rollball import Scene
+from rollball.geometry import unit_normal
+from rollball.trajectory import CENTER, CONTACT, R
+
+from .controller import RUNNING
+
+PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
+
+
+class Drawing:
+    """Draws ``window``'s runs (a ``MainWindow``: its controller, view, close-up, readouts,
+    time slider, plots and progress bar)."""
+
+    def __init__(self, window):
+        self.window = window
+        self.drawn_index = -1                # the rows the view shows
+        self.plotted_at = -math.inf          # when the plots were last brought up to the shown time
+
+    def clear(self) -> None:
+        """No run: the ball at the start of the scene, empty plots and time slider."""
+        w = self.window
+        self.drawn_index = -1
+        w.view.set_runs(None)
+        w.readouts.set_runs([None])
+        scene = w.scene
+        if scene is not None and w.landscape is not None:
+            self.draw_start(scene)
+        w.plots.show_run(None, 0)
+        w.plots.set_cursor(None)
+        w.timeline.set_span(0.0)
+        w.view.set_liftoff(None)
+        w.view.set_trail(np.zeros((0, 3)))
+        w.progress.setValue(0)
+
+    def draw_start(self, scene: Scene) -> None:
+        """The ball at its start position, before any run."""
+        w = self.window
+        s, r = scene.start, scene.ball.radius
+        d = w.landscape.evaluate(s.x, s.y)
+        valid = bool(np.all(np.isfinite(d)))
+        w.view.ball.setVisible(valid)   # no ball left hanging where the start was
+        if not valid:
+            w.show_message(f"The landscape cannot be evaluated at the start point ({s.x:g}, {s.y:g})",
+                           warning=True)
+            return
+        center = np.array([s.x, s.y, d[0]]) + r * unit_normal(d)
+        w.view.set_ball(center, np.eye(3), r)
+        self._show_closeup_at(center, np.eye(3), np.array([s.x, s.y]), np.zeros((0, 3)))
+        w.readouts.clear()
+
+    def draw(self, force: bool = False) -> None:
+        w = self.window
+        runs, t = w.controller.runs, w.controller.play_time
+        if not runs or all(len(run.buffer) == 0 for run in runs):
+            return
+        indices = tuple(run.index_at(t) for run in runs)
+        if indices == self.drawn_index and not force:
+            return  # the same rows as the last frame
+        self.drawn_index = indices
+        radius = runs[0].simulation.scene.ball.radius
+        followed = w.view.followed
+        for k, (run, i) in enumerate(zip(runs, indices)):
+            if len(run.buffer):
+                row = run.buffer.rows[i]
+                trail = run.buffer.trail(i, lift=0.3)   # 0.3 r above the contact point
+                w.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
+                w.view.set_trail(trail, k)
+                if k == followed:
+                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color)
+                w.readouts.show_row(k, run.buffer, i)
+        followed = w.compare.followed if w.compare.followed < len(runs) else 0
+        if len(runs[followed].buffer):   # the time of the moment drawn, as its readout says it
+            w.timeline.set_time(t, shown=float(runs[followed].buffer.t[indices[followed]]))
+        if force or time.perf_counter() - self.plotted_at >= PLOT_INTERVAL:
+            self.plot()   # in the same frame as the 3-D view: the window is composed once
+        shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
+        w.progress.setValue(int(round(1000 * min(1.0, shown / w.controller.t_end))))
+
+    def plot(self) -> None:
+        """Bring the plots, and the time line's computed span and events, up to the shown time."""
+        w = self.window
+        self.plotted_at = time.perf_counter()
+        runs, t = w.controller.runs, w.controller.play_time
+        if w.compare.active:
+            w.compare.error_plots.show_time(t)
+        elif runs and len(runs[0].buffer):
+            # while playing, the curves grow with the ball; otherwise they show all that is computed
+            buffer = runs[0].buffer
+            i = buffer.index_at(t)
+            w.plots.show_run(buffer, i if w.controller.state == RUNNING else len(buffer) - 1)
+            w.plots.set_cursor(buffer.t[i])
+        if runs:
+            w.timeline.set_available(w.controller.end_time)
+            w.runs.show_events()
+
+    def follow(self, on: bool) -> None:
+        """The camera follows the ball (in compare mode, the followed run's)."""
+        w = self.window
+        w.view.set_follow(on, w.scene.ball.radius if on and w.scene else None, index=w.compare.followed)
+
+    # -- the close-up ----------------------------------------------------------------
+
+    def show_closeup(self, on: bool) -> None:
+        w = self.window
+        w.closeup_frame.setVisible(on)
+        self.place_closeup()
+        if not on:
+            return
+        if w.controller.runs:
+            self.draw(force=True)
+        elif w.scene is not None and w.landscape is not None:
+            self.draw_start(w.scene)
+
+    def place_closeup(self) -> None:
+        """In the view's top right corner, 0.3 of its width."""
+        w = self.window
+        width = max(160, round(0.3 * w.view.width()))
+        w.closeup_frame.setGeometry(w.view.width() - width - 8, 8, width, round(0.75 * width))
+
+    def _show_closeup_at(self, center, R, contact, trail, color: str | None = None) -> None:
+        w = self.window
+        if w.closeup.isVisible():
+            w.closeup.show_ball(center, R, contact, trail, w.view.opts["azimuth"], w.view.opts["elevation"], color)
