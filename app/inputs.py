@@ -15,6 +15,7 @@ import threading
 from PySide6 import QtCore, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
+from rollball.formula import parameter_problem
 from rollball.landscape import landscape_for
 from rollball import METHODS, MethodKind
 
@@ -190,6 +191,8 @@ class ScenePanel(QtWidgets.QWidget):
         self.parameter_rows = ParameterRows()
         self.parameter_rows.edited.connect(lambda name: self._edited(f"parameters.{name}"))
         self.parameter_rows.dragged.connect(self._dragged)
+        self.parameter_rows.changed.connect(self._parameters_changed)
+        self.parameter_rows.propose = self._unknown_name
         box.addWidget(self.formula)
         box.addWidget(self.formula_error)
         box.addWidget(self.parameter_rows)
@@ -311,6 +314,19 @@ class ScenePanel(QtWidgets.QWidget):
             self.apply()
         finally:
             self.gesture = None
+
+    def _parameters_changed(self, _name: str) -> None:
+        """A parameter was added or removed: applied at once, the formula checked again with
+        the new names (its text stays as typed, refused if it uses a name now gone)."""
+        if not self._filling:
+            self.apply()
+
+    def _unknown_name(self) -> str:
+        """The name the formula uses that no parameter has (what "Add Parameter…" proposes),
+        or ""."""
+        problem = self._checked.get((self._formula_text(), self.parameter_names()))
+        found = re.match(r"unknown name '(\w+)'", problem or "")
+        return found.group(1) if found and parameter_problem(found.group(1)) is None else ""
 
     def parameter_names(self) -> tuple[str, ...]:
         """The names the formula may use: the scene's parameters, as the panel shows them."""
