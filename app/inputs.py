@@ -116,6 +116,13 @@ def compile_reason(error: Exception) -> str:
     return reason if len(reason) <= MAX_REASON else reason[: MAX_REASON - 1] + "…"
 
 
+def _style(widget: QtWidgets.QWidget, sheet: str) -> None:
+    """Set a style sheet when it differs (setting one re-polishes the widget, a few hundred µs
+    each: every field on every keystroke would be milliseconds)."""
+    if widget.styleSheet() != sheet:
+        widget.setStyleSheet(sheet)
+
+
 def _message_label(name: str) -> QtWidgets.QLabel:
     label = QtWidgets.QLabel(wordWrap=True, objectName=name)
     label.setTextFormat(QtCore.Qt.TextFormat.PlainText)
@@ -468,13 +475,13 @@ class ScenePanel(QtWidgets.QWidget):
         rows = self.parameter_rows
         fields = {"landscape": self.formula, **self.numbers, **rows.edits}
         for name, edit in fields.items():
-            edit.setStyleSheet(field_style if name == key else "")
+            _style(edit, field_style if name == key else "")
         for name, label in {**self.row_labels, **rows.labels}.items():
-            label.setStyleSheet(label_style if name == key else "")
+            _style(label, label_style if name == key else "")
         messages = self._all_messages()
         shown_at = messages.get(key, self.error) if key is not None else None
         for label in (*messages.values(), self.error):
-            label.setStyleSheet(message_style)
+            _style(label, message_style)
             label.setVisible(label is shown_at)
         if key == "landscape":
             message = f"{message} — the last valid landscape is still shown"
