@@ -15,6 +15,7 @@ import threading
 from PySide6 import QtCore, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
+from rollball.formula import parameter_problem
 from rollball.landscape import landscape_for
 from rollball import METHODS, MethodKind
 
@@ -115,6 +116,13 @@ def compile_reason(error: Exception) -> str:
     return reason if len(reason) <= MAX_REASON else reason[: MAX_REASON - 1] + "…"
 
 
+def _style(widget: QtWidgets.QWidget, sheet: str) -> None:
+    """Set a style sheet when it differs (setting one re-polishes the widget, a few hundred µs
+    each: every field on every keystroke would be milliseconds)."""
+    if widget.styleSheet() != sheet:
+        widget.setStyleSheet(sheet)
+
+
 def _message_label(name: str) -> QtWidgets.QLabel:
     label = QtWidgets.QLabel(wordWrap=True, objectName=name)
     label.setTextFormat(QtCore.Qt.TextFormat.PlainText)
@@ -190,6 +198,8 @@ class ScenePanel(QtWidgets.QWidget):
         self.parameter_rows = ParameterRows()
         self.parameter_rows.edited.connect(lambda name: self._edited(f"parameters.{name}"))
         self.parameter_rows.dragged.connect(self._dragged)
+        self.parameter_rows.changed.connect(self._parameters_changed)
+        self.parameter_rows.propose = self._unknown_name
         box.addWidget(self.formula)
         box.addWidget(self.formula_error)
         box.addWidget(self.parameter_rows)
@@ -311,6 +321,19 @@ class ScenePanel(QtWidgets.QWidget):
             self.apply()
         finally:
             self.gesture = None
+
+    def _parameters_changed(self, _name: str) -> None:
+        """A parameter was added or removed: applied at once, the formula checked again with
+        the new names (its text stays as typed, refused if it uses a name now gone)."""
+        if not self._filling:
+            self.apply()
+
+    def _unknown_name(self) -> str:
+        """The name the formula uses that no parameter has (what "Add Parameter…" proposes),
+        or ""."""
+        problem = self._checked.get((self._formula_text(), self.parameter_names()))
+        found = re.match(r"unknown name '(\w+)'", problem or "")
+        return found.group(1) if found and parameter_problem(found.group(1)) is None else ""
 
     def parameter_names(self) -> tuple[str, ...]:
         """The names the formula may use: the scene's parameters, as the panel shows them."""
@@ -452,13 +475,13 @@ class ScenePanel(QtWidgets.QWidget):
         rows = self.parameter_rows
         fields = {"landscape": self.formula, **self.numbers, **rows.edits}
         for name, edit in fields.items():
-            edit.setStyleSheet(field_style if name == key else "")
+            _style(edit, field_style if name == key else "")
         for name, label in {**self.row_labels, **rows.labels}.items():
-            label.setStyleSheet(label_style if name == key else "")
+            _style(label, label_style if name == key else "")
         messages = self._all_messages()
         shown_at = messages.get(key, self.error) if key is not None else None
         for label in (*messages.values(), self.error):
-            label.setStyleSheet(message_style)
+            _style(label, message_style)
             label.setVisible(label is shown_at)
         if key == "landscape":
             message = f"{message} — the last valid landscape is still shown"

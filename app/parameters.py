@@ -1,11 +1,14 @@
 """A scene's named parameters in the app: the landscape with their values, and a slider per
-parameter in the Scene panel.
+parameter in the Scene panel, where parameters are added and removed.
 
 The compiled landscape takes the parameters' values as arguments (docs/design.md §3, §4), so a
 new value compiles nothing: ``Valued`` is the scene's landscape with its values, and draws,
 plays back and evaluates like a landscape without parameters. ``ParameterRows`` shows a slider
 per parameter over its range (or, without one, ``value ± max(1, |value|)``) with the value's
-field beside it; dragging changes the scene at once, as fast as it is drawn.
+field beside it; dragging changes the scene at once, as fast as it is drawn. "Add…" asks for
+a name, a value and an optional range (``ParameterDialog``, checked as a scene file is), and a
+row's × removes it; the other rows keep what was typed in them, and the formula is checked
+again with the new names (a formula still using a removed name is refused, its text kept).
 """
 
 from __future__ import annotations
@@ -15,7 +18,8 @@ import math
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
-from rollball import Scene
+from rollball import Scene, SceneError
+from rollball.formula import MAX_PARAMETERS
 from rollball.landscape import Landscape, landscape_of
 
 SLIDER_STEPS = 1000      # positions of a slider between the ends of its range
@@ -96,6 +100,8 @@ class ParameterRow(QtWidgets.QWidget):
         self.message = QtWidgets.QLabel(wordWrap=True, objectName=f"parameters.{name}.error")
         self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
         self.message.hide()
+        self.remove = QtWidgets.QToolButton(text="\u00d7", objectName=f"parameters.{name}.remove", autoRaise=True)
+        self.remove.setToolTip(f"Remove parameter {name} (the formula must then do without it)")
         self._set_tips()
         v = QtWidgets.QVBoxLayout(self)
         v.setContentsMargins(0, 0, 0, 0)
@@ -104,6 +110,7 @@ class ParameterRow(QtWidgets.QWidget):
         h.addWidget(self.label)
         h.addWidget(self.slider, 1)
         h.addWidget(self.edit)
+        h.addWidget(self.remove)
         v.addLayout(h)
         v.addWidget(self.message)
         self.set_value(value)
@@ -136,13 +143,15 @@ class ParameterRow(QtWidgets.QWidget):
 
 
 class ParameterRows(QtWidgets.QWidget):
-    """A row per parameter of the scene (none: the widget is hidden). ``edited(name)`` when a
-    value is typed (the panel waits for a pause), ``dragged(name)`` when a slider moved (the
-    panel applies it at once); ``gesture`` counts slider drags, so the changes of one drag make
-    one undo step."""
+    """A row per parameter of the scene under a title with an "Add…" button. ``edited(name)``
+    when a value is typed (the panel waits for a pause), ``dragged(name)`` when a slider moved
+    (the panel applies it at once), ``changed(name)`` when a parameter was added or removed
+    (applied at once); ``gesture`` counts slider drags, so the changes of one drag make one
+    undo step."""
 
     edited = QtCore.Signal(str)
     dragged = QtCore.Signal(str)
+    changed = QtCore.Signal(str)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -153,10 +162,19 @@ class ParameterRows(QtWidgets.QWidget):
         self._layout.setContentsMargins(0, 2, 0, 0)
         self._layout.setSpacing(2)
         self.title = QtWidgets.QLabel("Parameters")
-        self.title.setToolTip("The formula's named numbers (from the scene file): drag a slider to "
-                              "reshape the landscape; nothing is compiled")
-        self._layout.addWidget(self.title)
-        self.setVisible(False)
+        self.title.setToolTip("The formula's named numbers: drag a slider to reshape the landscape; "
+                              "nothing is compiled")
+        self.add_button = QtWidgets.QPushButton("Add Parameter\u2026", objectName="parameters.add")
+        self.add_button.setToolTip("A named number for the formula (e.g. a in a*sin(x)), with a slider")
+        self.add_button.clicked.connect(lambda: self.ask_new(self.propose()))
+        self.propose = lambda: ""   # the name the dialog proposes (the panel's: one the formula lacks)
+        self.dialog: ParameterDialog | None = None
+        header = QtWidgets.QHBoxLayout()
+        header.addWidget(self.title)
+        header.addStretch(1)
+        header.addWidget(self.add_button)
+        self._layout.addLayout(header)
+        self._show_title()
 
     @property
     def edits(self) -> dict[str, QtWidgets.QLineEdit]:
@@ -183,15 +201,51 @@ class ParameterRows(QtWidgets.QWidget):
             row.deleteLater()
         self.rows = {}
         for p in parameters:
-            row = ParameterRow(p.name, p.value, p.min, p.max, self)
-            row.edit.textEdited.connect(lambda _text, n=p.name: self.edited.emit(n))
-            row.slider.valueChanged.connect(lambda position, n=p.name: self._slid(n, position))
-            row.slider.sliderPressed.connect(self._pressed)
-            row.slider.sliderReleased.connect(self._released)
-            self._layout.addWidget(row)
-            self.rows[p.name] = row
-        self.setVisible(bool(self.rows))
+            self._add_row(p.name, p.value, p.min, p.max)
+        self._show_title()
         return True
+
+    def _add_row(self, name: str, value: float, low: float | None, high: float | None) -> ParameterRow:
+        row = ParameterRow(name, value, low, high, self)
+        row.edit.textEdited.connect(lambda _text, n=name: self.edited.emit(n))
+        row.slider.valueChanged.connect(lambda position, n=name: self._slid(n, position))
+        row.slider.sliderPressed.connect(self._pressed)
+        row.slider.sliderReleased.connect(self._released)
+        row.remove.clicked.connect(lambda _=False, n=name: self.remove(n))
+        self._layout.addWidget(row)
+        self.rows[name] = row
+        return row
+
+    def _show_title(self) -> None:
+        self.title.setText("Parameters" if self.rows else "No parameters")
+        self.title.setEnabled(bool(self.rows))
+        self.add_button.setEnabled(len(self.rows) < MAX_PARAMETERS)
+
+    def add(self, name: str, value: float, low: float | None = None, high: float | None = None) -> None:
+        """A new row (the others keep what was typed in them); ``changed(name)``."""
+        self._add_row(name, value, low, high)
+        self._show_title()
+        self.changed.emit(name)
+
+    def remove(self, name: str) -> None:
+        """Take a parameter's row away; ``changed(name)``."""
+        row = self.rows.pop(name)
+        self._layout.removeWidget(row)
+        row.hide()
+        row.deleteLater()
+        self._show_title()
+        self.changed.emit(name)
+
+    def ask_new(self, name: str = "") -> "ParameterDialog":
+        """The dialog asking for a new parameter (``name`` proposed); on OK it is added."""
+        if self.dialog is not None:
+            self.dialog.close()
+        self.dialog = ParameterDialog(tuple(self.rows), name, self)
+        self.dialog.chosen.connect(self.add)
+        self.dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
+        self.dialog.destroyed.connect(lambda *_: setattr(self, "dialog", None))
+        self.dialog.open()
+        return self.dialog
 
     def _pressed(self) -> None:
         self.gesture += 1
@@ -219,3 +273,86 @@ class ParameterRows(QtWidgets.QWidget):
                 return {}, f"parameters.{name}", f"{name}: " + ("not a number" if text else "missing")
             out[name] = row.spec(value)
         return out, None, None
+
+
+class ParameterDialog(QtWidgets.QDialog):
+    """A new parameter: its name, value and, optionally, the range its slider offers. Checked
+    as a scene file is (the core's own rules: an identifier that is not x, y, pi, e or a
+    function's name, not taken, finite numbers, min below max); OK only when it passes, with
+    the reason beside the field otherwise. ``chosen(name, value, min, max)`` on OK."""
+
+    chosen = QtCore.Signal(str, float, object, object)
+
+    def __init__(self, taken: tuple[str, ...], name: str = "", parent=None):
+        super().__init__(parent)
+        self.setWindowTitle("Add Parameter")
+        self.setObjectName("parameterDialog")
+        self.taken = taken
+        self.name = QtWidgets.QLineEdit(name, objectName="name", placeholderText="e.g. a")
+        self.value = QtWidgets.QLineEdit("1.0", objectName="value")
+        self.low = QtWidgets.QLineEdit(objectName="min", placeholderText="none")
+        self.high = QtWidgets.QLineEdit(objectName="max", placeholderText="none")
+        self.name.setToolTip("A name the formula can use: letters, digits and _, not x, y, pi, e nor a "
+                             "function's name")
+        self.low.setToolTip("The slider's range (optional: both ends or neither; the value may lie outside)")
+        self.high.setToolTip(self.low.toolTip())
+        self.message = QtWidgets.QLabel(objectName="message", wordWrap=True)
+        self.message.setTextFormat(QtCore.Qt.TextFormat.PlainText)
+        self.message.setStyleSheet("color: #c0392b;")
+        self.buttons = QtWidgets.QDialogButtonBox(QtWidgets.QDialogButtonBox.StandardButton.Ok
+                                                  | QtWidgets.QDialogButtonBox.StandardButton.Cancel)
+        self.ok = self.buttons.button(QtWidgets.QDialogButtonBox.StandardButton.Ok)
+        self.ok.setText("Add")
+        self.buttons.accepted.connect(self.accept)
+        self.buttons.rejected.connect(self.reject)
+        form = QtWidgets.QFormLayout(self)
+        form.addRow("Name", self.name)
+        form.addRow("Value", self.value)
+        rng = QtWidgets.QHBoxLayout()
+        rng.addWidget(self.low)
+        rng.addWidget(QtWidgets.QLabel("to"))
+        rng.addWidget(self.high)
+        form.addRow("Slider range", rng)
+        form.addRow(self.message)
+        form.addRow(self.buttons)
+        for edit in (self.name, self.value, self.low, self.high):
+            edit.textChanged.connect(self.check)
+        self.check()
+
+    def parameter(self) -> tuple[tuple | None, str]:
+        """((name, value, min, max), "") when the fields make a parameter, else (None, why)."""
+        name = self.name.text().strip()
+        if not name:
+            return None, "Name: missing"
+        if name in self.taken:
+            return None, f"Name: the scene has a parameter {name} already"
+        spec, numbers = {}, {"value": self.value, "min": self.low, "max": self.high}
+        for key, edit in numbers.items():
+            text = edit.text().strip().replace("\u2212", "-")
+            if not text and key != "value":
+                continue
+            try:
+                spec[key] = float(text)
+            except ValueError:
+                return None, f"{key.capitalize()}: " + ("not a number" if text else "missing")
+        try:   # the core's own check, as of a scene file holding it
+            scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "0",
+                                     "parameters": {name: spec}})
+        except SceneError as error:
+            field = error.key.rsplit(".", 1)[-1] if error.key.count(".") >= 2 else "name"
+            return None, f"{field.capitalize()}: {error.reason}"
+        p = scene.parameters[0]
+        return (p.name, p.value, p.min, p.max), ""
+
+    def check(self) -> None:
+        parameter, why = self.parameter()
+        self.ok.setEnabled(parameter is not None)
+        self.message.setText(why)
+        self.message.setVisible(bool(why) and bool(self.name.text().strip()))
+
+    def accept(self) -> None:
+        parameter, _ = self.parameter()
+        if parameter is None:
+            return
+        super().accept()
+        self.chosen.emit(*parameter)

@@ -15,10 +15,11 @@ from PySide6 import QtCore, QtWidgets
 from rollball import Scene, get_method, sweep
 from rollball.sweeps import KEYS, OUTCOMES, Grid
 from rollball.sweeps.batch import sweep_method
-from rollball.sweeps.grid import value_of, with_values
+from rollball.sweeps.grid import PARAMETER_PREFIX, value_of, with_values
 from rollball.sweeps.plot import label
 
 from .inputs import format_number
+from .parameters import slider_range
 from .worker import Worker, retire
 
 # What a fresh dialog offers: (key, half-width around the scene's value, N), first and second
@@ -27,12 +28,15 @@ DEFAULT_COLOR = "min_normal_force"   # lift-off where it is ≤ 0; a value for e
 
 
 def tidy(values: np.ndarray) -> np.ndarray:
-    """Grid values rounded to the grid's own precision (a tenth of its spacing, in decimals):
-    1.95 where the spacing is 0.05, not 1.9500000000000002."""
+    """Grid values rounded to the grid's own precision (from a tenth of its spacing, in
+    decimals, to as many more as keep every value within a millionth of a spacing): 1.95
+    where the spacing is 0.05, not 1.9500000000000002; 1.75 where it is 1.25."""
     spacing = np.min(np.abs(np.diff(values))) if len(values) > 1 else 0.0
     if not spacing > 0:
         return values
     decimals = max(0, int(np.ceil(-np.log10(spacing))) + 1)
+    while decimals < 17 and np.max(np.abs(np.round(values, decimals) - values)) > 1e-6 * spacing:
+        decimals += 1
     return np.round(values, decimals)
 
 
@@ -48,15 +52,34 @@ def method_text(scene: Scene) -> str:
             f"classic makes no difference)")
 
 
+def keys_of(scene: Scene) -> dict[str, str]:
+    """The keys a sweep of the scene may vary, with their units: the start values and the
+    like (``KEYS``), then the scene's parameters (``parameters.NAME``, no unit)."""
+    return dict(KEYS) | {PARAMETER_PREFIX + name: "" for name in scene.parameter_names}
+
+
+def parameter_span(scene: Scene, key: str) -> tuple[float, float]:
+    """The range a parameter's row offers when it is chosen: the parameter's own (as its
+    slider does), or one around its value."""
+    name = key[len(PARAMETER_PREFIX):]
+    p = next(p for p in scene.parameters if p.name == name)
+    return slider_range(p.value, p.min, p.max)
+
+
 class AxisRow:
-    """One varied key: which, from, to, how many values."""
+    """One varied key: which, from, to, how many values. Choosing a parameter of the scene
+    fills in its range."""
 
     def __init__(self, form: QtWidgets.QFormLayout, title: str, key: str, lo: float, hi: float, n: int,
-                 optional: bool):
+                 optional: bool, scene: Scene):
+        self.scene = scene
         self.key = QtWidgets.QComboBox(objectName=f"{title}.key")
-        for k, unit in KEYS.items():
-            self.key.addItem(f"{k} ({unit})", k)
-        self.key.setCurrentIndex(list(KEYS).index(key))
+        keys = keys_of(scene)
+        for k, unit in keys.items():
+            self.key.addItem(f"{k} ({unit})" if unit else k, k)
+        self.key.setCurrentIndex(list(keys).index(key))
+        self.key.setToolTip("The scene key to vary; parameters.NAME: a parameter of the formula "
+                            "(the landscape is compiled once for the whole sweep)")
         self.lo = QtWidgets.QLineEdit(format_number(lo), objectName=f"{title}.from")
         self.hi = QtWidgets.QLineEdit(format_number(hi), objectName=f"{title}.to")
         self.n = QtWidgets.QSpinBox(objectName=f"{title}.n", minimum=1, maximum=10_000, value=n)
@@ -70,6 +93,14 @@ class AxisRow:
                 row.addWidget(QtWidgets.QLabel(text))
             row.addWidget(widget, 2 if widget is self.key else 1)
         form.addRow(title, row)
+        self.key.currentIndexChanged.connect(self._key_chosen)
+
+    def _key_chosen(self) -> None:
+        key = self.key.currentData()
+        if key.startswith(PARAMETER_PREFIX):
+            lo, hi = parameter_span(self.scene, key)
+            self.lo.setText(format_number(lo))
+            self.hi.setText(format_number(hi))
 
     @property
     def used(self) -> bool:
@@ -101,7 +132,8 @@ class SweepDialog(QtWidgets.QDialog):
         rows = []
         for title, (key, half, n) in zip(("Vary", "and"), DEFAULTS):
             centre = value_of(scene, key)
-            rows.append(AxisRow(form, title, key, centre - half, centre + half, n, optional=title == "and"))
+            rows.append(AxisRow(form, title, key, centre - half, centre + half, n, optional=title == "and",
+                                scene=scene))
         self.rows = rows
         self.color = QtWidgets.QComboBox(objectName="color")
         for name in OUTCOMES:

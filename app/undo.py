@@ -38,6 +38,10 @@ def changed_keys(old: Scene, new: Scene) -> list[str]:
 
 
 def describe(old: Scene, new: Scene) -> str:
+    added = [n for n in new.parameter_names if n not in old.parameter_names]
+    removed = [n for n in old.parameter_names if n not in new.parameter_names]
+    if len(added) + len(removed) == 1:   # (with the formula changed, or not)
+        return f"Add parameter {added[0]}" if added else f"Remove parameter {removed[0]}"
     keys = changed_keys(old, new)
     if len(keys) == 1:
         key = keys[0]

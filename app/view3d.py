@@ -219,14 +219,22 @@ def look(center: np.ndarray, distance: float, elevation: float, azimuth: float) 
     return center + distance * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
 
 
+def camera_axes(forward: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The view's right and up directions for a camera looking along ``forward`` with z up:
+    right = forward × z normalised (x when looking straight down), up = right × forward,
+    written out (numpy's cross costs more than the rest of a camera fit together)."""
+    fx, fy, fz = map(float, forward)
+    norm = (fx * fx + fy * fy) ** 0.5
+    rx, ry = (fy / norm, -fx / norm) if norm > 1e-9 else (1.0, 0.0)
+    return np.array([rx, ry, 0.0]), np.array([ry * fz, -rx * fz, rx * fy - ry * fx])
+
+
 def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, fov: float, aspect: float) -> np.ndarray:
     """Normalised view coordinates (-1 to 1 across the view) of points seen from ``eye``
     looking at ``center`` with z up, ``fov`` the horizontal field of view in degrees and
     ``aspect`` = height / width; points behind the camera come out as inf."""
     forward = (center - eye) / np.linalg.norm(center - eye)
-    right = np.cross(forward, [0.0, 0.0, 1.0])
-    right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
-    up = np.cross(right, forward)
+    right, up = camera_axes(forward)
     rel = np.atleast_2d(points) - eye
     depth = rel @ forward
     half = np.tan(np.radians(fov) / 2)
@@ -385,13 +393,18 @@ class SceneView(gl.GLViewWidget):
         aspect = aspect or self.height() / max(self.width(), 1)
         fov = self.opts["fov"]
         reach = LABEL_REACH * TICK * float(max(box[1, 0] - box[0, 0], box[1, 1] - box[0, 1]))
-        views = [(self._fit_distance(_labelled(corners, box, center, elevation, azimuth, reach), center,
-                                     elevation, azimuth, fov, aspect), elevation, azimuth)
-                 for elevation, azimuth in VIEWPOINTS]
+        fitted = {}   # (distance, elevation, azimuth) of the viewpoints tried: most scenes need one
+
+        def view(elevation, azimuth):
+            if (elevation, azimuth) not in fitted:
+                fitted[elevation, azimuth] = (self._fit_distance(
+                    _labelled(corners, box, center, elevation, azimuth, reach), center, elevation, azimuth,
+                    fov, aspect), elevation, azimuth)
+            return fitted[elevation, azimuth]
         must = (self.ball_center, *self.no_fit_points)
-        chosen = next((view for wanted in ((*must, self.lowest_point), must) for view in views
-                       if all(self.in_sight(point, look(center, *view), 2 * r) for point in wanted)),
-                      views[0])   # the landscape framed, should no side show the ball
+        chosen = next((view(*v) for wanted in ((*must, self.lowest_point), must) for v in VIEWPOINTS
+                       if all(self.in_sight(point, look(center, *view(*v)), 2 * r) for point in wanted)),
+                      None) or view(*VIEWPOINTS[0])   # the landscape framed, should no side show the ball
         distance, elevation, azimuth = chosen
         self.setCameraPosition(distance=distance, elevation=elevation, azimuth=azimuth)
         focus = self.ball_center if self.follow else center
@@ -425,9 +438,7 @@ class SceneView(gl.GLViewWidget):
         # from d = |its sideways offset| / (FILL · tan(fov/2) · (1 or aspect)) − q on
         eye = look(center, 1.0, elevation, azimuth)
         forward = center - eye
-        right = np.cross(forward, [0.0, 0.0, 1.0])
-        right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
-        up = np.cross(right, forward)
+        right, up = camera_axes(forward)
         rel = np.atleast_2d(corners) - center
         half = FILL * np.tan(np.radians(fov) / 2)
         needed = np.maximum(np.abs(rel @ right) / half, np.abs(rel @ up) / (half * aspect)) - rel @ forward

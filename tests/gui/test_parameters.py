@@ -9,6 +9,7 @@ import pytest
 from PySide6 import QtCore
 
 from rollball import Scene
+from rollball.scene import Parameter
 from rollball import landscape as core_landscape
 from rollball.examples import EXAMPLES_DIR
 from rollball_app.parameters import SLIDER_STEPS, slider_range, slider_value
@@ -165,11 +166,88 @@ def test_the_parameter_rows_follow_the_text_size(qtbot, ripples):
 
 
 def test_a_scene_without_parameters_shows_no_rows(qtbot, window):
-    assert not window.panel.parameter_rows.isVisibleTo(window.panel) and window.panel.parameter_rows.rows == {}
+    rows = window.panel.parameter_rows
+    assert rows.rows == {} and rows.title.text() == "No parameters" and rows.add_button.isVisible()
     assert window.files.open_scene(RIPPLES, remember=False)
-    assert window.panel.parameter_rows.isVisibleTo(window.panel)
+    assert list(rows.rows) == ["a", "k"] and rows.title.text() == "Parameters"
     assert window.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
-    assert not window.panel.parameter_rows.isVisibleTo(window.panel)
+    assert rows.rows == {} and rows.title.text() == "No parameters"
+
+
+def _add(qtbot, window, name=None, value="1.5", low="", high=""):
+    """Add Parameter… as a user does: the dialog, its fields, Add."""
+    rows = window.panel.parameter_rows
+    qtbot.mouseClick(rows.add_button, QtCore.Qt.MouseButton.LeftButton)
+    dialog = rows.dialog
+    qtbot.waitExposed(dialog)
+    if name is not None:
+        dialog.name.setText(name)
+    dialog.value.setText(value)
+    dialog.low.setText(low)
+    dialog.high.setText(high)
+    return dialog
+
+
+def test_a_parameter_is_added_for_a_name_the_formula_lacks_and_undone(qtbot, window):
+    panel = window.panel
+    before = window.scene
+    set_field(qtbot, window, "landscape", "0.5*sin(b*x)*cos(y)")
+    assert panel.marked == "landscape" and "unknown name 'b'" in panel.error_text
+    dialog = _add(qtbot, window, low="0.5", high="3")
+    assert dialog.name.text() == "b"                          # the name the formula lacks, proposed
+    assert dialog.ok.isEnabled() and dialog.message.text() == ""
+    qtbot.mouseClick(dialog.ok, QtCore.Qt.MouseButton.LeftButton)
+    apply_fields(qtbot, window)                               # the formula is checked with b
+    scene = window.scene
+    assert scene.landscape == "0.5*sin(b*x)*cos(y)" and panel.error_text == ""
+    assert [(p.name, p.value, p.min, p.max) for p in scene.parameters] == [("b", 1.5, 0.5, 3.0)]
+    assert panel.formula.text() == "0.5*sin(b*x)*cos(y)"     # the text as typed
+    assert window.undo_stack.undoText() == "Add parameter b"
+    axis = window.view._axis
+    xs, ys = np.meshgrid(axis, axis, indexing="ij")
+    drawn = drawn_heights(window)
+    shown = np.isfinite(drawn)
+    assert np.allclose(drawn[shown], (0.5 * np.sin(1.5 * xs) * np.cos(ys))[shown], atol=1e-9)
+    window.undo_stack.undo()
+    assert window.scene == before and panel.parameter_rows.rows == {}
+    window.undo_stack.redo()
+    assert window.scene == scene and list(panel.parameter_rows.rows) == ["b"]
+
+
+@pytest.mark.parametrize("name, value, low, high, why", [
+    ("x", "1", "", "", "Name: 'x' is taken by the formula's own variables"),
+    ("pi", "1", "", "", "Name: 'pi' is taken by the formula's own constants"),
+    ("sin", "1", "", "", "Name: 'sin' is the name of a function"),
+    ("2a", "1", "", "", "Name: a parameter's name must be an identifier (a letter, then letters, digits or _)"),
+    ("a", "1", "", "", "Name: the scene has a parameter a already"),
+    ("c", "one", "", "", "Value: not a number"),
+    ("c", "1", "0", "", "Max: missing (a range has both ends)"),
+    ("c", "1", "2", "1", "Min: must be less than max (got 2.0 and 1.0)"),
+    ("c", "inf", "", "", "Value: must be a finite number"),
+])
+def test_a_new_parameter_is_checked_as_a_scene_file_is(qtbot, ripples, name, value, low, high, why):
+    dialog = _add(qtbot, ripples, name, value, low, high)
+    assert not dialog.ok.isEnabled() and dialog.message.text() == why
+    dialog.reject()
+    assert list(ripples.panel.parameter_rows.rows) == ["a", "k"]
+
+
+def test_removing_a_parameter_keeps_what_was_typed_and_the_formula_is_checked_again(qtbot, ripples):
+    window, panel = ripples, ripples.panel
+    rows = panel.parameter_rows
+    rows.rows["k"].edit.setText("2")                   # typed, not applied yet
+    qtbot.mouseClick(rows.rows["a"].remove, QtCore.Qt.MouseButton.LeftButton)
+    apply_fields(qtbot, window)
+    assert list(rows.rows) == ["k"] and rows.rows["k"].edit.text() == "2"
+    assert panel.formula.text() == "a*sin(k*x)*cos(k*y)"        # kept, and refused
+    assert panel.marked == "landscape" and "unknown name 'a'" in panel.error_text
+    assert window.scene.parameter_names == ("a", "k")           # the last valid scene stays
+    set_field(qtbot, window, "landscape", "0.3*sin(k*x)*cos(k*y)")
+    assert window.scene.parameters == (Parameter("k", 2.0, 0.5, 3.0),) and panel.error_text == ""
+    assert window.undo_stack.undoText() == "Remove parameter a"
+    window.undo_stack.undo()
+    assert list(rows.rows) == ["a", "k"] and window.scene.landscape == "a*sin(k*x)*cos(k*y)"
+    assert rows.rows["k"].edit.text() == "1.0"
 
 
 def test_the_faster_redraw_draws_what_pyqtgraph_would():

@@ -97,3 +97,29 @@ def test_grid_values_are_rounded_to_the_grid_precision():
     assert list(tidy(np.linspace(-2.0, 2.0, 81))[78:]) == [1.9, 1.95, 2.0]
     assert 1.9500000000000002 in np.linspace(-2.0, 2.0, 81)   # (what a plain grid holds)
     assert list(tidy(np.linspace(0.0, 1e-3, 3))) == [0.0, 0.0005, 0.001]
+    assert list(tidy(np.linspace(0.5, 3.0, 3))) == [0.5, 1.75, 3.0]       # not 1.8
+
+
+def test_a_parameter_is_swept_like_any_key_and_a_click_loads_its_value(qtbot, window):
+    from rollball.examples import EXAMPLES_DIR
+    assert window.files.open_scene(EXAMPLES_DIR / "ripples.json", remember=False)
+    dialog = _open(qtbot, window)
+    row = dialog.rows[0]
+    keys = [row.key.itemData(i) for i in range(row.key.count())]
+    assert keys[-2:] == ["parameters.a", "parameters.k"] and row.key.itemText(len(keys) - 1) == "parameters.k"
+    row.key.setCurrentIndex(row.key.findData("parameters.k"))      # its range is filled in
+    assert (row.lo.text(), row.hi.text()) == ("0.5", "3.0")
+    dialog.rows[1].enabled.setChecked(False)
+    row.n.setValue(3)                                              # k = 0.5, 1.75, 3
+    dialog.color.setCurrentIndex(dialog.color.findData("x_end"))
+    _run(qtbot, dialog)
+    table = dialog.table
+    assert table.keys == ("parameters.k",) and len(table) == 3 and table.done.all()
+    assert dialog.plot_item.getAxis("bottom").labelText == "parameters.k"
+    scene = dialog.pick(1.75, 0.0)
+    assert scene.parameter_values == (0.5, 1.75)
+    qtbot.waitUntil(lambda: window.scene.parameter_values == (0.5, 1.75))
+    assert window.panel.parameter_rows.rows["k"].edit.text() == "1.75"
+    window.undo_action.trigger()
+    assert window.scene.parameter_values == (0.5, 1.0)
+    dialog.close()
