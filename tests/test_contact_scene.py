@@ -99,3 +99,18 @@ def test_a_start_omega_that_does_not_roll_needs_friction():
     assert Scene.from_dict({**skidding, "contact": {"friction": 0.3}}).start.omega == (0.0, 0.0, 0.0)
     with pytest.raises(SceneError, match="^start.omega: the ball does not roll"):
         Scene(landscape="0.5*x", start=Start(0.0, 0.0, 1.0, 0.0, omega=(0.0, 0.0, 0.0)))
+
+
+def test_a_rolling_start_omega_runs_as_the_start_velocity_and_spin_it_equals():
+    from rollball import simulate
+
+    landscape, start = "0.3*sin(x)*cos(y)", {"x": 0.4, "y": -0.3, "vx": 0.7, "vy": -0.2}
+    plain = Scene.from_dict({**V3, "landscape": landscape, "start": {**start, "spin": 2.0}})
+    d = np.array([0.3 * np.sin(0.4) * np.cos(-0.3), 0.3 * np.cos(0.4) * np.cos(-0.3), -0.3 * np.sin(0.4) * np.sin(-0.3)])
+    n = np.array([-d[1], -d[2], 1.0]) / np.sqrt(1 + d[1] ** 2 + d[2] ** 2)
+    velocity = np.array([0.7, -0.2, d[1] * 0.7 - d[2] * 0.2])
+    omega = np.cross(n, velocity) / 0.1 + 2.0 * n
+    given = Scene.from_dict({**V3, "landscape": landscape, "start": {**start, "omega": list(omega)}})
+    a, b = simulate(plain, t_end=0.2), simulate(given, t_end=0.2)
+    assert np.allclose(a.omega[0], omega, rtol=0, atol=1e-13)
+    assert np.abs(a.data - b.data).max() < 1e-12
