@@ -18,9 +18,12 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .files import atomic_write_text, open_regular
+from .geometry import unit_normal
 from .formula import FormulaError, check_parameter_names
-from .landscape import landscape_for
+from .landscape import landscape_for, landscape_of
 from .tableaus import METHODS, get_method
 from .text import shown
 
@@ -57,6 +60,24 @@ class Start:
     vx: float = 0.0
     vy: float = 0.0
     spin: float = 0.0
+    # version 3: the initial angular velocity (world frame, rad/s) instead of the rolling one;
+    # None: ω₀ = N × ċ₀ / r + spin · N
+    omega: tuple[float, float, float] | None = None
+
+
+AFTER_LIFTOFF = ("fly", "glued")   # what a ball does where the surface would have to pull it
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The contact model (version 3; docs/design.md §1). ``friction``: Coulomb's μ ≥ 0, or None
+    for always enough friction to roll (the 2011 model); ``restitution``: e in [0, 1], the
+    share of the normal speed a landing gives back; ``after_liftoff``: "fly" (the ball leaves
+    the surface and lands again) or "glued" (it keeps rolling on the surface, the lift-off
+    reported: the 2011 behaviour, what a version-2 file means)."""
+    friction: float | None = None
+    restitution: float = 0.0
+    after_liftoff: str = "fly"
 
 
 @dataclass(frozen=True)
@@ -103,6 +124,14 @@ def _tolerance(v):
     return None if v >= MIN_RTOL else f"must be at least {MIN_RTOL:.3g} (10 × the rounding error of a double)"
 
 
+def _unit_interval(v):
+    return None if 0.0 <= v <= 1.0 else "must be from 0 to 1"
+
+
+def _after_liftoff(v):
+    return None if v in AFTER_LIFTOFF else f"must be one of {', '.join(map(repr, AFTER_LIFTOFF))}"
+
+
 def _known_method(v):
     try:
         get_method(v)
@@ -131,7 +160,14 @@ CONSTRAINTS = {
     "integrator.atol": _normal_positive,
     "duration": _positive,
     "view.step": _positive,
+    "contact.friction": _not_negative,
+    "contact.restitution": _unit_interval,
+    "contact.after_liftoff": _after_liftoff,
 }
+
+# Keys whose value may be null (None), and keys holding a fixed number of numbers (a JSON array).
+NULLABLE = ("contact.friction", "start.omega")
+VECTORS = {"start.omega": 3}
 
 
 @dataclass(frozen=True)
@@ -145,6 +181,7 @@ class Scene:
     duration: float = 10.0
     view: View = field(default_factory=View)
     parameters: tuple[Parameter, ...] = ()   # version 3; also given as a dict as in a file
+    contact: Contact = field(default_factory=Contact)   # version 3
 
     def __post_init__(self):
         object.__setattr__(self, "parameters", _parameters(self.parameters))
@@ -171,9 +208,14 @@ class Scene:
 
     def to_dict(self) -> dict:
         """The scene as a file holds it, always in the newest version (``VERSION``); keys at
-        their defaults are written too, but ``parameters`` only when there are any."""
+        their defaults are written too, but ``parameters`` only when there are any and
+        ``start.omega`` only when given (``contact`` always: its meaning differs by version)."""
         body = dataclasses.asdict(self)
         del body["parameters"]
+        if self.start.omega is None:
+            del body["start"]["omega"]
+        else:
+            body["start"]["omega"] = list(self.start.omega)
         if self.parameters:
             shown = {p.name: p.value if p.min is None else {"value": p.value, "min": p.min, "max": p.max}
                      for p in self.parameters}
@@ -253,18 +295,22 @@ def _v1_to_v2(body: dict) -> dict:
 
 
 def _v2_to_v3(body: dict) -> dict:
-    """Version 3 added ``parameters`` (named numbers in the formula); a version-2 scene has
-    none and runs as it did. Keys version 3 added are still unknown in a version-2 file."""
+    """Version 3 added ``parameters`` (named numbers in the formula), the contact model and
+    ``start.omega``; a version-2 scene has none of them and runs as it did: a ball with
+    always enough friction to roll that stays glued to the surface after a lift-off. Keys
+    version 3 added are still unknown in a version-2 file."""
     for key in V3_KEYS:
         group, _, name = key.rpartition(".")
         holder = body.get(group) if group else body
         if isinstance(holder, dict) and name in holder:
             raise SceneError(key, "unknown key in a version-2 scene (it came with version 3)")
-    return body
+    return {**body, "contact": dict(V2_CONTACT)}
 
 
-# The (dotted) keys version 3 added; the contact model and start.omega of the same version go here too.
-V3_KEYS = ("parameters",)
+# The (dotted) keys version 3 added.
+V3_KEYS = ("parameters", "contact", "start.omega")
+# What a version-2 scene's contact is: the 2011 model.
+V2_CONTACT = {"friction": None, "restitution": 0.0, "after_liftoff": "glued"}
 
 # MIGRATIONS[k] takes version k + 1 to version k + 2; a file of version v runs MIGRATIONS[v - 1:].
 MIGRATIONS = [_v1_to_v2, _v2_to_v3]
@@ -272,7 +318,7 @@ assert len(MIGRATIONS) == VERSION - 1
 
 
 # Field types, resolved once: loading a scene evaluates nothing.
-_HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View)}
+_HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View, Contact)}
 
 
 def _number(key: str, value) -> float:
@@ -377,6 +423,13 @@ def _check(obj, prefix: str) -> None:
         key, value, kind = prefix + f.name, getattr(obj, f.name), hints[f.name]
         if key == "parameters":   # checked by _parameters
             continue
+        if value is None and key in NULLABLE:
+            continue
+        if key in VECTORS:
+            object.__setattr__(obj, f.name, _vector(key, value, VECTORS[key]))
+            continue
+        if key in NULLABLE:   # a number where one is given
+            kind = float
         if dataclasses.is_dataclass(kind):
             if not isinstance(value, kind):
                 raise SceneError(key, "must be an object")
@@ -397,6 +450,15 @@ def _check(obj, prefix: str) -> None:
             problem = CONSTRAINTS.get(key, lambda v: None)(value)
         if problem:
             raise SceneError(key, f"{problem} (got {value!r})" if kind is float else problem)
+
+
+def _vector(key: str, value, size: int) -> tuple[float, ...]:
+    """A JSON array (or a tuple) of ``size`` finite numbers, as a tuple of plain floats."""
+    if not isinstance(value, (list, tuple)):
+        raise SceneError(key, f"must be an array of {size} numbers, not {_kind(value)}")
+    if len(value) != size:
+        raise SceneError(key, f"must be an array of {size} numbers, not of {len(value)}")
+    return tuple(_number(f"{key}[{i}]", item) for i, item in enumerate(value))
 
 
 def _finite(*factors: float) -> bool:
@@ -423,8 +485,52 @@ def _check_derived(scene: Scene) -> None:
                          "the kinetic energy m v² overflows")
     if not _finite(inertia, s.spin, s.spin, 2.0):
         raise SceneError("start.spin", "the kinetic energy m r² spin² overflows")
+    if s.omega is not None:
+        if s.spin != 0.0:
+            raise SceneError("start.spin", "must be 0 when start.omega is given (ω's part along the normal "
+                                           "is the spin)")
+        if not _finite(inertia, sum(w * w for w in s.omega), 2.0):
+            raise SceneError("start.omega", "the kinetic energy m r² |ω|² overflows")
+        _check_rolls(scene)
     v = scene.view
     points = (v.max - v.min) / v.step + 1
     if not points <= MAX_GRID_POINTS:  # also catches an overflowing (infinite) span
         shown_points = f"{math.ceil(points):,}" if math.isfinite(points) else "too many"
         raise SceneError("view.step", f"{shown_points} grid points per side; at most {MAX_GRID_POINTS}")
+
+
+# A start.omega rolls when the contact point's slip speed is below this share of the speeds
+# involved (|ċ₀| and r|ω₀|): room for the digits a file gives, far below any real slip.
+ROLLING_TOLERANCE = 1e-9
+
+
+def start_slip(scene: Scene) -> np.ndarray | None:
+    """The velocity of the ball's material point at the contact at the start,
+    u = ċ₀ + ω₀ × (−r N), for a scene with ``start.omega`` (None without one, or where the
+    landscape cannot be evaluated at the start: the run reports that)."""
+    s, r = scene.start, scene.ball.radius
+    if s.omega is None:
+        return None
+    with np.errstate(all="ignore"):
+        d = landscape_of(scene).evaluate(s.x, s.y, scene.parameter_values)
+        if not np.all(np.isfinite(d[:3])):
+            return None
+        normal = unit_normal(d)
+        velocity = np.array([s.vx, s.vy, d[1] * s.vx + d[2] * s.vy])
+        return velocity - r * np.cross(np.array(s.omega), normal)
+
+
+def _check_rolls(scene: Scene) -> None:
+    """With friction null the ball can only roll: a start.omega whose contact point slips is refused."""
+    if scene.contact.friction is not None:
+        return   # it slips until friction makes it roll
+    slip = start_slip(scene)
+    if slip is None:
+        return
+    s, r = scene.start, scene.ball.radius
+    speed = float(np.linalg.norm(slip))
+    scale = max(math.hypot(s.vx, s.vy), r * math.sqrt(sum(w * w for w in s.omega)))
+    if speed > ROLLING_TOLERANCE * scale:
+        raise SceneError("start.omega", f"the ball does not roll at the start (its contact point slips at "
+                                        f"{speed:.3g} m/s); with contact.friction null it can only roll: give "
+                                        f"ω = N × ċ / r + spin · N, or a friction coefficient")

@@ -96,16 +96,27 @@ def initial_momentum(d: np.ndarray, vx, vy, spin, r, m) -> np.ndarray:
     o1 = (n2 * c3 - n3 * c2) / r + spin * n1  # omega = N x c' / r + spin N
     o2 = (n3 * c1 - n1 * c3) / r + spin * n2
     o3 = (n1 * c2 - n2 * c1) / r + spin * n3
+    return rolling_momentum(d, o1, o2, o3, r, m)
+
+
+def rolling_momentum(d: np.ndarray, o1, o2, o3, r, m) -> np.ndarray:
+    """The angular momentum about the contact point of a ball rolling with angular velocity
+    (o1, o2, o3): v = T ω = m r² (7/5 ω − N (N·ω)) (docs/design.md §1), elementwise."""
+    n1, n2, n3 = unit_normal(d)
     no = n1 * o1 + n2 * o2 + n3 * o3
     mr2 = m * r * r
     return np.stack([mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)])
 
 
 def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Contact point and angular momentum about it, from the scene's start values."""
+    """Contact point and angular momentum about it, from the scene's start values (with
+    ``start.omega`` that angular velocity, which the scene checked rolls)."""
     s, r, m = scene.start, scene.ball.radius, scene.ball.mass
     with np.errstate(all="ignore"):  # an overflow is reported by the kernel's start check
-        v = initial_momentum(landscape.evaluate(s.x, s.y, scene.parameter_values), s.vx, s.vy, s.spin, r, m)
+        d = landscape.evaluate(s.x, s.y, scene.parameter_values)
+        if s.omega is not None:
+            return np.array([s.x, s.y]), rolling_momentum(d, *s.omega, r, m)
+        v = initial_momentum(d, s.vx, s.vy, s.spin, r, m)
     return np.array([s.x, s.y]), v
 
 

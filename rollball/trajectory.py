@@ -15,13 +15,20 @@ from .kernel.interface import REASONS, ROW_ENERGY, ROW_FORCE, ROW_SLICES, ROW_T,
 COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
            "energy", "normal_force")
-# The CSV adds columns derived per row after the 23 above (docs/design.md §5); readers that take the
-# first 23 keep working.
-CSV_COLUMNS = COLUMNS + ("energy_error",)
+# The CSV adds columns per row after the 23 above (docs/design.md §5); readers that take the
+# first 23 keep working: the energy error, then the contact's mode, the slip speed (m/s) and the
+# energy dissipated so far (J).
+EXTRA_COLUMNS = ("energy_error", "mode", "slip_speed", "dissipated")
+CSV_COLUMNS = COLUMNS + EXTRA_COLUMNS
+# The modes of the contact, one a row (``Trajectory.modes`` holds their positions here).
+MODES = ("rolling", "sliding", "flying")
+ROLLING, SLIDING, FLYING = range(len(MODES))
+TRANSITION_KINDS = ("slip", "grip", "liftoff", "landing")
 UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
          "vx": "m/s", "vy": "m/s", "vz": "m/s", "wx": "rad/s", "wy": "rad/s", "wz": "rad/s",
          **{f"r{i}{j}": "1" for i in (1, 2, 3) for j in (1, 2, 3)},
-         "energy": "J", "normal_force": "N", "energy_error": "1"}
+         "energy": "J", "normal_force": "N", "energy_error": "1", "mode": "-", "slip_speed": "m/s",
+         "dissipated": "J"}
 HEADER = ",".join(CSV_COLUMNS)
 
 # Where a row keeps what (the kernel's interface declares it once; use these, never raw column numbers)
@@ -33,6 +40,10 @@ OMEGA = ROW_SLICES["omega"]        # angular velocity (world frame)
 R = ROW_SLICES["R"]                # orientation, row-major 3x3
 ENERGY = ROW_ENERGY
 NORMAL_FORCE = ROW_FORCE
+# The slip speed and the energy dissipated, where the kernel's rows hold them (None: rows of the
+# 2011 model, which never slips nor loses energy).
+SLIP_SPEED = ROW_SLICES.get("slip_speed")
+DISSIPATED = ROW_SLICES.get("dissipated")
 
 ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
 ORTHOGONALITY_WARNING = 1e-3   # likewise ||R^T R - I|| at the end of a run
@@ -58,6 +69,30 @@ class Liftoff:
     x: float      # contact point (m)
     y: float
     kink: bool    # at a convex kink (a ridge) rather than where F·N crosses 0
+
+
+@dataclass(frozen=True)
+class Transition:
+    """Where the contact changes mode: ``kind`` in TRANSITION_KINDS ("slip": rolling turns into
+    sliding, "grip": sliding into rolling, "liftoff", "landing"), at ``time`` and contact point
+    (x, y). A landing also says how fast the ball hit the surface along its normal
+    (``impact_speed``, m/s) and the kinetic energy the impact took (``energy_lost``, J)."""
+
+    time: float
+    kind: str
+    x: float
+    y: float
+    impact_speed: float | None = None
+    energy_lost: float | None = None
+
+    def sentence(self) -> str:
+        where = f"t = {self.time:.6g} s, (x, y) = ({self.x:.6g}, {self.y:.6g})"
+        if self.kind == "landing":
+            return (f"landing at {where}: hits at {self.impact_speed:.4g} m/s along the normal, "
+                    f"{self.energy_lost:.4g} J lost")
+        return {"slip": f"slip at {where}: rolling would need more friction than μ F·N",
+                "grip": f"grip at {where}: the slip ends, the ball rolls",
+                "liftoff": f"lift-off at {where}: the ball leaves the surface"}[self.kind]
 
 
 @dataclass(frozen=True)
@@ -106,6 +141,29 @@ class Trajectory:
     gravity: float = 9.81
     provenance: dict = field(default_factory=dict)
     energy_check: EnergyCheck | None = None  # set by the run where one interval's jump dominates
+    modes: np.ndarray | None = None  # the mode of each row (positions in MODES); None: every row rolls
+    transitions: tuple[Transition, ...] = ()   # the changes of mode, in time order
+
+    @property
+    def mode(self) -> np.ndarray:
+        """The contact's mode of each row: "rolling", "sliding" or "flying" (strings)."""
+        codes = np.zeros(len(self), dtype=np.int8) if self.modes is None else self.modes[: len(self)]
+        return np.array(MODES)[codes]
+
+    @property
+    def slip_speed(self) -> np.ndarray:
+        """The speed of the ball's material point at the contact (m/s; 0 rolling; in flight the
+        tangential speed of its point nearest the surface)."""
+        return np.zeros(len(self)) if SLIP_SPEED is None else self.data[:, SLIP_SPEED.start]
+
+    @property
+    def dissipated(self) -> np.ndarray:
+        """The energy dissipated so far by sliding friction and impacts (J), for every row."""
+        return np.zeros(len(self)) if DISSIPATED is None else self.data[:, DISSIPATED.start]
+
+    @property
+    def landings(self) -> int:
+        return sum(1 for change in self.transitions if change.kind == "landing")
 
     @property
     def liftoff_time(self) -> float | None:
@@ -222,22 +280,44 @@ class Trajectory:
         atomic_write(path, self.write_csv, keep=keep)
 
     def write_csv(self, stream) -> None:
-        """Provenance and unit lines (``#``), the header, then the rows with the energy error."""
+        """Provenance and unit lines (``#``), the header, then the rows: the 23 columns, the
+        energy error, the mode, the slip speed and the energy dissipated."""
         for key, value in self.provenance.items():
             stream.write(f"# {key}: {value}\n")
         stream.write(f"# units: {','.join(UNITS[name] for name in CSV_COLUMNS)}\n")
         stream.write(HEADER + "\n")
-        np.savetxt(stream, np.column_stack([self.data, self.energy_error()]), fmt="%.17g", delimiter=",")
+        if not len(self):
+            return
+        before = io.StringIO()
+        np.savetxt(before, np.column_stack([self.data[:, : len(COLUMNS)], self.energy_error()]), fmt="%.17g",
+                   delimiter=",")
+        after = io.StringIO()
+        np.savetxt(after, np.column_stack([self.slip_speed, self.dissipated]), fmt="%.17g", delimiter=",")
+        for head, mode, tail in zip(before.getvalue().splitlines(), self.mode, after.getvalue().splitlines()):
+            stream.write(f"{head},{mode},{tail}\n")
 
 
-def read_csv(path: str | os.PathLike) -> np.ndarray:
+def read_csv(path: str | os.PathLike, extra: bool = False):
     """Read a trajectory CSV back as an (n, 23) array of its first 23 columns (``#`` lines are
-    skipped; files with only these 23 columns, as written before the energy error, read too)."""
+    skipped; files with only these 23 columns, as written before the energy error, read too).
+    With ``extra``: (that array, {name: column} of the columns after them that the file has:
+    "energy_error", "mode" (strings), "slip_speed", "dissipated"))."""
     with open(path, encoding="utf-8") as stream:
         lines = [line for line in stream if not line.startswith("#")]
-    if not lines or tuple(lines[0].strip().split(",")[: len(COLUMNS)]) != COLUMNS:
+    header = tuple(lines[0].strip().split(",")) if lines else ()
+    if header[: len(COLUMNS)] != COLUMNS:
         raise ValueError(f"{path}: not a RollBall trajectory (header must begin {','.join(COLUMNS)})")
     body = "".join(lines[1:])
+    names = [name for name in header[len(COLUMNS):] if name in EXTRA_COLUMNS]
     if not body.strip():
-        return np.empty((0, len(COLUMNS)))
-    return np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, usecols=range(len(COLUMNS)))
+        rows = np.empty((0, len(COLUMNS)))
+        return (rows, {name: np.empty(0, dtype=str if name == "mode" else float) for name in names}) if extra else rows
+    rows = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, usecols=range(len(COLUMNS)))
+    if not extra:
+        return rows
+    columns = {}
+    for name in names:
+        position = header.index(name)
+        columns[name] = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=1, usecols=position,
+                                   dtype=str if name == "mode" else float)
+    return rows, columns

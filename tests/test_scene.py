@@ -77,7 +77,8 @@ def test_the_migration_steps_cover_every_version():
     from rollball.scene import MIGRATIONS, VERSION, _v1_to_v2, _v2_to_v3
 
     assert VERSION == 3 and MIGRATIONS == [_v1_to_v2, _v2_to_v3]
-    assert _v2_to_v3({"landscape": "x", "gravity": 1}) == {"landscape": "x", "gravity": 1}
+    assert _v2_to_v3({"landscape": "x", "gravity": 1}) == {
+        "landscape": "x", "gravity": 1, "contact": {"friction": None, "restitution": 0.0, "after_liftoff": "glued"}}
     assert _v1_to_v2({"landscape": "x"}) == {"landscape": "x"}
     assert _v1_to_v2({"integrator": "bad"}) == {"integrator": "bad"}  # refused later, by key
 

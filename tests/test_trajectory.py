@@ -1,5 +1,7 @@
 """Recording rules, chunked runs, the API's argument checks, and the CSV."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -78,11 +80,16 @@ def test_csv_round_trip_at_full_precision(scene_factory, tmp_path):
     traj.to_csv(path)
     lines = path.read_text().splitlines()
     header = [line for line in lines if not line.startswith("#")][0]
-    assert header == ",".join(COLUMNS) + ",energy_error" and " " not in header
+    assert header == ",".join(COLUMNS) + ",energy_error,mode,slip_speed,dissipated" and " " not in header
     assert any(line.startswith("# landscape: 0.5*sin(x)*cos(y)") for line in lines)
     back = read_csv(path)
     assert back.shape == (len(traj), 23)
-    assert np.array_equal(back, traj.data)  # bit for bit
+    assert np.array_equal(back, traj.data[:, :23])  # bit for bit
+    rows, extra = read_csv(path, extra=True)
+    assert np.array_equal(rows, back) and list(extra) == ["energy_error", "mode", "slip_speed", "dissipated"]
+    assert list(extra["mode"]) == ["rolling"] * len(traj)   # the 2011 model: it rolls, loses nothing
+    assert np.array_equal(extra["slip_speed"], traj.slip_speed) and np.array_equal(extra["dissipated"], traj.dissipated)
+    assert np.array_equal(extra["energy_error"], traj.energy_error())
 
 
 def test_csv_says_every_unit_and_each_rows_energy_error(scene_factory, tmp_path):
@@ -93,11 +100,13 @@ def test_csv_says_every_unit_and_each_rows_energy_error(scene_factory, tmp_path)
     lines = path.read_text().splitlines()
     names = lines[[not line.startswith("#") for line in lines].index(True)].split(",")
     units = next(line for line in lines if line.startswith("# units: "))[len("# units: "):].split(",")
-    assert len(units) == len(names) == 24
+    assert len(units) == len(names) == 27
     unit = dict(zip(names, units))
-    assert [unit[k] for k in ("t", "x", "cz", "vx", "wz", "r23", "energy", "normal_force", "energy_error")] == [
-        "s", "m", "m", "m/s", "rad/s", "1", "J", "N", "1"]
-    table = np.loadtxt(path, delimiter=",", comments="#", skiprows=lines.index(",".join(names)) + 1)
+    assert [unit[k] for k in ("t", "x", "cz", "vx", "wz", "r23", "energy", "normal_force", "energy_error", "mode",
+                              "slip_speed", "dissipated")] == ["s", "m", "m", "m/s", "rad/s", "1", "J", "N", "1", "-",
+                                                               "m/s", "J"]
+    table = np.loadtxt(path, delimiter=",", comments="#", skiprows=lines.index(",".join(names)) + 1,
+                       usecols=range(24))
     energy = table[:, names.index("energy")]
     scale = max(abs(energy[0]), scene.ball.mass * scene.gravity * scene.ball.radius)
     np.testing.assert_allclose(table[:, 23], (energy - energy[0]) / scale, rtol=1e-15, atol=0)
@@ -109,7 +118,8 @@ def test_csv_without_the_extra_columns_still_reads(scene_factory, tmp_path):
     path = tmp_path / "old.csv"
     rows = "\n".join(",".join(repr(float(v)) for v in row) for row in traj.data)
     path.write_text("# program: rollball 0.1.0\n" + ",".join(COLUMNS) + "\n" + rows + "\n")
-    assert np.array_equal(read_csv(path), traj.data)
+    assert np.array_equal(read_csv(path), traj.data[:, :23])
+    assert read_csv(path, extra=True)[1] == {}
 
 
 def test_csv_of_an_empty_trajectory_has_the_header(scene_factory, tmp_path):
@@ -118,7 +128,7 @@ def test_csv_of_an_empty_trajectory_has_the_header(scene_factory, tmp_path):
     path = tmp_path / "empty.csv"
     traj.to_csv(path)
     assert [line for line in path.read_text().splitlines() if not line.startswith("#")] == [
-        ",".join(COLUMNS) + ",energy_error"]
+        ",".join(COLUMNS) + ",energy_error,mode,slip_speed,dissipated"]
     assert read_csv(path).shape == (0, 23)
 
 
@@ -187,3 +197,17 @@ def test_recording_keeps_a_displayed_run_small(scene_factory):
     assert recording(scene, dt=1e-5, t_end=10.0) == {"record_every": 1_000_000 // AUTO_ROWS}
     assert recording(scene, dt=1e-5, t_end=10.0, record_every=7) == {"record_every": 7}
     assert recording(scene, method="adaptive", t_end=2.0) == {"record_dt": 2.0 / ADAPTIVE_ROWS}
+
+
+def test_modes_and_transitions_reach_the_csv(scene_factory, tmp_path):
+    from rollball.trajectory import Transition
+
+    traj = simulate(scene_factory("0*x", vx=0.5), t_end=0.01, record_every=5)
+    flown = dataclasses.replace(traj, modes=np.array([0, 2, 1], dtype=np.int8),
+                                transitions=(Transition(0.004, "liftoff", 0.1, 0.0),
+                                             Transition(0.007, "landing", 0.2, 0.0, 0.5, 0.01)))
+    assert list(flown.mode) == ["rolling", "flying", "sliding"] and flown.landings == 1
+    assert "0.5 m/s along the normal, 0.01 J lost" in flown.transitions[1].sentence()
+    path = tmp_path / "modes.csv"
+    flown.to_csv(path)
+    assert list(read_csv(path, extra=True)[1]["mode"]) == ["rolling", "flying", "sliding"]

@@ -1,0 +1,338 @@
+"""A ball off the surface: free flight, exact; the landing, located; the impact (docs/design.md §1).
+
+In flight the centre falls freely and the spin is constant, so the motion is closed form:
+c(t) = c₀ + ċ₀ τ + ½ g τ², ω constant, R(t) = exp(A(ω) τ) R₀ with τ = t − t₀ (scipy's rotation
+vector exponential, exact at any angle): no integrator, no step error. The ball lands where the
+centre's distance to the surface first comes down to r. That distance is measured to the centre's
+closest surface point (its foot), found by Newton's method on (c − φ(α)) ∥ N(α); the first root
+in time is never stepped over (each step is bounded by the distance and the speed, ``landing``)
+and is then located by a bracketing root finder to round-off. The impact there is an impulse at
+the contact point (``impact``): the normal velocity turns into −e times itself, the tangential
+impulse is Coulomb's, sticking where μ allows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.spatial.transform import Rotation
+
+from .geometry import unit_normal
+from .kernel.interface import ROW_SIZE, ROW_SLICES
+
+# A rebound whose apex above the surface would be lower than this share of the radius ends in
+# contact: the bounces after it last 2 v/(g (1 − e)) together, v = sqrt(2 g · REST_HEIGHT · r):
+# with r = 0.1 m about a millimetre a second and a few milliseconds even at e = 0.9, far below
+# what can be seen or matters, and an endless series of ever smaller bounces is cut off.
+REST_HEIGHT = 1e-6
+
+FOOT_ITERATIONS = 50     # Newton's iterations for the closest surface point (converges in a few)
+GAP_TOLERANCE = 1e-12    # × r: a gap this small is contact (round-off of the distance)
+FIRST_STEP = 1e-9        # s: the first look after a lift-off, then doubling until the ball is clear
+CLEAR_WITHIN = 1e-2      # s: a ball not clear of the surface by then never left it
+MAX_LOOKS = 1_000_000    # steps of the landing search (a grazing flight takes the most)
+SAMPLES = 21             # the grid a closest point is looked for on, per side...
+BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
+
+
+def rest_speed(radius: float, gravity: float) -> float:
+    """The slowest rebound that still flies (m/s): apex REST_HEIGHT · r above the surface."""
+    return math.sqrt(2.0 * gravity * REST_HEIGHT * radius)
+
+
+@dataclass(frozen=True)
+class FreeState:
+    """The ball at time t off (or just touching) the surface: centre, its velocity, ω, R."""
+
+    t: float
+    center: np.ndarray     # (3,)
+    velocity: np.ndarray   # (3,)
+    omega: np.ndarray      # (3,) world frame
+    R: np.ndarray          # (3, 3) body to world
+
+    @classmethod
+    def from_row(cls, row: np.ndarray) -> "FreeState":
+        """The state a recorded row holds (``kernel.interface.ROW_SLICES``)."""
+        return cls(float(row[ROW_SLICES["t"]][0]), row[ROW_SLICES["center"]].copy(),
+                   row[ROW_SLICES["velocity"]].copy(), row[ROW_SLICES["omega"]].copy(),
+                   row[ROW_SLICES["R"]].reshape(3, 3).copy())
+
+
+@dataclass(frozen=True)
+class Foot:
+    """The centre's closest surface point: contact coordinates, the surface's unit normal there,
+    and the centre's signed distance along it (> 0 above the surface)."""
+
+    x: float
+    y: float
+    normal: np.ndarray
+    distance: float
+
+
+class Surface:
+    """The landscape as flight needs it: the closest point to a centre."""
+
+    def __init__(self, landscape, values=(), reach: float = 1.0):
+        self.landscape, self.values = landscape, tuple(values)
+        self.reach_default = reach   # m: how far to look where the point below is undefined
+
+    def evaluate(self, x, y) -> np.ndarray:
+        with np.errstate(all="ignore"):
+            return self.landscape.evaluate(x, y, self.values)
+
+    def feet(self, centers: np.ndarray, guesses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For centres (n, 3) from first guesses (n, 2): the feet (n, 2), the unit normals there
+        (n, 3) and the signed distances (n,), by Newton's method on the gradient of ½|c − φ(α)|²:
+        b = ((c − φ)·φ_x, (c − φ)·φ_y) = 0, with the Hessian G − d_z H (G = φ_αᵀφ_α, H the
+        second derivatives of f, d = c − φ). NaN where it does not converge (outside the
+        landscape's domain, or beyond a focal point where the nearest point is elsewhere)."""
+        c = np.asarray(centers, dtype=float).reshape(-1, 3)
+        alpha = np.array(guesses, dtype=float).reshape(-1, 2)
+        done = np.zeros(len(c), dtype=bool)
+        with np.errstate(all="ignore"):
+            for _ in range(FOOT_ITERATIONS):
+                f, fx, fy, fxx, fxy, fyy = self.evaluate(alpha[:, 0], alpha[:, 1])
+                dx, dy, dz = c[:, 0] - alpha[:, 0], c[:, 1] - alpha[:, 1], c[:, 2] - f
+                b1, b2 = dx + dz * fx, dy + dz * fy
+                h11, h12, h22 = 1.0 + fx * fx - dz * fxx, fx * fy - dz * fxy, 1.0 + fy * fy - dz * fyy
+                det = h11 * h22 - h12 * h12
+                s1, s2 = (h22 * b1 - h12 * b2) / det, (h11 * b2 - h12 * b1) / det
+                step = np.where(done[:, None], 0.0, np.column_stack([s1, s2]))
+                alpha = alpha + step
+                size = np.abs(step).max(axis=1)
+                done |= size <= 4e-16 * (1.0 + np.abs(alpha).max(axis=1))
+                if done.all() or not np.isfinite(alpha).all():
+                    break
+            d = self.evaluate(alpha[:, 0], alpha[:, 1])
+            normal = unit_normal(d).T
+            gap = c - np.column_stack([alpha, d[0]])
+            distance = np.einsum("ij,ij->i", gap, normal)
+            # a converged foot has c − φ along N; anything else (a saddle of the distance, no
+            # convergence) is not a closest point
+            off = np.linalg.norm(gap - distance[:, None] * normal, axis=1)
+            bad = ~done | ~(off <= 1e-6 * (1.0 + np.abs(distance)))
+        alpha[bad] = np.nan
+        distance = np.where(bad, np.nan, distance)
+        return alpha, normal, distance
+
+    def foot(self, center: np.ndarray, guess=None) -> Foot:
+        """The closest surface point to ``center``: the nearest of the feet Newton's method
+        finds from ``guess`` (the last foot), from the point below the centre and from the
+        nearest points of a SAMPLES × SAMPLES grid over the square the closest point must lie
+        in (within the distance to the point below, |c_z − f(c_x, c_y)|, of the centre)."""
+        center = np.asarray(center, dtype=float)
+        below = self.evaluate(center[0], center[1])
+        reach = abs(center[2] - below[0])
+        if not math.isfinite(reach):
+            reach = 2.0 * self.reach_default
+        axis = np.linspace(-reach, reach, SAMPLES)
+        gx, gy = np.meshgrid(center[0] + axis, center[1] + axis, indexing="ij")
+        heights = self.evaluate(gx.ravel(), gy.ravel())[0]
+        far = (gx.ravel() - center[0]) ** 2 + (gy.ravel() - center[1]) ** 2 + (heights - center[2]) ** 2
+        nearest = np.argsort(np.where(np.isnan(far), np.inf, far))[:BEST_SAMPLES]
+        starts = [center[:2]] + ([] if guess is None else [guess])
+        starts += [(gx.ravel()[i], gy.ravel()[i]) for i in nearest if np.isfinite(far[i])]
+        alpha, normal, distance = self.feet(np.repeat(center[None, :], len(starts), axis=0), np.array(starts))
+        if np.isnan(distance).all():
+            return Foot(math.nan, math.nan, np.full(3, math.nan), math.nan)
+        i = int(np.nanargmin(distance))
+        return Foot(float(alpha[i, 0]), float(alpha[i, 1]), normal[i], float(distance[i]))
+
+
+class Flight:
+    """A ball in free flight from ``start`` until it lands: its exact state at any time,
+    recorded rows, and the landing."""
+
+    def __init__(self, surface: Surface, start: FreeState, *, radius: float, mass: float, gravity: float):
+        self.surface, self.start = surface, start
+        self.radius, self.mass, self.gravity = radius, mass, gravity
+        self.g = np.array([0.0, 0.0, -gravity])
+
+    def state(self, t: float) -> FreeState:
+        s = self.start
+        tau = t - s.t
+        rotation = Rotation.from_rotvec(s.omega * tau).as_matrix()
+        return FreeState(t, s.center + s.velocity * tau + 0.5 * self.g * tau * tau, s.velocity + self.g * tau,
+                         s.omega.copy(), rotation @ s.R)
+
+    def centers(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Centre positions and velocities (n, 3) at ``times``."""
+        tau = (np.asarray(times, dtype=float) - self.start.t)[:, None]
+        return (self.start.center + self.start.velocity * tau + 0.5 * self.g * tau * tau,
+                self.start.velocity + self.g * tau)
+
+    def gap(self, t: float, guess=None) -> tuple[float, Foot]:
+        """The centre's distance to the surface minus r at time t, and the foot."""
+        center = self.centers(np.array([t]))[0][0]
+        foot = self.surface.foot(center, guess)
+        return foot.distance - self.radius, foot
+
+    def landing(self, t_end: float) -> tuple[float, Foot] | None:
+        """The first time in (t₀, t_end] the ball touches the surface again, and the contact
+        there; None if it is still flying at t_end.
+
+        No step skips a root: the true distance D to the surface changes no faster than the
+        centre moves, so from a gap h = D − r > 0 at t the ball cannot touch before t + Δ with
+        |ċ(t)| Δ + ½ g Δ² = h (and no step moves the centre by more than r, so that a closest
+        point the grid of ``Surface.foot`` did not see at a distance is seen nearer). Near the surface a second look, at the time the gap's rate of
+        change predicts plus a tenth, finds a sign change sooner; the root is then located by
+        Brent's method on the bracket to round-off."""
+        tol = GAP_TOLERANCE * self.radius
+        t0 = self.start.t
+        foot = self.surface.foot(self.start.center)
+        guess = None if math.isnan(foot.x) else np.array([foot.x, foot.y])
+        # just after a lift-off the gap grows like τ³ from 0: look ahead until the ball is clear
+        tau = FIRST_STEP
+        while True:
+            t = min(t0 + tau, t_end)
+            h, foot = self.gap(t, guess)
+            if not math.isnan(foot.x):
+                guess = np.array([foot.x, foot.y])
+            if h > tol or t >= t_end or math.isnan(h):
+                break
+            if h < -tol:   # it never left: it touches again at once
+                return self._locate(t0, t, guess)
+            if tau > CLEAR_WITHIN:
+                return t, foot
+            tau *= 2.0
+        if math.isnan(h):
+            return None   # no surface under the ball: it falls on (NaN: outside the landscape's domain)
+        for _ in range(MAX_LOOKS):
+            if t >= t_end:
+                return None
+            speed = float(np.linalg.norm(self.centers(np.array([t]))[1][0]))
+            g = self.gravity
+            reach = min(h, self.radius)   # (at most r a step: no feature of the ball's size is passed unseen)
+            bound = 2.0 * reach / (speed + math.sqrt(speed * speed + 2.0 * g * reach)) if speed + g > 0 else math.inf
+            # the gap's rate of change: the centre's velocity along the normal at the foot
+            rate = float(np.dot(self.centers(np.array([t]))[1][0], foot.normal))
+            if rate < 0 and 1.1 * h / -rate > bound:
+                ahead = min(t + 1.1 * h / -rate, t_end)
+                h_ahead, foot_ahead = self.gap(ahead, guess)
+                if h_ahead <= 0:
+                    return self._locate(t, ahead, guess)
+            t_next = min(t + max(bound, 0.0), t_end)
+            h_next, foot_next = self.gap(t_next, guess)
+            if math.isnan(h_next):
+                return None
+            if h_next <= tol:
+                return self._locate(t, t_next, guess) if h_next < 0 else (t_next, foot_next)
+            t, h, foot = t_next, h_next, foot_next
+            guess = np.array([foot.x, foot.y])
+        raise RuntimeError("the landing search took too many steps")
+
+    def _locate(self, a: float, b: float, guess) -> tuple[float, Foot]:
+        """The root of the gap in [a, b] (gap(a) ≥ 0 ≥ gap(b)), to round-off."""
+        def gap(t):
+            return self.gap(t, guess)[0]
+        if gap(a) <= 0.0:
+            t = a
+        else:
+            t = brentq(gap, a, b, xtol=4 * np.finfo(float).eps * max(abs(b), 1.0), rtol=4 * np.finfo(float).eps,
+                       maxiter=200)
+        return t, self.gap(t, guess)[1]
+
+    def rows(self, times: np.ndarray, dissipated: float, guess=None) -> np.ndarray:
+        """Recorded rows (``kernel.interface.ROW_FIELDS``) at ``times``: the exact state; as
+        contact point the centre's closest surface point; normal force 0; slip speed the
+        tangential speed of the ball's point nearest the surface; ``dissipated`` as given."""
+        times = np.asarray(times, dtype=float)
+        n = len(times)
+        rows = np.empty((n, ROW_SIZE))
+        if n == 0:
+            return rows
+        centers, velocities = self.centers(times)
+        start = np.repeat(np.asarray(guess if guess is not None else self.start.center[:2], float)[None, :], n, 0)
+        alpha, normals, _ = self.surface.feet(centers, start)
+        for i in np.flatnonzero(np.isnan(alpha[:, 0])):   # the full search where that does not converge
+            foot = self.surface.foot(centers[i])
+            alpha[i], normals[i] = (foot.x, foot.y), foot.normal
+        s = self.start
+        rotations = Rotation.from_rotvec(np.outer(times - s.t, s.omega)).as_matrix() @ s.R
+        m, r = self.mass, self.radius
+        rows[:, ROW_SLICES["t"]] = times[:, None]
+        rows[:, ROW_SLICES["contact"]] = alpha
+        rows[:, ROW_SLICES["center"]] = centers
+        rows[:, ROW_SLICES["velocity"]] = velocities
+        rows[:, ROW_SLICES["omega"]] = s.omega
+        rows[:, ROW_SLICES["R"]] = rotations.reshape(n, 9)
+        rows[:, ROW_SLICES["energy"]] = energy(velocities, s.omega, centers[:, 2], m, r, self.gravity)[:, None]
+        rows[:, ROW_SLICES["normal_force"]] = 0.0
+        if "slip_speed" in ROW_SLICES:
+            rows[:, ROW_SLICES["slip_speed"]] = tangential_slip(velocities, s.omega, normals, r)[:, None]
+        if "dissipated" in ROW_SLICES:
+            rows[:, ROW_SLICES["dissipated"]] = dissipated
+        return rows
+
+
+def energy(velocity, omega, height, mass, radius, gravity):
+    """½ m |ċ|² + ½ (2/5) m r² |ω|² + m g c_z, elementwise over rows."""
+    v2 = np.sum(np.asarray(velocity) ** 2, axis=-1)
+    w2 = np.sum(np.asarray(omega) ** 2, axis=-1)
+    return 0.5 * mass * v2 + 0.2 * mass * radius * radius * w2 + mass * gravity * np.asarray(height)
+
+
+def tangential_slip(velocity, omega, normal, radius):
+    """|u − (u·N) N| for the velocity u = ċ + ω × (−r N) of the ball's point towards the surface."""
+    velocity, omega, normal = np.broadcast_arrays(*(np.atleast_2d(np.asarray(a, float)) for a in (velocity, omega,
+                                                                                                  normal)))
+    u = velocity - radius * np.cross(omega, normal)
+    u_t = u - np.einsum("ij,ij->i", u, normal)[:, None] * normal
+    return np.linalg.norm(u_t, axis=1)
+
+
+@dataclass(frozen=True)
+class Impact:
+    """What a landing does: the velocities after it and what it cost."""
+
+    velocity: np.ndarray   # the centre's, after
+    omega: np.ndarray      # after
+    normal_speed: float    # the speed the ball hit the surface with, along the normal (m/s, ≥ 0)
+    rebound: float         # the normal speed it leaves with (e times the above)
+    sticking: bool         # the contact point's tangential velocity is 0 after (friction sufficed)
+    energy_lost: float     # J
+    impulse: np.ndarray    # the impulse the surface gave at the contact point (N s)
+
+
+def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: float,
+           friction: float | None) -> Impact:
+    """The impulse J = J_n N + J_t at the contact point of a ball hitting the surface with
+    the centre's ``velocity`` and ``omega``, the surface's unit ``normal`` there.
+
+    The contact point's velocity u = ċ + ω × (−r N) changes by J_n/m along N and by (7/2) J_t/m
+    in the tangent plane (a homogeneous ball: Δċ = J/m, Δω = (5/(2 m r²)) (−r N) × J). Normal:
+    u_n → −e u_n, so J_n = (1 + e) m |u_n|. Tangential: sticking needs J_t = −(2/7) m u_t, taken
+    when |J_t| ≤ μ J_n (always for μ None); else J_t = −μ J_n û_t (the slip keeps its direction
+    and shrinks). Angular momentum about the contact point does not change (the impulse acts
+    there)."""
+    velocity, omega, normal = (np.asarray(a, dtype=float) for a in (velocity, omega, normal))
+    m, r, e = mass, radius, restitution
+    u = velocity - r * np.cross(omega, normal)
+    u_n = float(np.dot(u, normal))
+    approach = max(-u_n, 0.0)
+    j_n = (1.0 + e) * m * approach
+    u_t = u - u_n * normal
+    j_t = -(2.0 / 7.0) * m * u_t
+    slip = float(np.linalg.norm(u_t))
+    sticking = friction is None or float(np.linalg.norm(j_t)) <= friction * j_n
+    if not sticking:
+        j_t = -friction * j_n * u_t / slip if slip > 0 else np.zeros(3)
+    impulse = j_n * normal + j_t
+    after_v = velocity + impulse / m
+    after_w = omega + (5.0 / (2.0 * m * r * r)) * np.cross(-r * normal, impulse)
+    lost = float(energy(velocity, omega, 0.0, m, r, 0.0) - energy(after_v, after_w, 0.0, m, r, 0.0))
+    return Impact(after_v, after_w, approach, e * approach, bool(sticking), lost, impulse)
+
+
+def settle(hit: Impact, normal, *, mass: float, radius: float) -> Impact:
+    """The impact ``hit`` ending in contact (its rebound too slow to fly): the normal velocity
+    left is taken away too, and its energy counted as lost."""
+    normal = np.asarray(normal, dtype=float)
+    v_n = float(np.dot(hit.velocity, normal))
+    velocity = hit.velocity - v_n * normal
+    lost = hit.energy_lost + 0.5 * mass * v_n * v_n
+    return Impact(velocity, hit.omega, hit.normal_speed, 0.0, hit.sticking, lost,
+                  hit.impulse - mass * v_n * normal)

@@ -1,0 +1,129 @@
+"""Free flight, the landing search and the impact (rollball/flight.py) against closed forms and an
+independent root finder."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+from rollball.flight import FreeState, Flight, Surface, energy, impact, rest_speed, settle
+from rollball.kernel.interface import ROW_SLICES
+from rollball.landscape import landscape_for
+
+G, R, M = 9.81, 0.1, 1.3
+
+
+def flight(formula, center, velocity, omega=(0.0, 0.0, 0.0), gravity=G):
+    start = FreeState(0.0, np.array(center, float), np.array(velocity, float), np.array(omega, float), np.eye(3))
+    return Flight(Surface(landscape_for(formula)), start, radius=R, mass=M, gravity=gravity)
+
+
+def test_flight_is_the_parabola_and_a_turn_at_constant_rate():
+    f = flight("0*x", (0.0, 0.0, 2.0), (1.0, -0.5, 2.0), omega=(3.0, -1.0, 7.0))
+    t = 0.37
+    s = f.state(t)
+    assert np.allclose(s.center, [t, -0.5 * t, 2.0 + 2.0 * t - 0.5 * G * t * t], rtol=0, atol=1e-15)
+    assert np.allclose(s.velocity, [1.0, -0.5, 2.0 - G * t], rtol=0, atol=1e-15)
+    # R(t) = exp(A(omega) t): a turn by |omega| t about omega, by Rodrigues' formula written out here
+    w = np.array([3.0, -1.0, 7.0])
+    k = w / np.linalg.norm(w)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    angle = np.linalg.norm(w) * t
+    assert np.allclose(s.R, np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K, atol=1e-14)
+    rows = f.rows(np.linspace(0.0, 0.6, 7), dissipated=0.25)
+    e = rows[:, ROW_SLICES["energy"]][:, 0]
+    assert np.ptp(e) <= 1e-14 * abs(e[0])   # exact: no integrator in flight
+    assert np.all(rows[:, ROW_SLICES["normal_force"]] == 0.0)
+    assert np.allclose(rows[:, ROW_SLICES["contact"]], rows[:, ROW_SLICES["center"]][:, :2])   # foot on a plane
+    Rs = rows[:, ROW_SLICES["R"]].reshape(-1, 3, 3)
+    assert np.abs(np.einsum("nji,njk->nik", Rs, Rs) - np.eye(3)).max() < 1e-14
+
+
+def test_the_landing_on_a_plane_is_located_to_round_off():
+    f = flight("0.25", (0.3, 0.0, 1.5), (2.0, 1.0, 0.5))
+    t, foot = f.landing(10.0)
+    # c_z(t) = 0.25 + r: 1.5 + 0.5 t − g t²/2 = 0.35
+    exact = (0.5 + math.sqrt(0.25 + 2 * G * 1.15)) / G
+    assert abs(t - exact) <= 4e-16 * 3 and foot.distance == pytest.approx(R, abs=1e-15)
+    assert (foot.x, foot.y) == pytest.approx((0.3 + 2 * exact, exact), abs=1e-14)
+    assert f.landing(0.5 * exact) is None   # still flying at t_end
+
+
+def test_a_narrow_ridge_in_the_way_is_hit_not_flown_through():
+    """Skimming past a ridge 3 cm wide: the first contact, from an independent distance (scipy's
+    minimize_scalar on the curve z = f(x), Brent's root finder in time)."""
+    formula, height = "0.5*exp(-(x-1)^2/0.001)", lambda x: 0.5 * np.exp(-(x - 1) ** 2 / 0.001)
+    f = flight(formula, (0.0, 0.0, 0.55), (3.0, 0.0, 0.0), gravity=0.0)
+    t, foot = f.landing(10.0)
+
+    def gap(time):
+        cx, cz = 3.0 * time, 0.55
+        best = minimize_scalar(lambda x: (x - cx) ** 2 + (height(x) - cz) ** 2, bounds=(0.9, 1.1), method="bounded",
+                               options={"xatol": 1e-12})
+        return math.sqrt(best.fun) - R
+
+    expected = brentq(gap, 0.2, 1.0 / 3.0, xtol=1e-14)
+    assert t == pytest.approx(expected, abs=1e-9) and foot.x < 1.0
+
+
+def test_a_sticking_impact_keeps_the_angular_momentum_about_the_contact_point():
+    n = np.array([0.0, 0.0, 1.0])
+    v, w = np.array([2.0, 0.5, -3.0]), np.array([1.0, -4.0, 2.0])
+    hit = impact(v, w, n, mass=M, radius=R, restitution=0.0, friction=None)
+    assert hit.sticking and hit.normal_speed == 3.0 and hit.rebound == 0.0
+    about_contact = lambda vel, om: 0.4 * M * R * R * om + M * R * np.cross(n, vel)
+    assert np.allclose(about_contact(hit.velocity, hit.omega), about_contact(v, w), rtol=0, atol=1e-14)
+    u = hit.velocity - R * np.cross(hit.omega, n)   # the contact point is at rest after
+    assert np.abs(u).max() < 1e-14
+    before, after = energy(v, w, 0.0, M, R, G), energy(hit.velocity, hit.omega, 0.0, M, R, G)
+    assert hit.energy_lost == pytest.approx(before - after, rel=1e-14) and hit.energy_lost > 0
+    # a ball sliding on without spin keeps 5/7 of its speed along the surface (billiards)
+    plain = impact([2.0, 0.0, -1.0], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.0, friction=None)
+    assert plain.velocity == pytest.approx([10.0 / 7.0, 0.0, 0.0], abs=1e-15)
+
+
+def test_a_sliding_impact_takes_mu_times_the_normal_impulse():
+    n = np.array([0.6, 0.0, 0.8])
+    t1 = np.array([0.8, 0.0, -0.6])
+    v = 4.0 * t1 - 2.0 * n
+    hit = impact(v, np.zeros(3), n, mass=M, radius=R, restitution=0.5, friction=0.1)
+    j_n = (1 + 0.5) * M * 2.0
+    assert not hit.sticking and hit.rebound == pytest.approx(1.0)
+    assert hit.impulse == pytest.approx(j_n * n - 0.1 * j_n * t1, abs=1e-14)
+    assert np.dot(hit.velocity, n) == pytest.approx(1.0, abs=1e-14)
+    about_contact = lambda vel, om: 0.4 * M * R * R * om + M * R * np.cross(n, vel)
+    assert np.allclose(about_contact(hit.velocity, hit.omega), about_contact(v, np.zeros(3)), atol=1e-14)
+    # enough friction: it sticks
+    assert impact(v, np.zeros(3), n, mass=M, radius=R, restitution=0.5, friction=1.0).sticking
+    # a frictionless surface gives no tangential impulse
+    assert np.allclose(impact(v, np.zeros(3), n, mass=M, radius=R, restitution=0.5, friction=0.0).impulse, j_n * n)
+
+
+def test_rebound_apex_heights_scale_by_e_squared():
+    e = 0.6
+    f = flight("0*x", (0.0, 0.0, 1.1), (0.5, 0.0, 0.0))
+    apexes = []
+    for _ in range(4):
+        t, foot = f.landing(100.0)
+        s = f.state(t)
+        hit = impact(s.velocity, s.omega, foot.normal, mass=M, radius=R, restitution=e, friction=None)
+        assert hit.rebound > rest_speed(R, G)
+        apexes.append(hit.rebound ** 2 / (2 * G))
+        f = Flight(f.surface, type(s)(t, s.center, hit.velocity, hit.omega, s.R), radius=R, mass=M, gravity=G)
+        f_apex = f.state(t + hit.rebound / G).center[2] - R   # the flight's own apex
+        assert f_apex == pytest.approx(apexes[-1], rel=1e-12)
+    ratios = np.array(apexes[1:]) / np.array(apexes[:-1])
+    assert ratios == pytest.approx(e * e, rel=1e-12)
+    assert apexes[0] == pytest.approx(e * e * 1.0, rel=1e-12)   # dropped from 1 m above contact
+
+
+def test_a_slow_rebound_settles_and_counts_the_energy():
+    n = np.array([0.0, 0.0, 1.0])
+    slow = rest_speed(R, G) / 2
+    hit = impact([1.0, 0.0, -slow / 0.5], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.5, friction=None)
+    assert hit.rebound < rest_speed(R, G)
+    rest = settle(hit, n, mass=M, radius=R)
+    assert rest.velocity[2] == 0.0 and rest.rebound == 0.0
+    assert rest.energy_lost == pytest.approx(hit.energy_lost + 0.5 * M * hit.rebound ** 2, rel=1e-14)
+    assert rest_speed(0.1, 9.81) == pytest.approx(math.sqrt(2 * 9.81 * 1e-7))
