@@ -84,11 +84,11 @@ def test_each_entry_point_unpacks_what_the_interface_declares_for_its_function()
 def test_the_scratch_views_tile_the_scratch_array_the_interface_sizes():
     scratch = unpacking._compile(unpacking.scratch_source(), "scratch", {})   # (the same source, run by Python)
     assert [name for name, _ in interface.SCRATCH] == ["d", "Y", "zn", "pn", "Rn", "Ye", "Re", "pe", "sa", "sb", "sm"]
-    for n in (kernel.MOTION_SIZE, kernel.MK_SIZE, kernel.CLASSIC_SIZE):
+    for n in (kernel.MOTION_SIZE, kernel.MK_SIZE, kernel.CLASSIC_SIZE, *kernel.SLIDING_SIZES):
         work = np.arange(float(kernel.work_size(n)))
         views = scratch(work, n)
         assert np.concatenate([v.ravel() for v in views]).tolist() == work.tolist()
-        assert [v.shape for v in views][:5] == [(6,), (n,), (n,), (kernel.PROBE_SIZE,), (3, 3)]
+        assert [v.shape for v in views][:5] == [(kernel.D_SLIP + 3,), (n,), (n,), (kernel.PROBE_SIZE,), (3, 3)]
 
 
 def test_run_arrays_are_the_arrays_every_loop_takes():

@@ -14,7 +14,9 @@ State vector z: contact point (x, y), angular momentum about the contact point v
 then either u (3, the Munthe-Kaas Lie-algebra increment, zero at each step start; the
 adaptive pairs carry omega there instead and R follows it, ``dense.turn``) or
 R (9, row-major, integrated as a plain matrix by the classic scheme), or nothing: a state
-of MOTION_SIZE carries no orientation at all (sweeps, whose outcomes do not need it). Stage derivatives
+of MOTION_SIZE carries no orientation at all (sweeps, whose outcomes do not need it). A sliding
+ball's state is (x, y), the centre velocity (3), omega (3) and the energy dissipated, then the
+same orientation parts (``interface``: its length tells which). Stage derivatives
 are the rows of K; the hot loop indexes whole arrays and never slices them.
 
 The modules, from the bottom layer up (each imports only those before it): ``interface``
@@ -22,7 +24,7 @@ The modules, from the bottom layer up (each imports only those before it): ``int
 curvatures, Rodrigues), ``dense`` (interpolation, omega's polynomial, the turn of R),
 ``recording`` (rows, the start, failures), ``explicit`` and ``collocation`` (the steps),
 ``steps`` (choosing a step, error norm, acceptance), ``events`` (locating lift-off, breaks, the
-fold), ``unpacking`` (slots and scratch, generated), ``loops`` (the stepping loops),
+fold, the changes of contact mode), ``unpacking`` (slots and scratch, generated), ``loops`` (the stepping loops),
 ``entries`` (the entry points).
 """
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from .explicit import STEP_NOT_CONVERGED, end_of_step
-from .interface import I_EVALS, I_STEPS, MK_SIZE
+from .interface import I_EVALS, I_STEPS, MOTION_SIZE
 from .lowlevel import COLD, JIT
-from .physics import STAGE, dexpinv, dynamics, rodrigues
+from .physics import STAGE, dexpinv, dynamics, motion_size, rodrigues, sliding_dynamics
 
 
 # -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
@@ -34,9 +34,10 @@ def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
     arguments and codes of trial_step (the orientation always Munthe-Kaas).
 
-    The stage equations are solved in two parts, since u does not act on (alpha, v): first
-    the motion, evaluating the right-hand side with u = 0 (so that its u-part is omega),
-    then the increments u at the stages from those omegas, which needs no evaluations.
+    The stage equations are solved in two parts, since u does not act on the motion (rolling
+    (alpha, v), or sliding (alpha, c', omega, D): the state's length says which): first the
+    motion, evaluating the right-hand side with u = 0 (so that its u-part is omega), then the
+    increments u at the stages from those omegas, which needs no evaluations.
 
     W (``Collocation.kernel_arrays``) holds a_ij at W[1+i, 1+j], b_i at W[last, 1+i] and the
     extrapolation of the starting values in rows s+1 .. 2s. K[0] holds z'(z); K[1 .. s] hold
@@ -46,12 +47,13 @@ def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
     Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the motion is not finite),
     2 (only the orientation is not) or STEP_NOT_CONVERGED.
     """
-    n = MK_SIZE
+    n = z.shape[0]
+    m = motion_size(n)
     s = (last - 1) // 2
     new = s + 1
     # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
     for i in range(s):
-        for q in range(5):
+        for q in range(m):
             acc = K[0, q]
             if ints[I_STEPS] > 0:
                 acc *= W[new + i, 0]
@@ -59,13 +61,13 @@ def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
                     acc += W[new + i, 1 + j] * K[1 + j, q]
             K[new + i, q] = acc
     for i in range(s):
-        for q in range(5):
+        for q in range(m):
             K[1 + i, q] = K[new + i, q]
-    for q in range(5, n):
+    for q in range(m, n):
         Y[q] = 0.0
-    code = _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn)
+    code = _iterate(s, m, h, z, K, W, ints, fn, d, p, Y, pn)
     if code == 0:
-        code = _increments(s, h, K, W)
+        code = _increments(s, m, h, K, W)
     if code != 0:
         return code
     for q in range(n):
@@ -74,28 +76,35 @@ def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
         c = h * W[last, 1 + i]
         for q in range(n):
             zn[q] += c * K[1 + i, q]
-    rodrigues(zn[5], zn[6], zn[7], R, Rn)
+    rodrigues(zn[m], zn[m + 1], zn[m + 2], R, Rn)
     return end_of_step(fn, d, p, True, n, True, zn, Rn, K, last, pn, ints)
 
 
 @JIT
-def _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn):
-    """Fixed-point iteration for the (alpha, v) parts of the stage derivatives K[1 .. s]."""
+def _iterate(s, m, h, z, K, W, ints, fn, d, p, Y, pn):
+    """Fixed-point iteration for the motion's parts (the first m) of the stage derivatives
+    K[1 .. s]."""
     new = s + 1
     best, stalled, previous = np.inf, 0, np.inf
     for _ in range(MAX_ITERATIONS):
         for i in range(s):
-            for q in range(5):
+            for q in range(m):
                 Y[q] = z[q]
             for j in range(s):
                 c = h * W[1 + i, 1 + j]
-                for q in range(5):
+                for q in range(m):
                     Y[q] += c * K[1 + j, q]
-            dynamics(fn, d, p, Y, 1.0, K, new + i, pn, STAGE)
+            if m == MOTION_SIZE:
+                dynamics(fn, d, p, Y, 1.0, K, new + i, pn, STAGE)
+            else:
+                sliding_dynamics(fn, d, p, Y, 1.0, K, new + i, pn, STAGE)
         ints[I_EVALS] += s
+        # (the parts scaled each by its own size: alpha, then v; sliding alpha, c', omega, D)
         change = max(_scaled_change(s, h, z, K, 0, 2), _scaled_change(s, h, z, K, 2, 5))
+        if m != MOTION_SIZE:
+            change = max(change, _scaled_change(s, h, z, K, 5, 8), _scaled_change(s, h, z, K, 8, 9))
         for i in range(s):
-            for q in range(5):
+            for q in range(m):
                 K[1 + i, q] = K[new + i, q]
         if change != change:  # the stages left the landscape's domain
             return 1
@@ -117,12 +126,12 @@ def _iterate(s, h, z, K, W, ints, fn, d, p, Y, pn):
 
 
 @JIT
-def _increments(s, h, K, W):
-    """The u-parts of K[1 .. s]: U_i = h sum_j a_ij dexp^-1_(U_j)(omega_j), iterated from U = 0
-    (omega_j in the u-part of K[s+1+j]); no right-hand-side evaluations."""
+def _increments(s, m, h, K, W):
+    """The u-parts of K[1 .. s] (after the motion's m): U_i = h sum_j a_ij dexp^-1_(U_j)(omega_j),
+    iterated from U = 0 (omega_j in the u-part of K[s+1+j]); no right-hand-side evaluations."""
     new = s + 1
     for i in range(s):
-        for q in range(5, 8):
+        for q in range(m, m + 3):
             K[1 + i, q] = K[new + i, q]  # dexp^-1 at U = 0
     best, stalled = np.inf, 0
     for _ in range(MAX_ITERATIONS):
@@ -131,14 +140,14 @@ def _increments(s, h, K, W):
             u1, u2, u3 = 0.0, 0.0, 0.0
             for j in range(s):
                 c = h * W[1 + i, 1 + j]
-                u1 += c * K[1 + j, 5]
-                u2 += c * K[1 + j, 6]
-                u3 += c * K[1 + j, 7]
-            k1, k2, k3 = dexpinv(u1, u2, u3, K[new + i, 5], K[new + i, 6], K[new + i, 7])
-            change = max(change, abs(k1 - K[1 + i, 5]), abs(k2 - K[1 + i, 6]), abs(k3 - K[1 + i, 7]))
+                u1 += c * K[1 + j, m]
+                u2 += c * K[1 + j, m + 1]
+                u3 += c * K[1 + j, m + 2]
+            k1, k2, k3 = dexpinv(u1, u2, u3, K[new + i, m], K[new + i, m + 1], K[new + i, m + 2])
+            change = max(change, abs(k1 - K[1 + i, m]), abs(k2 - K[1 + i, m + 1]), abs(k3 - K[1 + i, m + 2]))
             size = max(size, abs(k1), abs(k2), abs(k3))
             # (Gauss-Seidel: later stages see this one's new value at once)
-            K[1 + i, 5], K[1 + i, 6], K[1 + i, 7] = k1, k2, k3
+            K[1 + i, m], K[1 + i, m + 1], K[1 + i, m + 2] = k1, k2, k3
         if not change <= size * 1e300:
             return 2
         if change <= ROUND_OFF * size:

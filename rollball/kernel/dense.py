@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import math
 
-from .interface import MOTION_SIZE, PROBE_SIZE, P_TURN
+from .interface import PROBE_SIZE, P_TURN
 from .lowlevel import COLD, JIT
-from .physics import _finite, _finite_matrix, evaluate, rodrigues, shape_of
+from .physics import _finite, _finite_matrix, evaluate, motion_size, rodrigues, shape_of
 
 
 # -- the orientation of the adaptive pairs ----------------------------------------------------
@@ -150,16 +150,17 @@ def state_at(fn, d, p, z, R, h, P, K, theta0, theta, Ye, Re, pe):
     into the spare last row of K); whether it is finite. R is the orientation at t + theta0 h
     (theta0 is 0 but when carrying omega, where R is turned on from there; Re may be R)."""
     n, mk = shape_of(z)
+    m = motion_size(n)
     interpolate(z, h, P, K, theta, Ye)
-    if n == MOTION_SIZE:  # no orientation carried
+    if n == m:  # no orientation carried
         pass
     elif mk and p[P_TURN] > 0.0:
         turn(p, z, R, h, P, K, theta0, theta, Re)
     elif mk:
-        rodrigues(Ye[5], Ye[6], Ye[7], R, Re)
+        rodrigues(Ye[m], Ye[m + 1], Ye[m + 2], R, Re)
     else:
         for a in range(3):
             for c in range(3):
-                Re[a, c] = Ye[5 + 3 * a + c]
+                Re[a, c] = Ye[m + 3 * a + c]
     evaluate(fn, d, p, Ye, mk, K, K.shape[0] - 1, pe)
     return _finite(Ye, 0, n) and _finite(pe, 0, PROBE_SIZE) and _finite_matrix(Re)

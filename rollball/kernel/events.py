@@ -9,12 +9,13 @@ import math
 from .dense import interpolate, state_at, turn
 from .explicit import dense_stages
 from .interface import (
-    DOES_NOT_FIT, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_HELD,
-    I_REASON, I_ROWS, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_OMEGA, PROBE_SIZE, P_TURN, R_HEIGHT_JUMP,
-    R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE)
+    DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
+    F_LIFT_Y, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE,
+    PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SIZE, PROBE_SLIP, P_FLY, P_MU, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT,
+    R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import curvatures, shape_of
-from .recording import _fail, record, record_last
+from .physics import curvatures, shape_of, sliding_size
+from .recording import _fail, hold, record, record_last
 from .steps import accept, search_step
 
 
@@ -54,7 +55,9 @@ JUMP_TOL = 1e-6        # crossed, at once once a sub-step this short fits and do
 FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
 LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's contact points
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
-FORCE_EVENT, FIT_EVENT = 0.0, 1.0
+# FORCE_EVENT: F.N reaches 0; FIT_EVENT: r*kappa reaches 1; SLIP_EVENT: the friction rolling needs
+# reaches mu F.N; GRIP_EVENT: the slip velocity's component along the slip at the step's start reaches 0
+FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT = 0.0, 1.0, 2.0, 3.0
 KINK, JUMP, JOLT = 0.0, 1.0, 2.0   # what locate_break bisects towards (JOLT: the centre jumping)
 
 
@@ -71,11 +74,18 @@ def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
 
 @COLD
 def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
-    """g(theta) of an event, negative before it: -F.N (lift-off) or r*kappa - 1 (no fit);
-    +inf where the state is not finite (past any event)."""
-    if kind == FORCE_EVENT:
+    """g(theta) of an event, negative before it: -F.N (lift-off), r*kappa - 1 (no fit),
+    |F_t| - mu F.N (slip: the friction rolling needs beyond what the contact gives) or
+    -u_slip . u0 (grip; s[0:3] holds u0, the slip velocity at the step's start); +inf where
+    the state is not finite (past any event)."""
+    if kind != FIT_EVENT:
         ok = state_at(fn, d, p, z, R, h, P, K, 0.0, theta, Ye, Re, pe)
-        g = -pe[PROBE_FORCE]
+        if kind == FORCE_EVENT:
+            g = -pe[PROBE_FORCE]
+        elif kind == SLIP_EVENT:
+            g = pe[PROBE_NEED] - p[P_MU] * pe[PROBE_FORCE]
+        else:
+            g = -(pe[PROBE_SLIP] * s[0] + pe[PROBE_SLIP + 1] * s[1] + pe[PROBE_SLIP + 2] * s[2])
     else:
         surface_at(fn, d, p[0], z, h, P, K, theta, Ye, s)
         ok = True
@@ -97,7 +107,7 @@ def locate(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, b, gb, ints):
             if a < secant < b:
                 m = secant
         g = event_value(kind, fn, d, p, z, R, h, P, K, m, Ye, Re, pe, s)
-        if kind == FORCE_EVENT:
+        if kind != FIT_EVENT:
             ints[I_EVALS] += 1
         if g >= 0.0:
             b, gb = m, g
@@ -288,10 +298,82 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     jolted = math.isnan(info[F_LIFTOFF]) and centre_jolted(p[0], h, z, probe, zn, pn)
-    if not (fit_end or sharp or jumpy or raced or force_end or jolted):
+    turned = mode_changes(p, n, probe, pn) != 0
+    if not (fit_end or sharp or jumpy or raced or force_end or jolted or turned):
         return -1.0  # the usual step: nothing to look at closer
-    return examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
-                        sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping)
+    valid = -1.0
+    if fit_end or sharp or jumpy or raced or force_end or jolted:
+        valid = examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
+                             sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping)
+    if turned and valid < 0.0:
+        valid = locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa)
+    return valid
+
+
+@JIT
+def mode_changes(p, n, probe, pn):
+    """Which change of contact mode the ends of a step (probes probe and pn) say happens
+    inside it, for a state of length n: T_LIFTOFF (F.N < 0 at the end, where the ball flies:
+    p[P_FLY]), T_SLIP (rolling with a finite mu: the friction rolling needs exceeds mu F.N at
+    the end), T_GRIP (sliding: the slip velocity at the end points against the one at the
+    start); 0 for none (always, in the 2011 model: mu inf and glued). The first found; the
+    earliest inside the step is ``locate_transition``'s."""
+    if p[P_FLY] != 0.0 and pn[PROBE_FORCE] < 0.0:
+        return T_LIFTOFF
+    if sliding_size(n):
+        u0 = probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2
+        dot = (probe[PROBE_SLIP] * pn[PROBE_SLIP] + probe[PROBE_SLIP + 1] * pn[PROBE_SLIP + 1]
+               + probe[PROBE_SLIP + 2] * pn[PROBE_SLIP + 2])
+        return T_GRIP if u0 > 0.0 and dot <= 0.0 else 0
+    if p[P_MU] < math.inf and pn[PROBE_NEED] > p[P_MU] * pn[PROBE_FORCE]:
+        return T_SLIP
+    return 0
+
+
+@COLD
+def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, s):
+    """A step whose ends say the contact changes mode (``mode_changes``): locate the earliest
+    change on the step's dense output to ROOT_TOL of the step, stop the run there (status
+    TRANSITION, its kind, time and contact point in ints and info) and return the fraction of
+    the step where it happens (``record_valid`` then records the state there); -1 when the
+    dense output shows none after all.
+
+    A slip that stops where rolling would need more friction than mu F.N is not a grip: the
+    slip turns about, and the run stops as a slip (the next run slides on from zero slip)."""
+    n, mk = shape_of(z)
+    dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+    mu = p[P_MU]
+    best, kind = 2.0, 0
+    if p[P_FLY] != 0.0 and pn[PROBE_FORCE] < 0.0 < probe[PROBE_FORCE]:
+        a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, -probe[PROBE_FORCE], 1.0,
+                      -pn[PROBE_FORCE], ints)
+        best, kind = b, T_LIFTOFF
+    if sliding_size(n):
+        s[0], s[1], s[2] = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
+        ga = -(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+        gb = -(s[0] * pn[PROBE_SLIP] + s[1] * pn[PROBE_SLIP + 1] + s[2] * pn[PROBE_SLIP + 2])
+        if ga < 0.0 <= gb:
+            a, b = locate(GRIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+            if b < best:
+                best, kind = b, T_GRIP
+    elif mu < math.inf:
+        ga = probe[PROBE_NEED] - mu * probe[PROBE_FORCE]
+        gb = pn[PROBE_NEED] - mu * pn[PROBE_FORCE]
+        if ga < 0.0 < gb:
+            a, b = locate(SLIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+            if b < best:
+                best, kind = b, T_SLIP
+    if kind == 0:
+        return -1.0
+    state_at(fn, d, p, z, R, h, P, K, 0.0, best, Ye, Re, pe)
+    if kind == T_GRIP and pe[PROBE_NEED] > mu * pe[PROBE_FORCE]:
+        kind = T_SLIP
+    if kind == T_LIFTOFF and math.isnan(info[F_LIFTOFF]):
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + best * h, Ye[0], Ye[1], 0.0
+    ints[I_STATUS] = TRANSITION
+    ints[I_TRANSITION] = kind
+    info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t + best * h, Ye[0], Ye[1]
+    return best
 
 
 @JIT
@@ -301,13 +383,14 @@ def centre_jolted(r, h, z, probe, zn, pn):
     exact motion cannot do that: the contact point passed (within round-off of the step) a
     point where the normal turns through a finite angle, as beside the tip of a cone, where
     the model's centre jumps across however short the step."""
-    c0 = r * (probe[PROBE_OMEGA + 1] * probe[2] - probe[PROBE_OMEGA + 2] * probe[1])
-    c1 = r * (probe[PROBE_OMEGA + 2] * probe[0] - probe[PROBE_OMEGA] * probe[2])
-    c2 = r * (probe[PROBE_OMEGA] * probe[1] - probe[PROBE_OMEGA + 1] * probe[0])
+    # the centre's velocity r omega x N + the slip velocity (0 rolling)
+    c0 = r * (probe[PROBE_OMEGA + 1] * probe[2] - probe[PROBE_OMEGA + 2] * probe[1]) + probe[PROBE_SLIP]
+    c1 = r * (probe[PROBE_OMEGA + 2] * probe[0] - probe[PROBE_OMEGA] * probe[2]) + probe[PROBE_SLIP + 1]
+    c2 = r * (probe[PROBE_OMEGA] * probe[1] - probe[PROBE_OMEGA + 1] * probe[0]) + probe[PROBE_SLIP + 2]
     s0 = c0 * c0 + c1 * c1 + c2 * c2
-    c0 = r * (pn[PROBE_OMEGA + 1] * pn[2] - pn[PROBE_OMEGA + 2] * pn[1])
-    c1 = r * (pn[PROBE_OMEGA + 2] * pn[0] - pn[PROBE_OMEGA] * pn[2])
-    c2 = r * (pn[PROBE_OMEGA] * pn[1] - pn[PROBE_OMEGA + 1] * pn[0])
+    c0 = r * (pn[PROBE_OMEGA + 1] * pn[2] - pn[PROBE_OMEGA + 2] * pn[1]) + pn[PROBE_SLIP]
+    c1 = r * (pn[PROBE_OMEGA + 2] * pn[0] - pn[PROBE_OMEGA] * pn[2]) + pn[PROBE_SLIP + 1]
+    c2 = r * (pn[PROBE_OMEGA] * pn[1] - pn[PROBE_OMEGA + 1] * pn[0]) + pn[PROBE_SLIP + 2]
     s1 = c0 * c0 + c1 * c1 + c2 * c2
     dx = zn[0] - z[0] + r * (pn[0] - probe[0])
     dy = zn[1] - z[1] + r * (pn[1] - probe[1])
@@ -587,7 +670,15 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
 def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, info, Y, zn, Rn, pn,
                  Ye, sa, sb, sm, stepping):
     """A run stopped inside a step: its last valid state, reached by ``approach`` (or else the
-    step's start), is the last row; the stop's time and place are refined on the way."""
+    step's start), is the last row; the stop's time and place are refined on the way. A run
+    stopped at a change of contact mode: the state there on the step's dense output is the
+    last row and the run's state (z, R, probe)."""
+    if ints[I_STATUS] == TRANSITION:  # the state at the change of mode, from the dense output
+        state_at(fn, d, p, z, R, h, P, K, 0.0, theta, zn, Rn, pn)
+        record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
+        ints[I_ROWS] += 1
+        hold(p, z, R, probe, zn, Rn, pn)
+        return
     if ints[I_HELD] == 1:  # the last valid state is known already (``fold_search``)
         record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
         ints[I_ROWS] += 1

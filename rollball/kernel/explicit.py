@@ -4,9 +4,12 @@ evaluation of its new state, and the dense-output stages and orientation of the 
 from __future__ import annotations
 
 from .dense import omega_polynomial, turn
-from .interface import CLASSIC_SIZE, I_DENSE, I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, PROBE_SIZE, P_TURN
+from .interface import (
+    CLASSIC_SIZE, I_DENSE, I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, PROBE_SIZE, P_TURN, SLIDING_CLASSIC_SIZE,
+    SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
 from .lowlevel import COLD, JIT, STEP
-from .physics import FULL, STAGE, _finite, _finite_matrix, _finite_row, dynamics, rodrigues, shape_of
+from .physics import (FULL, STAGE, _finite, _finite_matrix, _finite_row, dynamics, motion_size, rates, rodrigues,
+                      shape_of, sliding_dynamics)
 
 
 @JIT
@@ -25,8 +28,11 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
     """The explicit step for one state layout: with n and mk constants of the compiled code,
     its stage loops unroll as in hand-written C. ``defer``: carrying omega, leave R to the
     caller (``carry_orientation`` once the step is accepted: a rejected try does not pay
-    for the dense-output stages)."""
-    orientation = n > MOTION_SIZE
+    for the dense-output stages). The layout's length says rolling or sliding (``interface``)."""
+    sliding = n in (SLIDING_MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE)
+    m = SLIDING_MOTION_SIZE if sliding else MOTION_SIZE   # the motion; the orientation after it
+    orientation = n > m
+    rhs = sliding_dynamics if sliding else dynamics
 
     @STEP
     def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
@@ -42,7 +48,7 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
         """
         for i in range(1, last):
             combine(n, z, h, W, i, K, i, Y)
-            dynamics(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pn, STAGE)
+            rhs(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pn, STAGE)
         ints[I_EVALS] += last - 1
         combine(n, z, h, W, last, K, last, zn)
         carry = orientation and mk and p[P_TURN] > 0.0
@@ -51,11 +57,11 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
                 for c in range(3):
                     Rn[a, c] = R[a, c]
         elif orientation and mk:
-            rodrigues(zn[5], zn[6], zn[7], R, Rn)
+            rodrigues(zn[m], zn[m + 1], zn[m + 2], R, Rn)
         elif orientation:
             for a in range(3):
                 for c in range(3):
-                    Rn[a, c] = zn[5 + 3 * a + c]
+                    Rn[a, c] = zn[m + 3 * a + c]
         code = end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints)
         if carry and code == 0 and not defer:
             code = carry_orientation(fn, d, p, W, P, h, z, R, K, last, Y, Rn, pn, ints)
@@ -68,16 +74,24 @@ trial_step_mk = _trial_step(MK_SIZE, True)
 trial_step_pair = _trial_step(MK_SIZE, True, True)  # the pairs' tries (``advance_adaptive``)
 trial_step_classic = _trial_step(CLASSIC_SIZE, False)
 trial_step_motion = _trial_step(MOTION_SIZE, False)
+sliding_step_mk = _trial_step(SLIDING_MK_SIZE, True)
+sliding_step_pair = _trial_step(SLIDING_MK_SIZE, True, True)
+sliding_step_classic = _trial_step(SLIDING_CLASSIC_SIZE, False)
 
 
 @JIT
 def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
-    """The explicit step (``_trial_step``) for z's layout: MK_SIZE, CLASSIC_SIZE or MOTION_SIZE."""
+    """The explicit step (``_trial_step``) for z's layout: MK_SIZE, CLASSIC_SIZE or MOTION_SIZE
+    rolling, SLIDING_MK_SIZE or SLIDING_CLASSIC_SIZE sliding."""
     n = z.shape[0]
     if n == MK_SIZE:
         return trial_step_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
     if n == CLASSIC_SIZE:
         return trial_step_classic(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == SLIDING_MK_SIZE:
+        return sliding_step_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == SLIDING_CLASSIC_SIZE:
+        return sliding_step_classic(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
     return trial_step_motion(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
@@ -85,15 +99,19 @@ def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
 def end_of_step(fn, d, p, mk, n, orientation, zn, Rn, K, last, pn, ints):
     """The new state zn, Rn of a step checked, then evaluated in full into K[last] and pn
     (counted in ints[I_EVALS]). Returns the step's report (below): 0, 1 or 2."""
-    if not _finite(zn, 0, 5):
+    m = motion_size(n)
+    if not _finite(zn, 0, m):
         return 1
-    if orientation and not (_finite(zn, 5, n) and _finite_matrix(Rn)):
+    if orientation and not (_finite(zn, m, n) and _finite_matrix(Rn)):
         return 2
-    dynamics(fn, d, p, zn, 1.0 if mk else 0.0, K, last, pn, FULL)
+    if m == MOTION_SIZE:
+        dynamics(fn, d, p, zn, 1.0 if mk else 0.0, K, last, pn, FULL)
+    else:
+        sliding_dynamics(fn, d, p, zn, 1.0 if mk else 0.0, K, last, pn, FULL)
     ints[I_EVALS] += 1
-    if not (_finite_row(K, last, 0, 5) and _finite(pn, 0, PROBE_SIZE)):
+    if not (_finite_row(K, last, 0, m) and _finite(pn, 0, PROBE_SIZE)):
         return 1
-    if not _finite_row(K, last, 5, n):
+    if not _finite_row(K, last, m, n):
         return 2
     return 0
 
@@ -124,5 +142,5 @@ def dense_stages(fn, d, p, W, h, z, K, last, Y, pe, ints):
     ints[I_DENSE] = ints[I_STEPS] + 1
     for i in range(last + 1, W.shape[0]):
         combine(n, z, h, W, i, K, i, Y)
-        dynamics(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pe, STAGE)
+        rates(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pe, STAGE)
         ints[I_EVALS] += 1

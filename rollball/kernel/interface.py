@@ -75,25 +75,47 @@ def landscape_record(address: int, values=()) -> np.ndarray:
 
 
 # -- a run's state -------------------------------------------------------------------------------
+#
+# Rolling (the 2011 model): the contact point (x, y) and the angular momentum about it v (3).
+# Sliding (the contact point slips): (x, y), the centre's velocity (3, world), omega (3, world) and the
+# energy dissipated by friction D (J). Either motion is followed by the orientation: u (3, the
+# Munthe-Kaas increment; the adaptive pairs carry omega there while rolling and nothing while
+# sliding, where omega is part of the motion) or R (9, the classic scheme). The state's length tells
+# the kernel which dynamics to use.
+MOTION_SIZE, MK_SIZE, CLASSIC_SIZE = 5, 8, 14            # rolling: motion only, + u (3), + R (9)
+SLIDING_MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE = 9, 12, 18   # sliding: the same
+SLIDING_SIZES = (SLIDING_MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE)
+# where the sliding state keeps what
+S_VELOCITY, S_OMEGA, S_DISSIPATED = 2, 5, 8
 
-MOTION_SIZE, MK_SIZE, CLASSIC_SIZE = 5, 8, 14   # the state z: motion only, + u (3), + R (9)
 
-
-def state_size(munthe_kaas: bool) -> int:
+def state_size(munthe_kaas: bool, sliding: bool = False) -> int:
+    if sliding:
+        return SLIDING_MK_SIZE if munthe_kaas else SLIDING_CLASSIC_SIZE
     return MK_SIZE if munthe_kaas else CLASSIC_SIZE
 
 
 P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this tolerance (rad)
+P_MU = 8    # the friction coefficient mu; inf: always enough friction to roll (the 2011 model)
+P_FLY = 9   # 1: the run stops at a lift-off (the ball flies); 0: it goes on glued to the surface
+P_DISSIPATED = 10  # the energy dissipated before this run (J): what rolling rows record
+P_SIZE = 11
 
 
-def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0) -> np.ndarray:
+def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, friction: float | None = None,
+               fly: bool = False, dissipated: float = 0.0) -> np.ndarray:
     """The ball and gravity as the kernel reads them, with the constants it would otherwise
     recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0; then ``turn``:
     0 for the Munthe-Kaas increment u in the state, else the tolerance (rad) for the
-    orientation's sub-steps when omega is carried instead (``turn``: the adaptive pairs)."""
+    orientation's sub-steps when omega is carried instead (``turn``: the adaptive pairs);
+    then the contact: ``friction`` mu (None: always enough to roll, the 2011 model: no slip is
+    ever looked for), ``fly`` (stop the run at a lift-off instead of going on glued) and the
+    energy ``dissipated`` before this run (J, carried into its rows)."""
     r, m, g0 = radius, mass, gravity
-    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0,
-                     turn + 0.0 * r])   # (+ 0 r: a column like the others where r is an array, sweeps)
+    zero = 0.0 * r   # (+ 0 r: a column like the others where r is an array, sweeps)
+    mu = np.inf if friction is None else friction
+    return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + zero, mu + zero,
+                     (1.0 if fly else 0.0) + zero, dissipated + zero])
 
 
 # How a method steps (``take_step``). Floats: numba compiles a function anew for every
@@ -107,21 +129,25 @@ PROBE_FORCE = 6    # normal force F.N
 PROBE_FIT = 7      # r * largest principal curvature (the ball fits while < 1)
 PROBE_HEIGHT = 8   # f(x, y)
 PROBE_FIT_LO = 9   # r * smallest principal curvature (< 0 where the surface bends away)
-PROBE_SIZE = 10
+PROBE_NEED = 10    # |F_t|: the tangential force rolling needs (with this omega; 0 while mu is inf)
+PROBE_SLIP = 11    # the slip velocity of the ball's material point at the contact (3; rolling: 0)
+PROBE_SIZE = 14
 
 # Integer run counters (``ints``) and float run facts (``info``).
 # I_DENSE: the step whose extra dense-output stages K holds (they are computed on demand).
 # I_HELD: 1 once a stopped step's last valid state is already in zn, Rn, pn (``fold_search``).
 # I_RETRY: 1 while the adaptive step follows a rejection (kept between calls).
+# I_TRANSITION: the kind of a transition the run stopped at (TRANSITIONS: its position + 1; 0 none).
 (I_STEPS, I_ROWS, I_LAST_RECORDED, I_STATUS, I_REJECTED, I_NONFINITE, I_EVALS, I_REASON, I_DENSE, I_HELD,
- I_RETRY) = range(11)
+ I_RETRY, I_TRANSITION) = range(12)
 # F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
 # F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
 # F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
 # F_ERR_OLD: the adaptive step-size control's error of the last accepted step (PI control).
+# F_EVENT_T, F_EVENT_X, F_EVENT_Y: the time and contact point of the transition the run stopped at.
 (F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD,
- F_ERR_OLD) = range(12)
-INTS_SIZE, INFO_SIZE = 11, 12
+ F_ERR_OLD, F_EVENT_T, F_EVENT_X, F_EVENT_Y) = range(15)
+INTS_SIZE, INFO_SIZE = 12, 15
 
 # -- recorded rows: the CSV columns of docs/design.md §5 ------------------------------------------
 
@@ -145,11 +171,37 @@ STATUSES = {
     "ok": "reached its end time",
     "does_not_fit": "the ball no longer fits a valley: the model breaks down",
     "nonfinite": "the landscape or the state could not be evaluated",
+    "transition": "stopped where the contact changes mode (a lift-off, a slip or a grip): the run goes on in the "
+                  "new mode from the state there",
     "aborted": "the caller cancelled",
     "row_limit": "recording every step filled the row limit before the end",
 }
-KERNEL_STATUSES = ("running", "ok", "does_not_fit", "nonfinite")
-RUNNING, OK, DOES_NOT_FIT, NONFINITE = range(len(KERNEL_STATUSES))
+KERNEL_STATUSES = ("running", "ok", "does_not_fit", "nonfinite", "transition")
+RUNNING, OK, DOES_NOT_FIT, NONFINITE, TRANSITION = range(len(KERNEL_STATUSES))
+
+# The changes of contact mode a run stops at (status "transition"): the kind's code in
+# ints[I_TRANSITION] is its position here plus 1, its time and contact point are info[F_EVENT_T],
+# info[F_EVENT_X], info[F_EVENT_Y], and the run's last row and z, R, probe hold the state there,
+# located on the method's dense output. Each with the mode the ball goes on in and the sentence
+# made from the event's fields.
+TRANSITIONS = {
+    "liftoff": ("flying", "the ball leaves the surface at {where}: the normal force F·N reaches 0"),
+    "slip": ("sliding", "the ball starts to slip at {where}: rolling would need a friction force beyond μ F·N"),
+    "grip": ("rolling", "the slip ends at {where}: the ball rolls on"),
+}
+T_NONE = 0
+T_LIFTOFF, T_SLIP, T_GRIP = range(1, len(TRANSITIONS) + 1)
+
+
+def transition_name(code: int) -> str | None:
+    """The transition with this code (ints[I_TRANSITION]), or None."""
+    return list(TRANSITIONS)[code - 1] if 1 <= code <= len(TRANSITIONS) else None
+
+
+def transition_sentence(kind: str, time: float, x: float, y: float) -> str:
+    """The sentence for a transition, made from its fields."""
+    return TRANSITIONS[kind][1].format(where=f"t = {time:.6g} s, (x, y) = ({x:.6g}, {y:.6g})")
+
 
 # Why the physics stopped a run (``trajectory.Reason``, ``Failure``): its code in ints[I_REASON]
 # is its position here plus 1 (0: none), with the status it gives, what info[F_FAIL_VALUE]
@@ -213,10 +265,13 @@ def sentence(reason: str, value: float, time: float, x: float, y: float, radius:
 # -- the arrays of a run ----------------------------------------------------------------------------
 
 SURFACE_SIZE = 8   # x, y, f, N (3), r * largest and smallest principal curvature
-# The scratch array's parts, in order (``loops.scratch`` views them): landscape values d, stage
-# state Y, trial state zn, probe pn and orientation Rn, and for the dense output a state Ye,
-# orientation Re, probe pe and three surface points. "n": the state's size; (3, 3) a matrix.
-SCRATCH = (("d", 6), ("Y", "n"), ("zn", "n"), ("pn", PROBE_SIZE), ("Rn", (3, 3)), ("Ye", "n"), ("Re", (3, 3)),
+# The scratch array's parts, in order (``loops.scratch`` views them): landscape values d (then,
+# from D_SLIP, the slip velocity at the step's start: a sliding ball's friction keeps its side of
+# it through the step, ``sliding_dynamics``), stage state Y, trial state zn, probe pn and
+# orientation Rn, and for the dense output a state Ye, orientation Re, probe pe and three surface
+# points. "n": the state's size; (3, 3) a matrix.
+D_SLIP = LANDSCAPE_OUTPUTS
+SCRATCH = (("d", D_SLIP + 3), ("Y", "n"), ("zn", "n"), ("pn", PROBE_SIZE), ("Rn", (3, 3)), ("Ye", "n"), ("Re", (3, 3)),
            ("pe", PROBE_SIZE), ("sa", SURFACE_SIZE), ("sb", SURFACE_SIZE), ("sm", SURFACE_SIZE))
 
 

@@ -9,14 +9,14 @@ import numpy as np
 
 from .dense import state_at
 from .events import TIP_REACH, fold_search, record_valid, step_events, tip_stop
-from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, trial_step_pair
+from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, sliding_step_pair, trial_step_pair
 from .interface import (
-    BATCH_CHUNK, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED, I_RETRY,
-    I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF, O_MAX_SPEED,
-    O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, ROW_CENTER, ROW_ENERGY, ROW_FORCE, ROW_SIZE, ROW_VELOCITY,
-    RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED)
+    BATCH_CHUNK, D_SLIP, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
+    I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
+    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_SLIP, ROW_CENTER, ROW_ENERGY, ROW_FORCE, ROW_SIZE,
+    ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED)
 from .lowlevel import COLD, JIT
-from .physics import shape_of
+from .physics import motion_size, shape_of
 from .recording import _fail, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -34,6 +34,13 @@ def reach_of(K, h, z):
     """How far around the contact point a step of h that cannot pass looks for a tip of the
     surface: twice the step's travel, at least TIP_REACH (relative to 1 + |x| + |y|)."""
     return max(2.0 * h * speed_of(K), TIP_REACH * (1.0 + abs(z[0]) + abs(z[1])))
+
+
+@JIT
+def slip_reference(d, probe):
+    """The slip velocity at the step's start, which a sliding ball's friction keeps its side of
+    through the step (``sliding_dynamics``), into d[D_SLIP:] (rolling: 0, never read)."""
+    d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
 
 
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
@@ -68,6 +75,7 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
         t0 = (k - 1) * dt
         h = t_end - t0 if final else dt
         t = t_end if final else k * dt
+        slip_reference(d, probe)
         bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
             valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
@@ -107,7 +115,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
                      probe, rows, ints, info, work):
     """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
     (carrying omega, p[P_TURN] > 0); info[F_TIME] is the time reached and info[F_H] the next
-    step to try. The error is controlled on the motion; R follows omega (``turn``).
+    step to try. The error is controlled on the motion (rolling or sliding, by z's length);
+    R follows omega (``turn``).
 
     The loop is generic over the pair; its plug-in points are data (``Tableau.kernel_arrays``):
     - W, square: rows 1 .. last-1 the stage coefficients, row ``last`` the weights b (the
@@ -125,7 +134,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
     the dense output (``step_events``). Returns early, still running, when ``rows`` has fewer
     than two free rows while recording every step: the caller grows it and calls again.
     """
-    n = MK_SIZE
+    n = z.shape[0]   # MK_SIZE, or SLIDING_MK_SIZE
+    motion = motion_size(n)
     last = E.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     if ints[I_ROWS] == 0:
@@ -140,8 +150,12 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)  # (the pairs: MK_SIZE)
-        err = math.inf if bad else error_norm(E, err_kind, K, last, MOTION_SIZE, z, zn, hs, rtol, atol)
+        slip_reference(d, probe)
+        if n == MK_SIZE:
+            bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        else:
+            bad = sliding_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        err = math.inf if bad else error_norm(E, err_kind, K, last, motion, z, zn, hs, rtol, atol)
         if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
             bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
             err = math.inf if bad else err

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import math
 
-from .interface import MK_SIZE, MOTION_SIZE, P_TURN
+from .interface import (
+    D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SLIP, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
+    SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
 from .lowlevel import COLD, JIT, STEP, data_pointer, landscape
 
 
@@ -29,26 +31,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     # omega = T^-1 v, T^-1 = 5/(7 m r^2) (I + 5/2 N N^T)
     nv = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
     o1, o2, o3 = k * (v1 + nv * n1), k * (v2 + nv * n2), k * (v3 + nv * n3)
-    # N' columns: dN/dx = (n_x - N (N . n_x)) / W with n = (-f_x, -f_y, 1)
-    s = n1 * fxx + n2 * fxy
-    Nx1, Nx2, Nx3 = (n1 * s - fxx) * iW, (n2 * s - fxy) * iW, n3 * s * iW
-    s = n1 * fxy + n2 * fyy
-    Ny1, Ny2, Ny3 = (n1 * s - fxy) * iW, (n2 * s - fyy) * iW, n3 * s * iW
-    # C' = phi' + r N', E = C'^T C'
-    Cx1, Cx2, Cx3 = 1.0 + r * Nx1, r * Nx2, fx + r * Nx3
-    Cy1, Cy2, Cy3 = r * Ny1, 1.0 + r * Ny2, fy + r * Ny3
-    E11 = Cx1 * Cx1 + Cx2 * Cx2 + Cx3 * Cx3
-    E12 = Cx1 * Cy1 + Cx2 * Cy2 + Cx3 * Cy3
-    E22 = Cy1 * Cy1 + Cy2 * Cy2 + Cy3 * Cy3
-    idet = 1.0 / (E11 * E22 - E12 * E12)
-    # alpha' = r E^-1 C'^T (omega x N)
-    w1, w2, w3 = o2 * n3 - o3 * n2, o3 * n1 - o1 * n3, o1 * n2 - o2 * n1
-    b1 = r * (Cx1 * w1 + Cx2 * w2 + Cx3 * w3)
-    b2 = r * (Cy1 * w1 + Cy2 * w2 + Cy3 * w3)
-    a1 = (E22 * b1 - E12 * b2) * idet
-    a2 = (E11 * b2 - E12 * b1) * idet
-    # N' alpha', then v' = m r (N x g) - m r^2 (N' alpha') x (N x omega), with N x omega = -w
-    d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
+    a1, a2, d1, d2, d3, w1, w2, w3 = rolling_rates(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
     K[row, 0] = a1
     K[row, 1] = a2
     K[row, 2] = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
@@ -82,6 +65,190 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
         probe[7] = r * hi
         probe[8] = d[0]
         probe[9] = r * lo
+        need = 0.0
+        if p[P_MU] < math.inf:  # (the 2011 model never asks)
+            t1, t2, t3 = friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, K[row, 2],
+                                         K[row, 3], K[row, 4])
+            need = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+        probe[PROBE_NEED] = need
+        probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = 0.0, 0.0, 0.0
+
+
+@JIT
+def frame(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3):
+    """The surface at a contact point with slopes fx, fy, curvatures fxx, fxy, fyy,
+    iW = 1 / sqrt(1 + fx² + fy²) and normal N: the columns of N' (dN/dx, dN/dy) and of the
+    centre's Jacobian C' = phi' + r N', and the metric E = C'^T C' with 1 / det E."""
+    # N' columns: dN/dx = (n_x - N (N . n_x)) / W with n = (-f_x, -f_y, 1)
+    s = n1 * fxx + n2 * fxy
+    Nx1, Nx2, Nx3 = (n1 * s - fxx) * iW, (n2 * s - fxy) * iW, n3 * s * iW
+    s = n1 * fxy + n2 * fyy
+    Ny1, Ny2, Ny3 = (n1 * s - fxy) * iW, (n2 * s - fyy) * iW, n3 * s * iW
+    # C' = phi' + r N', E = C'^T C'
+    Cx1, Cx2, Cx3 = 1.0 + r * Nx1, r * Nx2, fx + r * Nx3
+    Cy1, Cy2, Cy3 = r * Ny1, 1.0 + r * Ny2, fy + r * Ny3
+    E11 = Cx1 * Cx1 + Cx2 * Cx2 + Cx3 * Cx3
+    E12 = Cx1 * Cy1 + Cx2 * Cy2 + Cx3 * Cy3
+    E22 = Cy1 * Cy1 + Cy2 * Cy2 + Cy3 * Cy3
+    idet = 1.0 / (E11 * E22 - E12 * E12)
+    return Nx1, Nx2, Nx3, Ny1, Ny2, Ny3, Cx1, Cx2, Cx3, Cy1, Cy2, Cy3, E11, E12, E22, idet
+
+
+@JIT
+def rolling_rates(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3):
+    """The rolling ball's alpha' (2) and N' alpha' (3), and omega x N (3), at a contact point
+    (``frame``'s arguments) for the angular velocity omega (docs/design.md §1)."""
+    (Nx1, Nx2, Nx3, Ny1, Ny2, Ny3, Cx1, Cx2, Cx3, Cy1, Cy2, Cy3, E11, E12, E22,
+     idet) = frame(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3)
+    # alpha' = r E^-1 C'^T (omega x N)
+    w1, w2, w3 = o2 * n3 - o3 * n2, o3 * n1 - o1 * n3, o1 * n2 - o2 * n1
+    b1 = r * (Cx1 * w1 + Cx2 * w2 + Cx3 * w3)
+    b2 = r * (Cy1 * w1 + Cy2 * w2 + Cy3 * w3)
+    a1 = (E22 * b1 - E12 * b2) * idet
+    a2 = (E11 * b2 - E12 * b1) * idet
+    # N' alpha', then v' = m r (N x g) - m r^2 (N' alpha') x (N x omega), with N x omega = -w
+    d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
+    return a1, a2, d1, d2, d3, w1, w2, w3
+
+
+@JIT
+def friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3):
+    """F_t (3), the tangential force the surface must exert for the ball to roll: from the
+    torque about the centre, (2/5) m r² omega' = (-r N) x F, so F_t = (2/5) m r N x omega';
+    omega' = T^-1 (v' + 5/2 (N' alpha'.v + N.v') N + 5/2 (N.v) N' alpha'), for the rolling
+    state with normal N, omega, N' alpha' = d, angular momentum v and its rate v' = e."""
+    k, mr = p[3], p[4]
+    nv = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
+    nve = 2.5 * (d1 * v1 + d2 * v2 + d3 * v3 + n1 * e1 + n2 * e2 + n3 * e3)
+    q1 = k * (e1 + nve * n1 + nv * d1)
+    q2 = k * (e2 + nve * n2 + nv * d2)
+    q3 = k * (e3 + nve * n3 + nv * d3)
+    c = 0.4 * mr
+    return c * (n2 * q3 - n3 * q2), c * (n3 * q1 - n1 * q3), c * (n1 * q2 - n2 * q1)
+
+
+@JIT
+def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3):
+    """F_t (3) a ball rolling at this contact point with angular velocity omega needs
+    (``friction_needed``): what a sliding ball whose slip has stopped is held to."""
+    r, mr2, mg = p[0], p[5], p[6]
+    no = n1 * o1 + n2 * o2 + n3 * o3
+    v1, v2, v3 = mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)  # v = T omega
+    a1, a2, d1, d2, d3, w1, w2, w3 = rolling_rates(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
+    e1 = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
+    e2 = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
+    e3 = mr2 * (d1 * w2 - d2 * w1)
+    return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3)
+
+
+# A slip speed below this fraction of the ball's speeds (|c'|, r |omega|) is zero: the slip of a
+# sliding run that starts from rolling, in round-off (its direction is then the one it starts in).
+SLIP_ZERO = 1e-12
+
+
+@STEP
+def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
+    """``dynamics`` of a sliding ball, z = (x, y, c' (3), omega (3), D, orientation): the ball
+    keeps contact, F_n from the constraint N.c'' = -(N' alpha').c', kinetic friction -mu F_n s
+    along the unit slip velocity s of the material point at the contact (docs/design.md §11):
+    alpha' = E^-1 C'^T c', m c'' = m g + F_n N - mu |F_n| s, (2/5) m r² omega' = (-r N) x F,
+    D' = mu |F_n| |u_slip|. Where the slip is zero (SLIP_ZERO: a slip starting), s is the
+    direction the slip starts in, against the friction rolling would need, and the probe's slip
+    velocity is exactly 0.
+
+    Inside a step the friction stays on its side of the slip velocity at the step's start,
+    d[D_SLIP:D_SLIP + 3] (s = -u/|u| where u points against it, and D' < 0): the equations go on
+    smoothly through a slip speed of 0 instead of turning the friction about, so that the
+    step's stages and dense output stay those of a smooth motion and the grip (u.u0 = 0) is
+    located on them to the method's order (the run stops there)."""
+    r, m, g0, mr, mu = p[0], p[1], p[2], p[4], p[P_MU]
+    landscape(fn, z[0], z[1], data_pointer(d))
+    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
+    iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
+    n1, n2, n3 = -fx * iW, -fy * iW, iW
+    c1, c2, c3 = z[2], z[3], z[4]
+    o1, o2, o3 = z[5], z[6], z[7]
+    (Nx1, Nx2, Nx3, Ny1, Ny2, Ny3, Cx1, Cx2, Cx3, Cy1, Cy2, Cy3, E11, E12, E22,
+     idet) = frame(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3)
+    # alpha' = E^-1 C'^T c'
+    b1 = Cx1 * c1 + Cx2 * c2 + Cx3 * c3
+    b2 = Cy1 * c1 + Cy2 * c2 + Cy3 * c3
+    a1 = (E22 * b1 - E12 * b2) * idet
+    a2 = (E11 * b2 - E12 * b1) * idet
+    d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
+    fn_ = m * (g0 * n3 - (d1 * c1 + d2 * c2 + d3 * c3))   # F_n = m (-(N' alpha').c' - N.g)
+    # the slip velocity u = c' + omega x (-r N)
+    u1 = c1 - r * (o2 * n3 - o3 * n2)
+    u2 = c2 - r * (o3 * n1 - o1 * n3)
+    u3 = c3 - r * (o1 * n2 - o2 * n1)
+    us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
+    speeds = c1 * c1 + c2 * c2 + c3 * c3 + r * r * (o1 * o1 + o2 * o2 + o3 * o3)
+    if us * us > SLIP_ZERO * SLIP_ZERO * speeds:
+        side = us
+        if u1 * d[D_SLIP] + u2 * d[D_SLIP + 1] + u3 * d[D_SLIP + 2] < 0.0:
+            side = -us   # past the slip's zero: the friction keeps its side (above)
+        s1, s2, s3 = u1 / side, u2 / side, u3 / side
+        us = side
+    else:  # the slip starts against the friction rolling needs
+        u1, u2, u3, us = 0.0, 0.0, 0.0, 0.0
+        t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
+        tn = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+        s1, s2, s3 = (-t1 / tn, -t2 / tn, -t3 / tn) if tn > 0.0 else (0.0, 0.0, 0.0)
+    f = mu * abs(fn_)
+    K[row, 0] = a1
+    K[row, 1] = a2
+    K[row, 2] = (fn_ * n1 - f * s1) / m
+    K[row, 3] = (fn_ * n2 - f * s2) / m
+    K[row, 4] = (fn_ * n3 - f * s3) / m - g0
+    q = 2.5 * f / mr   # omega' = 5 / (2 m r²) (-r N) x (-f s)
+    K[row, 5] = q * (n2 * s3 - n3 * s2)
+    K[row, 6] = q * (n3 * s1 - n1 * s3)
+    K[row, 7] = q * (n1 * s2 - n2 * s1)
+    K[row, 8] = f * us
+    if K.shape[1] == SLIDING_MOTION_SIZE:  # no orientation carried
+        pass
+    elif mk != 0.0 and p[P_TURN] > 0.0:  # the pairs: omega is the motion's, R follows it (``turn``)
+        K[row, 9], K[row, 10], K[row, 11] = 0.0, 0.0, 0.0
+    elif mk != 0.0:
+        K[row, 9], K[row, 10], K[row, 11] = dexpinv(z[9], z[10], z[11], o1, o2, o3)
+    else:
+        for j in range(3):
+            q1, q2, q3 = z[9 + j], z[12 + j], z[15 + j]
+            K[row, 9 + j] = o2 * q3 - o3 * q2
+            K[row, 12 + j] = o3 * q1 - o1 * q3
+            K[row, 15 + j] = o1 * q2 - o2 * q1
+    if full != 0.0:
+        probe[0], probe[1], probe[2] = n1, n2, n3
+        probe[3], probe[4], probe[5] = o1, o2, o3
+        probe[6] = fn_
+        hi, lo = curvatures(fx, fy, fxx, fxy, fyy, iW)
+        probe[7] = r * hi
+        probe[8] = d[0]
+        probe[9] = r * lo
+        t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
+        probe[PROBE_NEED] = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+        probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = u1, u2, u3
+
+
+@JIT
+def sliding_size(n):
+    """Whether a state of length n is a sliding ball's."""
+    return n == SLIDING_MOTION_SIZE or n == SLIDING_MK_SIZE or n == SLIDING_CLASSIC_SIZE
+
+
+@JIT
+def motion_size(n):
+    """The motion's part of a state of length n (its orientation follows it)."""
+    return SLIDING_MOTION_SIZE if sliding_size(n) else MOTION_SIZE
+
+
+@JIT
+def rates(fn, d, p, z, mk, K, row, probe, full):
+    """``dynamics`` or ``sliding_dynamics``, by the state's length."""
+    if sliding_size(K.shape[1]):
+        sliding_dynamics(fn, d, p, z, mk, K, row, probe, full)
+    else:
+        dynamics(fn, d, p, z, mk, K, row, probe, full)
 
 
 # Below this |u|^2 the coefficient of dexp^-1 is its series (to round-off for |u| < 0.1).
@@ -159,7 +326,7 @@ def shape_of(z):
     (COLD) take them so, not as the constants of the loops, which would compile them anew
     for every loop."""
     n = z.shape[0]
-    return n, n == MK_SIZE
+    return n, n == MK_SIZE or n == SLIDING_MK_SIZE
 
 
 @JIT
@@ -190,4 +357,4 @@ def _finite_matrix(R):
 
 @COLD
 def evaluate(fn, d, p, z, mk, K, row, probe):
-    dynamics(fn, d, p, z, 1.0 if mk else 0.0, K, row, probe, FULL)
+    rates(fn, d, p, z, 1.0 if mk else 0.0, K, row, probe, FULL)

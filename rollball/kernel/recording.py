@@ -8,12 +8,13 @@ import math
 import numpy as np
 
 from .interface import (
-    DOES_NOT_FIT, F_FAIL_T, F_FAIL_VALUE, F_FAIL_X, F_FAIL_Y, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE,
-    I_EVALS, I_LAST_RECORDED, I_REASON, I_ROWS, I_STATUS, I_STEPS, NONFINITE, PROBE_FIT, PROBE_FORCE, PROBE_HEIGHT,
-    PROBE_OMEGA, PROBE_SIZE, P_TURN, ROW_CENTER, ROW_CONTACT, ROW_ENERGY, ROW_FORCE, ROW_OMEGA, ROW_R, ROW_SIZE,
-    ROW_T, ROW_VELOCITY, R_NO_FIT, R_START_OVERFLOW, R_START_UNDEFINED)
+    DOES_NOT_FIT, D_SLIP, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_VALUE, F_FAIL_X, F_FAIL_Y, F_LIFTOFF,
+    F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_LAST_RECORDED, I_REASON, I_ROWS, I_STATUS, I_STEPS,
+    I_TRANSITION, NONFINITE, PROBE_FIT, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SIZE, PROBE_SLIP,
+    P_FLY, P_MU, P_TURN, ROW_CENTER, ROW_CONTACT, ROW_ENERGY, ROW_FORCE, ROW_OMEGA, ROW_R, ROW_SIZE, ROW_T, ROW_VELOCITY,
+    R_NO_FIT, R_START_OVERFLOW, R_START_UNDEFINED, S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import FULL, _finite, _finite_row, dynamics, shape_of
+from .physics import FULL, _finite, _finite_row, motion_size, rates, shape_of, sliding_size
 
 
 @JIT
@@ -29,15 +30,42 @@ def record(rows, i, t, z, R, probe, p):
     rows[i, ROW_CENTER + 1] = z[1] + r * n2
     cz = probe[PROBE_HEIGHT] + r * n3
     rows[i, ROW_CENTER + 2] = cz
-    rows[i, ROW_VELOCITY] = r * (o2 * n3 - o3 * n2)
-    rows[i, ROW_VELOCITY + 1] = r * (o3 * n1 - o1 * n3)
-    rows[i, ROW_VELOCITY + 2] = r * (o1 * n2 - o2 * n1)
     rows[i, ROW_OMEGA], rows[i, ROW_OMEGA + 1], rows[i, ROW_OMEGA + 2] = o1, o2, o3
     for a in range(3):
         for b in range(3):
             rows[i, ROW_R + 3 * a + b] = R[a, b]
-    rows[i, ROW_ENERGY] = 0.5 * (o1 * z[2] + o2 * z[3] + o3 * z[4]) + m * g0 * cz
+    if sliding_size(z.shape[0]):
+        c1, c2, c3 = z[S_VELOCITY], z[S_VELOCITY + 1], z[S_VELOCITY + 2]
+        rows[i, ROW_VELOCITY], rows[i, ROW_VELOCITY + 1], rows[i, ROW_VELOCITY + 2] = c1, c2, c3
+        rows[i, ROW_ENERGY] = (0.5 * m * (c1 * c1 + c2 * c2 + c3 * c3) + 0.2 * m * r * r * (o1 * o1 + o2 * o2 + o3 * o3)
+                               + m * g0 * cz)
+    else:
+        rows[i, ROW_VELOCITY] = r * (o2 * n3 - o3 * n2)
+        rows[i, ROW_VELOCITY + 1] = r * (o3 * n1 - o1 * n3)
+        rows[i, ROW_VELOCITY + 2] = r * (o1 * n2 - o2 * n1)
+        rows[i, ROW_ENERGY] = 0.5 * (o1 * z[2] + o2 * z[3] + o3 * z[4]) + m * g0 * cz
     rows[i, ROW_FORCE] = probe[PROBE_FORCE]
+
+
+@JIT
+def hold(p, z, R, probe, zn, Rn, pn):
+    """Make zn, Rn, pn (a state inside a step) the run's state z, R, probe, as a step's start:
+    the Munthe-Kaas increment u zero (R holds the orientation), a rolling pair's omega exact."""
+    n, mk = shape_of(z)
+    m = motion_size(n)
+    for q in range(n):
+        z[q] = zn[q]
+    if mk and p[P_TURN] > 0.0 and m == 5:
+        for q in range(3):
+            z[5 + q] = pn[PROBE_OMEGA + q]
+    elif mk and n > m:
+        for q in range(3):
+            z[m + q] = 0.0
+    for a in range(3):
+        for c in range(3):
+            R[a, c] = Rn[a, c]
+    for q in range(PROBE_SIZE):
+        probe[q] = pn[q]
 
 
 @COLD
@@ -58,17 +86,20 @@ def _fail(ints, info, status, reason, t, x, y, value):
 
 @COLD
 def start(fn, d, p, z, R, K, probe, rows, ints, info):
-    """Check and record the initial state; K[0] and probe describe it afterwards."""
+    """Check and record the initial state; K[0] and probe describe it afterwards. A start that
+    changes contact mode at once stops the run there (status TRANSITION, ``start_mode``)."""
     n, mk = shape_of(z)
     landscape(fn, z[0], z[1], data_pointer(d))
     if not _finite(d, 0, 6):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
+    sliding = sliding_size(n)
+    d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = 0.0, 0.0, 0.0   # (no step yet)
     # (np.int64(0): a literal 0 would compile dynamics anew for it)
-    dynamics(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
+    rates(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
     ints[I_EVALS] += 1
     ints[I_DENSE] = -1
-    if mk and p[P_TURN] > 0.0:
+    if mk and p[P_TURN] > 0.0 and not sliding:
         for q in range(3):
             z[5 + q] = probe[PROBE_OMEGA + q]
     record(rows, 0, 0.0, z, R, probe, p)
@@ -81,3 +112,25 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = 0.0, z[0], z[1], 0.0
     if probe[PROBE_FIT] >= 1.0:
         _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, 0.0, z[0], z[1], probe[PROBE_FIT])
+        return
+    kind = start_mode(p, sliding, probe)
+    if kind != 0:
+        ints[I_STATUS] = TRANSITION
+        ints[I_TRANSITION] = kind
+        info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = 0.0, z[0], z[1]
+
+
+@JIT
+def start_mode(p, sliding, probe):
+    """The change of contact mode a run's start makes at once (probe: its state's), or 0:
+    a lift-off where F.N < 0 and the ball flies (p[P_FLY]); rolling, a slip where the friction
+    it needs exceeds mu F.N; sliding with zero slip, a grip where it does not."""
+    force, need, mu = probe[PROBE_FORCE], probe[PROBE_NEED], p[P_MU]
+    if p[P_FLY] != 0.0 and force < 0.0:
+        return T_LIFTOFF
+    if sliding:
+        slip = probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2
+        return T_GRIP if slip == 0.0 and need <= mu * force else 0
+    if mu < math.inf and need > mu * force:
+        return T_SLIP
+    return 0

@@ -9,6 +9,7 @@ from .collocation import collocation_step
 from .explicit import trial_step
 from .interface import F_ERR_OLD, IMPLICIT, MOTION_SIZE, PROBE_OMEGA, PROBE_SIZE, P_TURN
 from .lowlevel import COLD, JIT
+from .physics import motion_size
 
 # Step-size control of the embedded pairs: after an accepted step the next one is
 # h * SAFETY * err^(exponent + cut * beta) * err_old^beta (PI control, as Hairer's DOPRI5 and
@@ -50,8 +51,9 @@ def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
     """The error of a step in units of the tolerance (the step is accepted when <= 1).
 
     Each estimate is h (E K)_q per component q < n, weighed by scale_q = atol + rtol
-    max(|z_q|, |zn_q|). The pairs pass the motion, alpha and v (n = MOTION_SIZE): omega is a
-    function of it, and R follows omega's dense output held to its own tolerance (``turn``).
+    max(|z_q|, |zn_q|). The pairs pass the motion, alpha and v (n = MOTION_SIZE; sliding alpha,
+    c', omega and D): omega is a function of it or part of it, and R follows omega's dense
+    output held to its own tolerance (``turn``).
     kind 0: one estimate (E row 0), RMS over the components (Hairer's DOPRI5). kind 1: two
     estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
     as Hairer's DOP853 does.
@@ -92,16 +94,18 @@ def next_step_factor(err, err_kind, err_exp, info):
 def accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn):
     """Make the trial state the current one; K[0] becomes its derivative (the u-part omega;
     carrying omega, z's omega becomes the exact one of the new state)."""
+    m = motion_size(n)
     for q in range(n):
         z[q] = zn[q]
         K[0, q] = K[last, q]
-    if mk and n > MOTION_SIZE and p[P_TURN] > 0.0:  # the next step starts from the exact omega
+    if mk and n > m and p[P_TURN] > 0.0:  # the next step starts from the exact omega
+        if m == MOTION_SIZE:  # (sliding, omega is the motion's own)
+            for q in range(3):
+                z[5 + q] = pn[PROBE_OMEGA + q]
+    elif mk and n > m:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
         for q in range(3):
-            z[5 + q] = pn[PROBE_OMEGA + q]
-    elif mk and n > MOTION_SIZE:  # the next step starts from u = 0, where dexp_u^-1(omega) = omega
-        for q in range(3):
-            z[5 + q] = 0.0
-            K[0, 5 + q] = pn[PROBE_OMEGA + q]
+            z[m + q] = 0.0
+            K[0, m + q] = pn[PROBE_OMEGA + q]
     for a in range(3):
         for c in range(3):
             R[a, c] = Rn[a, c]
