@@ -101,8 +101,9 @@ def test_row_columns_reasons_and_statuses_come_from_the_interface():
     from rollball import trajectory
     from rollball.simulation import describe
 
-    assert kernel.ROW_SIZE == len(trajectory.COLUMNS) == 23
+    assert len(trajectory.COLUMNS) == 23 and kernel.ROW_SIZE == 25   # (the 2011 model's, then slip and dissipated)
     assert trajectory.R == slice(12, 21) and trajectory.CENTER == slice(3, 6) and trajectory.NORMAL_FORCE == 22
+    assert trajectory.SLIP_SPEED == slice(23, 24) and trajectory.DISSIPATED == slice(24, 25)
     assert [str(s) for s in trajectory.Status] == [s for s in interface.STATUSES if s != "running"]
     assert [str(r) for r in trajectory.Reason] == list(interface.REASONS)
     assert interface.reason_name(kernel.R_KINK) == "kink" and interface.reason_name(0) is None

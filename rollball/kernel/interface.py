@@ -151,16 +151,18 @@ INTS_SIZE, INFO_SIZE = 12, 15
 
 # -- recorded rows: the CSV columns of docs/design.md §5 ------------------------------------------
 
+# (slip_speed: the speed of the ball's material point at the contact, 0 rolling; dissipated: the
+# energy lost to friction and impacts so far, J; energy is kinetic + potential, without it)
 ROW_FIELDS = (("t", 1), ("contact", 2), ("center", 3), ("velocity", 3), ("omega", 3), ("R", 9), ("energy", 1),
-              ("normal_force", 1))
+              ("normal_force", 1), ("slip_speed", 1), ("dissipated", 1))
 ROW_SLICES = {}   # field -> its slice of a row
 for _name, _width in ROW_FIELDS:
     _start = sum(c.stop - c.start for c in ROW_SLICES.values())
     ROW_SLICES[_name] = slice(_start, _start + _width)
 del _name, _width, _start
 ROW_SIZE = sum(width for _, width in ROW_FIELDS)
-(ROW_T, ROW_CONTACT, ROW_CENTER, ROW_VELOCITY, ROW_OMEGA, ROW_R, ROW_ENERGY,
- ROW_FORCE) = (ROW_SLICES[name].start for name, _ in ROW_FIELDS)
+(ROW_T, ROW_CONTACT, ROW_CENTER, ROW_VELOCITY, ROW_OMEGA, ROW_R, ROW_ENERGY, ROW_FORCE, ROW_SLIP,
+ ROW_DISSIPATED) = (ROW_SLICES[name].start for name, _ in ROW_FIELDS)
 
 # -- how a run ended ------------------------------------------------------------------------------
 

@@ -11,8 +11,9 @@ from .interface import (
     DOES_NOT_FIT, D_SLIP, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_VALUE, F_FAIL_X, F_FAIL_Y, F_LIFTOFF,
     F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_LAST_RECORDED, I_REASON, I_ROWS, I_STATUS, I_STEPS,
     I_TRANSITION, NONFINITE, PROBE_FIT, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SIZE, PROBE_SLIP,
-    P_FLY, P_MU, P_TURN, ROW_CENTER, ROW_CONTACT, ROW_ENERGY, ROW_FORCE, ROW_OMEGA, ROW_R, ROW_SIZE, ROW_T, ROW_VELOCITY,
-    R_NO_FIT, R_START_OVERFLOW, R_START_UNDEFINED, S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
+    P_DISSIPATED, P_FLY, P_MU, P_TURN, ROW_CENTER, ROW_CONTACT, ROW_DISSIPATED, ROW_ENERGY, ROW_FORCE, ROW_OMEGA,
+    ROW_R, ROW_SIZE, ROW_SLIP, ROW_T, ROW_VELOCITY, R_NO_FIT, R_START_OVERFLOW, R_START_UNDEFINED, S_DISSIPATED,
+    S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import FULL, _finite, _finite_row, motion_size, rates, shape_of, sliding_size
 
@@ -39,11 +40,16 @@ def record(rows, i, t, z, R, probe, p):
         rows[i, ROW_VELOCITY], rows[i, ROW_VELOCITY + 1], rows[i, ROW_VELOCITY + 2] = c1, c2, c3
         rows[i, ROW_ENERGY] = (0.5 * m * (c1 * c1 + c2 * c2 + c3 * c3) + 0.2 * m * r * r * (o1 * o1 + o2 * o2 + o3 * o3)
                                + m * g0 * cz)
+        u1, u2, u3 = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
+        rows[i, ROW_SLIP] = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
+        rows[i, ROW_DISSIPATED] = z[S_DISSIPATED]
     else:
         rows[i, ROW_VELOCITY] = r * (o2 * n3 - o3 * n2)
         rows[i, ROW_VELOCITY + 1] = r * (o3 * n1 - o1 * n3)
         rows[i, ROW_VELOCITY + 2] = r * (o1 * n2 - o2 * n1)
         rows[i, ROW_ENERGY] = 0.5 * (o1 * z[2] + o2 * z[3] + o3 * z[4]) + m * g0 * cz
+        rows[i, ROW_SLIP] = 0.0
+        rows[i, ROW_DISSIPATED] = p[P_DISSIPATED]
     rows[i, ROW_FORCE] = probe[PROBE_FORCE]
 
 
