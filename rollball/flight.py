@@ -20,7 +20,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
-from .geometry import unit_normal
+from .geometry import fit_ratio, unit_normal
 from .kernel.interface import ROW_SIZE, ROW_SLICES
 
 # A rebound whose apex above the surface would be lower than this share of the radius ends in
@@ -172,56 +172,62 @@ class Flight:
 
     def landing(self, t_end: float) -> tuple[float, Foot] | None:
         """The first time in (t₀, t_end] the ball touches the surface again, and the contact
-        there; None if it is still flying at t_end.
+        there; None if it is still flying at t_end (or there is no surface under it).
 
-        No step skips a root: the true distance D to the surface changes no faster than the
-        centre moves, so from a gap h = D − r > 0 at t the ball cannot touch before t + Δ with
-        |ċ(t)| Δ + ½ g Δ² = h (and no step moves the centre by more than r, so that a closest
-        point the grid of ``Surface.foot`` did not see at a distance is seen nearer). Near the surface a second look, at the time the gap's rate of
-        change predicts plus a tenth, finds a sign change sooner; the root is then located by
-        Brent's method on the bracket to round-off."""
+        Steps are bounded so that none passes a root of the gap h = D − r (D the centre's
+        distance to the surface). Two bounds, the larger taken: (1) D changes no faster than
+        the centre moves, so the ball cannot touch before |ċ| Δ + ½ g Δ² = h; (2) near the
+        surface D' = ċ·N at the foot and D'' ≥ −(g + |ċ|² κ/(1 − D κ)) for κ the largest
+        principal curvature towards the ball there: h + D' Δ − ½ A Δ² = 0 with A twice that
+        bound. No step moves the centre by more than r (so a closest point the grid of
+        ``Surface.foot`` did not see from afar is seen nearer). Just after a lift-off the gap
+        grows from 0 (like τ³): the first looks double from FIRST_STEP until it is clear. A
+        look ahead to where D' predicts the touch (plus a tenth) brackets it sooner; the root
+        is then located by Brent's method to round-off."""
         tol = GAP_TOLERANCE * self.radius
-        t0 = self.start.t
-        foot = self.surface.foot(self.start.center)
-        guess = None if math.isnan(foot.x) else np.array([foot.x, foot.y])
-        # just after a lift-off the gap grows like τ³ from 0: look ahead until the ball is clear
-        tau = FIRST_STEP
-        while True:
-            t = min(t0 + tau, t_end)
-            h, foot = self.gap(t, guess)
-            if not math.isnan(foot.x):
-                guess = np.array([foot.x, foot.y])
-            if h > tol or t >= t_end or math.isnan(h):
-                break
-            if h < -tol:   # it never left: it touches again at once
-                return self._locate(t0, t, guess)
-            if tau > CLEAR_WITHIN:
-                return t, foot
-            tau *= 2.0
+        r, g = self.radius, self.gravity
+        t = self.start.t
+        h, foot = self.gap(t)
         if math.isnan(h):
-            return None   # no surface under the ball: it falls on (NaN: outside the landscape's domain)
+            return None
+        clearing = FIRST_STEP if h <= tol else 0.0   # (just lifted off: not yet clear of the surface)
         for _ in range(MAX_LOOKS):
             if t >= t_end:
                 return None
-            speed = float(np.linalg.norm(self.centers(np.array([t]))[1][0]))
-            g = self.gravity
-            reach = min(h, self.radius)   # (at most r a step: no feature of the ball's size is passed unseen)
-            bound = 2.0 * reach / (speed + math.sqrt(speed * speed + 2.0 * g * reach)) if speed + g > 0 else math.inf
-            # the gap's rate of change: the centre's velocity along the normal at the foot
-            rate = float(np.dot(self.centers(np.array([t]))[1][0], foot.normal))
-            if rate < 0 and 1.1 * h / -rate > bound:
-                ahead = min(t + 1.1 * h / -rate, t_end)
-                h_ahead, foot_ahead = self.gap(ahead, guess)
-                if h_ahead <= 0:
+            guess = np.array([foot.x, foot.y])
+            velocity = self.centers(np.array([t]))[1][0]
+            speed = float(np.linalg.norm(velocity))
+            rate = float(np.dot(velocity, foot.normal))
+            reach = min(max(h, 0.0), r)
+            step = 2.0 * reach / (speed + math.sqrt(speed * speed + 2.0 * g * reach)) if speed + g > 0 else math.inf
+            kappa = max(float(fit_ratio(self.surface.evaluate(foot.x, foot.y), 1.0)), 0.0)
+            room = 1.0 - (h + r) * kappa
+            if room > 0 and h > 0:
+                bend = 2.0 * (g + speed * speed * kappa / room)
+                local = (rate + math.sqrt(rate * rate + 2.0 * bend * h)) / bend if bend > 0 else math.inf
+                step = max(step, local)
+            step = min(step, r / speed) if speed > 0 else step
+            if clearing:
+                step = max(step, clearing)
+                clearing *= 2.0
+            if rate < 0 and not clearing:
+                ahead = t + 1.1 * h / -rate
+                if t + step < ahead <= t_end and self.gap(ahead, guess)[0] < 0:
                     return self._locate(t, ahead, guess)
-            t_next = min(t + max(bound, 0.0), t_end)
+            t_next = min(t + step, t_end)
             h_next, foot_next = self.gap(t_next, guess)
             if math.isnan(h_next):
                 return None
-            if h_next <= tol:
-                return self._locate(t, t_next, guess) if h_next < 0 else (t_next, foot_next)
+            if h_next < -tol:
+                return self._locate(t, t_next, guess)
+            if clearing:
+                if h_next > tol:
+                    clearing = 0.0
+                elif t_next - self.start.t > CLEAR_WITHIN:
+                    return t_next, foot_next   # it never left the surface
+            elif h_next <= tol:
+                return t_next, foot_next
             t, h, foot = t_next, h_next, foot_next
-            guess = np.array([foot.x, foot.y])
         raise RuntimeError("the landing search took too many steps")
 
     def _locate(self, a: float, b: float, guess) -> tuple[float, Foot]:

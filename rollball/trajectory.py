@@ -212,8 +212,15 @@ class Trajectory:
         return max(e0, self.mass * self.gravity * self.radius, np.finfo(float).tiny)
 
     def energy_error(self) -> np.ndarray:
-        """(E(t) - E(0)) / energy_scale for every row."""
-        return (self.energy - self.energy[0]) / self.energy_scale if len(self) else self.energy.copy()
+        """(E(t) + D(t) - E(0) - D(0)) / energy_scale for every row, D the energy dissipated (0 in
+        the 2011 model): what friction and landings took is accounted for, so this measures the
+        integrator alone."""
+        if not len(self):
+            return self.energy.copy()
+        if DISSIPATED is None:
+            return (self.energy - self.energy[0]) / self.energy_scale
+        total = self.energy + self.dissipated
+        return (total - total[0]) / self.energy_scale
 
     @property
     def energy_drift(self) -> float:
