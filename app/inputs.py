@@ -322,6 +322,18 @@ class ScenePanel(QtWidgets.QWidget):
         finally:
             self.gesture = None
 
+    def put(self, values: dict[str, float], gesture) -> Scene | None:
+        """Values set from outside the fields (the start dragged in the 3-D view): shown in
+        their fields and applied at once; the changes of one ``gesture`` make one undo step."""
+        for key, value in values.items():
+            self.numbers[key].setText(format_number(value))
+            self._edits = [k for k in self._edits if k != key] + [key]
+        self.gesture = gesture
+        try:
+            return self.apply()
+        finally:
+            self.gesture = None
+
     def _parameters_changed(self, _name: str) -> None:
         """A parameter was added or removed: applied at once, the formula checked again with
         the new names (its text stays as typed, refused if it uses a name now gone)."""
