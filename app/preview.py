@@ -102,7 +102,7 @@ class PathPreview(QtCore.QObject):
         worker.done.connect(self._done)
         worker.failed.connect(self._failed)
         worker.cancelled.connect(self._cancelled)
-        worker.finished.connect(lambda: self._ended(worker))
+        worker.finished.connect(self._ended)
         self.worker, self.computing = worker, scene
         worker.start()
 
@@ -118,7 +118,8 @@ class PathPreview(QtCore.QObject):
     def _cancelled(self) -> None:
         self.cancelled += 1
 
-    def _ended(self, worker: Worker) -> None:
+    def _ended(self) -> None:
+        worker = self.sender()
         if worker is not self.worker:   # let go of already (shutdown)
             return
         ended = self.computing
