@@ -42,7 +42,8 @@ class StartEditing(QtCore.QObject):
         f_y) there: the handles, and the preview asked for (the old one stays until it comes)."""
         s = scene.start
         velocity = np.array([s.vx, s.vy, slope[0] * s.vx + slope[1] * s.vy])   # tangent to the surface
-        self.view.set_start(center, normal, velocity)
+        # with a start.omega of its own, the velocity goes with it (the app has no field for ω): not dragged
+        self.view.set_start(center, normal, velocity, velocity_fixed=s.omega is not None)
         if scene != self.scene:   # (the same scene drawn again: its preview is there or coming)
             self.scene = scene
             self.preview.request(scene)

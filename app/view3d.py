@@ -332,6 +332,7 @@ class SceneView(gl.GLViewWidget):
             item.setVisible(False)
             self.addItem(item)
         self.start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None   # centre, normal, velocity
+        self.velocity_fixed = False
         self._drag: tuple[str, np.ndarray] | None = None   # what is dragged, and the grab's offset
         self.setMouseTracking(True)               # the cursor shows what can be dragged
 
@@ -548,11 +549,13 @@ class SceneView(gl.GLViewWidget):
     # -- the start's handles --------------------------------------------------------------
 
     def set_start(self, center: np.ndarray | None, normal: np.ndarray | None = None,
-                  velocity: np.ndarray | None = None) -> None:
+                  velocity: np.ndarray | None = None, velocity_fixed: bool = False) -> None:
         """The start's handles at the ball's ``center`` (``normal``: the surface's there;
         ``velocity``: the centre's, tangent to the surface), the arrow drawn to where the centre
-        would be ARROW_SECONDS later; None: no handles (a run is shown)."""
+        would be ARROW_SECONDS later; None: no handles (a run is shown). ``velocity_fixed``: the
+        arrow is shown but not dragged (a scene with a ``start.omega`` that goes with it)."""
         self.start = None if center is None else tuple(np.asarray(a, dtype=float) for a in (center, normal, velocity))
+        self.velocity_fixed = velocity_fixed
         shown = self.start is not None and bool(np.any(self.start[2]))
         self.arrow.setVisible(shown)
         self.arrow_head.setVisible(shown)
@@ -589,7 +592,8 @@ class SceneView(gl.GLViewWidget):
         center, _, velocity = self.start
         m, w, h = self._matrix(), self.width(), self.height()
         mouse = np.array([pos.x(), pos.y()])
-        if np.any(velocity):
+        shift = shift and not self.velocity_fixed
+        if np.any(velocity) and not self.velocity_fixed:
             tip = on_screen(m, center + ARROW_SECONDS * velocity, w, h)
             if tip is not None and np.linalg.norm(tip - mouse) <= HANDLE_PIXELS:
                 return "velocity"

@@ -141,3 +141,22 @@ def test_compare_mode_previews_before_its_runs_and_not_during_them(qtbot, window
     window.runs.reset()
     wait_preview(qtbot, window)
     window.compare_action.setChecked(False)
+
+
+def test_a_scene_with_its_own_start_omega_keeps_its_velocity(qtbot, window, tmp_path):
+    import json
+    data = json.loads((EXAMPLES_DIR / "flat.json").read_text())
+    data.update(version=3)
+    data["start"].update(vx=0.5, vy=0.0, spin=0.0, omega=[0.0, 5.0, 0.0])   # rolls: ω = N × ċ / r
+    data["ball"]["radius"] = 0.1
+    path = tmp_path / "omega.json"
+    path.write_text(json.dumps(data))
+    assert window.files.open_scene(path)
+    view = window.view
+    wait_preview(qtbot, window)
+    center = view.start[0]
+    assert view.arrow_head.visible()
+    tip = center + ARROW_SECONDS * np.array([0.5, 0.0, 0.0])
+    before = window.scene
+    drag(view, [pixel(view, tip), pixel(view, tip + [0.3, 0.3, 0.0])])      # the head does not move
+    assert window.scene.start.vx == before.start.vx and window.scene.start.omega == (0.0, 5.0, 0.0)
