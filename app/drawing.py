@@ -55,11 +55,13 @@ class Drawing:
         valid = bool(np.all(np.isfinite(d)))
         w.view.ball.setVisible(valid)   # no ball left hanging where the start was
         if not valid:
+            w.start_editing.hide()
             w.show_message(f"The landscape cannot be evaluated at the start point ({s.x:g}, {s.y:g})",
                            warning=True)
             return
         center = np.array([s.x, s.y, d[0]]) + r * unit_normal(d)
         w.view.set_ball(center, np.eye(3), r)
+        w.start_editing.show(scene, center, unit_normal(d), d[1:3])   # the handles, the path's preview
         self._show_closeup_at(center, np.eye(3), np.array([s.x, s.y]), np.zeros((0, 3)))
         w.readouts.clear()
 

@@ -137,8 +137,9 @@ class ScenePanel(QtWidgets.QWidget):
     ``error_text`` shown right under it.
 
     A new formula is parsed, differentiated and compiled in a background thread (that can take
-    seconds): meanwhile the field says "checking…", the window stays responsive and the last
-    valid scene stays current; ``checking`` is True until the result is in.
+    seconds), from the keystroke on, so that it is mostly ready when the typing pause ends; if it
+    is not, the field says "checking…" meanwhile, the window stays responsive and the last valid
+    scene stays current; ``checking`` is True until the result is in.
     """
 
     sceneChanged = QtCore.Signal(object)
@@ -309,6 +310,15 @@ class ScenePanel(QtWidgets.QWidget):
         if key is not None:
             self._edits = [k for k in self._edits if k != key] + [key]
         self._timer.start()
+        if key == "landscape":
+            self._check_ahead()
+
+    def _check_ahead(self) -> None:
+        """Check the formula as typed in the background now, during the typing pause: when the
+        pause ends, a new formula is ready, as one seen before (nothing is shown meanwhile)."""
+        now = (self._formula_text(), self.parameter_names())
+        if self._checking is None and now not in self._checked:
+            self._start_check(*now)
 
     def _dragged(self, name: str) -> None:
         """A slider moved: applied at once (no typing pause), one undo step a drag."""
@@ -319,6 +329,18 @@ class ScenePanel(QtWidgets.QWidget):
         self.gesture = ("slider", self.parameter_rows.gesture)
         try:
             self.apply()
+        finally:
+            self.gesture = None
+
+    def put(self, values: dict[str, float], gesture) -> Scene | None:
+        """Values set from outside the fields (the start dragged in the 3-D view): shown in
+        their fields and applied at once; the changes of one ``gesture`` make one undo step."""
+        for key, value in values.items():
+            self.numbers[key].setText(format_number(value))
+            self._edits = [k for k in self._edits if k != key] + [key]
+        self.gesture = gesture
+        try:
+            return self.apply()
         finally:
             self.gesture = None
 
@@ -368,9 +390,12 @@ class ScenePanel(QtWidgets.QWidget):
         self.formula_error.setText(CHECKING)
         self.formula_error.show()
         if self._checking is None:  # one check at a time; the latest text follows it
-            self._checking = (text, self.parameter_names())
-            threading.Thread(target=self._check_in_background, args=self._checking, daemon=True,
-                             name="formula check").start()
+            self._start_check(text, self.parameter_names())
+
+    def _start_check(self, text: str, names: tuple[str, ...]) -> None:
+        self._checking = (text, names)
+        threading.Thread(target=self._check_in_background, args=self._checking, daemon=True,
+                         name="formula check").start()
 
     def _check_in_background(self, text: str, names: tuple[str, ...] = ()) -> None:
         try:
@@ -386,7 +411,9 @@ class ScenePanel(QtWidgets.QWidget):
         self._checked[checked] = problem
         self._checking = None
         now = (self._formula_text(), self.parameter_names())
-        if now == checked or now not in self._checked:
+        if self._timer.isActive():   # checked ahead, the typing pause still on: the newest text next
+            self._check_ahead()
+        elif now == checked or now not in self._checked:
             self.apply()
 
     def _formula_text(self) -> str:

@@ -12,8 +12,13 @@ The latency is timed from the change to the 3-D view's next frame on screen (``f
 Xvfb's software GL included), on the ripples example (a sin(k x) cos(k y), a 81 × 81 grid):
 a parameter's slider moved (the scene made anew, the surface evaluated with the new values
 and redrawn, the run reset: nothing compiled), and a formula keystroke, counted from the end
-of the typing pause (``inputs.DEBOUNCE_MS`` more from the key itself) — to a formula seen before
-(the app's own part) and to one never seen (parsed, derived and compiled in the background).
+of the typing pause (``inputs.DEBOUNCE_MS`` after the key itself) — to a formula seen before
+(the app's own part) and to one never seen (parsed, derived and compiled in the background from
+the key on, so mostly during the pause; ``formula_new_key``: the same counted from the key).
+Then the path's preview (``preview``): from a slider moved to the frame that shows its preview
+(computed in the background after the landscape is drawn); and a key typed into the formula
+field to the field painted (``keystroke``), once with nothing else to do and once while
+previews are computed back to back (``keystroke_previewing``: typing must not wait for them).
 """
 
 from __future__ import annotations
@@ -102,8 +107,9 @@ def latency(repeats: int = 9) -> dict:
             while time.perf_counter() < end:
                 app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 20)
 
-        def drawn_after(change, done=lambda: True) -> float:
-            """Seconds from ``change()`` to the view's next frame on screen once ``done()``."""
+        def drawn_after(change, done=lambda: True, since=None) -> float:
+            """Seconds from ``change()`` (or from ``since()``, once ``done()``) to the view's next
+            frame on screen once ``done()``."""
             settle()
             started = time.perf_counter()
             change()
@@ -113,7 +119,7 @@ def latency(repeats: int = 9) -> dict:
             seen = frames[0]
             while frames[0] == seen and time.perf_counter() < deadline:
                 app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
-            return time.perf_counter() - started
+            return time.perf_counter() - (started if since is None else since())
 
         settle(1.0)
         compiles = []
@@ -133,24 +139,82 @@ def latency(repeats: int = 9) -> dict:
                 while panel.checking:
                     app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
 
-            def keystroke(text: str) -> None:   # the formula's last key, then the typing pause ends
+            pause_ended = [0.0]   # when the typing pause ended (the panel's timer fired), before it applies
+            panel._timer.timeout.disconnect()
+            panel._timer.timeout.connect(lambda: (pause_ended.__setitem__(0, time.perf_counter()), panel.apply()))
+
+            def keystroke(text: str) -> None:   # the formula's last key; the typing pause ends by itself
                 field.setText(text[:-1])
                 field.setCursorPosition(len(text) - 1)
                 QtTest.QTest.keyClicks(field, text[-1])
-                panel.apply()
-            seen_s = [drawn_after(lambda t=seen[i % 2]: keystroke(t), lambda t=seen[i % 2]: window.scene.landscape == t)
-                      for i in range(repeats)]
-            fresh = [f"{base}+{random.randrange(10**8, 10**9)}e-10*x" for _ in range(repeats)]   # never seen
-            new_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t) for t in fresh]
+            since_pause = lambda: pause_ended[0]   # noqa: E731
+            seen_s = [drawn_after(lambda t=seen[i % 2]: keystroke(t), lambda t=seen[i % 2]: window.scene.landscape == t,
+                                  since_pause) for i in range(repeats)]
+            fresh = [f"{base}+{random.randrange(10**8, 10**9)}e-10*x" for _ in range(2 * repeats)]   # never seen
+            new_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t, since_pause)
+                     for t in fresh[:repeats]]
+            new_key_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t)
+                         for t in fresh[repeats:]]
         finally:
             core._compile = real
+        editing = window.start_editing
+
+        def previewed(scene) -> bool:
+            return editing.scene == scene and window.view.preview.visible() and not editing.preview.busy
+        preview_s = [drawn_after(lambda p=p: slider.setValue(p), lambda: previewed(window.scene)) for p in
+                     (150 + 700 * (i % 2) + 10 * i for i in range(repeats))]
+        painted = [0]
+
+        class Paints(QtCore.QObject):
+            def eventFilter(self, watched, event):
+                if event.type() == QtCore.QEvent.Type.Paint:
+                    painted[0] += 1
+                return False
+        paints = Paints()
+        field.installEventFilter(paints)
+
+        def typed() -> float:   # a key into the formula field, to the field painted
+            settle(0.05)
+            seen, started = painted[0], time.perf_counter()
+            QtTest.QTest.keyClick(field, "1")
+            while painted[0] == seen and time.perf_counter() < started + 10:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 1)
+            elapsed = time.perf_counter() - started
+            panel._timer.stop()   # the typing pause never ends: the key is not applied
+            return elapsed
+        field.setText(base)
+        keys_s = [typed() for _ in range(repeats)]
+        scenes = [dataclasses.replace(window.scene, start=dataclasses.replace(window.scene.start, x=x))
+                  for x in (0.3, 0.35)]
+        busy = []
+
+        def keep_busy():   # previews back to back, as while a slider is dragged
+            if not editing.preview.busy:
+                editing.preview.request(scenes[len(busy) % 2])
+                busy.append(1)
+        feeder = QtCore.QTimer(interval=0)
+        feeder.timeout.connect(keep_busy)
+        feeder.start()
+        field.setText(base)
+        busy_at_key = []
+
+        def typed_previewing() -> float:
+            settle(0.05)
+            busy_at_key.append(editing.preview.busy)
+            return typed()
+        previewing_s = [typed_previewing() for _ in range(repeats)]
+        feeder.stop()
+        field.removeEventFilter(paints)
         window.document.saved_scene = window.scene  # nothing to ask when it closes
         window.close()
 
     def ms(values):
         return {"median_ms": float(1e3 * np.median(values)), "longest_ms": float(1e3 * np.max(values))}
     return {"slider": ms(slider_s), "slider_compiles": slider_compiles, "formula_seen": ms(seen_s),
-            "formula_new": ms(new_s), "debounce_ms": DEBOUNCE_MS, "goal_ms": LATENCY_GOAL_MS, "repeats": repeats}
+            "formula_new": ms(new_s), "formula_new_key": ms(new_key_s), "preview": ms(preview_s), "keystroke": ms(keys_s),
+            "keystroke_previewing": ms(previewing_s), "previews_during_keys": len(busy),
+            "preview_busy_at_key": int(sum(busy_at_key)), "debounce_ms": DEBOUNCE_MS, "goal_ms": LATENCY_GOAL_MS,
+            "repeats": repeats}
 
 
 if __name__ == "__main__":

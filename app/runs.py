@@ -200,6 +200,8 @@ class RunCommands:
 
     def state_changed(self, state: str) -> None:
         self.update_controls()
+        if state != READY:
+            self.window.start_editing.hide()   # a run is shown: no preview, no handles
         if state == PAUSED:
             self.window.drawing.plot()   # the plots catch up with the ball where it stopped
 

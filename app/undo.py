@@ -43,6 +43,8 @@ def describe(old: Scene, new: Scene) -> str:
     if len(added) + len(removed) == 1:   # (with the formula changed, or not)
         return f"Add parameter {added[0]}" if added else f"Remove parameter {removed[0]}"
     keys = changed_keys(old, new)
+    if keys in (["start.x", "start.y"], ["start.vx", "start.vy"]):   # a handle dragged in the view
+        return "Move start point" if keys[0] == "start.x" else "Change start velocity"
     if len(keys) == 1:
         key = keys[0]
         if key.startswith("parameters.") and key not in LABELS:   # parameters.k or parameters.k.value

@@ -1,8 +1,14 @@
-"""The 3-D view: the landscape, the ball showing its orientation, the contact trail, markers.
+"""The 3-D view: the landscape, the ball showing its orientation, the contact trail, markers,
+and before a run the path's preview and the start's handles.
 
 Drawing only: this module receives arrays and never runs the physics. The surface is rebuilt
 when the landscape or grid changes; the ball moves by its transform and the trail by
 ``setData``, so a frame costs little whatever the step rate.
+
+Before a run (``set_start``) the ball can be dragged over the surface to move the start point,
+and the head of its velocity arrow (or the ball with Shift) to set the start velocity; the view
+says where (``startDragged``, ``velocityDragged``, ``dragFinished``) and the window changes the
+scene. Any other drag turns the camera, as before.
 """
 
 from __future__ import annotations
@@ -11,9 +17,11 @@ import numpy as np
 import pyqtgraph as pg
 import pyqtgraph.opengl as gl
 from OpenGL import GL
-from PySide6 import QtGui
+from PySide6 import QtCore, QtGui
 
 from rollball.geometry import fit_ratio
+
+from .picking import mouse_ray, on_screen, ray_plane, ray_surface
 
 BACKGROUND = (246, 246, 243)
 NO_FIT_COLOR = (0.86, 0.12, 0.20, 1.0)      # where the ball does not fit: r·κ ≥ 1
@@ -25,6 +33,10 @@ AXIS_COLOR = (0.30, 0.30, 0.30, 1.0)
 TEXT_COLOR = (60, 60, 60, 255)
 TRAIL_COLOR = (0.80, 0.10, 0.10, 1.0)
 LIFTOFF_COLOR = (1.0, 0.55, 0.0, 1.0)
+PREVIEW_COLOR = (1.0, 0.2, 0.8, 1.0)        # the path's preview before a run (magenta: seen on every height colour)
+ARROW_COLOR = (0.05, 0.05, 0.05, 0.9)       # the start velocity's arrow
+ARROW_SECONDS = 1.0      # the arrow reaches where the centre would be this long after the start
+HANDLE_PIXELS = 14       # the arrow head's handle on screen; a press this near grabs it
 BALL_STRIPES = np.array([(0.90, 0.20, 0.15), (1.00, 0.80, 0.10), (0.15, 0.45, 0.85),
                          (0.95, 0.55, 0.10), (0.20, 0.65, 0.30), (0.55, 0.25, 0.70)])
 HEIGHT_MAP = pg.colormap.get("viridis")
@@ -256,13 +268,18 @@ def _labelled(corners: np.ndarray, box: np.ndarray, center: np.ndarray, elevatio
 
 
 class SceneView(gl.GLViewWidget):
-    """Landscape, ball, trail and lift-off marker, with a camera that can follow the ball.
+    """Landscape, ball, trail and lift-off marker, with a camera that can follow the ball;
+    before a run, the path's preview and the start's handles (dragged: the signals).
 
     The surface is drawn up to the height the ball's energy can reach (plus a margin) and cut
     level there, with a faint line along the cut; axes with ticks in metres give the scale.
     The camera frames the drawn landscape, heights included, from a side where the ball is
     in sight, and keeps that framing when the view is resized until the user turns or zooms.
     """
+
+    startDragged = QtCore.Signal(float, float)      # the start contact point dragged to (x, y)
+    velocityDragged = QtCore.Signal(float, float)   # the start velocity's arrow dragged to (vx, vy)
+    dragFinished = QtCore.Signal()                  # the button let go: the drag is over
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -303,6 +320,21 @@ class SceneView(gl.GLViewWidget):
         self.colors: list | None = None   # the runs' colours in compare mode
         self.marks_shown = True   # a ring around a ball too small to be seen from afar
         self.marks = [self._mark(MARK_EDGE)]   # one per ball
+        self.preview = gl.GLLinePlotItem(color=PREVIEW_COLOR, width=3.0, antialias=False, mode="line_strip")
+        self.preview.setGLOptions("translucent")
+        self.arrow = gl.GLLinePlotItem(color=ARROW_COLOR, width=2.5, antialias=True, mode="lines")
+        self.arrow.setGLOptions(MARK_GL)          # over the surface, as the ball's ring
+        self.arrow_head = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), size=HANDLE_PIXELS, pxMode=True,
+                                               color=(0.05, 0.05, 0.05, 0.35))
+        self.arrow_head.setGLOptions(MARK_GL)
+        for item in (self.preview, self.arrow, self.arrow_head):
+            item.setDepthValue(BALL_DEPTH + 0.05)
+            item.setVisible(False)
+            self.addItem(item)
+        self.start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None   # centre, normal, velocity
+        self.velocity_fixed = False
+        self._drag: tuple[str, np.ndarray] | None = None   # what is dragged, and the grab's offset
+        self.setMouseTracking(True)               # the cursor shows what can be dragged
 
     @property
     def ball_center(self) -> np.ndarray:
@@ -347,7 +379,7 @@ class SceneView(gl.GLViewWidget):
         xs_kept, ys_kept = xs[near], ys[near]
         self.bounds = np.array([[xs_kept.min(), ys_kept.min(), float(shown.min())],
                                 [xs_kept.max(), ys_kept.max(), float(min(shown.max(), self.cap))]])
-        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff):   # drawn after the surface
+        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff, self.preview):   # after the surface
             self.removeItem(item)
             self.addItem(item)
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
@@ -489,8 +521,126 @@ class SceneView(gl.GLViewWidget):
             self.reset_camera()
 
     def mousePressEvent(self, event) -> None:
+        grab = self._grab(event)
+        if grab is not None:
+            self._drag = grab
+            event.accept()
+            return
         self.framed = False   # the user takes the camera
         super().mousePressEvent(event)
+
+    def mouseMoveEvent(self, event) -> None:
+        if self._drag is not None:
+            self._dragged(event.position())
+            event.accept()
+            return
+        if event.buttons() == QtCore.Qt.MouseButton.NoButton:
+            self._hover(event)
+        super().mouseMoveEvent(event)
+
+    def mouseReleaseEvent(self, event) -> None:
+        if self._drag is not None:
+            self._drag = None
+            self.dragFinished.emit()
+            event.accept()
+            return
+        super().mouseReleaseEvent(event)
+
+    # -- the start's handles --------------------------------------------------------------
+
+    def set_start(self, center: np.ndarray | None, normal: np.ndarray | None = None,
+                  velocity: np.ndarray | None = None, velocity_fixed: bool = False) -> None:
+        """The start's handles at the ball's ``center`` (``normal``: the surface's there;
+        ``velocity``: the centre's, tangent to the surface), the arrow drawn to where the centre
+        would be ARROW_SECONDS later; None: no handles (a run is shown). ``velocity_fixed``: the
+        arrow is shown but not dragged (a scene with a ``start.omega`` that goes with it)."""
+        self.start = None if center is None else tuple(np.asarray(a, dtype=float) for a in (center, normal, velocity))
+        self.velocity_fixed = velocity_fixed
+        shown = self.start is not None and bool(np.any(self.start[2]))
+        self.arrow.setVisible(shown)
+        self.arrow_head.setVisible(shown)
+        if not shown:
+            if self.start is None:
+                self._drag = None
+            return
+        center, normal, velocity = self.start
+        tip = center + ARROW_SECONDS * velocity
+        length = float(np.linalg.norm(tip - center))
+        back = (center - tip) / length * min(0.25 * length, 3.0 * self.ball_radius)   # the head's barbs
+        side = np.cross(normal, back) * 0.5
+        self.arrow.setData(pos=np.array([center, tip, tip, tip + back + side, tip, tip + back - side]))
+        self.arrow_head.setData(pos=tip.reshape(1, 3))
+
+    def set_preview(self, points: np.ndarray | None) -> None:
+        """The path's preview (None or fewer than two points: none)."""
+        shown = points is not None and len(points) >= 2
+        self.preview.setVisible(shown)
+        if shown:
+            self.preview.setData(pos=np.asarray(points, dtype=float))
+
+    def _matrix(self) -> np.ndarray:
+        w, h = self.width(), self.height()
+        return np.array((self.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * self.viewMatrix()).data()).reshape(4, 4).T
+
+    def _ray(self, pos) -> tuple[np.ndarray, np.ndarray]:
+        return mouse_ray(self._matrix(), pos.x(), pos.y(), self.width(), self.height())
+
+    def _handle_at(self, pos, shift: bool = False) -> str | None:
+        """"velocity" over the arrow's head, "point" over the ball (Shift: "velocity"), or None."""
+        if self.start is None:
+            return None
+        center, _, velocity = self.start
+        m, w, h = self._matrix(), self.width(), self.height()
+        mouse = np.array([pos.x(), pos.y()])
+        shift = shift and not self.velocity_fixed
+        if np.any(velocity) and not self.velocity_fixed:
+            tip = on_screen(m, center + ARROW_SECONDS * velocity, w, h)
+            if tip is not None and np.linalg.norm(tip - mouse) <= HANDLE_PIXELS:
+                return "velocity"
+        ball = on_screen(m, center, w, h)
+        reach = max(self.ball_pixels() / 2, MARK_PIXELS / 2)
+        if ball is not None and np.linalg.norm(ball - mouse) <= reach:
+            return "velocity" if shift else "point"
+        return None
+
+    def _grab(self, event) -> tuple[str, np.ndarray] | None:
+        if event.button() != QtCore.Qt.MouseButton.LeftButton:
+            return None
+        shift = bool(event.modifiers() & QtCore.Qt.KeyboardModifier.ShiftModifier)
+        handle = self._handle_at(event.position(), shift)
+        if handle is None:
+            return None
+        offset = np.zeros(2)
+        if handle == "point":   # the contact point keeps its offset from the point grabbed
+            hit = ray_surface(*self._ray(event.position()), self.height_at, self._axis[0], self._axis[-1])
+            contact = self.start[0] - self.ball_radius * self.start[1]
+            offset = (contact - hit)[:2] if hit is not None else offset
+        return handle, offset
+
+    def _dragged(self, pos) -> None:
+        kind, offset = self._drag
+        origin, direction = self._ray(pos)
+        if kind == "point":
+            hit = ray_surface(origin, direction, self.height_at, self._axis[0], self._axis[-1])
+            if hit is not None:
+                self.startDragged.emit(*map(float, hit[:2] + offset))
+            return
+        center, normal, _ = self.start
+        hit = ray_plane(origin, direction, center, normal)   # the tangent plane at the centre
+        if hit is not None:
+            self.velocityDragged.emit(*map(float, (hit - center)[:2] / ARROW_SECONDS))
+
+    def _hover(self, event) -> None:
+        shift = bool(event.modifiers() & QtCore.Qt.KeyboardModifier.ShiftModifier)
+        handle = self._handle_at(event.position(), shift)
+        cursors = {"point": QtCore.Qt.CursorShape.OpenHandCursor, "velocity": QtCore.Qt.CursorShape.SizeAllCursor}
+        if handle is None:
+            self.unsetCursor()
+        else:
+            self.setCursor(cursors[handle])
+        self.setToolTip({"point": "Drag to move the start point over the surface (Shift: set the velocity)",
+                         "velocity": "Drag to set the start velocity (the arrow: where the ball is "
+                                     f"{ARROW_SECONDS:g} s later)"}.get(handle, ""))
 
     def wheelEvent(self, event) -> None:
         self.framed = False

@@ -32,6 +32,7 @@ from .runs import RunCommands
 from .scene_files import SceneFiles
 from .session import SceneSession
 from .speed_window import SpeedWindow
+from .start_editing import StartEditing
 from .sweep_dialog import SweepDialog
 from .timeline import TimeSlider
 from .view3d import SceneView
@@ -66,6 +67,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plots = LivePlots()
         self.readouts = Readouts()
         self.speed_window: SpeedWindow | None = None   # made when first asked for
+        self.start_editing = StartEditing(self.view, self.panel, self)   # the preview; the start dragged
         self.help_window: helps.HelpWindow | None = None
         self._build_layout()
         self._build_actions()
@@ -459,6 +461,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.speed_window.close()
         self.runs.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
+        self.start_editing.shutdown()
         self.runs.stop_preparing()
         event.accept()
 

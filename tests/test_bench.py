@@ -92,3 +92,6 @@ def test_the_report_states_the_apps_latency_against_its_goal():
     latency["formula_seen"] = figure(200.0)
     missed = [line for line in _targets(app=app).splitlines() if "missed" in line]
     assert len(missed) == 1 and "seen before" in missed[0]
+    latency.update(preview=figure(110.0), keystroke_previewing=figure(14.0))   # reported, no goal
+    text = _targets(app=app)
+    assert "preview drawn (median of 9) | 110 ms" in text and "back to back (median of 9) | 14 ms" in text
