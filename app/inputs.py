@@ -19,6 +19,8 @@ from rollball.formula import parameter_problem
 from rollball.landscape import landscape_for
 from rollball import METHODS, MethodKind
 
+from . import contact_fields
+from .contact_fields import ContactFields
 from .parameters import ParameterRows
 
 # (dotted scene key, label, unit, tooltip), by group
@@ -70,8 +72,9 @@ def format_number(value: float) -> str:
     return repr(float(value))  # shortest text that reads back as the same number
 
 
-LABELS = {key: label for fields in NUMBER_FIELDS.values() for key, label, _, _ in fields} | {"landscape": "Formula"}
-UNITS = {key: unit for fields in NUMBER_FIELDS.values() for key, _, unit, _ in fields}
+LABELS = ({key: label for fields in NUMBER_FIELDS.values() for key, label, _, _ in fields} | {"landscape": "Formula"}
+          | contact_fields.LABELS)
+UNITS = {key: unit for fields in NUMBER_FIELDS.values() for key, _, unit, _ in fields} | contact_fields.UNITS
 CHECKING = "checking…"
 MAX_REASON = 160               # characters of a compiler's reason shown under the formula
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")                       # terminal colours
@@ -92,6 +95,15 @@ def labelled(text: str) -> str:
         if "." in key:
             text = text.replace(key, label)
     return text
+
+
+def _lookup(d: dict, key: str):
+    """A dotted key's value, or None where the dictionary has none (start.omega left out)."""
+    for part in key.split("."):
+        if not isinstance(d, dict) or part not in d:
+            return None
+        d = d[part]
+    return d
 
 
 def _number(text: str) -> float:
@@ -162,6 +174,8 @@ class ScenePanel(QtWidgets.QWidget):
         self.noticed: str | None = None                      # the key of a field with a notice
         self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
         self._timer.timeout.connect(self.apply)
+        self.contact = ContactFields(self)   # friction, restitution, after lift-off, start ω
+        self.contact.edited.connect(self._edited)
 
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(6, 6, 6, 6)
@@ -179,7 +193,11 @@ class ScenePanel(QtWidgets.QWidget):
                 form.addRow(self.row_labels[key], self._number_field(key, unit, tip))
             if title == "Integrator":
                 form.addRow("Record", self._record_field())
+            if title == "Start":
+                self.contact.add_omega_row(form)
             layout.addWidget(group)
+            if title == "Start":
+                layout.addWidget(self.contact.group())
         layout.addStretch(1)
 
     # -- building ---------------------------------------------------------------------
@@ -300,6 +318,7 @@ class ScenePanel(QtWidgets.QWidget):
                 button.setChecked(button.property("method") == scene.integrator.method)
             self.munthe_kaas.setChecked(scene.integrator.munthe_kaas)
             self._method_state()
+            self.contact.fill(scene)
         finally:
             self._filling = False
         self._show_notice(scene)
@@ -443,6 +462,9 @@ class ScenePanel(QtWidgets.QWidget):
             except ValueError:
                 return None, key, f"{LABELS[key]}: " + ("not a number" if edit.text().strip() else "missing")
             _set(data, key, value)
+        refused = self.contact.read(data)
+        if refused is not None:
+            return None, *refused
         data["integrator"]["method"] = self.method()
         data["integrator"]["munthe_kaas"] = self.munthe_kaas.isChecked()
         try:
@@ -458,10 +480,13 @@ class ScenePanel(QtWidgets.QWidget):
         if self._scene is not None:
             valid = self._scene.to_dict()
             for key in reversed(self._edits):
-                if key not in self.numbers or _get(data, key) == _get(valid, key):
+                if (key not in self.numbers and key not in self.contact.edits) or _lookup(data, key) == _lookup(valid, key):
                     continue
                 alone = self._scene.to_dict()
-                _set(alone, key, _get(data, key))
+                if _lookup(data, key) is None and key == contact_fields.OMEGA:
+                    del alone["start"]["omega"]
+                else:
+                    _set(alone, key, _lookup(data, key))
                 try:
                     Scene.from_dict(alone)
                 except SceneError as refusal:
@@ -475,8 +500,9 @@ class ScenePanel(QtWidgets.QWidget):
     def _together(key: str, error: SceneError, data: dict) -> str:
         """The message on ``key`` for a refusal the core gives to another field."""
         other, reason = error.key, labelled(error.reason)
-        if reason.startswith("must") and other in UNITS:   # "Max: Min (−4 m) must be less than Max"
-            reason = f"{LABELS[other]} ({_get(data, other):g} {UNITS[other]}".rstrip() + f") {reason}"
+        value = _lookup(data, other)
+        if reason.startswith("must") and other in UNITS and isinstance(value, float):   # "Max: Min (−4 m) must be …"
+            reason = f"{LABELS[other]} ({value:g} {UNITS[other]}".rstrip() + f") {reason}"
         return f"{LABELS[key]}: {reason}"
 
     def _show_notice(self, scene: Scene) -> None:
@@ -497,13 +523,15 @@ class ScenePanel(QtWidgets.QWidget):
         ``message`` right under it."""
         if key is not None and key.startswith("parameters."):   # parameters.a.value: the field of a
             key = ".".join(key.split(".")[:2])
+        if key is not None and key.startswith(contact_fields.OMEGA):   # start.omega[1]: the ω field
+            key = contact_fields.OMEGA
         self.marked, self.noticed = (key, None) if mark == "error" else (None, key)
         field_style, label_style, message_style = MARKS[mark]
         rows = self.parameter_rows
-        fields = {"landscape": self.formula, **self.numbers, **rows.edits}
+        fields = {"landscape": self.formula, **self.numbers, **rows.edits, **self.contact.edits}
         for name, edit in fields.items():
             _style(edit, field_style if name == key else "")
-        for name, label in {**self.row_labels, **rows.labels}.items():
+        for name, label in {**self.row_labels, **rows.labels, **self.contact.labels}.items():
             _style(label, label_style if name == key else "")
         messages = self._all_messages()
         shown_at = messages.get(key, self.error) if key is not None else None
@@ -531,7 +559,7 @@ class ScenePanel(QtWidgets.QWidget):
 
     def _all_messages(self) -> dict[str, QtWidgets.QLabel]:
         """The message under each field, the parameters' too, by key."""
-        return {**self.messages, **self.parameter_rows.messages}
+        return {**self.messages, **self.parameter_rows.messages, **self.contact.messages}
 
     @property
     def error_text(self) -> str:

@@ -18,7 +18,9 @@ from .inputs import NUMBER_FIELDS
 LABELS = {key: f"{group.lower()} {label}" if group in ("Start", "Grid") else label.lower()
           for group, fields in NUMBER_FIELDS.items() for key, label, _, _ in fields}
 LABELS.update({"landscape": "landscape", "description": "description", "parameters": "parameters",
-               "integrator.method": "method", "integrator.munthe_kaas": "Munthe-Kaas"})
+               "integrator.method": "method", "integrator.munthe_kaas": "Munthe-Kaas",
+               "contact.friction": "friction", "contact.restitution": "restitution",
+               "contact.after_liftoff": "after lift-off", "start.omega": "start ω"})
 
 
 def _flat(data: dict, prefix: str = "") -> dict:
@@ -34,7 +36,7 @@ def _flat(data: dict, prefix: str = "") -> dict:
 def changed_keys(old: Scene, new: Scene) -> list[str]:
     """The dotted scene keys whose values differ, in the scene file's order."""
     a, b = _flat(old.to_dict()), _flat(new.to_dict())
-    return [key for key in b if a.get(key) != b[key]]
+    return [key for key in {**b, **a} if a.get(key) != b.get(key)]   # (a key one of them leaves out: start.omega)
 
 
 def describe(old: Scene, new: Scene) -> str:
