@@ -81,3 +81,17 @@ def test_the_transition_is_declared_as_data():
     assert kernel.transition_name(kernel.T_NONE) is None
     assert "t = 1.5 s, (x, y) = (0.25, 0)" in kernel.transition_sentence("grip", 1.5, 0.25, 0.0)
     assert [mode for mode, _ in kernel.TRANSITIONS.values()] == ["flying", "sliding", "rolling"]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_flying_ball_stops_at_a_ridge(method):
+    """Up the roof -|x| at 45° from x = -1 (6 m/s along x): the ball leaves the surface at the ridge
+    x = 0, when (6√2 t − (5/7) g t² / (2√2)) / √2 = 1; the last state is the one just before it."""
+    start = rolling_state("-abs(x)", -1.0, 0.0, 6.0, 0.0)
+    run = segment("-abs(x)", start, sliding=False, method=method, dt=1e-3, t_end=0.5, fly=True)
+    assert (run.status, run.transition) == ("transition", "liftoff")
+    a = 5.0 / 7.0 * 9.81 / math.sqrt(2.0)
+    t_ridge = (6.0 * math.sqrt(2.0) - math.sqrt(72.0 - 2.0 * a * math.sqrt(2.0))) / a
+    t, x, _ = run.event
+    assert t == pytest.approx(t_ridge, abs=1e-8) and abs(x) < 1e-8
+    assert -1e-6 < run.state.x <= 0.0 and run.rows[-1, kernel.ROW_T] <= t

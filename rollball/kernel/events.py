@@ -437,11 +437,14 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                 stop, valid = b, a
             elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
                 info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
-                approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
-                         sm, info[F_LIFTOFF:F_LIFT_Y + 1], stepping)
-                # the run goes on with the whole step, taken again (the approach used its buffers)
-                retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
-                dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+                clean = approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa,
+                                 sb, sm, info[F_LIFTOFF:F_LIFT_Y + 1], stepping)
+                if p[P_FLY] != 0.0:  # the ball flies: the run stops at the last state before the ridge
+                    stop, valid = clean, clean
+                    kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, clean)
+                else:  # the run goes on with the whole step, taken again (the approach used its buffers)
+                    retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+                    dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
         elif r * bend >= chord2:
             # a step passing a tip of the surface within round-off of its stages bends like that too
             # (the normal turns through a finite angle over a span the dense output cannot resolve)
@@ -476,6 +479,26 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
         interpolate(z, h, P, K, b, Ye)
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, Ye[0], Ye[1], 0.0
     return valid if stop <= 1.0 else -1.0
+
+
+@COLD
+def kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, clean):
+    """Where the ball flies (p[P_FLY]), a lift-off at a ridge's kink (info[F_LIFTOFF ...]) stops
+    the run as a transition whose state is the last one before the kink: zn, Rn, pn where the
+    ``approach`` reached one (clean > 0), else the step's start."""
+    if not clean > 0.0:
+        n = z.shape[0]
+        for q in range(n):
+            zn[q] = z[q]
+        for a in range(3):
+            for c in range(3):
+                Rn[a, c] = R[a, c]
+        for q in range(PROBE_SIZE):
+            pn[q] = probe[q]
+    ints[I_HELD] = 1
+    ints[I_STATUS] = TRANSITION
+    ints[I_TRANSITION] = T_LIFTOFF
+    info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y]
 
 
 @JIT
@@ -674,7 +697,8 @@ def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, 
     stopped at a change of contact mode: the state there on the step's dense output is the
     last row and the run's state (z, R, probe)."""
     if ints[I_STATUS] == TRANSITION:  # the state at the change of mode, from the dense output
-        state_at(fn, d, p, z, R, h, P, K, 0.0, theta, zn, Rn, pn)
+        if ints[I_HELD] == 0:  # (held: the last state before a ridge, ``kink_liftoff``)
+            state_at(fn, d, p, z, R, h, P, K, 0.0, theta, zn, Rn, pn)
         record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
         ints[I_ROWS] += 1
         hold(p, z, R, probe, zn, Rn, pn)
