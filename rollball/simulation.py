@@ -17,7 +17,7 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene
 from .tableaus import MethodKind, get_method
-from .trajectory import CONTACT, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory
+from .trajectory import CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory
 
 # 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
 # recording every adaptive step grows its buffer by doubling up to the limit, holding the
@@ -387,6 +387,11 @@ PROBE_ORDER = 3        # methods of lower order (euler) are judged by rk4's chan
 ROUGH_ORDER = 2        # the energy error of a step across a jump of the curvature goes as h^2
 
 
+def _accounted(rows: np.ndarray) -> np.ndarray:
+    """The energy plus what friction and landings dissipated so far, per row (``Trajectory.energy_error``)."""
+    return rows[:, ENERGY] + (0.0 if DISSIPATED is None else rows[:, DISSIPATED.start])
+
+
 def _start_of(run: Simulation, row: np.ndarray):
     """A recorded row's state as a scene's start (a rolling state is its contact point, its
     centre's horizontal velocity and its spin about the normal), or None where it is not one."""
@@ -410,6 +415,7 @@ def _interval_change(run: Simulation, row: np.ndarray, duration: float, delay: f
         lead.judge_energy = False
         lead.advance()
         start = _start_of(lead, lead.rows[-1]) if lead.status is Status.OK else None
+        e0 -= 0.0 if start is None else float(_accounted(lead.rows)[-1] - lead.rows[-1, ENERGY])
     if start is None:
         return None
     try:
@@ -418,7 +424,7 @@ def _interval_change(run: Simulation, row: np.ndarray, duration: float, delay: f
         return None
     redo.judge_energy = False  # (the check's own runs are not checked)
     redo.advance()
-    e = redo.rows[:, ENERGY]
+    e = _accounted(redo.rows)
     if redo.status is not Status.OK or len(e) < 2:
         return None
     return abs(float(e[-1]) - e0)
@@ -448,8 +454,8 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
     if len(rows) < 2:
         return None
     scene = run.scene
-    energy = rows[:, ENERGY]
-    scale = max(abs(energy[0]), scene.ball.mass * scene.gravity * scene.ball.radius, np.finfo(float).tiny)
+    energy = _accounted(rows)
+    scale = max(abs(rows[0, ENERGY]), scene.ball.mass * scene.gravity * scene.ball.radius, np.finfo(float).tiny)
     error = (energy - energy[0]) / scale
     with np.errstate(invalid="ignore"):
         drift = float(np.nanmax(np.abs(error)))
