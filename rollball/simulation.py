@@ -17,7 +17,7 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene
 from .tableaus import MethodKind, get_method
-from .trajectory import CONTACT, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory
+from .trajectory import CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory
 
 # 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
 # recording every adaptive step grows its buffer by doubling up to the limit, holding the
@@ -377,28 +377,85 @@ class Simulation:
                           energy_check=self._energy_check)
 
 
-SHORTER = 4            # energy_check takes the interval again with a step this many times shorter...
+SHORTER = 4            # energy_check takes the interval again with steps 4, 16, 64, 256 times shorter...
+LEVELS = 4             # (down to FLOOR)
+PHASES = 8             # ...each starting 0, 1/8, ..., 7/8 of such a step late, the largest change counting
+FLOOR = 1e-10          # (relative energy changes below this are not used: round-off)
 TIGHTER = 1e4          # ...or, adaptive, with tolerances this many times tighter
 MIN_TOLERANCE = 1e-15  # (not below this)
+PROBE_ORDER = 3        # methods of lower order (euler) are judged by rk4's changes over the interval
+ROUGH_ORDER = 2        # the energy error of a step across a jump of the curvature goes as h^2
+
+
+def _accounted(rows: np.ndarray) -> np.ndarray:
+    """The energy plus what friction and landings dissipated so far, per row (``Trajectory.energy_error``)."""
+    return rows[:, ENERGY] + (0.0 if DISSIPATED is None else rows[:, DISSIPATED.start])
+
+
+def _start_of(run: Simulation, row: np.ndarray):
+    """A recorded row's state as a scene's start (a rolling state is its contact point, its
+    centre's horizontal velocity and its spin about the normal), or None where it is not one."""
+    x, y = (float(value) for value in row[CONTACT])
+    d = run.landscape.evaluate(x, y, run.scene.parameter_values)
+    spin = float(np.dot(row[OMEGA], unit_normal(d)))
+    vx, vy = (float(value) for value in row[VELOCITY][:2])
+    try:
+        return dataclasses.replace(run.scene.start, x=x, y=y, vx=vx, vy=vy, spin=spin)
+    except ValueError:
+        return None
+
+
+def _interval_change(run: Simulation, row: np.ndarray, duration: float, delay: float = 0.0, **options) -> float | None:
+    """|E(end) − E(row)| of the interval of ``duration`` taken again from ``row`` with
+    ``options`` (Simulation's), its first step ``delay`` long where ``delay`` > 0 (so that the
+    steps after it fall elsewhere); None where a run does not end ok."""
+    scene, start, e0 = run.scene, _start_of(run, row), float(row[ENERGY])
+    if delay > 0.0 and start is not None:
+        lead = Simulation(dataclasses.replace(scene, start=start, duration=delay), **{**options, "dt": delay})
+        lead.judge_energy = False
+        lead.advance()
+        start = _start_of(lead, lead.rows[-1]) if lead.status is Status.OK else None
+        e0 -= 0.0 if start is None else float(_accounted(lead.rows)[-1] - lead.rows[-1, ENERGY])
+    if start is None:
+        return None
+    try:
+        redo = Simulation(dataclasses.replace(scene, start=start, duration=duration - delay), **options)
+    except ValueError:
+        return None
+    redo.judge_energy = False  # (the check's own runs are not checked)
+    redo.advance()
+    e = _accounted(redo.rows)
+    if redo.status is not Status.OK or len(e) < 2:
+        return None
+    return abs(float(e[-1]) - e0)
 
 
 def energy_check(run: Simulation) -> EnergyCheck | None:
     """Whose a finished run's energy error is, where one recorded interval holds most of it
     (at least half; None otherwise, or where the error is below the warning).
 
-    The interval is taken again from its first row's state (a rolling state is its contact
-    point, its centre's horizontal velocity and its spin about the normal: ``Start``), with the
-    same method and step, and with a step SHORTER times shorter (adaptive: tolerances TIGHTER
-    times tighter). On a smooth landscape the energy's change shrinks as the method's order p
-    predicts, SHORTER^p (TIGHTER); where the landscape has a kink, a jump of its curvature or
-    the like within the interval, it does not. Judged as the landscape's where it shrinks by
-    less than the square root of that."""
+    The interval is taken again from its first row's state (``_start_of``) with the same method
+    and step, then with steps SHORTER, SHORTER^2, ... (LEVELS of them) times shorter (adaptive:
+    once, with tolerances TIGHTER times tighter). On a smooth landscape the energy's change
+    shrinks as the method's order p predicts, SHORTER^p per level (TIGHTER) once the steps
+    resolve the landscape. Across a jump of the curvature a step's energy error goes as h^2 (its
+    error in the state, of order h, is along the flow, where the energy does not change), across
+    a kink not at all: however short the steps, the change shrinks by at most SHORTER^2 per
+    level. How much it is depends on where in a step the jump falls, so each shorter step is
+    taken PHASES times, each starting a fraction of a step later, and the largest change counts.
+    The two finest levels whose changes are above FLOOR judge, by the shrink per level between
+    them (coarse steps may not yet resolve a smooth landscape, nor show the jump's rate under the
+    step's own error; over two levels, one whose phases all fell lucky counts once too high and
+    once too low): the landscape's where it is less than the geometric mean of SHORTER^p and
+    SHORTER^ROUGH_ORDER (adaptive: the change shrank by less than the square root of TIGHTER). A method of order below PROBE_ORDER (euler) cannot
+    tell a jump of the curvature so (its own error shrinks more slowly than the jump's), so rk4
+    takes the interval again for it."""
     rows = run.rows
     if len(rows) < 2:
         return None
     scene = run.scene
-    energy = rows[:, ENERGY]
-    scale = max(abs(energy[0]), scene.ball.mass * scene.gravity * scene.ball.radius, np.finfo(float).tiny)
+    energy = _accounted(rows)
+    scale = max(abs(rows[0, ENERGY]), scene.ball.mass * scene.gravity * scene.ball.radius, np.finfo(float).tiny)
     error = (energy - energy[0]) / scale
     with np.errstate(invalid="ignore"):
         drift = float(np.nanmax(np.abs(error)))
@@ -408,39 +465,49 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
     i = int(np.nanargmax(jumps))
     if not jumps[i] >= 0.5 * drift:
         return None
-    row = rows[i]
-    t0, t1 = float(row[T]), float(rows[i + 1][T])
-    x, y = (float(value) for value in row[CONTACT])
-    d = run.landscape.evaluate(x, y, scene.parameter_values)
-    normal = unit_normal(d)
-    spin = float(np.dot(row[OMEGA], normal))
-    vx, vy = (float(value) for value in row[VELOCITY][:2])
-    try:
-        again = dataclasses.replace(scene, start=dataclasses.replace(scene.start, x=x, y=y, vx=vx, vy=vy, spin=spin),
-                                    duration=t1 - t0)
-    except ValueError:
-        return None
-    changes = []
-    for shorter in (False, True):
-        if run.adaptive:
-            tighter = TIGHTER if shorter else 1.0
-            redo = Simulation(again, method=run.tableau.name, dt=run.dt,
-                              rtol=max(run.rtol / tighter, MIN_TOLERANCE),
-                              atol=max(run.atol / tighter, MIN_TOLERANCE * 1e-3), record_dt=t1 - t0)
-        else:
-            redo = Simulation(again, method=run.tableau.name, munthe_kaas=run.munthe_kaas,
-                              dt=run.dt / SHORTER if shorter else run.dt, record_every=MAX_STEPS)
-        redo.judge_energy = False  # (the check's own runs are not checked)
-        redo.advance()
-        e = redo.rows[:, ENERGY]
-        if redo.status is not Status.OK or len(e) < 2:
+    row, t0, t1 = rows[i], float(rows[i][T]), float(rows[i + 1][T])
+    if run.adaptive:
+        changes = [_interval_change(run, row, t1 - t0, method=run.tableau.name, dt=run.dt,
+                                    rtol=max(run.rtol / tighter, MIN_TOLERANCE),
+                                    atol=max(run.atol / tighter, MIN_TOLERANCE * 1e-3), record_dt=t1 - t0)
+                   for tighter in (1.0, TIGHTER)]
+        if None in changes:
             return None
-        changes.append(abs(float(e[-1] - e[0])) / scale)
-    expected = TIGHTER if run.adaptive else float(SHORTER ** run.tableau.order)
+        expected, threshold = TIGHTER, math.sqrt(TIGHTER)
+        finer = "its tolerances and ones 10⁴ times tighter, the tighter"
+    else:
+        probe = run.tableau if run.tableau.order >= PROBE_ORDER else get_method("rk4")
+        same = dict(method=probe.name, munthe_kaas=run.munthe_kaas, record_every=MAX_STEPS)
+        changes = [_interval_change(run, row, t1 - t0, dt=run.dt, **same)]
+        level = 0
+        while level < LEVELS and changes[-1] is not None and (level == 0 or changes[-1] >= FLOOR * scale):
+            level += 1
+            h = run.dt / SHORTER ** level
+            phases = [_interval_change(run, row, t1 - t0, k * h / PHASES, dt=h, **same) for k in range(PHASES)]
+            changes.append(None if None in phases else max(phases))
+        if None in changes:
+            return None
+        if level > 1 and changes[-1] < FLOOR * scale:  # judged by the finest levels above round-off
+            level -= 1
+        first = max(level - 2, 0)  # over the two finest levels, where there are two
+        changes = [changes[first], changes[level]]
+        expected = float(SHORTER ** probe.order)
+        threshold = SHORTER ** ((probe.order + ROUGH_ORDER) / 2)
+        steps = [SHORTER ** k for k in range(first, level + 1)]
+        finer = (f"the run's step and one {SHORTER} times shorter, the shorter" if level == 1 else
+                 f"steps {', '.join(map(str, steps[:-1]))} and {steps[-1]} times shorter than the run's, each "
+                 f"{SHORTER} times shorter" if first > 0 else
+                 f"the run's step and ones {', '.join(map(str, steps[1:-1]))} and {steps[-1]} times shorter, each "
+                 f"{SHORTER} times shorter")
+        if probe is not run.tableau:
+            finer = f"{probe.name}, at {finer}"
+        if changes[0] < FLOOR * scale:  # the probe's change at the run's step is round-off: smooth to it
+            changes = [1.0, 0.0]
     shrink = changes[0] / changes[1] if changes[1] > 0.0 else math.inf
-    finer = f"tolerances {TIGHTER:.0e} times tighter" if run.adaptive else f"a step {SHORTER} times shorter"
-    return EnergyCheck(t0, t1, x, y, float(jumps[i]), float(shrink), expected, not shrink >= math.sqrt(expected),
-                       finer.replace("1e+04", "10⁴"))
+    if not run.adaptive:  # per level: steps SHORTER times shorter
+        shrink **= 1 / (level - first)
+    x, y = (float(value) for value in row[CONTACT])
+    return EnergyCheck(t0, t1, x, y, float(jumps[i]), float(shrink), expected, not shrink >= threshold, finer)
 
 
 def describe(failure: Failure, radius: float) -> str:

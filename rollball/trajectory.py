@@ -109,19 +109,21 @@ class Failure:
 @dataclass(frozen=True)
 class EnergyCheck:
     """Whose a run's energy error is, found by taking again the recorded interval where most of
-    it happened (``simulation.energy_check``): with the run's step and a step 4 times shorter
-    (tolerances 10^4 times tighter for the adaptive methods). A smooth landscape's error shrinks
-    as the method's order predicts (``expected``); one that does not shrink is the landscape's."""
+    it happened (``simulation.energy_check``): with the run's step and steps 4, 16, 64, 256 times
+    shorter (tolerances 10^4 times tighter for the adaptive methods; euler's interval is taken
+    again by rk4). A smooth landscape's error shrinks as the method's order predicts
+    (``expected``, per step 4 times shorter) once the steps resolve it; one that shrinks no faster
+    than across a jump of the curvature is the landscape's."""
 
     time: float        # s: the start of the interval
     end: float         # s: its end
     x: float           # contact point at its start (m)
     y: float
     jump: float        # the energy's change across it, relative to its scale
-    shrink: float      # the change there with the run's step over that with the shorter one
+    shrink: float      # the change there with the longer of the two steps (``finer``) over that with the shorter
     expected: float    # what a smooth landscape's shrinks by
     landscape: bool    # True: the error does not shrink with the step: the landscape's
-    finer: str = "a step 4 times shorter"  # what the interval was taken again with
+    finer: str = "the run's step and one 4 times shorter, the shorter"  # how it was taken again, and which shrinks
 
 
 @dataclass
@@ -273,12 +275,13 @@ class Trajectory:
         if check is not None and check.landscape:
             return (f"energy changed by {drift:.2g} of its scale, {check.jump:.2g} of it between t = {check.time:.6g} "
                     f"and {check.end:.6g} s from (x, y) = ({check.x:.6g}, {check.y:.6g}), and that does not shrink "
-                    f"when the step does (taken again with {check.finer} it changes by 1/{check.shrink:.3g} "
-                    f"as much, where a smooth landscape gives 1/{check.expected:.3g}): the landscape is not smooth "
-                    f"there; this is the landscape's, not the step's")
+                    f"as the step does (taken again with {check.finer} changes it by 1/{check.shrink:.3g} as much, "
+                    f"where a smooth landscape gives 1/{check.expected:.3g}): the landscape is not smooth there; this "
+                    f"is the landscape's, not the step's")
         if check is not None:
-            return (f"energy changed by {drift:.2g} of its scale: the step is too large for this method ({check.finer} "
-                    f"shrinks its largest jump, at t = {check.time:.6g} s, {check.shrink:.3g}-fold)")
+            return (f"energy changed by {drift:.2g} of its scale: the step is too large for this method (its largest "
+                    f"jump, at t = {check.time:.6g} s, taken again with {check.finer} changes it by "
+                    f"1/{check.shrink:.3g} as much)")
         return f"energy changed by {drift:.2g} of its scale: the step is too large for this method"
 
     def to_csv(self, path: str | os.PathLike, keep=()) -> None:

@@ -24,10 +24,9 @@ def runs(scene, method):
     return [r for r in found["runs"] if r["method"] == method]
 
 
-def reach(scene, target):
-    """dop853's evaluations over scipy's DOP853's to reach a contact error of ``target``."""
-    found = next(s for s in ACCURACY["pairs"] if s["scene"] == scene)["to_reach"][target]
-    return found["dop853"] / found["scipy_dop853"]
+def same_error(scene):
+    """dop853's evaluations over scipy's DOP853's for the same contact error, 1e-8 .. 1e-10 m."""
+    return [s["ratio"] for s in next(s for s in ACCURACY["pairs"] if s["scene"] == scene)["same_error"]]
 
 
 @pytest.mark.parametrize("text, values, lo, hi, slack", [
@@ -38,16 +37,9 @@ def reach(scene, target):
     ("on the saddle 2.6–4.5 and", lambda: [r["R_over_contact"] for r in runs("saddle", "dopri5")], 2.6, 4.5, 0.1),
     ("1.7–8 times (at most 0.7 rtol)", lambda: [r["R_over_contact"] for r in runs("saddle", "dop853")], 1.7, 8, 0.1),
     ("(at most 0.7 rtol)", lambda: [r["R_over_rtol"] for r in runs("saddle", "dop853")], 0, 0.7, 0.1),
-    ("0.85–0.89 times its evaluations", lambda: [r["evaluations_over_scipy"] for r in runs("hills", "dop853")
-                                               if "evaluations_over_scipy" in r], 0.85, 0.89, 0.1),
-    ("0.71–0.80 on the saddle", lambda: [r["evaluations_over_scipy"] for r in runs("saddle", "dop853")
-                                         if "evaluations_over_scipy" in r], 0.71, 0.80, 0.1),
-    ("0.57–0.70 on a crater held out", lambda: [r["evaluations_over_scipy"] for r in runs("crater", "dop853")
-                                                if "evaluations_over_scipy" in r], 0.57, 0.70, 0.1),
-    ("to reach 1e-10 m 0.87, 0.79 and 0.66 times", lambda: [reach("hills", "1e-10")], 0.87, 0.87, 0.05),
-    ("to reach 1e-10 m 0.87, 0.79 and 0.66 times", lambda: [reach("saddle", "1e-10")], 0.79, 0.79, 0.05),
-    ("to reach 1e-10 m 0.87, 0.79 and 0.66 times", lambda: [reach("crater", "1e-10")], 0.66, 0.66, 0.05),
-    ("but 1.12 times to reach 1e-8 m on the hills", lambda: [reach("hills", "1e-08")], 1.12, 1.12, 0.05),
+    ("0.71–0.76 times its evaluations on the saddle", lambda: same_error("saddle"), 0.71, 0.76, 0.05),
+    ("0.59–0.70 on a crater held out", lambda: same_error("crater"), 0.59, 0.70, 0.05),
+    ("about as many on the hills (0.89–1.03,", lambda: same_error("hills"), 0.89, 1.03, 0.05),
     ("rk4's R error is 88–110 times", lambda: [r["R_over_contact"] for r in ACCURACY["rk4_orientation"]["runs"]],
      88, 110, 0.1),
     ("dopri5 at rtol 1e-10 within 9e-11 s", lambda: [r["dopri5_rtol_1e-10"] for r in ACCURACY["liftoff"]], 0, 9e-11, 0.1),

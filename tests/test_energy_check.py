@@ -5,6 +5,7 @@ curvature it does not shrink and is the landscape's (docs/design.md §1)."""
 
 import threading
 
+import numpy as np
 import pytest
 
 from conftest import make_scene
@@ -55,6 +56,45 @@ def test_a_jump_of_the_curvature_is_the_landscapes():
     notes = traj.warnings()
     assert len(notes) == 1 and "the landscape is not smooth there" in notes[0]
     assert f"t = {check.time:.6g}" in notes[0] and "the step is too large" not in notes[0]
+
+
+@pytest.mark.parametrize("dt", [0.02, 0.04, 0.05])
+def test_rk4_across_a_jump_of_the_curvature_at_large_steps_is_the_landscapes(dt):
+    # f'' jumps from -8 to 8 at x = 0, crossed at 7 m/s. Taken again with one step 4 times shorter the
+    # interval's error shrank 172-, 53- and 19-fold (the step's, against the old threshold 16); with
+    # steps 16 to 256 times shorter, each 4 times shorter shrinks it about 16-fold: a jump's h^2
+    traj = simulate(make_scene("4*x*abs(x)", x=-0.5, vx=2.0, duration=0.5, dt=dt), method="rk4")
+    check = traj.energy_check
+    assert check is not None and check.landscape and check.shrink < 64.0, check
+    i, j = np.searchsorted(traj.t, [check.time, check.end])
+    assert traj.contact[i, 0] < 0.0 < traj.contact[j, 0]  # the interval crosses the jump
+    assert "the landscape is not smooth there" in traj.warnings()[0]
+
+
+def test_euler_across_a_jump_of_the_curvature_is_judged_by_rk4():
+    # the curvature jumps from 4 to 6 at x = 0: euler's own energy error shrinks 4-fold per step 4
+    # times shorter, the jump's 16-fold, so euler cannot tell them apart (it judged this the step's);
+    # rk4 (256-fold where the landscape is smooth) can
+    traj = simulate(make_scene("3*max(x,0)^2 + 2*min(x,0)^2", x=0.5, vx=-1.0, duration=1.0, dt=0.05), method="euler")
+    check = traj.energy_check
+    assert check is not None and check.landscape and check.finer.startswith("rk4"), check
+    assert check.expected == 256 and check.shrink < 64.0
+    i, j = np.searchsorted(traj.t, [check.time, check.end])
+    assert traj.contact[i, 0] > 0.0 > traj.contact[j, 0]
+
+
+@pytest.mark.parametrize("landscape, x, vx, duration, method, dt", [
+    ("-0.5*exp(-4*(x^2+y^2))", -0.6, 2.0, 1.0, "rk4", 0.15), ("-0.5*exp(-4*(x^2+y^2))", -0.6, 2.0, 1.0, "lawson5", 0.25),
+    (BUMP, -0.8, 3.0, 0.5, "euler", 0.15)])
+def test_a_smooth_landscape_at_steps_that_do_not_resolve_it_is_the_steps(landscape, x, vx, duration, method, dt):
+    # one step crosses the whole pit or bump: a step 4 times shorter shrinks the error 11-, 26- and
+    # (euler's own) 1.8-fold, less than the method's order says, and these were judged the landscape's;
+    # shorter steps resolve it and shrink it as the order says
+    traj = simulate(make_scene(landscape, x=x, y=0.1 if "y" in landscape else 0.0, vx=vx, duration=duration, dt=dt),
+                    method=method)
+    check = traj.energy_check
+    assert check is not None and not check.landscape and check.shrink > check.expected / 4, check
+    assert "the step is too large" in traj.warnings()[0]
 
 
 def test_no_check_where_the_energy_is_kept():
