@@ -44,7 +44,9 @@ GHOST_ALPHA = 0.3        # the balls of the runs not followed, in compare mode: 
 TICK = 0.015             # an axis tick's length as a fraction of the landscape's width
 LABEL_REACH = 8          # ticks beyond the axes that their labels reach (names at 6, text beyond)
 FILL = 0.9               # the framed landscape fills up to this fraction of the view
-MARK_PIXELS = 30         # a ball smaller than this on screen is marked by a ring this wide around it
+MARK_FRACTION = 0.06     # a ball drawn smaller than this fraction of the picture's shorter side
+MIN_MARK_PIXELS = 12     # (but at least this many pixels) is marked by a ring that wide around it
+MARK_PIXELS = 30         # the ring in the default window's view (504 pixels high), for scale
 MARK_EDGE = (0.10, 0.10, 0.10, 0.85)   # the ring's edge (a run's own colour in compare mode)
 MARK_FILL = (1.0, 1.0, 1.0, 0.55)      # its inside, behind the ball
 MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,   # never hidden by the surface
@@ -55,6 +57,18 @@ LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's f
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
               for elevation in (30, 45, 60, 75)] + [(90, -90)]
+
+
+def mark_pixels(size: tuple[int, int]) -> int:
+    """The ball's ring in a picture of ``size`` (width, height): the same share of the picture
+    on screen, in a small video and in a large one."""
+    return max(MIN_MARK_PIXELS, round(MARK_FRACTION * min(size)))
+
+
+def ring_sizes(ring: float, k: int = 0) -> np.ndarray:
+    """The two discs drawing run k's ring ``ring`` pixels wide: its edge, then its inside."""
+    step = ring / 5
+    return np.array([ring + step * (5 / 6), ring]) + step * k
 
 
 def ball_mesh(stripes: np.ndarray = BALL_STRIPES, cap=(0.97, 0.97, 0.97), rows: int = 24,
@@ -701,11 +715,12 @@ class SceneView(gl.GLViewWidget):
     # -- the ball's mark: seen from the back of the room, the ball itself drawn to scale ----
 
     def _mark(self, edge, k: int = 0) -> gl.GLScatterPlotItem:
-        """A ring MARK_PIXELS wide around a ball's centre, drawn over the surface and under the
-        ball: a dark (or the run's) edge, a pale inside. Run k's ring is 6k pixels wider and drawn
-        before those of the runs before it, so where balls stand together every ring shows."""
-        mark = gl.GLScatterPlotItem(pos=np.zeros((2, 3)), size=np.array([MARK_PIXELS + 5.0, MARK_PIXELS]) + 6 * k,
-                                    pxMode=True)
+        """A ring ``mark_pixels`` wide around a ball's centre, drawn over the surface and under
+        the ball: a dark (or the run's) edge, a pale inside. Run k's ring is wider by k fifths of
+        its width and drawn before those of the runs before it, so where balls stand together
+        every ring shows."""
+        mark = gl.GLScatterPlotItem(pos=np.zeros((2, 3)), size=ring_sizes(MARK_PIXELS, k), pxMode=True)
+        mark.ring = (MARK_PIXELS, k)   # the ring's width and the run's index it is drawn for
         self._color_mark(mark, edge)
         mark.setGLOptions(MARK_GL)
         mark.setDepthValue(MARK_DEPTH - 0.01 * k)
@@ -719,10 +734,11 @@ class SceneView(gl.GLViewWidget):
         edge[3] = MARK_EDGE[3]
         mark.setData(color=np.array([edge, MARK_FILL]))
 
-    def ball_pixels(self, index: int = 0) -> float:
-        """A ball's diameter on screen in pixels, true to scale: its centre and a point one
-        radius from it across the line of sight, projected with the view's own matrices."""
-        w, h = self.width(), self.height()
+    def ball_pixels(self, index: int = 0, size: tuple[int, int] | None = None) -> float:
+        """A ball's diameter in pixels, true to scale, on screen or in a picture of ``size``
+        taken with the same camera: its centre and a point one radius from it across the line
+        of sight, projected with the view's own matrices."""
+        w, h = size or (self.width(), self.height())
         m = np.array((self.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * self.viewMatrix()).data()).reshape(4, 4).T
         right = np.array(self.viewMatrix().row(0).toVector3D().toTuple())   # the camera's x axis in the world
         center = self.centers[index]
@@ -736,17 +752,23 @@ class SceneView(gl.GLViewWidget):
         self.marks_shown = on
         self.update()
 
-    def _place_marks(self) -> None:
-        """A ball is marked while it is shown smaller than MARK_PIXELS (changed only when it
+    def _place_marks(self, size: tuple[int, int]) -> None:
+        """For a picture of ``size`` (the screen's or an export's): a ball is marked while it is
+        drawn smaller than ``mark_pixels(size)``, by a ring that wide (changed only when it
         changes: a change asks for one more frame)."""
+        ring = mark_pixels(size)
         for k, (ball, mark) in enumerate(zip(self.balls, self.marks)):
-            wanted = self.marks_shown and ball.visible() and self.ball_pixels(k) < MARK_PIXELS
+            wanted = self.marks_shown and ball.visible() and self.ball_pixels(k, size) < ring
             if mark.visible() != wanted:
                 mark.setVisible(wanted)
+            if wanted and mark.ring != (ring, k):
+                mark.ring = (ring, k)
+                mark.setData(size=ring_sizes(ring, k))
 
-    def paintGL(self) -> None:
-        self._place_marks()
-        super().paintGL()
+    def paint(self, *, region, viewport, useItemNames=False) -> None:
+        """On screen (``paintGL``) and off screen (``renderToArray``, an export at any size)."""
+        self._place_marks((int(viewport[2]), int(viewport[3])))
+        super().paint(region=region, viewport=viewport, useItemNames=useItemNames)
 
     def set_label_scale(self, scale: float) -> None:
         """The axis labels at ``scale`` times their normal size."""
