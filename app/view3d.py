@@ -53,6 +53,8 @@ MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,  
            "glBlendFuncSeparate": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)}
 BALL_DEPTH, MARK_DEPTH, GHOST_DEPTH = 0.6, 0.5, 1.0   # drawing order: surface, marks, ball, ghosts
 LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's framebuffer unbound
+MIN_LABEL_PIXELS = 10      # axis numbers and names in an exported picture are at least this high
+LABEL_GAP = 3              # pixels kept free around an axis label (times the picture's scale)
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
@@ -69,6 +71,12 @@ def ring_sizes(ring: float, k: int = 0) -> np.ndarray:
     """The two discs drawing run k's ring ``ring`` pixels wide: its edge, then its inside."""
     step = ring / 5
     return np.array([ring + step * (5 / 6), ring]) + step * k
+
+
+def label_pixels(item: gl.GLTextItem, scale: float = 1.0) -> int:
+    """An axis label's text height in pixels in a picture ``scale`` times as wide as the view
+    (at least ``MIN_LABEL_PIXELS``, so a small video keeps it legible)."""
+    return max(MIN_LABEL_PIXELS, round(QtGui.QFontInfo(item.font).pixelSize() * scale))
 
 
 def ball_mesh(stripes: np.ndarray = BALL_STRIPES, cap=(0.97, 0.97, 0.97), rows: int = 24,
@@ -316,6 +324,7 @@ class SceneView(gl.GLViewWidget):
         self.cut_edge.setGLOptions("translucent")
         self.axes = gl.GLLinePlotItem(color=AXIS_COLOR, width=1.5, antialias=True, mode="lines")
         self.axis_labels: list[gl.GLTextItem] = []
+        self._thinned_for = None   # what the labels were last thinned for (_thin_labels)
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
         self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=3.0, antialias=True, mode="line_strip")
         self.liftoff = gl.GLScatterPlotItem(color=LIFTOFF_COLOR, size=16.0, pxMode=True)
@@ -511,23 +520,87 @@ class SceneView(gl.GLViewWidget):
                 break   # a flat landscape: no height axis
             step = nice_step(hi - lo, 6 if k < 2 else 5)
             corner = (ox, oy)[k] if k < 2 else None
+            numbers = []
             for value in np.arange(np.ceil(lo / step) * step, hi + 1e-9 * step, step):
                 at = start.copy()
                 at[k] = value
                 segments += [at, at + out]
                 if corner is None or abs(value - corner) > 0.5 * step:   # the corner is the height axis's
-                    labels.append((at + 2.5 * out, f"{value if abs(value) > 1e-9 * step else 0.0:g}"))
-            labels.append((end + 6 * out, "xyz"[k] + " (m)"))
+                    numbers.append((at + 2.5 * out, f"{value if abs(value) > 1e-9 * step else 0.0:g}", k))
+            # the first and last numbers before those between (they are kept first where crowded)
+            labels += numbers[:1] + numbers[-1:] + numbers[1:-1] if len(numbers) > 1 else numbers
+            # the height axis's name beside its top number (as far out as that number is wide:
+            # ``_place_name``), the others' beyond their ends
+            labels.append((end + 6 * out, "xyz"[k] + " (m)", (end, out) if k == 2 else None))
         self.axes.setData(pos=np.array(segments))
         for item in self.axis_labels:
             self.removeItem(item)
         font = QtGui.QFont()
         font.setPointSizeF(8 * self.label_scale)
         self.axis_labels = [gl.GLTextItem(pos=np.asarray(pos, dtype=float), text=text, color=TEXT_COLOR,
-                                          font=font, glOptions="translucent") for pos, text in labels]
-        for item in self.axis_labels:
+                                          font=font, glOptions="translucent") for pos, text, _ in labels]
+        for item, (_, _, about) in zip(self.axis_labels, labels):
             item.setDepthValue(LABEL_DEPTH)
+            item.is_name = item.text.endswith(" (m)")
+            item.axis = about if not item.is_name else None              # a number's axis (0, 1, 2)
+            item.beside = about if item.is_name else None               # the height axis's (top, out)
             self.addItem(item)
+        self._thinned_for = None
+
+    def _thin_labels(self, size: tuple[int, int]) -> None:
+        """In a picture of ``size`` (the screen's or an export's), an axis number that would
+        overlap an axis name or a number shown before it is left out: the names first, then
+        each axis's numbers in order. (The height axis is short beside the others: with large
+        text its numbers would run into each other and into "z (m)".) Worked out again only when
+        the size, the camera or the labels change."""
+        w, h = size
+        matrix = self.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * self.viewMatrix()
+        key = (w, h, self.width(), tuple(matrix.data()), id(self.axis_labels), self.label_scale)
+        if key == self._thinned_for:
+            return
+        self._thinned_for = key
+        scale = w / max(1, self.width())
+        gap = LABEL_GAP * scale
+
+        def screen(point) -> tuple[float, float] | None:
+            p = matrix.map(QtGui.QVector4D(*map(float, point), 1.0))
+            return None if p.w() <= 0 else ((p.x() / p.w() + 1) / 2 * w, (1 - p.y() / p.w()) / 2 * h)
+
+        kept: list[QtCore.QRectF] = []
+        font = QtGui.QFont(self.axis_labels[0].font) if self.axis_labels else QtGui.QFont()
+        font.setPixelSize(label_pixels(self.axis_labels[0], scale) if self.axis_labels else MIN_LABEL_PIXELS)
+        metrics = QtGui.QFontMetricsF(font)   # every label has the same font
+        widest = max((metrics.horizontalAdvance(item.text) for item in self.axis_labels if item.axis == 2),
+                     default=0.0)
+        for item in sorted(self.axis_labels, key=lambda item: not item.is_name):
+            if item.beside is not None:
+                self._place_name(item, screen, widest, metrics.horizontalAdvance(item.text), gap)
+            xy = screen(item.pos)
+            show = xy is not None
+            if show:
+                x, y = xy
+                rect = QtCore.QRectF(x, y - metrics.ascent(), metrics.horizontalAdvance(item.text),
+                                     metrics.ascent() + metrics.descent()).adjusted(-gap, -gap, gap, gap)
+                show = not any(rect.intersects(other) for other in kept)
+                if show:
+                    kept.append(rect)
+            if item.visible() != show:
+                item.setVisible(show)
+
+    @staticmethod
+    def _place_name(item: gl.GLTextItem, screen, numbers: float, name: float, gap: float) -> None:
+        """The height axis's name at its top, out beyond its numbers (``numbers`` pixels wide at
+        most, 2.5 ticks out) on the picture: they are drawn rightwards from their anchors, so
+        where the ticks point right the name starts past the widest number, where they point left
+        it ends before the numbers start."""
+        top, out = item.beside
+        a, b = screen(top), screen(np.asarray(top) + out)
+        if a is None or b is None or abs(b[0] - a[0]) < 1e-6:
+            return
+        reach = 2.5 + ((numbers if b[0] > a[0] else name) + 2 * gap) / abs(b[0] - a[0])   # in ticks
+        pos = np.asarray(top, dtype=float) + reach * np.asarray(out)
+        if not np.allclose(pos, item.pos):
+            item.setData(pos=pos)
 
     def resizeEvent(self, event) -> None:
         super().resizeEvent(event)
@@ -768,6 +841,7 @@ class SceneView(gl.GLViewWidget):
     def paint(self, *, region, viewport, useItemNames=False) -> None:
         """On screen (``paintGL``) and off screen (``renderToArray``, an export at any size)."""
         self._place_marks((int(viewport[2]), int(viewport[3])))
+        self._thin_labels((int(viewport[2]), int(viewport[3])))
         super().paint(region=region, viewport=viewport, useItemNames=useItemNames)
 
     def set_label_scale(self, scale: float) -> None:
