@@ -18,13 +18,14 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 
 from PySide6 import QtCore
 
 from rollball import Scene, Simulation, Trajectory
 
 from .playback import RunBuffer
-from .worker import SimulationThread, Worker, reference_worker, retire
+from .worker import COMPILING, Worker, reference_worker, stream_worker
 
 READY, RUNNING, PAUSED, FINISHED, STOPPED = "ready", "running", "paused", "finished", "stopped"
 FRAME_MS = 16              # advance the clock and redraw at most ~60 Hz
@@ -63,12 +64,11 @@ class RunController(QtCore.QObject):
     failed = QtCore.Signal(str)
     measured = QtCore.Signal()
 
-    _references: set = set()     # reference threads still computing (they cannot be interrupted)
-
     def __init__(self, parent=None):
         super().__init__(parent)
         self.runs: list[Run] = []
-        self.thread: SimulationThread | None = None
+        self.thread: Worker | None = None   # computing the runs
+        self._seconds: list[float] = []    # its processor time in each run so far
         self.state = READY
         self.computed = False          # the worker has finished every run
         self.compiling = False         # the worker is compiling a kernel (no rows yet)
@@ -118,15 +118,13 @@ class RunController(QtCore.QObject):
         if reference is not None:
             self._start_reference(*reference)
         runs = self.runs
-        self.thread = SimulationThread([run.simulation for run in runs], [run.buffer.derive for run in runs],
-                                       self, warm_ups, token=runs)
-        # to a method of this object, not a lambda: a lambda's queued calls are dropped with the
-        # thread object once it is deleted (after a fast run, before its rows were taken)
-        self.thread.rowsReady.connect(self._rows_ready, QtCore.Qt.ConnectionType.QueuedConnection)
-        self.thread.failed.connect(self.failed)
-        self.thread.compiling.connect(lambda: runs is self.runs and self._set_compiling(True),
-                                      QtCore.Qt.ConnectionType.QueuedConnection)
-        self.thread.finished.connect(self._computed)
+        self._seconds = [0.0] * len(runs)
+        self.thread = worker = stream_worker([run.simulation for run in runs], [run.buffer.derive for run in runs],
+                                             warm_ups, self._seconds)
+        # each signal names its worker: what a worker stopped meanwhile still says is dropped
+        worker.progressed.connect(partial(self._progress, worker))
+        worker.failed.connect(self.failed)
+        worker.ended.connect(partial(self._computed, worker))
         self._set_state(RUNNING)
         self._last_tick = time.perf_counter()
         self.thread.start()
@@ -176,30 +174,32 @@ class RunController(QtCore.QObject):
     def reset(self) -> None:
         """Drop the runs: back to ready at t = 0."""
         self._stop_worker()
+        if self._reference_thread is not None:
+            self._reference_thread.cancel(wait=False)   # ends within a chunk; its result is not wanted
         self.timer.stop()
         self.runs, self.computed, self.compiling, self.play_time = [], False, False, 0.0
         self.reference, self._reference_thread = None, None
         self._set_state(READY)
 
     def shutdown(self) -> None:
-        """Reset, and wait for reference runs still computing (before the app quits)."""
+        """Reset (before the app quits): the runs and the reference are cancelled."""
         self.reset()
-        for thread in list(RunController._references):
-            thread.wait()
 
     # -- the worker ------------------------------------------------------------------
 
     def _stop_worker(self) -> None:
         if self.thread is not None:
+            self.thread.cancel()   # within a chunk (bounded); its late signals are dropped
             self._take_seconds()
-            self.thread.finished.disconnect(self._computed)
-            self.thread.stop()
-            retire(self.thread)
             self.thread = None
 
-    def _rows_ready(self, runs: list, index: int, block, ended: bool) -> None:
-        if runs is not self.runs:
-            return   # a chunk still queued when its thread was stopped: its runs were dropped
+    def _progress(self, worker: Worker, message: tuple) -> None:
+        if worker is not self.thread:
+            return   # said before its worker was stopped: its runs were dropped
+        if message[0] == COMPILING:
+            self._set_compiling(True)
+            return
+        _rows, index, block, ended = message   # worker.ROWS
         run = self.runs[index]
         if block is not None:
             run.buffer.append(block)
@@ -212,15 +212,15 @@ class RunController(QtCore.QObject):
             self.stateChanged.emit(self.state)
 
     def _take_seconds(self) -> None:
-        for run, seconds in zip(self.runs, self.thread.seconds):
+        for run, seconds in zip(self.runs, self._seconds):
             run.seconds = seconds
 
-    def _computed(self) -> None:
+    def _computed(self, worker: Worker) -> None:
+        if worker is not self.thread:
+            return   # a worker stopped meanwhile
         self.computed, self.compiling = True, False
-        if self.thread is not None:
-            self._take_seconds()
-            retire(self.thread)
-            self.thread = None
+        self._take_seconds()
+        self.thread = None
         self.stateChanged.emit(self.state)
         self._measure()
 
@@ -228,11 +228,9 @@ class RunController(QtCore.QObject):
 
     def _start_reference(self, scene: Scene, t_end: float, record_dt: float) -> None:
         thread = self._reference_thread = reference_worker(scene, t_end, record_dt)
-        RunController._references.add(thread)
         thread.done.connect(lambda result: self._reference_done(thread, *result))
         thread.failed.connect(lambda message: thread is self._reference_thread and self.failed.emit(
             f"The reference run failed: {message}"))
-        thread.finished.connect(lambda: (RunController._references.discard(thread), retire(thread)))
         thread.start()
 
     def _reference_done(self, thread, trajectory: Trajectory, estimate: float) -> None:

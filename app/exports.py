@@ -17,7 +17,7 @@ from rollball.files import atomic_write_bytes, write_target
 from rollball.trajectory import CENTER
 
 from .animation import DEFAULT_FPS, frame_times, record
-from .controller import STOPPED
+from .controller import RUNNING, STOPPED
 from .dialogs import AnimationDialog, ImageDialog
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 
@@ -131,7 +131,8 @@ class Exports:
     def export_animation(self, path: Path, fps: float = DEFAULT_FPS, t0: float = 0.0, t1: float | None = None,
                          size: tuple[int, int] | None = None, caption: bool = True, progress=None) -> bool:
         """Play the computed run from t0 to t1 into an MP4 or GIF, ``fps`` frames per simulated
-        second, each frame the 3-D view at ``size`` (default: as on screen). False if there is
+        second, each frame the 3-D view at ``size`` (default: as on screen); the moment shown
+        before, and playback if it was playing, come back after it. False if there is
         no run or it was cancelled; OSError or ValueError if it cannot be written. Either way a
         file is written whole or not at all."""
         w = self.window
@@ -144,6 +145,7 @@ class Exports:
         keep = self._keep()
         write_target(path, keep)   # refused before a frame is drawn
         shown, started = w.controller.play_time, QtCore.QElapsedTimer()
+        playing = w.controller.state == RUNNING
         started.start()
         w.controller.pause()
         view_size = (size[0], size[1] - caption_height(size[0])) if caption else size   # caption inside
@@ -159,6 +161,8 @@ class Exports:
             if reframe:
                 w.view.reset_camera()
             w.runs.seek(shown)
+            if playing:
+                w.controller.toggle_pause()   # playback goes on from where it was
         if not done:
             w.show_message("Export cancelled; nothing was written")
             return False

@@ -10,7 +10,6 @@ below Min), the field whose change broke the scene is the one marked.
 from __future__ import annotations
 
 import re
-import threading
 
 from PySide6 import QtCore, QtWidgets
 
@@ -22,6 +21,7 @@ from rollball import METHODS, MethodKind
 from . import contact_fields
 from .contact_fields import ContactFields
 from .parameters import ParameterRows
+from .worker import Worker
 
 # (dotted scene key, label, unit, tooltip), by group
 NUMBER_FIELDS = {
@@ -143,19 +143,29 @@ def _message_label(name: str) -> QtWidgets.QLabel:
     return label
 
 
+def check_formula(text: str, names: tuple[str, ...] = ()) -> str | None:
+    """Why a formula is refused (parsed, differentiated and compiled: seconds at worst), or None."""
+    try:
+        landscape_for(text, names).compiled  # noqa: B018 - parse, differentiate and compile
+    except FormulaError as error:
+        return str(error)
+    except Exception as error:  # e.g. numba refusing generated code
+        return f"cannot compile the formula: {compile_reason(error)}"
+    return None
+
+
 class ScenePanel(QtWidgets.QWidget):
     """Fields for a scene. ``sceneChanged`` carries each new valid scene (after a typing pause).
     A field that keeps the fields from making a scene is ``marked`` (its key), with
     ``error_text`` shown right under it.
 
-    A new formula is parsed, differentiated and compiled in a background thread (that can take
+    A new formula is parsed, differentiated and compiled by a background ``Worker`` (that can take
     seconds), from the keystroke on, so that it is mostly ready when the typing pause ends; if it
     is not, the field says "checking…" meanwhile, the window stays responsive and the last valid
     scene stays current; ``checking`` is True until the result is in.
     """
 
     sceneChanged = QtCore.Signal(object)
-    _formulaChecked = QtCore.Signal(object, object)  # from the checking thread: (text, names), refusal or None
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -165,7 +175,6 @@ class ScenePanel(QtWidgets.QWidget):
         self._checked: dict[tuple[str, tuple[str, ...]], str | None] = {}
         self._checking: tuple[str, tuple[str, ...]] | None = None   # being checked in the background
         self.gesture = None                        # while a slider's change is applied: its drag
-        self._formulaChecked.connect(self._formula_checked)
         self.numbers: dict[str, QtWidgets.QLineEdit] = {}
         self.messages: dict[str, QtWidgets.QLabel] = {}      # under each field, by key
         self.row_labels: dict[str, QtWidgets.QLabel] = {}    # the form's label of each number field
@@ -413,18 +422,13 @@ class ScenePanel(QtWidgets.QWidget):
 
     def _start_check(self, text: str, names: tuple[str, ...]) -> None:
         self._checking = (text, names)
-        threading.Thread(target=self._check_in_background, args=self._checking, daemon=True,
-                         name="formula check").start()
+        checking = self._checking
+        worker = Worker(lambda _progress, _cancel: (checking, check_formula(*checking)), name="formula check")
+        worker.done.connect(self._formula_done)   # to a method: dropped once the panel is gone
+        worker.start()
 
-    def _check_in_background(self, text: str, names: tuple[str, ...] = ()) -> None:
-        try:
-            landscape_for(text, names).compiled  # noqa: B018 - parse, differentiate and compile
-            problem = None
-        except FormulaError as error:
-            problem = str(error)
-        except Exception as error:  # e.g. numba refusing generated code
-            problem = f"cannot compile the formula: {compile_reason(error)}"
-        self._formulaChecked.emit((text, names), problem)  # queued to the GUI thread
+    def _formula_done(self, result: tuple) -> None:
+        self._formula_checked(*result)
 
     def _formula_checked(self, checked: tuple, problem: str | None) -> None:
         self._checked[checked] = problem

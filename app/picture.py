@@ -10,13 +10,12 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import METHODS, Scene
 
-from .view3d import BALL_STRIPES, LIFTOFF_COLOR, NO_FIT_COLOR, TRAIL_COLOR
+from .view3d import BALL_STRIPES, LIFTOFF_COLOR, NO_FIT_COLOR, TRAIL_COLOR, label_pixels
 
 # colours of the view that must stay recognisable in a GIF's palette
 ACCENTS = (TRAIL_COLOR[:3], LIFTOFF_COLOR[:3], NO_FIT_COLOR[:3], *BALL_STRIPES, (0.97, 0.97, 0.97))
 MAX_TEXTURE = 4096          # pixels per side of one off-screen rendering pass
 INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
-MIN_LABEL_PIXELS = 10      # axis numbers and names in a picture are at least this high
 CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)
 
 
@@ -75,13 +74,12 @@ def labels_at(view, size: tuple[int, int]) -> list[tuple[float, float, object]]:
 
 def draw_labels(painter: QtGui.QPainter, view, size: tuple[int, int]) -> None:
     """The view's axis numbers and names on a picture of it at ``size``, as on screen: anchored
-    at their points (left, baseline), their text scaled with the picture (at least
-    ``MIN_LABEL_PIXELS`` high, so a small video keeps them legible)."""
+    at their points (left, baseline), their text scaled with the picture (``label_pixels``);
+    those the view left out so as not to overlap others (``SceneView._thin_labels``) stay out."""
     scale = size[0] / max(1, view.width())
     for x, y, item in labels_at(view, size):
         font = QtGui.QFont(item.font)
-        on_screen = QtGui.QFontInfo(item.font).pixelSize()
-        font.setPixelSize(max(MIN_LABEL_PIXELS, round(on_screen * scale)))
+        font.setPixelSize(label_pixels(item, scale))
         painter.setFont(font)
         painter.setPen(item.color)
         painter.drawText(QtCore.QPointF(x, y), item.text)

@@ -12,6 +12,7 @@ ended: only the latest scene's preview is ever drawn.
 from __future__ import annotations
 
 import dataclasses
+from functools import partial
 
 import numpy as np
 from PySide6 import QtCore
@@ -20,7 +21,7 @@ from rollball import Scene, Simulation
 from rollball.comparison import Cancelled
 from rollball.trajectory import CENTER
 
-from .worker import Worker, one_line, retire
+from .worker import Worker, one_line
 
 PREVIEW_SECONDS = 3.0     # simulated seconds shown ahead
 PREVIEW_ROWS = 300        # points of the line
@@ -98,11 +99,11 @@ class PathPreview(QtCore.QObject):
         return self.worker is not None
 
     def _start(self, scene: Scene) -> None:
-        worker = Worker(lambda _progress, cancel: compute(scene, cancel), self, describe=one_line)
+        worker = Worker(lambda _progress, cancel: compute(scene, cancel), describe=one_line, name="preview")
         worker.done.connect(self._done)
         worker.failed.connect(self._failed)
         worker.cancelled.connect(self._cancelled)
-        worker.finished.connect(self._ended)
+        worker.ended.connect(partial(self._ended, worker))
         self.worker, self.computing = worker, scene
         worker.start()
 
@@ -118,14 +119,12 @@ class PathPreview(QtCore.QObject):
     def _cancelled(self) -> None:
         self.cancelled += 1
 
-    def _ended(self) -> None:
-        worker = self.sender()
+    def _ended(self, worker: Worker) -> None:
         if worker is not self.worker:   # let go of already (shutdown)
             return
         ended = self.computing
         cancelled = worker.cancel_event.is_set()
-        retire(worker)
-        self.worker = self.computing = None
+        self.worker = self.computing = None   # the worker lets go of itself
         if self.wanted is not None and (self.wanted != ended or cancelled):
             self._start(self.wanted)
 
@@ -133,6 +132,5 @@ class PathPreview(QtCore.QObject):
         """Cancel and wait (the window closes)."""
         self.wanted = None
         if self.worker is not None:
-            self.worker.cancel()
-            retire(self.worker)
+            self.worker.cancel()   # bounded
             self.worker = self.computing = None

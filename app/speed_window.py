@@ -20,7 +20,7 @@ from rollball.comparison import RunResult
 
 from .compare_runs import COLORS
 from .plots import DecadeAxis, fit_decades
-from .worker import Worker, retire
+from .worker import Worker
 
 CSV_NAME = "compare.csv"
 SPEC_COLORS = COLORS + ("#e377c2", "#7f7f7f", "#bcbd22", "#17becf")   # one per method, as the CLI's figure
@@ -151,11 +151,12 @@ class SpeedWindow(QtWidgets.QWidget):
             return
         scene, quick = self.scene, self.quick.isChecked()
         self.thread = Worker(lambda progress, cancel: compare(scene, quick=quick, progress=progress, cancel=cancel),
-                             self)
-        self.thread.progressed.connect(lambda args: self._progress(*args))
+                             name="speed against error")
+        # to methods of this window: what the worker says after the window has gone is dropped
+        self.thread.progressed.connect(self._progressed)
         self.thread.done.connect(self._done)
-        self.thread.failed.connect(lambda message: self._ended(f"Cannot compare: {message}"))
-        self.thread.cancelled.connect(lambda: self._ended("Cancelled"))
+        self.thread.failed.connect(self._failed)
+        self.thread.cancelled.connect(self._cancelled)
         self.progress.setMaximum(0)
         self.status.setText("Computing the reference…")
         self.run_button.setEnabled(False)
@@ -166,15 +167,22 @@ class SpeedWindow(QtWidgets.QWidget):
         if self.thread is not None:
             self.thread.cancel()
 
+    def _progressed(self, args: tuple) -> None:
+        self._progress(*args)
+
+    def _failed(self, message: str) -> None:
+        self._ended(f"Cannot compare: {message}")
+
+    def _cancelled(self) -> None:
+        self._ended("Cancelled")
+
     def _progress(self, done: int, total: int, text: str) -> None:
         self.progress.setMaximum(total)
         self.progress.setValue(done)
         self.status.setText(text)
 
     def _ended(self, text: str) -> None:
-        if self.thread is not None:
-            retire(self.thread)
-            self.thread = None
+        self.thread = None   # the worker lets go of itself
         self.progress.setMaximum(1)
         self.progress.setValue(1 if self.comparison is not None else 0)
         self.status.setText(text)

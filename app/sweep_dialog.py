@@ -20,7 +20,7 @@ from rollball.sweeps.plot import label
 
 from .inputs import format_number
 from .parameters import slider_range
-from .worker import Worker, retire
+from .worker import Worker
 
 # What a fresh dialog offers: (key, half-width around the scene's value, N), first and second
 DEFAULTS = (("start.vx", 2.0, 41), ("start.spin", 4.0, 21))
@@ -204,11 +204,13 @@ class SweepDialog(QtWidgets.QDialog):
         self.progress.setValue(0)
         self.status.setText(f"Running {grid.size:,} runs…")
         scene = self.scene
-        self.thread = Worker(lambda progress, cancel: sweep(scene, vary, cancel=cancel, progress=progress), self)
-        self.thread.progressed.connect(lambda args: self.progress.setValue(args[0]))
+        self.thread = Worker(lambda progress, cancel: sweep(scene, vary, cancel=cancel, progress=progress),
+                             name="sweep")
+        # to methods of this dialog: what the worker says after the dialog has gone is dropped
+        self.thread.progressed.connect(self._progressed)
         self.thread.done.connect(self._finished)
         self.thread.failed.connect(self._failed)
-        self.thread.finished.connect(self._thread_ended)
+        self.thread.ended.connect(self._thread_ended)
         self.run_button.setEnabled(False)
         self.cancel_button.setEnabled(True)
         self.thread.start()
@@ -217,9 +219,11 @@ class SweepDialog(QtWidgets.QDialog):
         if self.thread is not None:
             self.thread.cancel(wait=False)
 
+    def _progressed(self, args: tuple) -> None:
+        self.progress.setValue(args[0])
+
     def _thread_ended(self) -> None:
-        retire(self.thread)
-        self.thread = None
+        self.thread = None   # the worker lets go of itself
         self.run_button.setEnabled(True)
         self.cancel_button.setEnabled(False)
 

@@ -44,17 +44,39 @@ GHOST_ALPHA = 0.3        # the balls of the runs not followed, in compare mode: 
 TICK = 0.015             # an axis tick's length as a fraction of the landscape's width
 LABEL_REACH = 8          # ticks beyond the axes that their labels reach (names at 6, text beyond)
 FILL = 0.9               # the framed landscape fills up to this fraction of the view
-MARK_PIXELS = 30         # a ball smaller than this on screen is marked by a ring this wide around it
+MARK_FRACTION = 0.06     # a ball drawn smaller than this fraction of the picture's shorter side
+MIN_MARK_PIXELS = 12     # (but at least this many pixels) is marked by a ring that wide around it
+MARK_PIXELS = 30         # the ring in the default window's view (504 pixels high), for scale
 MARK_EDGE = (0.10, 0.10, 0.10, 0.85)   # the ring's edge (a run's own colour in compare mode)
 MARK_FILL = (1.0, 1.0, 1.0, 0.55)      # its inside, behind the ball
 MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,   # never hidden by the surface
            "glBlendFuncSeparate": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)}
 BALL_DEPTH, MARK_DEPTH, GHOST_DEPTH = 0.6, 0.5, 1.0   # drawing order: surface, marks, ball, ghosts
 LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's framebuffer unbound
+MIN_LABEL_PIXELS = 10      # axis numbers and names in an exported picture are at least this high
+LABEL_GAP = 3              # pixels kept free around an axis label (times the picture's scale)
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
               for elevation in (30, 45, 60, 75)] + [(90, -90)]
+
+
+def mark_pixels(size: tuple[int, int]) -> int:
+    """The ball's ring in a picture of ``size`` (width, height): the same share of the picture
+    on screen, in a small video and in a large one."""
+    return max(MIN_MARK_PIXELS, round(MARK_FRACTION * min(size)))
+
+
+def ring_sizes(ring: float, k: int = 0) -> np.ndarray:
+    """The two discs drawing run k's ring ``ring`` pixels wide: its edge, then its inside."""
+    step = ring / 5
+    return np.array([ring + step * (5 / 6), ring]) + step * k
+
+
+def label_pixels(item: gl.GLTextItem, scale: float = 1.0) -> int:
+    """An axis label's text height in pixels in a picture ``scale`` times as wide as the view
+    (at least ``MIN_LABEL_PIXELS``, so a small video keeps it legible)."""
+    return max(MIN_LABEL_PIXELS, round(QtGui.QFontInfo(item.font).pixelSize() * scale))
 
 
 def ball_mesh(stripes: np.ndarray = BALL_STRIPES, cap=(0.97, 0.97, 0.97), rows: int = 24,
@@ -302,6 +324,7 @@ class SceneView(gl.GLViewWidget):
         self.cut_edge.setGLOptions("translucent")
         self.axes = gl.GLLinePlotItem(color=AXIS_COLOR, width=1.5, antialias=True, mode="lines")
         self.axis_labels: list[gl.GLTextItem] = []
+        self._thinned_for = None   # what the labels were last thinned for (_thin_labels)
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
         self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=3.0, antialias=True, mode="line_strip")
         self.liftoff = gl.GLScatterPlotItem(color=LIFTOFF_COLOR, size=16.0, pxMode=True)
@@ -497,23 +520,87 @@ class SceneView(gl.GLViewWidget):
                 break   # a flat landscape: no height axis
             step = nice_step(hi - lo, 6 if k < 2 else 5)
             corner = (ox, oy)[k] if k < 2 else None
+            numbers = []
             for value in np.arange(np.ceil(lo / step) * step, hi + 1e-9 * step, step):
                 at = start.copy()
                 at[k] = value
                 segments += [at, at + out]
                 if corner is None or abs(value - corner) > 0.5 * step:   # the corner is the height axis's
-                    labels.append((at + 2.5 * out, f"{value if abs(value) > 1e-9 * step else 0.0:g}"))
-            labels.append((end + 6 * out, "xyz"[k] + " (m)"))
+                    numbers.append((at + 2.5 * out, f"{value if abs(value) > 1e-9 * step else 0.0:g}", k))
+            # the first and last numbers before those between (they are kept first where crowded)
+            labels += numbers[:1] + numbers[-1:] + numbers[1:-1] if len(numbers) > 1 else numbers
+            # the height axis's name beside its top number (as far out as that number is wide:
+            # ``_place_name``), the others' beyond their ends
+            labels.append((end + 6 * out, "xyz"[k] + " (m)", (end, out) if k == 2 else None))
         self.axes.setData(pos=np.array(segments))
         for item in self.axis_labels:
             self.removeItem(item)
         font = QtGui.QFont()
         font.setPointSizeF(8 * self.label_scale)
         self.axis_labels = [gl.GLTextItem(pos=np.asarray(pos, dtype=float), text=text, color=TEXT_COLOR,
-                                          font=font, glOptions="translucent") for pos, text in labels]
-        for item in self.axis_labels:
+                                          font=font, glOptions="translucent") for pos, text, _ in labels]
+        for item, (_, _, about) in zip(self.axis_labels, labels):
             item.setDepthValue(LABEL_DEPTH)
+            item.is_name = item.text.endswith(" (m)")
+            item.axis = about if not item.is_name else None              # a number's axis (0, 1, 2)
+            item.beside = about if item.is_name else None               # the height axis's (top, out)
             self.addItem(item)
+        self._thinned_for = None
+
+    def _thin_labels(self, size: tuple[int, int]) -> None:
+        """In a picture of ``size`` (the screen's or an export's), an axis number that would
+        overlap an axis name or a number shown before it is left out: the names first, then
+        each axis's numbers in order. (The height axis is short beside the others: with large
+        text its numbers would run into each other and into "z (m)".) Worked out again only when
+        the size, the camera or the labels change."""
+        w, h = size
+        matrix = self.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * self.viewMatrix()
+        key = (w, h, self.width(), tuple(matrix.data()), id(self.axis_labels), self.label_scale)
+        if key == self._thinned_for:
+            return
+        self._thinned_for = key
+        scale = w / max(1, self.width())
+        gap = LABEL_GAP * scale
+
+        def screen(point) -> tuple[float, float] | None:
+            p = matrix.map(QtGui.QVector4D(*map(float, point), 1.0))
+            return None if p.w() <= 0 else ((p.x() / p.w() + 1) / 2 * w, (1 - p.y() / p.w()) / 2 * h)
+
+        kept: list[QtCore.QRectF] = []
+        font = QtGui.QFont(self.axis_labels[0].font) if self.axis_labels else QtGui.QFont()
+        font.setPixelSize(label_pixels(self.axis_labels[0], scale) if self.axis_labels else MIN_LABEL_PIXELS)
+        metrics = QtGui.QFontMetricsF(font)   # every label has the same font
+        widest = max((metrics.horizontalAdvance(item.text) for item in self.axis_labels if item.axis == 2),
+                     default=0.0)
+        for item in sorted(self.axis_labels, key=lambda item: not item.is_name):
+            if item.beside is not None:
+                self._place_name(item, screen, widest, metrics.horizontalAdvance(item.text), gap)
+            xy = screen(item.pos)
+            show = xy is not None
+            if show:
+                x, y = xy
+                rect = QtCore.QRectF(x, y - metrics.ascent(), metrics.horizontalAdvance(item.text),
+                                     metrics.ascent() + metrics.descent()).adjusted(-gap, -gap, gap, gap)
+                show = not any(rect.intersects(other) for other in kept)
+                if show:
+                    kept.append(rect)
+            if item.visible() != show:
+                item.setVisible(show)
+
+    @staticmethod
+    def _place_name(item: gl.GLTextItem, screen, numbers: float, name: float, gap: float) -> None:
+        """The height axis's name at its top, out beyond its numbers (``numbers`` pixels wide at
+        most, 2.5 ticks out) on the picture: they are drawn rightwards from their anchors, so
+        where the ticks point right the name starts past the widest number, where they point left
+        it ends before the numbers start."""
+        top, out = item.beside
+        a, b = screen(top), screen(np.asarray(top) + out)
+        if a is None or b is None or abs(b[0] - a[0]) < 1e-6:
+            return
+        reach = 2.5 + ((numbers if b[0] > a[0] else name) + 2 * gap) / abs(b[0] - a[0])   # in ticks
+        pos = np.asarray(top, dtype=float) + reach * np.asarray(out)
+        if not np.allclose(pos, item.pos):
+            item.setData(pos=pos)
 
     def resizeEvent(self, event) -> None:
         super().resizeEvent(event)
@@ -701,11 +788,12 @@ class SceneView(gl.GLViewWidget):
     # -- the ball's mark: seen from the back of the room, the ball itself drawn to scale ----
 
     def _mark(self, edge, k: int = 0) -> gl.GLScatterPlotItem:
-        """A ring MARK_PIXELS wide around a ball's centre, drawn over the surface and under the
-        ball: a dark (or the run's) edge, a pale inside. Run k's ring is 6k pixels wider and drawn
-        before those of the runs before it, so where balls stand together every ring shows."""
-        mark = gl.GLScatterPlotItem(pos=np.zeros((2, 3)), size=np.array([MARK_PIXELS + 5.0, MARK_PIXELS]) + 6 * k,
-                                    pxMode=True)
+        """A ring ``mark_pixels`` wide around a ball's centre, drawn over the surface and under
+        the ball: a dark (or the run's) edge, a pale inside. Run k's ring is wider by k fifths of
+        its width and drawn before those of the runs before it, so where balls stand together
+        every ring shows."""
+        mark = gl.GLScatterPlotItem(pos=np.zeros((2, 3)), size=ring_sizes(MARK_PIXELS, k), pxMode=True)
+        mark.ring = (MARK_PIXELS, k)   # the ring's width and the run's index it is drawn for
         self._color_mark(mark, edge)
         mark.setGLOptions(MARK_GL)
         mark.setDepthValue(MARK_DEPTH - 0.01 * k)
@@ -719,10 +807,11 @@ class SceneView(gl.GLViewWidget):
         edge[3] = MARK_EDGE[3]
         mark.setData(color=np.array([edge, MARK_FILL]))
 
-    def ball_pixels(self, index: int = 0) -> float:
-        """A ball's diameter on screen in pixels, true to scale: its centre and a point one
-        radius from it across the line of sight, projected with the view's own matrices."""
-        w, h = self.width(), self.height()
+    def ball_pixels(self, index: int = 0, size: tuple[int, int] | None = None) -> float:
+        """A ball's diameter in pixels, true to scale, on screen or in a picture of ``size``
+        taken with the same camera: its centre and a point one radius from it across the line
+        of sight, projected with the view's own matrices."""
+        w, h = size or (self.width(), self.height())
         m = np.array((self.projectionMatrix((0, 0, w, h), (0, 0, w, h)) * self.viewMatrix()).data()).reshape(4, 4).T
         right = np.array(self.viewMatrix().row(0).toVector3D().toTuple())   # the camera's x axis in the world
         center = self.centers[index]
@@ -736,17 +825,24 @@ class SceneView(gl.GLViewWidget):
         self.marks_shown = on
         self.update()
 
-    def _place_marks(self) -> None:
-        """A ball is marked while it is shown smaller than MARK_PIXELS (changed only when it
+    def _place_marks(self, size: tuple[int, int]) -> None:
+        """For a picture of ``size`` (the screen's or an export's): a ball is marked while it is
+        drawn smaller than ``mark_pixels(size)``, by a ring that wide (changed only when it
         changes: a change asks for one more frame)."""
+        ring = mark_pixels(size)
         for k, (ball, mark) in enumerate(zip(self.balls, self.marks)):
-            wanted = self.marks_shown and ball.visible() and self.ball_pixels(k) < MARK_PIXELS
+            wanted = self.marks_shown and ball.visible() and self.ball_pixels(k, size) < ring
             if mark.visible() != wanted:
                 mark.setVisible(wanted)
+            if wanted and mark.ring != (ring, k):
+                mark.ring = (ring, k)
+                mark.setData(size=ring_sizes(ring, k))
 
-    def paintGL(self) -> None:
-        self._place_marks()
-        super().paintGL()
+    def paint(self, *, region, viewport, useItemNames=False) -> None:
+        """On screen (``paintGL``) and off screen (``renderToArray``, an export at any size)."""
+        self._place_marks((int(viewport[2]), int(viewport[3])))
+        self._thin_labels((int(viewport[2]), int(viewport[3])))
+        super().paint(region=region, viewport=viewport, useItemNames=useItemNames)
 
     def set_label_scale(self, scale: float) -> None:
         """The axis labels at ``scale`` times their normal size."""

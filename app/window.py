@@ -10,6 +10,7 @@ panels), ``session`` (the widget-free document and undo history).
 from __future__ import annotations
 
 import math
+import sys
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
@@ -36,6 +37,7 @@ from .start_editing import StartEditing
 from .sweep_dialog import SweepDialog
 from .timeline import TimeSlider
 from .view3d import SceneView
+from .worker import finish_all
 
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
@@ -206,8 +208,8 @@ class MainWindow(QtWidgets.QMainWindow):
                                          "Show the contact path", checkable=True)
         self.trail_action.setChecked(True)
         self.mark_action = self._action("Ball &Marker", self.view.set_marks_visible, "M",
-                                        "A ring around the ball where it is drawn smaller than 30 pixels (a mark "
-                                        "to see it from afar; the ball inside is to scale)", checkable=True,
+                                        "A ring around the ball where it is drawn smaller than 6 % of the view's "
+                                        "height (a mark to see it from afar; the ball inside is to scale)", checkable=True,
                                         name="ball_marker")
         self.mark_action.setChecked(True)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
@@ -459,10 +461,15 @@ class MainWindow(QtWidgets.QMainWindow):
         self.preferences.save(self)
         if self.speed_window is not None:
             self.speed_window.close()
+        for dialog in self.findChildren(SweepDialog):
+            dialog.close()   # its sweep is cancelled
         self.runs.reset()  # stops the worker and lets go of the run's arrays
         self.controller.shutdown()
         self.start_editing.shutdown()
         self.runs.stop_preparing()
+        left = finish_all()   # every worker in flight cancelled and waited for, bounded
+        if left:
+            print(f"rollball-app: still at work when closing: {', '.join(left)}", file=sys.stderr)
         event.accept()
 
 

@@ -273,13 +273,14 @@ def record_step(t_end: float) -> float:
     return t_end / min(MAX_ROWS, max(MIN_ROWS, math.ceil(t_end * ROWS_PER_SECOND)))
 
 
-def reference_run(scene: Scene, t_end: float | None = None,
-                  record_dt: float | None = None) -> tuple[Trajectory, float]:
+def reference_run(scene: Scene, t_end: float | None = None, record_dt: float | None = None,
+                  cancel: threading.Event | None = None) -> tuple[Trajectory, float]:
     """The reference trajectory (rows at multiples of ``record_dt`` and at t_end) and an
     estimate of its own error (the largest difference, in m, m/s, rad/s or ‖ΔR‖_F, from a
-    run with a 10x tighter tolerance)."""
+    run with a 10x tighter tolerance). Setting ``cancel`` raises ``Cancelled`` within one
+    chunk of steps."""
     t_end = scene.duration if t_end is None else t_end
-    traj, ref = _reference(scene, t_end, record_step(t_end) if record_dt is None else record_dt)
+    traj, ref = _reference(scene, t_end, record_step(t_end) if record_dt is None else record_dt, cancel)
     return traj, ref.error_estimate
 
 

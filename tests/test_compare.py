@@ -167,6 +167,16 @@ def test_progress_and_cancel():
     assert [d for d, _, _ in seen] == sorted(d for d, _, _ in seen)
 
 
+def test_a_reference_run_is_cancelled_within_a_chunk():
+    scene = make_scene(**{**WAVES, "duration": 1000.0})   # minutes of steps if it were not cancelled
+    cancel = threading.Event()
+    threading.Timer(0.2, cancel.set).start()
+    started = time.perf_counter()
+    with pytest.raises(Cancelled):
+        reference_run(scene, record_dt=1.0, cancel=cancel)
+    assert time.perf_counter() - started < 10
+
+
 def test_ctrl_c_exits_130_and_writes_nothing(tmp_path, monkeypatch, capsys):
     from rollball import comparison
 

@@ -3,10 +3,10 @@ few pixels across, so a ring marks it; the ball inside stays drawn to scale."""
 
 import numpy as np
 import pytest
-from PySide6 import QtCore
+from PySide6 import QtCore, QtGui
 
 from rollball_app.modes import DEFAULT_SIZE
-from rollball_app.view3d import MARK_PIXELS
+from rollball_app.view3d import MARK_FRACTION, MARK_PIXELS, MIN_MARK_PIXELS, mark_pixels
 
 from .guitools import set_field
 from .test_compare import compare_to_end
@@ -100,3 +100,38 @@ def test_compare_mode_marks_every_run_in_its_colour(qtbot, window):
     window.compare_action.setChecked(False)
     window.view.image()
     assert len(view.marks) == 1
+
+
+def _ring_in_picture(window, size) -> tuple[int, int]:
+    """Width and height in pixels of what the ring adds to an exported picture of ``size``."""
+    from rollball_app.picture import render_view
+
+    def pixels():
+        image = render_view(window.view, size).convertToFormat(QtGui.QImage.Format.Format_RGB888)
+        array = np.frombuffer(image.constBits(), np.uint8, image.sizeInBytes()).reshape(image.height(), -1)
+        return array[:, : 3 * image.width()].reshape(image.height(), image.width(), 3).astype(int)
+
+    with_ring = pixels()
+    window.mark_action.setChecked(False)
+    without = pixels()
+    window.mark_action.setChecked(True)
+    rows, cols = np.nonzero(np.abs(with_ring - without).sum(axis=-1) > 30)
+    return (int(cols.max() - cols.min() + 1), int(rows.max() - rows.min() + 1)) if len(rows) else (0, 0)
+
+
+@pytest.mark.parametrize("size", [(320, 240), (1920, 1080)])
+def test_an_export_rings_the_ball_in_proportion_to_its_size(qtbot, window, size):
+    """The ring is the same share of the picture on screen and in a small or a large export
+    (30 pixels in the default view, 504 pixels high): not 30 pixels of a 240-pixel video."""
+    _framed(qtbot, window, "hills")
+    width, height = _ring_in_picture(window, size)
+    share = MARK_FRACTION * min(size)
+    assert max(width, height) == pytest.approx(share * 7 / 6, abs=3), (width, height)   # the edge disc
+    assert max(width, height) / size[1] < 0.1
+
+
+def test_the_ring_on_screen_follows_the_view_size(qtbot, window):
+    assert mark_pixels((912, 504)) == MARK_PIXELS   # the default window's view
+    assert mark_pixels((648, 380)) == 23            # on a 1024×768 screen
+    assert mark_pixels((320, 240)) == 14 and mark_pixels((1920, 1080)) == 65
+    assert mark_pixels((100, 80)) == MIN_MARK_PIXELS

@@ -8,6 +8,7 @@ import pytest
 
 from rollball_app.controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run, RunController
 from rollball_app.document import Document
+from rollball_app.worker import ROWS
 from rollball import Scene, Simulation, simulate
 from rollball.examples import EXAMPLES_DIR
 from rollball.landscape import landscape_for
@@ -121,9 +122,10 @@ def test_a_run_counts_as_ended_only_once_its_last_rows_have_arrived(qtbot, hills
     controller = RunController()
     runs = controller.runs = runs_of(hills, dict(method="rk4", t_end=0.5), dict(method="dopri5", t_end=0.5))
     slow, fast = runs
-    controller._rows_ready(runs, 0, slow.buffer.derive(slow.simulation.advance(200)), False)
+    worker = controller.thread = object()   # the worker whose rows these are
+    controller._progress(worker, (ROWS, 0, slow.buffer.derive(slow.simulation.advance(200)), False))
     rows = fast.simulation.advance(10**6)
     assert fast.simulation.done and len(rows) > 1
     assert controller.end_time == fast.buffer.end_time < slow.buffer.end_time   # the fast run has shown nothing
-    controller._rows_ready(runs, 1, fast.buffer.derive(rows), True)
+    controller._progress(worker, (ROWS, 1, fast.buffer.derive(rows), True))
     assert fast.ended and controller.end_time == slow.buffer.end_time

@@ -10,7 +10,7 @@ import pytest
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball_app.controller import PAUSED, READY, RUNNING
-from rollball_app.worker import SimulationThread
+from rollball_app.worker import Worker
 
 from .guitools import apply_fields, run_to_end, set_field
 from hostile_corpus import FORMULAS, SCENE_BYTES, SCENE_TEXTS
@@ -40,7 +40,7 @@ def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
     print(f"\n100 start/stop cycles: threads {threads} -> {threading.active_count()}, "
           f"memory {rss_mb() - memory:+.1f} MB")
     assert threading.active_count() <= threads
-    assert len(window.findChildren(SimulationThread)) == 0
+    qtbot.waitUntil(lambda: not Worker.running, timeout=10_000)   # every worker let go of
     assert rss_mb() - memory < 40, f"{rss_mb() - memory:.1f} MB more after 100 runs"
     run_to_end(qtbot, window)  # and it still works
     assert window.message.text().startswith("Finished")

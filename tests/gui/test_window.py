@@ -303,7 +303,7 @@ def test_closing_during_a_run_ends_the_worker(qtbot, window):
     started = time.perf_counter()
     assert window.close()
     assert time.perf_counter() - started < 5.0  # one chunk, about 40 ms
-    assert thread.isFinished() and window.controller.thread is None
+    assert not thread.is_running() and window.controller.thread is None
 
 
 def test_the_event_loop_keeps_serving_during_a_million_step_run(qtbot, window):
