@@ -169,6 +169,7 @@ class ParameterRows(QtWidgets.QWidget):
         self.add_button.clicked.connect(lambda: self.ask_new(self.propose()))
         self.propose = lambda: ""   # the name the dialog proposes (the panel's: one the formula lacks)
         self.dialog: ParameterDialog | None = None
+        self.removed: dict[str, tuple[str, str, str]] = {}   # a removed row's value and range, as typed
         header = QtWidgets.QHBoxLayout()
         header.addWidget(self.title)
         header.addStretch(1)
@@ -230,6 +231,9 @@ class ParameterRows(QtWidgets.QWidget):
     def remove(self, name: str) -> None:
         """Take a parameter's row away; ``changed(name)``."""
         row = self.rows.pop(name)
+        low, high = row.declared or ("", "")
+        self.removed[name] = (row.edit.text(), "" if low == "" else format_number(low),
+                              "" if high == "" else format_number(high))
         self._layout.removeWidget(row)
         row.hide()
         row.deleteLater()
@@ -237,10 +241,14 @@ class ParameterRows(QtWidgets.QWidget):
         self.changed.emit(name)
 
     def ask_new(self, name: str = "") -> "ParameterDialog":
-        """The dialog asking for a new parameter (``name`` proposed); on OK it is added."""
+        """The dialog asking for a new parameter (``name`` proposed, with its value and range
+        as they were if it was removed); on OK it is added."""
         if self.dialog is not None:
             self.dialog.close()
         self.dialog = ParameterDialog(tuple(self.rows), name, self)
+        if name in self.removed:
+            for edit, text in zip((self.dialog.value, self.dialog.low, self.dialog.high), self.removed[name]):
+                edit.setText(text)
         self.dialog.chosen.connect(self.add)
         self.dialog.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
         self.dialog.destroyed.connect(lambda *_: setattr(self, "dialog", None))

@@ -107,16 +107,17 @@ def latency(repeats: int = 9) -> dict:
             while time.perf_counter() < end:
                 app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 20)
 
-        def drawn_after(change, done=lambda: True, since=None) -> float:
+        def drawn_after(change, done=lambda: True, since=None, drawn_at=None) -> float:
             """Seconds from ``change()`` (or from ``since()``, once ``done()``) to the view's next
-            frame on screen once ``done()``."""
+            frame on screen once ``done()`` (``drawn_at()``: the frames swapped when what is
+            waited for was drawn, if a frame may have followed before ``done()`` is seen)."""
             settle()
             started = time.perf_counter()
             change()
             deadline = started + 120
             while not done() and time.perf_counter() < deadline:
                 app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
-            seen = frames[0]
+            seen = frames[0] if drawn_at is None else drawn_at()
             while frames[0] == seen and time.perf_counter() < deadline:
                 app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
             return time.perf_counter() - (started if since is None else since())
@@ -148,21 +149,29 @@ def latency(repeats: int = 9) -> dict:
                 field.setCursorPosition(len(text) - 1)
                 QtTest.QTest.keyClicks(field, text[-1])
             since_pause = lambda: pause_ended[0]   # noqa: E731
-            seen_s = [drawn_after(lambda t=seen[i % 2]: keystroke(t), lambda t=seen[i % 2]: window.scene.landscape == t,
-                                  since_pause) for i in range(repeats)]
             fresh = [f"{base}+{random.randrange(10**8, 10**9)}e-10*x" for _ in range(2 * repeats)]   # never seen
-            new_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t, since_pause)
-                     for t in fresh[:repeats]]
+            seen_s, new_s = [], []
+            for i in range(repeats):   # in turns, so that the machine's load weighs on both alike
+                seen_s.append(drawn_after(lambda t=seen[i % 2]: keystroke(t),
+                                          lambda t=seen[i % 2]: window.scene.landscape == t, since_pause))
+                new_s.append(drawn_after(lambda t=fresh[i]: keystroke(t), lambda t=fresh[i]: window.scene.landscape == t,
+                                         since_pause))
             new_key_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t)
                          for t in fresh[repeats:]]
         finally:
             core._compile = real
         editing = window.start_editing
 
-        def previewed(scene) -> bool:
-            return editing.scene == scene and window.view.preview.visible() and not editing.preview.busy
-        preview_s = [drawn_after(lambda p=p: slider.setValue(p), lambda: previewed(window.scene)) for p in
-                     (150 + 700 * (i % 2) + 10 * i for i in range(repeats))]
+        preview_drawn = [None]   # the frames swapped when the shown scene's preview was drawn
+        editing.preview.ready.connect(lambda preview: preview_drawn.__setitem__(0, frames[0])
+                                      if preview.scene == window.scene else None)
+
+        def move(position: int) -> None:
+            preview_drawn[0] = None
+            slider.setValue(position)
+        preview_s = [drawn_after(lambda p=p: move(p), lambda: preview_drawn[0] is not None,
+                                 drawn_at=lambda: preview_drawn[0])
+                     for p in (150 + 700 * (i % 2) + 10 * i for i in range(repeats))]
         painted = [0]
 
         class Paints(QtCore.QObject):

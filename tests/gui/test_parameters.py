@@ -250,6 +250,20 @@ def test_removing_a_parameter_keeps_what_was_typed_and_the_formula_is_checked_ag
     assert rows.rows["k"].edit.text() == "1.0"
 
 
+def test_a_parameter_removed_by_mistake_comes_back_as_it_was(qtbot, ripples):
+    window, rows = ripples, ripples.panel.parameter_rows
+    rows.rows["a"].edit.setText("0.75")                     # typed, then removed at once
+    qtbot.mouseClick(rows.rows["a"].remove, QtCore.Qt.MouseButton.LeftButton)
+    apply_fields(qtbot, window)
+    assert "unknown name 'a'" in window.panel.error_text
+    qtbot.mouseClick(rows.add_button, QtCore.Qt.MouseButton.LeftButton)
+    dialog = rows.dialog
+    assert (dialog.name.text(), dialog.value.text(), dialog.low.text(), dialog.high.text()) == ("a", "0.75", "0.0", "1.0")
+    qtbot.mouseClick(dialog.ok, QtCore.Qt.MouseButton.LeftButton)
+    apply_fields(qtbot, window)
+    assert window.panel.error_text == "" and window.scene.parameters[-1] == Parameter("a", 0.75, 0.0, 1.0)
+
+
 def test_the_faster_redraw_draws_what_pyqtgraph_would():
     """Vertex normals made in numpy are pyqtgraph's own (to float32 rounding), and the camera's
     distance in closed form is where the bisection it replaced ended."""
