@@ -82,6 +82,7 @@ class CompareMode:
                 for sim, choice, color in zip(simulations, choices, compare_runs.COLORS)]
         w.view.set_runs([run.color for run in runs])
         w.readouts.set_runs([(run.label, run.color) for run in runs])
+        w.readouts.show_contact(False)   # a row per run: the slip and dissipation would not fit
         self.error_plots.set_runs(runs, scene.duration)
         self.summary.set_runs(runs)
         w.timeline.set_span(max(sim.t_end for sim in simulations))

@@ -13,8 +13,9 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball.trajectory import NORMAL_FORCE
+from rollball.trajectory import FLYING, NORMAL_FORCE
 
+from .contact_view import ModeSpans
 from .help import TOPIC
 
 FLOOR = 1e-17       # log plots show exact zeros at this level
@@ -165,6 +166,8 @@ class LivePlots(QtWidgets.QWidget):
         # where the energy has grown (the ball could climb above where it started): over the
         # |E − E0| curve in another colour, so a gain is told from a loss on the log axis
         self.curves["energy_gain"] = self.plots[0].plot(pen=pg.mkPen(GAIN_COLOR, width=2), connect="finite")
+        # where the ball slides or flies: shaded spans behind the normal force (0 in flight)
+        self.mode_spans = ModeSpans(self.plots[2])
         self.scale = 1.0
         self.show_run(None, 0)
 
@@ -204,6 +207,7 @@ class LivePlots(QtWidgets.QWidget):
     def show_run(self, buffer, index: int) -> None:
         """Plot rows 0..index of a ``RunBuffer`` (None or empty: clear)."""
         if buffer is None or len(buffer) == 0:
+            self.mode_spans.show(np.zeros(0), np.zeros(0))
             for curve in self.curves.values():
                 curve.setData([], [])
             for plot in self.plots[:2]:  # empty: show the range errors live in
@@ -218,4 +222,6 @@ class LivePlots(QtWidgets.QWidget):
             values = np.maximum(values, FLOOR)
             self.curves[name].setData(t, values)
             fit_decades(plot, values)
-        self.curves["force"].setData(t, buffer.rows[picked, NORMAL_FORCE])
+        modes = buffer.mode[: index + 1]
+        self.mode_spans.show(buffer.t[: index + 1], modes)
+        self.curves["force"].setData(t, np.where(modes[picked] == FLYING, 0.0, buffer.rows[picked, NORMAL_FORCE]))

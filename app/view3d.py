@@ -311,6 +311,8 @@ class SceneView(gl.GLViewWidget):
         for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
+        self._marked_colors = np.zeros((0, 4))   # of the marked points (lift-off, transitions)
+        self._trail_colors = [np.asarray(TRAIL_COLOR)]   # each run's own
         self.ball_radius = 0.1
         self.balls, self.trails = [self.ball], [self.trail]   # one per run (compare mode: several)
         self.centers = [np.zeros(3)]
@@ -655,7 +657,11 @@ class SceneView(gl.GLViewWidget):
         self.balls, self.trails, self.marks = [self.ball], [self.trail], self.marks[:1]
         self._color_mark(self.marks[0], MARK_EDGE if colors is None else colors[0])
         self.ball.setMeshData(meshdata=ball_mesh() if colors is None else run_ball_mesh(colors[0]))
-        self.trail.setData(color=TRAIL_COLOR if colors is None else pg.mkColor(colors[0]).getRgbF())
+        # the trails' colours are given per point (``set_trail``): a single colour set after
+        # per-point ones would reach the GL buffer as a tuple
+        self._trail_colors = [np.asarray(pg.mkColor(c).getRgbF(), dtype=float) for c in colors] if colors \
+            else [np.asarray(TRAIL_COLOR)]
+        self.trail.setData(pos=np.zeros((0, 3)), color=np.zeros((0, 4)))
         # one trail is added onto the surface; several keep their own colours where they cross
         self.trail.setGLOptions("additive" if colors is None else "translucent")
         for color in (colors or [])[1:]:
@@ -773,19 +779,31 @@ class SceneView(gl.GLViewWidget):
             self.opts["center"] = QtGui.QVector3D(*map(float, center))
         self.update()
 
-    def set_trail(self, points: np.ndarray, index: int = 0) -> None:
-        self.trails[index].setData(pos=points if len(points) >= 2 else np.zeros((0, 3)))
+    def set_trail(self, points: np.ndarray, index: int = 0, colors: np.ndarray | None = None) -> None:
+        """A run's trail through ``points``; ``colors``: one (r, g, b, a) per point (the contact's
+        modes), else the run's own colour."""
+        enough = len(points) >= 2
+        if colors is None:
+            colors = np.tile(self._trail_colors[index], (len(points), 1))
+        self.trails[index].setData(pos=points if enough else np.zeros((0, 3)),
+                                   color=colors if enough else np.zeros((0, 4)))
 
     def set_liftoff(self, point: np.ndarray | None) -> None:
-        """Mark the lift-off point; None hides the marker."""
+        """Mark the lift-off point; None hides the marker (and every other marked point)."""
         self.liftoff.setVisible(point is not None)
+        self._marked_colors = np.zeros((0, 4))
         if point is not None:
-            self.liftoff.setData(pos=np.asarray(point, dtype=float).reshape(1, 3))
+            self.add_liftoff(point)
 
-    def add_liftoff(self, point: np.ndarray) -> None:
-        """One more lift-off point (one per run in compare mode)."""
+    def add_liftoff(self, point: np.ndarray, color=LIFTOFF_COLOR) -> None:
+        """One more marked point: a lift-off (one per run in compare mode), or any change of the
+        contact's mode in the colour given."""
         shown = self.liftoff.pos if self.liftoff.visible() and self.liftoff.pos is not None else np.zeros((0, 3))
-        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]))
+        colors = self._marked_colors[: len(shown)]
+        color = np.asarray(pg.mkColor(color).getRgbF() if isinstance(color, str) else color, dtype=float)
+        self._marked_colors = np.vstack([colors, color.reshape(1, 4)])
+        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]),
+                             color=self._marked_colors)
         self.liftoff.setVisible(True)
 
     def set_follow(self, follow: bool, radius: float | None = None, index: int | None = None) -> None:
