@@ -4,7 +4,8 @@ known exactly, whatever the integrators do.
 
 On the plane z = 0: a ball struck at v₀ = 2 m/s without spin slides (μ = 0.2) until
 t₁ = 2v₀/(7μg), then rolls at 5v₀/7; at t₂ it is thrown up at 1 m/s (a flight: a parabola,
-normal force 0) and lands at t₃ = t₂ + 2/g, then rolls on.
+normal force 0) and lands at t₃ = t₂ + 2/g, then rolls on. Friction dissipates 2/7 of the
+kinetic energy (D = E₀ − E until the grip); the landing takes the throw's ½ m (1 m/s)².
 """
 
 from __future__ import annotations
@@ -55,6 +56,11 @@ def rows(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         row[ROW_SLICES["R"]] = np.eye(3).ravel()
         row[ROW_SLICES["energy"]] = 0.5 * M * (v * v + vz * vz) + 0.2 * M * R * R * w * w + M * G * z
         row[ROW_SLICES["normal_force"]] = force
+        kinetic = 0.5 * M * v * v + 0.2 * M * R * R * w * w
+        row[ROW_SLICES["slip_speed"]] = v - R * w   # the contact point's speed over the plane
+        # what friction took (all the kinetic energy lost until the grip), then the landing's too
+        row[ROW_SLICES["dissipated"]] = (0.5 * M * V0 * V0 - min(kinetic, 0.5 * M * V0 * V0)
+                                         + (0.5 * M * UP * UP if t >= T3 else 0.0))
         modes[k] = mode
     return out, modes
 

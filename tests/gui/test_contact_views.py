@@ -11,7 +11,7 @@ from rollball.examples import EXAMPLES_DIR
 from rollball.trajectory import CENTER, FLYING, ROLLING, SLIDING
 
 from .guitools import FASTEST
-from .scripted import SCENE, T1, T2, T3, TRANSITIONS, ScriptedSimulation
+from .scripted import MU, SCENE, T1, T2, T3, TRANSITIONS, V0, ScriptedSimulation
 
 
 def _play(qtbot, window, tmp_path):
@@ -59,6 +59,11 @@ def test_readouts_and_the_normal_force_in_flight(qtbot, window, tmp_path):
     _play(qtbot, window, tmp_path)
     readouts = window.readouts
     assert readouts["slip"].isVisible() and readouts["dissipated"].isVisible()
+    window.runs.seek(0.1)   # sliding: v − rω = v₀ − (7/2) μ g t
+    assert readouts["slip"].text() == f"{V0 - 3.5 * MU * 9.81 * 0.1:.3g} m/s"
+    window.runs.seek(0.5)   # rolling: friction took 2/7 of the kinetic energy, and the error counts it
+    assert readouts["slip"].text() == "0 m/s" and readouts["dissipated"].text() == f"{2 / 7 * 2.0:.5g} J"
+    assert abs(float(readouts["drift"].text())) < 1e-12
     window.runs.seek((T2 + T3) / 2)
     assert readouts["force"].text() == "0 N"
     force = window.plots.curves["force"].getData()[1]
