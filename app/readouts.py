@@ -129,12 +129,15 @@ class Readouts(QtWidgets.QWidget):
         self.show_contact(self.contact_shown)
         self.clear()
 
-    def show_contact(self, on: bool) -> None:
+    def show_contact(self, on: bool, columns: bool = True) -> None:
         """Show the slip speed and the energy dissipated (a scene whose ball can slip or fly), or
-        not (the 2011 model: they are always 0)."""
-        self.contact_shown = on
+        not (the 2011 model: they are always 0); ``columns`` False: the titles say the energy
+        error counts the dissipation, but its columns are left out (compare mode: they would
+        not fit a row per run)."""
         for key, title in TITLES[on].items():
             self.titles[key].setText(title)
+        on = on and columns
+        self.contact_shown = on
         for key in CONTACT_QUANTITIES:
             self.titles[key].setVisible(on)
             for row in self.rows:

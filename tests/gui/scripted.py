@@ -116,3 +116,17 @@ class ScriptedSimulation:
 
     def message(self, status=None) -> str:
         return "reached the end"
+
+
+class RollingSimulation(ScriptedSimulation):
+    """The same start, rolling all the way (no friction limit, nothing to fly over): no transitions."""
+
+    def __init__(self, dt: float = 0.01):
+        super().__init__(dt=dt)
+        self._rows[:, ROW_SLICES["normal_force"]] = M * G
+        self._modes[:] = ROLLING
+        self.liftoff_time = None
+
+    @property
+    def transitions(self) -> list:
+        return []

@@ -11,7 +11,7 @@ from rollball.examples import EXAMPLES_DIR
 from rollball.trajectory import CENTER, FLYING, ROLLING, SLIDING
 
 from .guitools import FASTEST
-from .scripted import MU, SCENE, T1, T2, T3, TRANSITIONS, V0, ScriptedSimulation
+from .scripted import MU, SCENE, T1, T2, T3, TRANSITIONS, V0, RollingSimulation, ScriptedSimulation
 
 
 def _play(qtbot, window, tmp_path):
@@ -82,3 +82,31 @@ def test_spans_from_modes():
     assert contact_view.spans(t, [0, 1, 1, 0, 2, 2, 2, 0]) == [(1.0, 3.0, SLIDING), (4.0, 7.0, FLYING)]
     assert contact_view.spans(t[:2], [2, 2]) == [(0.0, 1.0, FLYING)]
     assert contact_view.summary(TRANSITIONS) == "; 1 grip, 1 lift-off, 1 landing (0.5 J lost)"
+
+
+def test_compare_mode_each_run_shows_its_own_transitions(qtbot, window, tmp_path):
+    """One run slides and flies, the other only rolls: each trail in its own colour's shades, the
+    markers of the one that has transitions named by run, nothing of the other."""
+    SCENE.save(tmp_path / "billiard.json")
+    window.files.open_scene(tmp_path / "billiard.json", remember=False)
+    window.compare_action.setChecked(True)
+    runs = [Run(ScriptedSimulation(), window.landscape, "flies", "#1f77b4"),
+            Run(RollingSimulation(), window.landscape, "rolls", "#2ca02c")]
+    window.view.set_runs([run.color for run in runs])
+    window.readouts.set_runs([(run.label, run.color) for run in runs])
+    window.readouts.show_contact(True, columns=False)
+    window.timeline.set_span(1.0)
+    window.speed.setCurrentIndex(FASTEST)
+    window.controller.start(runs)
+    qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=20_000)
+    window.drawing.plot()
+    markers = [m for _, m in window.timeline.slider.markers]
+    assert [m.text.split(":")[0] for m in markers] == ["flies"] * 3
+    flying, rolling = (window.view.trails[k].color for k in (0, 1))
+    assert np.allclose(rolling, contact_view.trail_colors([ROLLING], "#2ca02c")[0])
+    picked = runs[0].buffer.trail_rows(len(runs[0].buffer) - 1)
+    assert np.allclose(flying, contact_view.trail_colors(runs[0].buffer.mode[picked], "#1f77b4"))
+    assert len({tuple(c) for c in flying}) == 3   # rolling, sliding and flying told apart
+    assert len(window.view.liftoff.pos) == 3
+    assert window.readouts.titles["drift"].text() == "(E+D−E₀)/E₀" and window.readouts["slip"].isHidden()
+    window.compare_action.setChecked(False)
