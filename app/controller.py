@@ -68,7 +68,7 @@ class Run:
         """The rows received so far as a trajectory (no copy)."""
         scene = self.simulation.scene
         return Trajectory(self.buffer.rows, mass=scene.ball.mass, radius=scene.ball.radius,
-                          gravity=scene.gravity)
+                          gravity=scene.gravity, modes=self.buffer.mode, transitions=tuple(self.transitions))
 
 
 class RunController(QtCore.QObject):
