@@ -103,14 +103,27 @@ def spans(t: np.ndarray, codes: np.ndarray) -> list[tuple[float, float, int]]:
 
 class ModeSpans:
     """Shaded time spans on a pyqtgraph plot where the run slides or flies (behind its curves),
-    with the mode's name in the tooltip."""
+    with the mode's name in the tooltip, and a line at each landing (one flight can follow another
+    at once: a bounce)."""
 
     def __init__(self, plot: pg.PlotItem):
         self.plot = plot
         self.items: list[pg.LinearRegionItem] = []
         self.shown: list[tuple[float, float, int]] = []
+        self.lines: list[pg.InfiniteLine] = []
 
-    def show(self, t: np.ndarray, codes: np.ndarray) -> None:
+    def show(self, t: np.ndarray, codes: np.ndarray, landings=()) -> None:
+        """Spans from rows' times and modes; ``landings``: times, those up to the last row shown."""
+        last = float(t[-1]) if len(t) else -np.inf
+        shown_landings = [x for x in landings if x <= last]
+        if [line.value() for line in self.lines] != shown_landings:
+            for line in self.lines:
+                self.plot.removeItem(line)
+            self.lines = [pg.InfiniteLine(pos=x, angle=90, pen=pg.mkPen(KIND_COLORS["landing"], width=2))
+                          for x in shown_landings]
+            for line in self.lines:
+                line.setToolTip(f"landing at t = {line.value():.4g} s")
+                self.plot.addItem(line, ignoreBounds=True)
         wanted = spans(t, codes)
         if wanted == self.shown:
             return

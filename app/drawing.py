@@ -40,6 +40,8 @@ class Drawing:
         w.readouts.set_runs([None])
         scene = w.scene
         w.readouts.show_contact(scene is not None and beyond_2011(scene))
+        w.plots.show_contact(scene is not None and beyond_2011(scene))
+        w.plots.landings = []
         if scene is not None and w.landscape is not None:
             self.draw_start(scene)
         w.plots.show_run(None, 0)
@@ -108,6 +110,7 @@ class Drawing:
             # while playing, the curves grow with the ball; otherwise they show all that is computed
             buffer = runs[0].buffer
             i = buffer.index_at(t)
+            w.plots.landings = [c.time for c in runs[0].transitions if c.kind == "landing"]
             w.plots.show_run(buffer, i if w.controller.state == RUNNING else len(buffer) - 1)
             w.plots.set_cursor(buffer.t[i])
         if runs:

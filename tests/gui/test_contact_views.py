@@ -72,9 +72,12 @@ def test_readouts_and_the_normal_force_in_flight(qtbot, window, tmp_path):
     shown = window.plots.mode_spans.shown
     assert [mode for *_, mode in shown] == [SLIDING, FLYING]
     assert abs(shown[1][0] - T2) < 0.011 and abs(shown[1][1] - T3) < 0.011
+    assert [line.value() for line in window.plots.mode_spans.lines] == [T3]   # the landing
+    assert window.plots.plots[0].property("plotTitle").startswith("|E + D − E₀|")
     # a scene of the 2011 model shows neither slip nor dissipation
     window.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
     assert not readouts["slip"].isVisible() and readouts.titles["drift"].text() == "(E − E₀)/E₀"
+    assert window.plots.plots[0].property("plotTitle").startswith("|E − E₀|") and not window.plots.mode_spans.lines
 
 
 def test_spans_from_modes():
