@@ -12,6 +12,7 @@ from PySide6 import QtCore, QtWidgets
 from rollball import METHODS, Scene, Status
 
 from . import compare_runs
+from .contact_view import beyond_2011
 from .compare_panel import ComparePanel
 from .controller import Run
 from .error_plots import ErrorPlots
@@ -82,6 +83,7 @@ class CompareMode:
                 for sim, choice, color in zip(simulations, choices, compare_runs.COLORS)]
         w.view.set_runs([run.color for run in runs])
         w.readouts.set_runs([(run.label, run.color) for run in runs])
+        w.readouts.show_contact(beyond_2011(scene), columns=False)   # a row per run: slip and dissipation would not fit
         self.error_plots.set_runs(runs, scene.duration)
         self.summary.set_runs(runs)
         w.timeline.set_span(max(sim.t_end for sim in simulations))

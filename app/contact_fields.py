@@ -14,6 +14,8 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball import Scene
 
+from .help import set_topic
+
 FRICTION, RESTITUTION, AFTER_LIFTOFF, OMEGA = ("contact.friction", "contact.restitution",
                                                 "contact.after_liftoff", "start.omega")
 # (dotted scene key, label, unit, placeholder shown while empty, tooltip)
@@ -31,6 +33,7 @@ AFTER_LIFTOFF_CHOICES = (("fly", "flies, lands again"), ("glued", "stays on the 
 AFTER_LIFTOFF_TIP = ("Where the surface would have to pull the ball (lift-off): it flies the exact parabola and "
                      "lands with an impact, or it stays glued to the surface as in 2011 (lift-off reported, "
                      "what follows not physical)")
+HELP_TOPIC = "model.html#contact"
 LABELS = {key: label for key, label, *_ in FIELDS} | {AFTER_LIFTOFF: "After lift-off"}
 UNITS = {key: unit for key, _, unit, *_ in FIELDS}
 KEYS = (FRICTION, RESTITUTION, AFTER_LIFTOFF, OMEGA)
@@ -108,6 +111,8 @@ class ContactFields(QtCore.QObject):
         self.labels[key] = QtWidgets.QLabel(LABELS[key])
         self.edits[key] = field
         form.addRow(self.labels[key], row)
+        for widget in (self.labels[key], row, field):
+            set_topic(widget, HELP_TOPIC)   # F1 over a contact field: what it does
 
     def _edit(self, key: str) -> QtWidgets.QLineEdit:
         _, _, unit, placeholder, tip = next(f for f in FIELDS if f[0] == key)
@@ -124,6 +129,7 @@ class ContactFields(QtCore.QObject):
     def group(self) -> QtWidgets.QGroupBox:
         """The Contact group: friction, restitution, after lift-off."""
         box = QtWidgets.QGroupBox("Contact")
+        set_topic(box, HELP_TOPIC)
         form = QtWidgets.QFormLayout(box)
         form.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
         for key in (FRICTION, RESTITUTION):

@@ -7,7 +7,9 @@ it; what was computed stays). Signals tell the window what to show:
 
 - ``stateChanged(state)`` whenever the state or ``computed`` changes,
 - ``frameReady(force)`` when the play time moved (``force``: draw even an unchanged row),
-- ``event(run, kind, t)`` when playback passes something worth saying (``"liftoff"``),
+- ``event(run, kind, t)`` when playback passes something worth saying (``"liftoff"`` where a
+  glued ball would leave the surface; a transition of the contact: ``"slip"``, ``"grip"``,
+  ``"liftoff"`` or ``"landing"``, its kind as in ``Run.transitions``),
 - ``finished()`` when playback reached the end of every run,
 - ``failed(message)`` when the core raised in the worker,
 - ``measured()`` when a comparison's reference is known and every run's true error against
@@ -41,19 +43,33 @@ class Run:
         self.label, self.color = label, color
         self.seconds = 0.0                 # compute time, known once the worker is done with it
         self.errors: dict | None = None    # true errors against the reference, per row
+        modes = (lambda: simulation.modes) if hasattr(type(simulation), "modes") else None
         self.buffer = RunBuffer(landscape, scene.ball.mass, scene.ball.radius, scene.gravity,
-                                capacity=simulation.row_capacity)
+                                capacity=simulation.row_capacity, modes=modes)
         self.liftoff_announced = False
+        self.announced = 0                 # transitions announced so far
         self.ended = False                 # the run's computation has ended and all its rows are here
 
     def index_at(self, t: float) -> int:
         return self.buffer.index_at(t)
 
+    @property
+    def transitions(self) -> list:
+        """The changes of the contact's mode found so far (``trajectory.Transition``s, in time
+        order; none in the 2011 model)."""
+        return list(getattr(self.simulation, "transitions", ()))
+
+    @property
+    def glued(self) -> bool:
+        """The ball stays on the surface after a lift-off (the 2011 behaviour): a lift-off is
+        reported, not flown."""
+        return self.simulation.scene.contact.after_liftoff == "glued"
+
     def trajectory(self) -> Trajectory:
         """The rows received so far as a trajectory (no copy)."""
         scene = self.simulation.scene
         return Trajectory(self.buffer.rows, mass=scene.ball.mass, radius=scene.ball.radius,
-                          gravity=scene.gravity)
+                          gravity=scene.gravity, modes=self.buffer.mode, transitions=tuple(self.transitions))
 
 
 class RunController(QtCore.QObject):
@@ -279,11 +295,18 @@ class RunController(QtCore.QObject):
     def _frame(self, force: bool) -> None:
         self.frameReady.emit(force)
         for i, run in enumerate(self.runs):
+            if not len(run.buffer):
+                continue
+            shown = run.buffer.t[run.index_at(self.play_time)]
             liftoff = run.simulation.liftoff_time  # set by the kernel as soon as it happens
-            if (liftoff is not None and not run.liftoff_announced and len(run.buffer)
-                    and run.buffer.t[run.index_at(self.play_time)] >= liftoff):
+            if run.glued and liftoff is not None and not run.liftoff_announced and shown >= liftoff:
                 run.liftoff_announced = True
                 self.event.emit(i, "liftoff", liftoff)
+            changes = run.transitions
+            while run.announced < len(changes) and changes[run.announced].time <= shown:
+                change = changes[run.announced]
+                run.announced += 1
+                self.event.emit(i, change.kind, change.time)
 
     def _set_state(self, state: str) -> None:
         self.state = state

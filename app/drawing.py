@@ -17,6 +17,7 @@ from rollball import Scene
 from rollball.geometry import unit_normal
 from rollball.trajectory import CENTER, CONTACT, R
 
+from .contact_view import beyond_2011, trail_colors
 from .controller import RUNNING
 
 PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
@@ -38,6 +39,9 @@ class Drawing:
         w.view.set_runs(None)
         w.readouts.set_runs([None])
         scene = w.scene
+        w.readouts.show_contact(scene is not None and beyond_2011(scene))
+        w.plots.show_contact(scene is not None and beyond_2011(scene))
+        w.plots.landings = []
         if scene is not None and w.landscape is not None:
             self.draw_start(scene)
         w.plots.show_run(None, 0)
@@ -79,9 +83,11 @@ class Drawing:
         for k, (run, i) in enumerate(zip(runs, indices)):
             if len(run.buffer):
                 row = run.buffer.rows[i]
-                trail = run.buffer.trail(i, lift=0.3)   # 0.3 r above the contact point
+                picked = run.buffer.trail_rows(i)
+                trail = run.buffer.trail(i, lift=0.3, picked=picked)   # 0.3 r above the contact point
                 w.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
-                w.view.set_trail(trail, k)
+                # coloured by the contact's mode (in compare mode, shades of the run's colour)
+                w.view.set_trail(trail, k, trail_colors(run.buffer.mode[picked], run.color))
                 if k == followed:
                     self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color)
                 w.readouts.show_row(k, run.buffer, i)
@@ -104,6 +110,7 @@ class Drawing:
             # while playing, the curves grow with the ball; otherwise they show all that is computed
             buffer = runs[0].buffer
             i = buffer.index_at(t)
+            w.plots.landings = [c.time for c in runs[0].transitions if c.kind == "landing"]
             w.plots.show_run(buffer, i if w.controller.state == RUNNING else len(buffer) - 1)
             w.plots.set_cursor(buffer.t[i])
         if runs:

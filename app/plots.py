@@ -13,11 +13,14 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball.trajectory import NORMAL_FORCE
+from rollball.trajectory import FLYING, NORMAL_FORCE
 
+from .contact_view import ModeSpans
 from .help import TOPIC
 
 FLOOR = 1e-17       # log plots show exact zeros at this level
+# the energy plot's title, and where the ball can slide or fly: the dissipation D counted as accounted for
+ENERGY_TITLES = {False: "|E − E₀| / E₀ (orange: gained)", True: "|E + D − E₀| / E₀ (orange: gained)"}
 GAIN_COLOR = "#e67e22"   # the energy curve where the energy has grown
 MAX_POINTS = 2000   # per curve; longer runs are thinned for drawing
 TITLE_POINTS = 9    # plot titles at font scale 1
@@ -138,7 +141,7 @@ class LivePlots(QtWidgets.QWidget):
         self.plots: list[pg.PlotItem] = []
         self.cursors = []
         for name, title, units, log in (
-            ("energy", "|E − E₀| / E₀ (orange: gained)", "", True),
+            ("energy", ENERGY_TITLES[False], "", True),
             ("orthogonality", "‖RᵀR − I‖", "", True),
             ("force", "Normal force F·N", "N", False),
         ):
@@ -165,7 +168,10 @@ class LivePlots(QtWidgets.QWidget):
         # where the energy has grown (the ball could climb above where it started): over the
         # |E − E0| curve in another colour, so a gain is told from a loss on the log axis
         self.curves["energy_gain"] = self.plots[0].plot(pen=pg.mkPen(GAIN_COLOR, width=2), connect="finite")
+        # where the ball slides or flies: shaded spans behind the normal force (0 in flight)
+        self.mode_spans = ModeSpans(self.plots[2])
         self.scale = 1.0
+        self.landings: list[float] = []   # the times of the shown run's landings (set with its transitions)
         self.show_run(None, 0)
 
     def _hovered(self, pos: QtCore.QPointF) -> None:
@@ -196,6 +202,14 @@ class LivePlots(QtWidgets.QWidget):
             plot.getAxis("left").setWidth(None if normal else int(round(40 * scale)))
             plot.getAxis("bottom").setHeight(None if normal else int(round(30 * scale)))
 
+    def show_contact(self, on: bool) -> None:
+        """Title the energy plot for a scene whose ball can slide or fly (``on``: its error counts
+        the energy dissipated as accounted for) or not."""
+        plot = self.plots[0]
+        if plot.property("plotTitle") != ENERGY_TITLES[on]:
+            plot.setProperty("plotTitle", ENERGY_TITLES[on])
+            plot.setTitle(ENERGY_TITLES[on], size=f"{TITLE_POINTS * self.scale:g}pt", color="#333")
+
     def set_duration(self, t_end: float) -> None:
         """Fix the time axis to the run: it is not re-laid out at every update."""
         for plot in self.plots:
@@ -204,6 +218,7 @@ class LivePlots(QtWidgets.QWidget):
     def show_run(self, buffer, index: int) -> None:
         """Plot rows 0..index of a ``RunBuffer`` (None or empty: clear)."""
         if buffer is None or len(buffer) == 0:
+            self.mode_spans.show(np.zeros(0), np.zeros(0))
             for curve in self.curves.values():
                 curve.setData([], [])
             for plot in self.plots[:2]:  # empty: show the range errors live in
@@ -218,4 +233,6 @@ class LivePlots(QtWidgets.QWidget):
             values = np.maximum(values, FLOOR)
             self.curves[name].setData(t, values)
             fit_decades(plot, values)
-        self.curves["force"].setData(t, buffer.rows[picked, NORMAL_FORCE])
+        modes = buffer.mode[: index + 1]
+        self.mode_spans.show(buffer.t[: index + 1], modes, self.landings)
+        self.curves["force"].setData(t, np.where(modes[picked] == FLYING, 0.0, buffer.rows[picked, NORMAL_FORCE]))

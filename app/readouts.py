@@ -1,4 +1,6 @@
-"""The numbers under the 3-D view: time, energy, its error, ‖RᵀR − I‖, normal force, speed.
+"""The numbers under the 3-D view: time, energy, its error, ‖RᵀR − I‖, normal force, speed,
+and where the contact can slip or the ball fly (a scene beyond the 2011 model), the slip speed
+and the energy dissipated (the energy error counts it as accounted for).
 
 One row of values per run; with several runs each row starts with the run's colour and name,
 shortened with "…" when the window is narrow (whole in its tooltip).
@@ -9,14 +11,25 @@ from __future__ import annotations
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball.trajectory import ENERGY, NORMAL_FORCE, T, VELOCITY
+from rollball.trajectory import ENERGY, FLYING, NORMAL_FORCE, T, VELOCITY
 
 QUANTITIES = (("t", "Time t"), ("energy", "Energy E"), ("drift", "(E − E₀)/E₀"), ("orth", "‖RᵀR − I‖"),
-              ("force", "Normal force F·N"), ("speed", "Speed |ċ|"))
+              ("force", "Normal force F·N"), ("speed", "Speed |ċ|"), ("slip", "Slip |u|"),
+              ("dissipated", "Dissipated"))
+CONTACT_QUANTITIES = ("slip", "dissipated")   # shown for scenes beyond the 2011 model
+# titles that change where the contact quantities are shown: shorter, so all fit a 1024-pixel window
+TITLES = {False: {"drift": "(E − E₀)/E₀", "force": "Normal force F·N"},
+          True: {"drift": "(E+D−E₀)/E₀", "force": "Force F·N"}}   # D: the energy dissipated
 FORMATS = {"t": "{:.4f} s", "energy": "{:.8g} J", "drift": "{:.2e}", "orth": "{:.2e}", "force": "{:.5g} N",
-           "speed": "{:.5g} m/s"}
+           "speed": "{:.5g} m/s", "slip": "{:.3g} m/s", "dissipated": "{:.5g} J"}
 WIDEST = {"t": 99.0, "energy": -0.12345678, "drift": -1e-10, "orth": 1e-10, "force": -0.12345,
-          "speed": 0.12345}   # a value as wide as each readout usually shows
+          "speed": 0.12345, "slip": 0.123, "dissipated": 0.12345}   # a value as wide as each readout usually shows
+TIPS = {"force": "The normal force F·N the surface pushes the ball with (0 in flight)",
+        "drift": "The energy's change since the start, what sliding friction and landings dissipated (D) counted "
+                 "as accounted for: the integrator's error alone",
+        "slip": "Slip speed: how fast the ball's point at the contact moves over the surface (0 while it rolls; in "
+                "flight, its point nearest the surface)",
+        "dissipated": "Energy dissipated so far by sliding friction and by landings"}
 SHORTEST_NAME = 14   # characters of a run's name kept, at least, before the "…" ("● RK4 Munthe-K…")
 
 
@@ -77,10 +90,14 @@ class Readouts(QtWidgets.QWidget):
         self.grid = QtWidgets.QGridLayout(self)
         self.grid.setContentsMargins(6, 2, 6, 2)
         self.grid.setVerticalSpacing(1)
-        for i, (_, title) in enumerate(QUANTITIES):
-            name = QtWidgets.QLabel(title)
+        self.titles: dict[str, QtWidgets.QLabel] = {}
+        for i, (key, title) in enumerate(QUANTITIES):
+            name = QtWidgets.QLabel(title, objectName=f"readoutTitle.{key}")
             name.setStyleSheet("color: #555;")
+            name.setToolTip(TIPS.get(key, ""))
             self.grid.addWidget(name, 0, i + 1)
+            self.titles[key] = name
+        self.contact_shown = True
         self.rows: list[dict[str, QtWidgets.QLabel]] = []
         self.names: list[QtWidgets.QLabel] = []
         self.set_runs([None])
@@ -109,7 +126,22 @@ class Readouts(QtWidgets.QWidget):
             for i, label in enumerate(row.values()):
                 self.grid.addWidget(label, r + 1, i + 1)
             self.rows.append(row)
+        self.show_contact(self.contact_shown)
         self.clear()
+
+    def show_contact(self, on: bool, columns: bool = True) -> None:
+        """Show the slip speed and the energy dissipated (a scene whose ball can slip or fly), or
+        not (the 2011 model: they are always 0); ``columns`` False: the titles say the energy
+        error counts the dissipation, but its columns are left out (compare mode: they would
+        not fit a row per run)."""
+        for key, title in TITLES[on].items():
+            self.titles[key].setText(title)
+        on = on and columns
+        self.contact_shown = on
+        for key in CONTACT_QUANTITIES:
+            self.titles[key].setVisible(on)
+            for row in self.rows:
+                row[key].setVisible(on)
 
     def clear(self) -> None:
         """Before a run: only the time, at 0."""
@@ -121,8 +153,10 @@ class Readouts(QtWidgets.QWidget):
     def show_row(self, r: int, buffer, i: int) -> None:
         """Run r's values at row i of its ``RunBuffer``."""
         row = buffer.rows[i]
+        flying = buffer.mode_of(i) == FLYING
         values = {"t": row[T], "energy": row[ENERGY], "drift": buffer.energy_error[i],
-                  "orth": buffer.orthogonality_error[i], "force": row[NORMAL_FORCE],
-                  "speed": np.linalg.norm(row[VELOCITY])}
+                  "orth": buffer.orthogonality_error[i], "force": 0.0 if flying else row[NORMAL_FORCE],
+                  "speed": np.linalg.norm(row[VELOCITY]), "slip": buffer.slip_speed[i],
+                  "dissipated": buffer.dissipated[i]}
         for key, label in self.rows[r].items():
             label.setText(FORMATS[key].format(values[key]))

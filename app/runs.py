@@ -9,11 +9,14 @@ drawing a moment of them is ``drawing.Drawing``'s; compare mode's runs are made 
 
 from __future__ import annotations
 
+import numpy as np
 from PySide6 import QtCore
 
 from rollball import Scene, Simulation, Status
+from rollball.geometry import unit_normal
 from rollball.simulation import recording
 
+from . import contact_view
 from .controller import FINISHED, PAUSED, READY, RUNNING, STOPPED, Run
 from .session import run_spec
 from .timeline import Marker
@@ -183,12 +186,19 @@ class RunCommands:
             self.seek(t)
 
     def show_events(self) -> None:
-        """Lift-off and an early stop as markers on the time slider and links beside it."""
+        """Lift-off (of a glued ball), every run's transitions of the contact (slip, grip,
+        lift-off, landing; in compare mode named by run) and an early stop as markers on the
+        time slider and links beside it."""
         w, simulation = self.window, self.controller.simulation
         events = []
-        if simulation.liftoff_time is not None:
+        first = self.controller.runs[0]
+        if simulation.liftoff_time is not None and first.glued:
             events.append(Marker(simulation.liftoff_time, LIFTOFF_COLOR,
                                  f"lift-off at t = {simulation.liftoff_time:.4g} s"))
+        compare = w.compare.active
+        for run in self.controller.runs if compare else self.controller.runs[:1]:
+            events += contact_view.markers(run.transitions, run.label if compare else "")
+        events.sort(key=lambda marker: marker.time)
         if simulation.status not in (None, Status.OK, Status.ABORTED) and len(self.controller.buffer):
             t = self.controller.buffer.end_time
             events.append(Marker(t, STOP_COLOR, f"{simulation.status.value.replace('_', ' ')} at t = {t:.4g} s"))
@@ -215,21 +225,34 @@ class RunCommands:
         liftoff = self._liftoff_note()   # every event of the run stays in its last word
         if status is Status.OK:
             warnings = "".join(f"; {note}" for note in self.controller.runs[0].trajectory().warnings())
-            w.show_message(f"Finished: {text}" + liftoff + warnings, warning=bool(warnings or liftoff))
+            glued_liftoff = self.controller.runs[0].glued and simulation.liftoff_time is not None
+            w.show_message(f"Finished: {text}" + liftoff + warnings, warning=bool(warnings or glued_liftoff))
         else:
             w.show_message(f"Stopped early ({status.value.replace('_', ' ')}): {text}" + liftoff, warning=True)
 
     def _liftoff_note(self) -> str:
+        run = self.controller.runs[0]
+        if not run.glued:
+            return contact_view.summary(run.transitions)
         t = self.controller.simulation.liftoff_time
         return "" if t is None else f"; lift-off at t = {t:.4g} s (not physical from there on)"
 
     def run_event(self, index: int, kind: str, t: float) -> None:
         w = self.window
-        if kind == "liftoff":
-            w.view.add_liftoff(self.controller.runs[index].buffer.point_at(t))
-            who = f"{self.controller.runs[index].label}: " if w.compare.active else ""
+        run = self.controller.runs[index]
+        who = f"{run.label}: " if w.compare.active else ""
+        if kind == "liftoff" and run.glued:
+            w.view.add_liftoff(run.buffer.point_at(t))
             w.show_message(f"{who}Lift-off at t = {t:.4g} s: the real ball would leave the surface "
                            f"here; the model keeps it on, so what follows is not physical", warning=True)
+            return
+        change = next((c for c in run.transitions if c.time == t and c.kind == kind), None)
+        if change is not None:
+            d = run.buffer.landscape.evaluate(change.x, change.y)
+            if np.all(np.isfinite(d[:3])):   # over the surface, as the trail is (0.3 r along the normal)
+                point = np.array([change.x, change.y, d[0]]) + 0.3 * run.buffer.radius * unit_normal(d)
+                w.view.add_liftoff(point, contact_view.KIND_COLORS[kind])
+            w.show_message(contact_view.sentence(kind, t, who))
 
     def update_controls(self) -> None:
         """The run controls as the state says: what Start does, which commands are open."""

@@ -24,7 +24,7 @@ from .undo import SceneChange
 def physics(scene: Scene) -> tuple:
     """What a run depends on (not the drawn grid or the description)."""
     return (scene.landscape, scene.parameters, scene.gravity, scene.ball, scene.start, scene.integrator,
-            scene.duration)
+            scene.duration, scene.contact)
 
 
 def run_spec(scene: Scene) -> RunSpec:

@@ -8,11 +8,13 @@ reached.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from html import escape
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
 STEPS = 10_000          # slider positions over the run
 MARKER_PIXELS = 6       # a click this close to a marker jumps to it
+MAX_LINKS = 2           # events named beside the slider; the others are markers on it only
 
 
 @dataclass(frozen=True)
@@ -20,6 +22,7 @@ class Marker:
     time: float
     color: str
     text: str           # tooltip, e.g. "lift-off at t = 1.23 s"
+    short: str = ""     # the link's text beside the slider, when shorter than ``text``
 
 
 class MarkedSlider(QtWidgets.QSlider):
@@ -131,11 +134,15 @@ class TimeSlider(QtWidgets.QWidget):
         self.slider.update()
 
     def set_markers(self, markers: list[Marker]) -> None:
-        """Events on the slider, and as links beside it."""
+        """Events on the slider, and the first ``MAX_LINKS`` as links beside it (the window
+        keeps its width however many bounces a run has)."""
         self.slider.markers = [(self._position(m.time), m) for m in markers]
         self.slider.update()
-        self.events.setText("Go to: " + " · ".join(f'<a href="{m.time!r}">{m.text}</a>' for m in markers)
-                            if markers else "")
+        links = " · ".join(f'<a href="{m.time!r}">{escape(m.short or m.text)}</a>' for m in markers[:MAX_LINKS])
+        more = len(markers) - MAX_LINKS
+        self.events.setText(("Go to: " + links + (f" · +{more}" if more > 0 else "")) if markers else "")
+        self.events.setToolTip("Click a time to show that moment" + (f"; {more} more marked on the slider "
+                                                                      "(click a marker)" if more > 0 else ""))
 
     def set_time(self, t: float, shown: float | None = None) -> None:
         """Put the handle at time t (no ``seeked``); the label says ``shown``, the time of the

@@ -32,6 +32,15 @@ CUT_COLOR = (0.15, 0.15, 0.15, 0.55)        # the edge where unreachable heights
 AXIS_COLOR = (0.30, 0.30, 0.30, 1.0)
 TEXT_COLOR = (60, 60, 60, 255)
 TRAIL_COLOR = (0.80, 0.10, 0.10, 1.0)
+CASING_COLOR = (0.08, 0.08, 0.08, 0.85)   # a dark edge under each trail: readable on every surface colour
+CASING_EXTRA = 3.0                        # pixels wider than the trail
+# Drawn after the surface (depth 0) and before the ball: the casing, then its trail over it, both
+# without the depth test, as the trail always was (a line's many short antialiased segments would
+# hide each other's pixels in the depth buffer): the whole path stays in sight, over the hills too.
+CASING_DEPTH, TRAIL_DEPTH = 0.01, 0.02
+TRAIL_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,
+            "glBlendFunc": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA)}
+CASING_GL = TRAIL_GL
 LIFTOFF_COLOR = (1.0, 0.55, 0.0, 1.0)
 PREVIEW_COLOR = (1.0, 0.2, 0.8, 1.0)        # the path's preview before a run (magenta: seen on every height colour)
 ARROW_COLOR = (0.05, 0.05, 0.05, 0.9)       # the start velocity's arrow
@@ -326,7 +335,8 @@ class SceneView(gl.GLViewWidget):
         self.axis_labels: list[gl.GLTextItem] = []
         self._thinned_for = None   # what the labels were last thinned for (_thin_labels)
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
-        self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=3.0, antialias=True, mode="line_strip")
+        self.trail = self._trail_items(TRAIL_COLOR)
+        self.casing = self.trail.casing
         self.liftoff = gl.GLScatterPlotItem(color=LIFTOFF_COLOR, size=16.0, pxMode=True)
         self.liftoff.setGLOptions("translucent")
         self.liftoff.setDepthValue(BALL_DEPTH + 0.1)   # over the ball's mark
@@ -334,6 +344,9 @@ class SceneView(gl.GLViewWidget):
         for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
+        self._marked_colors = np.zeros((0, 4))   # of the marked points (lift-off, transitions)
+        self._trail_colors = [np.asarray(TRAIL_COLOR)]   # each run's own
+        self.addItem(self.casing)
         self.ball_radius = 0.1
         self.balls, self.trails = [self.ball], [self.trail]   # one per run (compare mode: several)
         self.centers = [np.zeros(3)]
@@ -737,14 +750,17 @@ class SceneView(gl.GLViewWidget):
 
     def set_runs(self, colors: list | None) -> None:
         """One ball and trail per colour (compare mode), or None: the single striped ball."""
-        for item in self.balls[1:] + self.trails[1:] + self.marks[1:]:
+        for item in self.balls[1:] + self.trails[1:] + [t.casing for t in self.trails[1:]] + self.marks[1:]:
             self.removeItem(item)
         self.balls, self.trails, self.marks = [self.ball], [self.trail], self.marks[:1]
         self._color_mark(self.marks[0], MARK_EDGE if colors is None else colors[0])
         self.ball.setMeshData(meshdata=ball_mesh() if colors is None else run_ball_mesh(colors[0]))
-        self.trail.setData(color=TRAIL_COLOR if colors is None else pg.mkColor(colors[0]).getRgbF())
-        # one trail is added onto the surface; several keep their own colours where they cross
-        self.trail.setGLOptions("additive" if colors is None else "translucent")
+        # the trails' colours are given per point (``set_trail``): a single colour set after
+        # per-point ones would reach the GL buffer as a tuple
+        self._trail_colors = [np.asarray(pg.mkColor(c).getRgbF(), dtype=float) for c in colors] if colors \
+            else [np.asarray(TRAIL_COLOR)]
+        self.trail.setData(pos=np.zeros((0, 3)), color=np.zeros((0, 4)))
+        self.casing.setData(pos=np.zeros((0, 3)))
         for color in (colors or [])[1:]:
             ball = gl.GLMeshItem(meshdata=run_ball_mesh(color), smooth=False, shader="shaded",
                                  glOptions="opaque")
@@ -753,9 +769,9 @@ class SceneView(gl.GLViewWidget):
             mark = self._mark(color, len(self.marks))
             mark.setData(pos=self.marks[0].pos)
             self.marks.append(mark)
-            trail = gl.GLLinePlotItem(color=pg.mkColor(color).getRgbF(), width=3.0, antialias=True,
-                                      mode="line_strip", glOptions="translucent")
+            trail = self._trail_items(pg.mkColor(color).getRgbF())
             self.addItem(ball)
+            self.addItem(trail.casing)
             self.addItem(trail)
             self.balls.append(ball)
             self.trails.append(trail)
@@ -764,6 +780,7 @@ class SceneView(gl.GLViewWidget):
         for ball, trail in zip(self.balls, self.trails):
             ball.setVisible(True)
             trail.setVisible(self.trails_shown)
+            trail.casing.setVisible(self.trails_shown)
         self.centers = [self.centers[0]] * len(self.balls)
         self.colors = list(colors) if colors else None
         self.followed = 0
@@ -784,6 +801,7 @@ class SceneView(gl.GLViewWidget):
     def set_run_visible(self, index: int, visible: bool) -> None:
         self.balls[index].setVisible(visible)
         self.trails[index].setVisible(visible and self.trails_shown)
+        self.trails[index].casing.setVisible(visible and self.trails_shown)
 
     # -- the ball's mark: seen from the back of the room, the ball itself drawn to scale ----
 
@@ -858,6 +876,7 @@ class SceneView(gl.GLViewWidget):
         self.trails_shown = on
         for ball, trail in zip(self.balls, self.trails):
             trail.setVisible(on and ball.visible())
+            trail.casing.setVisible(on and ball.visible())
 
     def set_ball(self, center: np.ndarray, R: np.ndarray, radius: float, index: int = 0) -> None:
         """Place a run's ball (see ``ball_transform``)."""
@@ -869,19 +888,42 @@ class SceneView(gl.GLViewWidget):
             self.opts["center"] = QtGui.QVector3D(*map(float, center))
         self.update()
 
-    def set_trail(self, points: np.ndarray, index: int = 0) -> None:
-        self.trails[index].setData(pos=points if len(points) >= 2 else np.zeros((0, 3)))
+    @staticmethod
+    def _trail_items(color) -> gl.GLLinePlotItem:
+        """A run's trail, with its dark casing as ``trail.casing`` (both to be added to the view)."""
+        trail = gl.GLLinePlotItem(color=color, width=3.0, antialias=True, mode="line_strip", glOptions=TRAIL_GL)
+        trail.casing = gl.GLLinePlotItem(color=CASING_COLOR, width=3.0 + CASING_EXTRA, antialias=True,
+                                         mode="line_strip", glOptions=CASING_GL)
+        trail.setDepthValue(TRAIL_DEPTH)
+        trail.casing.setDepthValue(CASING_DEPTH)
+        return trail
+
+    def set_trail(self, points: np.ndarray, index: int = 0, colors: np.ndarray | None = None) -> None:
+        """A run's trail through ``points``; ``colors``: one (r, g, b, a) per point (the contact's
+        modes), else the run's own colour."""
+        enough = len(points) >= 2
+        if colors is None:
+            colors = np.tile(self._trail_colors[index], (len(points), 1))
+        trail = self.trails[index]
+        trail.setData(pos=points if enough else np.zeros((0, 3)), color=colors if enough else np.zeros((0, 4)))
+        trail.casing.setData(pos=points if enough else np.zeros((0, 3)), width=trail.width + CASING_EXTRA)
 
     def set_liftoff(self, point: np.ndarray | None) -> None:
-        """Mark the lift-off point; None hides the marker."""
+        """Mark the lift-off point; None hides the marker (and every other marked point)."""
         self.liftoff.setVisible(point is not None)
+        self._marked_colors = np.zeros((0, 4))
         if point is not None:
-            self.liftoff.setData(pos=np.asarray(point, dtype=float).reshape(1, 3))
+            self.add_liftoff(point)
 
-    def add_liftoff(self, point: np.ndarray) -> None:
-        """One more lift-off point (one per run in compare mode)."""
+    def add_liftoff(self, point: np.ndarray, color=LIFTOFF_COLOR) -> None:
+        """One more marked point: a lift-off (one per run in compare mode), or any change of the
+        contact's mode in the colour given."""
         shown = self.liftoff.pos if self.liftoff.visible() and self.liftoff.pos is not None else np.zeros((0, 3))
-        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]))
+        colors = self._marked_colors[: len(shown)]
+        color = np.asarray(pg.mkColor(color).getRgbF() if isinstance(color, str) else color, dtype=float)
+        self._marked_colors = np.vstack([colors, color.reshape(1, 4)])
+        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]),
+                             color=self._marked_colors)
         self.liftoff.setVisible(True)
 
     def set_follow(self, follow: bool, radius: float | None = None, index: int | None = None) -> None:

@@ -86,3 +86,14 @@ def test_saved_and_loaded_with_the_scene(qtbot, window, tmp_path):
     window.files.open_scene(path, remember=False)
     assert window.panel.contact.text("contact.friction") == "0.4"
     assert window.panel.contact.text("start.omega") == "0.0, 0.0, 2.0"
+
+
+def test_help_on_a_contact_field_is_the_model_pages_contact_section(window):
+    from rollball_app import help as helps
+    from rollball_app.help import page_html
+
+    for key in ("contact.friction", "contact.after_liftoff", "start.omega"):
+        assert helps.topic_at(window.panel.contact.edits[key]) == "model.html#contact"
+    page = page_html("model.html")
+    assert 'name="contact"' in page and "Friction μ" in page and "Start ω" in page
+    assert "White line" in page_html("plots.html")

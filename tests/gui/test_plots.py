@@ -9,7 +9,7 @@ import pytest
 from rollball_app import help as helps
 from rollball_app.controller import PAUSED, RUNNING
 from rollball_app.plots import FLOOR, LivePlots
-from rollball_app.playback import RunBuffer
+from rollball_app.playback import ENERGY_ERROR, ORTHOGONALITY, RunBuffer
 from rollball_app.drawing import PLOT_INTERVAL
 from rollball.trajectory import T
 
@@ -23,7 +23,7 @@ class Rows(RunBuffer):
         super().__init__(None, 1.0, 0.1, 9.81, capacity=len(energy_error))
         block = np.zeros((len(energy_error), self._data.shape[1]))
         block[:, T] = np.linspace(0.0, 10.0, len(energy_error))
-        block[:, -2], block[:, -1] = energy_error, orthogonality_error
+        block[:, ENERGY_ERROR], block[:, ORTHOGONALITY] = energy_error, orthogonality_error
         self.append(block)
 
 
