@@ -151,10 +151,11 @@ class SceneFiles:
 
     def update_title(self) -> None:
         w = self.window
-        dirty = self.dirty
-        w.setWindowModified(dirty)
+        dirty, title = self.dirty, w.document.title()
+        if w.isWindowModified() != dirty or w.windowTitle() != title:   # (setting them costs ms: the
+            w.setWindowModified(dirty)                                   # window system is told)
+            w.setWindowTitle(title)
         w.revert_action.setEnabled(dirty)
-        w.setWindowTitle(w.document.title())
 
     def may_discard(self) -> bool:
         """Ask before unsaved scene changes are lost; True to go on."""
