@@ -641,6 +641,9 @@ class SceneView(gl.GLViewWidget):
     def mouseReleaseEvent(self, event) -> None:
         if self._drag is not None:
             self._drag = None
+            if self.follow:   # the camera stood still under the mouse while it dragged: it follows again
+                self.opts["center"] = QtGui.QVector3D(*map(float, self.ball_center))
+                self.update()
             self.dragFinished.emit()
             event.accept()
             return
@@ -884,7 +887,7 @@ class SceneView(gl.GLViewWidget):
         self.centers[index] = np.asarray(center, dtype=float)
         self.marks[index].setData(pos=np.tile(self.centers[index], (2, 1)))
         self.ball_radius = radius
-        if self.follow and index == self.followed:
+        if self.follow and index == self.followed and self._drag is None:   # (a dragged start: after the drag)
             self.opts["center"] = QtGui.QVector3D(*map(float, center))
         self.update()
 

@@ -160,3 +160,22 @@ def test_a_scene_with_its_own_start_omega_keeps_its_velocity(qtbot, window, tmp_
     before = window.scene
     drag(view, [pixel(view, tip), pixel(view, tip + [0.3, 0.3, 0.0])])      # the head does not move
     assert window.scene.start.vx == before.start.vx and window.scene.start.omega == (0.0, 5.0, 0.0)
+
+
+def test_with_follow_ball_the_camera_waits_for_the_drag_to_end(qtbot, window):
+    view = window.view
+    window.follow_action.setChecked(True)
+    wait_preview(qtbot, window)
+    s = window.scene.start
+    centre = view.opts["center"]
+    target = (s.x + 0.6, s.y + 0.3)
+    pixels = [pixel(view, surface(window, s.x + w * 0.6, s.y + w * 0.3)) for w in (0.0, 0.5, 1.0)]
+    mouse(view, "press", pixels[0])
+    for p in pixels[1:]:
+        mouse(view, "move", p)
+    assert view.opts["center"] == centre                     # still while the mouse drags
+    mouse(view, "release", pixels[-1])
+    start = window.scene.start
+    assert (start.x, start.y) == pytest.approx(target, abs=0.02)   # where the mouse went, no run-away
+    assert np.allclose([view.opts["center"].x(), view.opts["center"].y()], view.ball_center[:2])
+    window.follow_action.setChecked(False)
