@@ -381,6 +381,7 @@ SHORTER = 4            # energy_check takes the interval again with steps 4, 16,
 LEVELS = 4             # (down to FLOOR)
 PHASES = 8             # ...each starting 0, 1/8, ..., 7/8 of such a step late, the largest change counting
 FLOOR = 1e-10          # (relative energy changes below this are not used: round-off)
+MAX_CHECK_STEPS = 4096  # (nor levels of more steps than this over the interval: a long one is judged coarser)
 TIGHTER = 1e4          # ...or, adaptive, with tolerances this many times tighter
 MIN_TOLERANCE = 1e-15  # (not below this)
 PROBE_ORDER = 3        # methods of lower order (euler) are judged by rk4's changes over the interval
@@ -480,7 +481,8 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
         same = dict(method=probe.name, munthe_kaas=run.munthe_kaas, record_every=MAX_STEPS)
         changes = [_interval_change(run, row, t1 - t0, dt=run.dt, **same)]
         level = 0
-        while level < LEVELS and changes[-1] is not None and (level == 0 or changes[-1] >= FLOOR * scale):
+        while (level < LEVELS and changes[-1] is not None and (level == 0 or changes[-1] >= FLOOR * scale)
+               and (level == 0 or (t1 - t0) * SHORTER ** (level + 1) <= run.dt * MAX_CHECK_STEPS)):
             level += 1
             h = run.dt / SHORTER ** level
             phases = [_interval_change(run, row, t1 - t0, k * h / PHASES, dt=h, **same) for k in range(PHASES)]

@@ -3,6 +3,7 @@
 script is run again and its figures move beyond noise, this fails until the README says so."""
 
 import json
+import math
 import re
 from pathlib import Path
 
@@ -61,3 +62,18 @@ def test_readme_orders_are_the_hills_comparisons():
     assert quoted
     for method, text in zip(("euler", "rk4", "lawson5", "gauss4", "gauss6"), quoted.groups()):
         assert f"{orders[method]:.2f}" == text
+
+
+def test_the_evaluations_for_an_error_are_read_off_each_ladders_front():
+    import sys
+    sys.path.insert(0, str(ROOT / "docs"))
+    from accuracy import front, on_front
+
+    runs = [{"contact": e, "evaluations": n} for e, n in
+            [(1e-6, 100), (2e-7, 90), (1e-7, 150), (1e-8, 140), (1e-9, 300), (5e-15, 900)]]
+    # (1e-6, 100) is beaten by (2e-7, 90) and (1e-7, 150) by (1e-8, 140); 5e-15 is below the floor
+    assert front(runs, floor=1e-13) == [(1e-9, 300), (1e-8, 140), (2e-7, 90)]
+    points = front(runs, floor=1e-13)
+    assert on_front(points, 1e-8) == pytest.approx(140)
+    assert on_front(points, math.sqrt(1e-9 * 1e-8)) == pytest.approx(math.sqrt(300 * 140))  # log-log
+    assert on_front(points, 1e-10) is None and on_front(points, 1e-6) is None
