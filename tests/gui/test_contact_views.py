@@ -53,6 +53,12 @@ def test_trail_coloured_by_mode_and_a_marker_at_every_transition(qtbot, window, 
     assert window.controller.play_time == T1
     assert len(window.view.liftoff.pos) == 3                     # every transition marked in the view
     assert "1 landing (0.5 J lost)" in window.message.toolTip()
+    window.closeup_action.setChecked(True)   # the close-up's trail by mode too
+    window.runs.seek(T3 - 0.05)
+    near = window.closeup.trail.color
+    allowed = [contact_view.rgba(contact_view.MODE_COLORS[k]) for k in (ROLLING, FLYING)]
+    assert len(near) and all(any(np.allclose(c, a, atol=1e-6) for a in allowed) for c in near)
+    assert any(np.allclose(c, allowed[1], atol=1e-6) for c in near)   # the flight before the landing
 
 
 def test_readouts_and_the_normal_force_in_flight(qtbot, window, tmp_path):
