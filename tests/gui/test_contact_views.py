@@ -21,13 +21,19 @@ def _play(qtbot, window, tmp_path):
     window.speed.setCurrentIndex(FASTEST)
     window.plots.set_duration(simulation.t_end)
     window.timeline.set_span(simulation.t_end)
+    events = []
+    window.controller.event.connect(lambda i, kind, t: events.append((kind, t)))
     window.controller.start([Run(simulation, window.landscape)])
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=20_000)
     window.drawing.plot()
+    return events
 
 
 def test_trail_coloured_by_mode_and_a_marker_at_every_transition(qtbot, window, tmp_path):
-    _play(qtbot, window, tmp_path)
+    events = _play(qtbot, window, tmp_path)
+    # each transition said once as playback passes it; a flying ball's lift-off is not the glued one's
+    assert events == [(c.kind, c.time) for c in TRANSITIONS]
+    assert contact_view.sentence("liftoff", T2).endswith("the ball leaves the surface and flies")
     buffer = window.controller.buffer
     t, mode = buffer.t, buffer.mode
     assert set(mode[t < T1]) == {SLIDING} and set(mode[(t > T2) & (t < T3)]) == {FLYING}
