@@ -35,6 +35,7 @@ class CloseUp(gl.GLViewWidget):
         self.patch = gl.GLSurfacePlotItem(shader="shaded", smooth=True, glOptions="opaque")
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
         self.trail = gl.GLLinePlotItem(color=TRAIL_COLOR, width=4.0, antialias=True, mode="line_strip")
+        self._trail_color = np.asarray(TRAIL_COLOR)
         for item in (self.patch, self.ball, self.trail):
             self.addItem(item)
         self.patch.setVisible(False)   # until it has been sampled
@@ -53,20 +54,26 @@ class CloseUp(gl.GLViewWidget):
             return
         self.color = color
         self.ball.setMeshData(meshdata=ball_mesh() if color is None else run_ball_mesh(color))
-        self.trail.setData(color=TRAIL_COLOR if color is None else pg.mkColor(color).getRgbF())
+        self.trail.setData(pos=np.zeros((0, 3)), color=np.zeros((0, 4)))   # (colours per point from now on)
+        self._trail_color = np.asarray(TRAIL_COLOR if color is None else pg.mkColor(color).getRgbF(), dtype=float)
 
     def show_ball(self, center: np.ndarray, R: np.ndarray, contact: np.ndarray, trail: np.ndarray,
-                  azimuth: float, elevation: float, color: str | None = None) -> None:
+                  azimuth: float, elevation: float, color: str | None = None,
+                  trail_colors: np.ndarray | None = None) -> None:
         """Draw the ball at ``center`` turned by R, touching at ``contact`` (x, y), with the trail
         points (n, 3), seen from the main camera's direction; ``color``: the run's (see
-        ``set_color``)."""
+        ``set_color``); ``trail_colors``: one per trail point (the contact's modes), else the
+        run's colour."""
         if self.landscape is None:
             return
         self.set_color(color)
         self._update_patch(contact)
         self.ball.setTransform(ball_transform(center, R, self.radius))
         near = np.max(np.abs(trail[:, :2] - contact[:2]), axis=1) <= PATCH_RADII * self.radius if len(trail) else []
-        self.trail.setData(pos=trail[near] if np.count_nonzero(near) >= 2 else np.zeros((0, 3)))
+        shown = np.count_nonzero(near) >= 2
+        colors = np.tile(self._trail_color, (len(trail), 1)) if trail_colors is None else trail_colors
+        self.trail.setData(pos=trail[near] if shown else np.zeros((0, 3)),
+                           color=colors[near] if shown else np.zeros((0, 4)))
         self.opts["center"] = QtGui.QVector3D(*map(float, center))
         self.opts["distance"] = DISTANCE_RADII * self.radius
         self.opts["azimuth"], self.opts["elevation"] = azimuth, elevation

@@ -17,9 +17,9 @@ from rollball.trajectory import FLYING, MODES, ROLLING, SLIDING
 from .timeline import Marker
 
 # The trail's colour by mode: told apart by lightness as well as hue (the Okabe–Ito colours
-# that colour-blind readers tell apart): dark red rolling (the 2011 trail), sky blue sliding,
+# that colour-blind readers tell apart): vermillion rolling (the 2011 trail was red), sky blue sliding,
 # white flying; each drawn over a dark edge that keeps it readable on every colour of the surface.
-MODE_COLORS = {ROLLING: "#c0180f", SLIDING: "#56b4e9", FLYING: "#ffffff"}
+MODE_COLORS = {ROLLING: "#d55e00", SLIDING: "#56b4e9", FLYING: "#ffffff"}
 MODE_WORDS = {ROLLING: "rolling", SLIDING: "sliding", FLYING: "flying"}
 # The plots' spans (behind the curves): none rolling, the same hues pale.
 SPAN_COLORS = {SLIDING: (86, 180, 233, 60), FLYING: (120, 120, 120, 45)}

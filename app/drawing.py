@@ -87,9 +87,10 @@ class Drawing:
                 trail = run.buffer.trail(i, lift=0.3, picked=picked)   # 0.3 r above the contact point
                 w.view.set_ball(row[CENTER], row[R].reshape(3, 3), radius, k)
                 # coloured by the contact's mode (in compare mode, shades of the run's colour)
-                w.view.set_trail(trail, k, trail_colors(run.buffer.mode[picked], run.color))
+                colors = trail_colors(run.buffer.mode[picked], run.color)
+                w.view.set_trail(trail, k, colors)
                 if k == followed:
-                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color)
+                    self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color, colors)
                 w.readouts.show_row(k, run.buffer, i)
         followed = w.compare.followed if w.compare.followed < len(runs) else 0
         if len(runs[followed].buffer):   # the time of the moment drawn, as its readout says it
@@ -141,7 +142,8 @@ class Drawing:
         width = max(160, round(0.3 * w.view.width()))
         w.closeup_frame.setGeometry(w.view.width() - width - 8, 8, width, round(0.75 * width))
 
-    def _show_closeup_at(self, center, R, contact, trail, color: str | None = None) -> None:
+    def _show_closeup_at(self, center, R, contact, trail, color: str | None = None, colors=None) -> None:
         w = self.window
         if w.closeup.isVisible():
-            w.closeup.show_ball(center, R, contact, trail, w.view.opts["azimuth"], w.view.opts["elevation"], color)
+            w.closeup.show_ball(center, R, contact, trail, w.view.opts["azimuth"], w.view.opts["elevation"], color,
+                                colors)

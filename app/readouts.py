@@ -158,5 +158,5 @@ class Readouts(QtWidgets.QWidget):
                   "orth": buffer.orthogonality_error[i], "force": 0.0 if flying else row[NORMAL_FORCE],
                   "speed": np.linalg.norm(row[VELOCITY]), "slip": buffer.slip_speed[i],
                   "dissipated": buffer.dissipated[i]}
-        for key, label in self.rows[r].items():
-            label.setText(FORMATS[key].format(values[key]))
+        for key, label in self.rows[r].items():   # (a flight over no surface has no slip speed: —)
+            label.setText(FORMATS[key].format(values[key]) if np.isfinite(values[key]) else "—")

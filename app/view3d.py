@@ -33,7 +33,7 @@ AXIS_COLOR = (0.30, 0.30, 0.30, 1.0)
 TEXT_COLOR = (60, 60, 60, 255)
 TRAIL_COLOR = (0.80, 0.10, 0.10, 1.0)
 CASING_COLOR = (0.08, 0.08, 0.08, 0.85)   # a dark edge under each trail: readable on every surface colour
-CASING_EXTRA = 3.0                        # pixels wider than the trail
+CASING_EXTRA = 4.0                        # pixels wider than the trail
 # Drawn after the surface (depth 0) and before the ball: the casing, then its trail over it, both
 # without the depth test, as the trail always was (a line's many short antialiased segments would
 # hide each other's pixels in the depth buffer): the whole path stays in sight, over the hills too.
@@ -894,7 +894,7 @@ class SceneView(gl.GLViewWidget):
     @staticmethod
     def _trail_items(color) -> gl.GLLinePlotItem:
         """A run's trail, with its dark casing as ``trail.casing`` (both to be added to the view)."""
-        trail = gl.GLLinePlotItem(color=color, width=3.0, antialias=True, mode="line_strip", glOptions=TRAIL_GL)
+        trail = gl.GLLinePlotItem(color=color, width=3.0, antialias=False, mode="line_strip", glOptions=TRAIL_GL)
         trail.casing = gl.GLLinePlotItem(color=CASING_COLOR, width=3.0 + CASING_EXTRA, antialias=True,
                                          mode="line_strip", glOptions=CASING_GL)
         trail.setDepthValue(TRAIL_DEPTH)

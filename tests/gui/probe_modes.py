@@ -70,7 +70,8 @@ def outside(window: MainWindow) -> list[str]:
     out = [] if screen.contains(frame) else [f"window {rect(frame)} beyond screen {rect(screen)}"]
     widgets = [window.view, window.timeline.slider, window.timeline.label, window.message, window.state_label,
                window.speed, window.progress]
-    widgets += [label for row in window.readouts.rows for label in row.values()] + window.readouts.names
+    widgets += [label for row in window.readouts.rows for label in row.values()
+                if not label.isHidden()] + window.readouts.names   # (slip and dissipation: where the ball can slide or fly)
     if window.presentation.active:
         widgets += window.presentation.bar.findChildren(QtWidgets.QToolButton)
     if window.compare.dock.isVisible():

@@ -21,13 +21,19 @@ def _play(qtbot, window, tmp_path):
     window.speed.setCurrentIndex(FASTEST)
     window.plots.set_duration(simulation.t_end)
     window.timeline.set_span(simulation.t_end)
+    events = []
+    window.controller.event.connect(lambda i, kind, t: events.append((kind, t)))
     window.controller.start([Run(simulation, window.landscape)])
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=20_000)
     window.drawing.plot()
+    return events
 
 
 def test_trail_coloured_by_mode_and_a_marker_at_every_transition(qtbot, window, tmp_path):
-    _play(qtbot, window, tmp_path)
+    events = _play(qtbot, window, tmp_path)
+    # each transition said once as playback passes it; a flying ball's lift-off is not the glued one's
+    assert events == [(c.kind, c.time) for c in TRANSITIONS]
+    assert contact_view.sentence("liftoff", T2).endswith("the ball leaves the surface and flies")
     buffer = window.controller.buffer
     t, mode = buffer.t, buffer.mode
     assert set(mode[t < T1]) == {SLIDING} and set(mode[(t > T2) & (t < T3)]) == {FLYING}
@@ -53,6 +59,12 @@ def test_trail_coloured_by_mode_and_a_marker_at_every_transition(qtbot, window, 
     assert window.controller.play_time == T1
     assert len(window.view.liftoff.pos) == 3                     # every transition marked in the view
     assert "1 landing (0.5 J lost)" in window.message.toolTip()
+    window.closeup_action.setChecked(True)   # the close-up's trail by mode too
+    window.runs.seek(T3 - 0.05)
+    near = window.closeup.trail.color
+    allowed = [contact_view.rgba(contact_view.MODE_COLORS[k]) for k in (ROLLING, FLYING)]
+    assert len(near) and all(any(np.allclose(c, a, atol=1e-6) for a in allowed) for c in near)
+    assert any(np.allclose(c, allowed[1], atol=1e-6) for c in near)   # the flight before the landing
 
 
 def test_readouts_and_the_normal_force_in_flight(qtbot, window, tmp_path):
