@@ -9,7 +9,13 @@ import pytest
 os.environ["ROLLBALL_CACHE_DIR"] = tempfile.mkdtemp(prefix="rollball-test-cache-")
 atexit.register(shutil.rmtree, os.environ["ROLLBALL_CACHE_DIR"], True)
 
+from pathlib import Path
+
 from rollball.scene import Ball, Contact, Integrator, Scene, Start
+
+# The examples that became version-3 scenes that fly (liftoff, cylinder, bump), as they were shipped
+# in version 2: the 2011 model's scenes for the tests of the rolling ball
+V2_EXAMPLES = Path(__file__).parent / "data" / "examples_v2"
 
 # The 2011 model: always enough friction to roll, glued to the surface after a lift-off (what the
 # tests of the rolling ball test; a scene made in Python flies by default, as a version-3 file)
