@@ -127,3 +127,11 @@ def test_adaptive_from_the_command_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["simulate", HILLS, "--rtol", "0"])
     assert stop.value.code == 2
+
+
+def test_simulate_prints_the_transitions(capsys):
+    assert main(["simulate", "ridge_jump", "--t-end", "1.3"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "first lift-off at t = 0.6738" in out[0] and "J dissipated" in out[0] and "WARNING" not in out[0]
+    assert out[1].startswith("  lift-off at t = 0.6738") and out[2].startswith("  landing at t = 1.2116")
+    assert "along the normal" in out[2] and "J lost" in out[2]
