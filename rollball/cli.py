@@ -199,13 +199,18 @@ def _simulate(args) -> int:
                             record_dt=args.record_dt)
     except ValueError as e:  # includes FormulaError
         return _fail(str(e))
+    flew = any(change.kind == "liftoff" for change in traj.transitions)
     liftoff = ("no lift-off" if traj.liftoff_time is None
+               else f"first lift-off at t = {traj.liftoff_time:.6g} s" if flew
                else f"WARNING: lift-off at t = {traj.liftoff_time:.6g} s (the real ball would leave the surface)")
     warnings = "".join(f", WARNING: {note}" for note in traj.warnings())
+    lost = f", {traj.dissipated[-1]:.4g} J dissipated" if len(traj) and traj.dissipated[-1] else ""
+    out = sys.stderr if to_stdout else sys.stdout
     print(f"{shown(args.scene)}: {traj.steps} steps ({traj.rejected} rejected, {traj.evaluations} evaluations), "
           f"status {traj.status} ({traj.message}), "
-          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{warnings}",
-          file=sys.stderr if to_stdout else sys.stdout)
+          f"relative energy drift {traj.energy_drift:.3g}, {liftoff}{lost}{warnings}", file=out)
+    for change in traj.transitions:
+        print(f"  {change.sentence()}", file=out)
     if to_stdout:
         traj.write_csv(sys.stdout)
     elif args.csv:

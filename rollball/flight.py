@@ -22,6 +22,7 @@ from scipy.spatial.transform import Rotation
 
 from .geometry import fit_ratio, unit_normal
 from .kernel.interface import ROW_SIZE, ROW_SLICES
+from .trajectory import DISSIPATED, SLIP_SPEED
 
 # A rebound whose apex above the surface would be lower than this share of the radius ends in
 # contact: the bounces after it last 2 v/(g (1 − e)) together, v = sqrt(2 g · REST_HEIGHT · r):
@@ -267,10 +268,8 @@ class Flight:
         rows[:, ROW_SLICES["R"]] = rotations.reshape(n, 9)
         rows[:, ROW_SLICES["energy"]] = energy(velocities, s.omega, centers[:, 2], m, r, self.gravity)[:, None]
         rows[:, ROW_SLICES["normal_force"]] = 0.0
-        if "slip_speed" in ROW_SLICES:
-            rows[:, ROW_SLICES["slip_speed"]] = tangential_slip(velocities, s.omega, normals, r)[:, None]
-        if "dissipated" in ROW_SLICES:
-            rows[:, ROW_SLICES["dissipated"]] = dissipated
+        rows[:, SLIP_SPEED] = tangential_slip(velocities, s.omega, normals, r)
+        rows[:, DISSIPATED] = dissipated
         return rows
 
 

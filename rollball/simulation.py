@@ -12,12 +12,14 @@ import threading
 
 import numpy as np
 
-from . import __version__, kernel, machine_code
+from . import __version__, kernel, machine_code, sliding
+from .flight import Flight, FreeState, Surface, impact, rest_speed, settle
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
-from .scene import CONSTRAINTS, Scene
+from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import MethodKind, get_method
-from .trajectory import CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory
+from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, ROLLING, SLIDING, T, VELOCITY,
+                         EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
 # 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
 # recording every adaptive step grows its buffer by doubling up to the limit, holding the
@@ -29,7 +31,10 @@ FIRST_ROWS = 4096      # adaptive runs recording every step start with this many
 AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
 ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in time
 
-_STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES) if code != kernel.RUNNING}
+_STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES)
+           if code not in (kernel.RUNNING, kernel.TRANSITION)}
+# The mode a kernel run's transition leads to (kernel.interface.TRANSITIONS) as a row mode.
+_NEXT_MODE = {"liftoff": FLYING, "slip": SLIDING, "grip": ROLLING}
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -187,29 +192,70 @@ class Simulation:
         self._fn = self._landscape_record.ctypes.data
         self._W, self._E, self._P = self.tableau.kernel_arrays()
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
-        self._p = kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity,
-                                    kernel.TURN_SHARE * self.rtol if self.adaptive else 0.0)
-        arrays = kernel.run_arrays(kernel.state_size(mk), len(self._W), n_rows)
-        self._z, self._R, self._K, self._rows = arrays["z"], arrays["R"], arrays["K"], arrays["rows"]
-        self._ints, self._info = arrays["ints"], arrays["info"]
-        alpha, v = initial_state(self.landscape, scene)
-        self._z[:2], self._z[2:5] = alpha, v
-        if not mk:
-            self._z[5:] = self._R.ravel()
-        self._info[kernel.F_H] = self.dt
-        if self.adaptive:
-            self._kernel = machine_code.Arguments(
-                "advance_adaptive", fn=self._fn, W=self._W, E=self._E, P=self._P, p=self._p, err_kind=self._error_kind,
-                err_exp=self.tableau.error_exponent, t_end=self.t_end, record_dt=self.record_dt or 0.0,
-                rtol=self.rtol, atol=self.atol, max_steps=1, **arrays)
+        # The 2011 model (friction null, glued after a lift-off) is one kernel run, as before scene
+        # version 3; any other contact is a sequence of runs, each in one mode (``_advance``).
+        contact = scene.contact
+        self.segmented = not (contact.friction is None and contact.after_liftoff == "glued")
+        self._p = self._parameters(0.0)
+        slip = start_slip(scene)
+        slips = slip is not None and bool(np.any(slip != 0.0)) and contact.friction is not None
+        if slips:   # a start.omega that does not roll: the ball starts sliding
+            s = scene.start
+            d = self.landscape.evaluate(s.x, s.y, scene.parameter_values)
+            velocity = np.array([s.vx, s.vy, d[1] * s.vx + d[2] * s.vy])
+            state = sliding.BallState(s.x, s.y, velocity, np.array(s.omega), np.eye(3), 0.0)
+            arrays = sliding.start_arrays(state, d, sliding=True, munthe_kaas=mk, stages=len(self._W), rows=n_rows,
+                                          radius=scene.ball.radius, mass=scene.ball.mass)
         else:
-            self._kernel = machine_code.Arguments(
-                "advance", fn=self._fn, W=self._W, P=self._P, p=self._p, dt=self.dt, t_end=self.t_end,
-                n_steps=self.n_steps, every=self.record_every, max_steps=1, **arrays,
-                stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
+            arrays = kernel.run_arrays(kernel.state_size(mk), len(self._W), n_rows)
+            alpha, v = initial_state(self.landscape, scene)
+            arrays["z"][:2], arrays["z"][2:5] = alpha, v
+            if not mk:
+                arrays["z"][5:] = arrays["R"].ravel()
+        arrays["info"][kernel.F_H] = self.dt
+        self._arm(arrays, self.t_end, self.n_steps)
+        # the runs after the first, where the contact changes mode
+        self._offset = 0.0         # the time the current kernel run started at
+        self._taken = 0            # its rows already moved to _out
+        self._skip_first = False   # its first row repeats the last one (a slip or a grip)
+        self._out = np.empty((n_rows if self.segmented else 0, kernel.ROW_SIZE))
+        self._count = 0            # rows in _out
+        self._mode = SLIDING if slips else ROLLING
+        self._mode_starts = [(0, self._mode)]   # (first row, mode) where the mode changes
+        self.transitions: list[Transition] = []
+        self._flight: Flight | None = None
+        self._surface = Surface(self.landscape, scene.parameter_values)
+        self._finished = [0, 0, 0]   # steps, rejected tries and evaluations of the finished kernel runs
+        self._first_liftoff: Liftoff | None = None
+        self._dissipated_now = 0.0   # J: what a flight carries
         self.status: Status | None = None
         self._energy_check: EnergyCheck | None = None
         self.judge_energy = True  # whether the finished run looks at whose its energy error is
+
+    def _parameters(self, dissipated: float) -> np.ndarray:
+        scene = self.scene
+        turn = kernel.TURN_SHARE * self.rtol if self.adaptive else 0.0
+        if not self.segmented:
+            return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn)
+        contact = scene.contact
+        return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn, friction=contact.friction,
+                                 fly=contact.after_liftoff == "fly", dissipated=dissipated)
+
+    def _arm(self, arrays: dict, t_end: float, n_steps: int | None) -> None:
+        """Make ``arrays`` the current kernel run, from its time 0 to ``t_end`` (n_steps fixed steps)."""
+        self._run_end, self._run_steps = t_end, n_steps
+        self._z, self._R, self._K, self._rows = arrays["z"], arrays["R"], arrays["K"], arrays["rows"]
+        self._ints, self._info, self._probe = arrays["ints"], arrays["info"], arrays["probe"]
+        if self.adaptive:
+            self._kernel = machine_code.Arguments(
+                "advance_adaptive", fn=self._fn, W=self._W, E=self._E, P=self._P, p=self._p, err_kind=self._error_kind,
+                err_exp=self.tableau.error_exponent, t_end=t_end, record_dt=self.record_dt or 0.0,
+                rtol=self.rtol, atol=self.atol, max_steps=1, **arrays)
+        else:
+            self._kernel = machine_code.Arguments(
+                "advance", fn=self._fn, W=self._W, P=self._P, p=self._p, dt=self.dt, t_end=t_end,
+                n_steps=n_steps, every=self.record_every, max_steps=1, **arrays,
+                stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
 
     @property
     def done(self) -> bool:
@@ -217,17 +263,17 @@ class Simulation:
 
     @property
     def steps(self) -> int:
-        return int(self._ints[kernel.I_STEPS])
+        return self._finished[0] + int(self._ints[kernel.I_STEPS])
 
     @property
     def rejected(self) -> int:
         """Steps tried and rejected by the adaptive method's error control (0 for fixed steps)."""
-        return int(self._ints[kernel.I_REJECTED])
+        return self._finished[1] + int(self._ints[kernel.I_REJECTED])
 
     @property
     def evaluations(self) -> int:
         """Right-hand-side evaluations so far, rejected tries included."""
-        return int(self._ints[kernel.I_EVALS])
+        return self._finished[2] + int(self._ints[kernel.I_EVALS])
 
     @property
     def failure(self) -> Failure | None:
@@ -236,17 +282,22 @@ class Simulation:
         if reason is None:
             return None
         info = self._info
-        return Failure(Reason(reason), float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
+        return Failure(Reason(reason), self._offset + float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
                        float(info[kernel.F_FAIL_Y]), float(info[kernel.F_FAIL_VALUE]))
 
     @property
     def time(self) -> float:
         """Simulated time reached so far."""
+        if self.segmented:
+            if self.status is Status.OK:
+                return self.t_end
+            if self._flight is not None:
+                return self._flight.start.t
         if self.adaptive:
             t = self._info[kernel.F_TIME]
-            return 0.0 if math.isnan(t) else float(t)
-        k = self.steps
-        return self.t_end if k == self.n_steps else k * self.dt
+            return self._offset + (0.0 if math.isnan(t) else float(t))
+        k = int(self._ints[kernel.I_STEPS])
+        return self._offset + (self._run_end if k == self._run_steps else k * self.dt)
 
     @property
     def progress(self) -> float:
@@ -255,13 +306,28 @@ class Simulation:
 
     @property
     def row_capacity(self) -> int:
-        """Rows reserved so far: all a fixed-step run will record; an adaptive run grows as needed."""
-        return len(self._rows)
+        """Rows reserved so far: all a fixed-step run will record; an adaptive run grows as needed
+        (and so does a run whose contact changes mode)."""
+        return len(self._out) if self.segmented else len(self._rows)
 
     @property
     def rows(self) -> np.ndarray:
         """The rows recorded so far (a view: copy what you keep)."""
+        if self.segmented:
+            return self._out[: self._count]
         return self._rows[: self._ints[kernel.I_ROWS]]
+
+    def _row_count(self) -> int:
+        return self._count if self.segmented else int(self._ints[kernel.I_ROWS])
+
+    @property
+    def modes(self) -> np.ndarray:
+        """The contact's mode of each row so far (positions in ``trajectory.MODES``)."""
+        codes = np.empty(self._row_count(), dtype=np.int8)
+        starts = self._mode_starts + [(len(codes), None)]
+        for (first, mode), (end, _) in zip(starts, starts[1:]):
+            codes[first:end] = mode
+        return codes
 
     def advance(self, max_steps: int | None = None) -> np.ndarray:
         """Run up to ``max_steps`` more steps (a whole number >= 1; all remaining if None);
@@ -280,13 +346,17 @@ class Simulation:
 
     def _advance(self, max_steps: int | None) -> np.ndarray:
         if self.done:
-            return self._rows[:0]
-        first = int(self._ints[kernel.I_ROWS])
+            return self.rows[:0]
+        first = self._row_count()
         if max_steps is not None:
             remaining = max_steps
         else:
-            remaining = math.inf if self.adaptive else self.n_steps - self.steps
-        while (remaining > 0 or self._ints[kernel.I_ROWS] == 0) and not self.done:
+            remaining = math.inf if self.adaptive or self.segmented else self.n_steps - self.steps
+        while (remaining > 0 or self._row_count() == 0) and not self.done:
+            if self._flight is not None:   # a flight is taken whole, as one step
+                self._fly()
+                remaining -= 1
+                continue
             chunk = int(min(remaining, CHUNK))
             if self.adaptive:
                 if self._ints[kernel.I_ROWS] >= len(self._rows) - 2:
@@ -305,14 +375,156 @@ class Simulation:
                 self._kernel.set("max_steps", chunk)
                 self._kernel()
             remaining -= chunk
+            if self.segmented:
+                self._collect()
+                self._note_liftoff()
             code = int(self._ints[kernel.I_STATUS])
-            if code != kernel.RUNNING:
+            if code == kernel.TRANSITION:
+                self._transition()
+            elif code != kernel.RUNNING:
                 self.status = _STATUS[code]
                 break
-        if self.judge_energy and self.status in (Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
+        # (a run that changed mode, or slid from its start, is not judged: the check takes an
+        # interval again from a rolling start)
+        rolled = all(mode == ROLLING for _, mode in self._mode_starts)
+        if self.judge_energy and not self.transitions and rolled and self.status in (
+                Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
             # (here, where the run runs: never in the thread that reads the trajectory)
             self._energy_check = energy_check(self)
-        return self._rows[first: self._ints[kernel.I_ROWS]].copy()
+        return self.rows[first:].copy()
+
+    # -- the runs after the first, where the contact changes mode (docs/design.md §1) ----------
+
+    def _append(self, rows: np.ndarray) -> None:
+        """Add rows to the run's rows (growing the buffer), in the current mode."""
+        if not len(rows):
+            return
+        if self._mode_starts[-1][1] != self._mode:
+            self._mode_starts.append((self._count, self._mode))
+        need = self._count + len(rows)
+        if need > len(self._out):
+            if need > MAX_ROWS:
+                raise ValueError(f"this run would record more than {MAX_ROWS:,} rows")
+            grown = np.empty((min(max(2 * len(self._out), need), MAX_ROWS), kernel.ROW_SIZE))
+            grown[: self._count] = self._out[: self._count]
+            self._out = grown
+        self._out[self._count: need] = rows
+        self._count = need
+
+    def _collect(self) -> None:
+        """Move the current kernel run's new rows to the run's rows, on the run's clock."""
+        count = int(self._ints[kernel.I_ROWS])
+        start = self._taken
+        if self._skip_first and start == 0 and count > 0:
+            start = 1
+        rows = self._rows[start:count].copy()
+        rows[:, T] += self._offset
+        self._taken = count
+        self._append(rows)
+
+    def _note_liftoff(self) -> None:
+        """Keep the first lift-off a kernel run found (where the ball flies, a transition's), on the run's clock."""
+        info = self._info
+        if self._first_liftoff is None and not math.isnan(info[kernel.F_LIFTOFF]):
+            self._first_liftoff = Liftoff(self._offset + float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]),
+                                          float(info[kernel.F_LIFT_Y]), bool(info[kernel.F_LIFT_KINK]))
+
+    def _finish_kernel_run(self) -> None:
+        self._finished[0] += int(self._ints[kernel.I_STEPS])
+        self._finished[1] += int(self._ints[kernel.I_REJECTED])
+        self._finished[2] += int(self._ints[kernel.I_EVALS])
+
+    def _transition(self) -> None:
+        """The kernel run stopped where the contact changes mode: go on in the new one."""
+        info = self._info
+        kind = kernel.transition_name(int(self._ints[kernel.I_TRANSITION]))
+        t = self._offset + float(info[kernel.F_EVENT_T])
+        x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
+        self.transitions.append(Transition(t, kind, x, y))
+        self._finish_kernel_run()
+        last = self._out[self._count - 1]
+        if kind == "liftoff":
+            self._dissipated_now = float(last[DISSIPATED])
+            self._mode = FLYING
+            self._flight = self._new_flight(FreeState.from_row(last))
+            return
+        normal = self._probe_normal()
+        state = sliding.stopped_state(self._z, self._R, self._p, normal)
+        self._mode = _NEXT_MODE[kind]
+        self._dissipated_now = state.dissipated
+        self._start_kernel_run(state, t, slides=kind == "slip", repeat=True)
+
+    def _probe_normal(self) -> np.ndarray:
+        return self._probe[kernel.PROBE_N: kernel.PROBE_N + 3].copy()
+
+
+    def _new_flight(self, start: FreeState) -> Flight:
+        ball = self.scene.ball
+        return Flight(self._surface, start, radius=ball.radius, mass=ball.mass, gravity=self.scene.gravity)
+
+    def _start_kernel_run(self, state, t: float, *, slides: bool, repeat: bool) -> None:
+        """A kernel run from ``state`` at time t in the given mode; ``repeat``: its first row
+        repeats the run's last row (the state where a slip or grip happened) and is left out."""
+        left = self.t_end - t
+        if not left > 1e-12 * self.t_end:
+            self.status = Status.OK
+            return
+        if self.adaptive:
+            n_steps = None
+            rows = FIRST_ROWS if self.record_dt is None else 2 + left / self.record_dt * (1 + 1e-12)
+        else:
+            n_steps = step_count(self.dt, left)
+            rows = 1 + n_steps // self.record_every + 1
+        d = self.landscape.evaluate(state.x, state.y, self.scene.parameter_values)
+        h = float(self._info[kernel.F_H]) if self.adaptive and math.isfinite(self._info[kernel.F_H]) else self.dt
+        arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=len(self._W),
+                               rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass)
+        arrays["info"][kernel.F_H] = h
+        self._p = self._parameters(state.dissipated)
+        self._arm(arrays, left, n_steps)
+        self._offset, self._taken, self._skip_first = t, 0, repeat
+
+    def _record_times(self, t0: float, t1: float) -> np.ndarray:
+        """The run's recording times strictly between t0 and t1 (fixed steps: every
+        record_every-th multiple of dt; adaptive: the multiples of record_dt, or of dt)."""
+        spacing = self.record_every * self.dt if not self.adaptive else (self.record_dt or self.dt)
+        k0, k1 = math.floor(t0 / spacing) + 1, math.ceil(t1 / spacing) - 1
+        if k1 - k0 + 1 > MAX_ROWS:
+            raise ValueError(f"this flight would record more than {MAX_ROWS:,} rows")
+        times = np.arange(k0, k1 + 1) * spacing
+        return times[(times > t0) & (times < t1)]
+
+    def _fly(self) -> None:
+        """Take the current flight to its landing (or to t_end), then the impact there."""
+        flight, ball, contact = self._flight, self.scene.ball, self.scene.contact
+        dissipated = self._dissipated_now
+        landing = flight.landing(self.t_end)
+        if landing is None:
+            times = np.append(self._record_times(flight.start.t, self.t_end), self.t_end)
+            self._append(flight.rows(times, dissipated))
+            self._flight = None
+            self.status = Status.OK
+            return
+        t, foot = landing
+        self._append(flight.rows(self._record_times(flight.start.t, t), dissipated))
+        s = flight.state(t)
+        hit = impact(s.velocity, s.omega, foot.normal, mass=ball.mass, radius=ball.radius,
+                     restitution=contact.restitution, friction=contact.friction)
+        bounces = hit.rebound > rest_speed(ball.radius, self.scene.gravity)
+        if not bounces:
+            hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
+        self._dissipated_now = dissipated = dissipated + hit.energy_lost
+        self.transitions.append(Transition(t, "landing", foot.x, foot.y, hit.normal_speed, hit.energy_lost))
+        if bounces:   # off again: the state just after the impact is a row of the new flight
+            self._flight = self._new_flight(FreeState(t, s.center, hit.velocity, hit.omega, s.R))
+            self._append(self._flight.rows(np.array([t]), dissipated))
+            if t >= self.t_end:
+                self._flight, self.status = None, Status.OK
+            return
+        self._flight = None
+        self._mode = ROLLING if hit.sticking else SLIDING
+        state = sliding.BallState(foot.x, foot.y, hit.velocity, hit.omega, s.R, dissipated)
+        self._start_kernel_run(state, t, slides=not hit.sticking, repeat=False)
 
     def cancel(self) -> None:
         """Stop the run where it is (status ``aborted``); the rows so far are kept.
@@ -324,12 +536,14 @@ class Simulation:
 
     @property
     def liftoff_time(self) -> float | None:
-        t = self._info[kernel.F_LIFTOFF]
-        return None if math.isnan(t) else float(t)
+        liftoff = self.liftoff
+        return None if liftoff is None else liftoff.time
 
     @property
     def liftoff(self) -> Liftoff | None:
         """The first lift-off, as soon as the kernel has found it (None before)."""
+        if self.segmented:
+            return self._first_liftoff
         info = self._info
         if math.isnan(info[kernel.F_LIFTOFF]):
             return None
@@ -369,12 +583,17 @@ class Simulation:
                        f"dt {self.dt!r} s, t_end {self.t_end!r} s, every {self.record_every}"),
             "status": f"{status}: {message}",
         }
+        if self.segmented:
+            c = scene.contact
+            provenance["contact"] = (f"friction {c.friction!r}, restitution {c.restitution!r}, "
+                                     f"after_liftoff {c.after_liftoff}")
         # rows are only ever appended: the trajectory can share them instead of copying
         return Trajectory(self.rows, status=status, message=message,
                           liftoff=self.liftoff, steps=self.steps, rejected=self.rejected,
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance,
-                          energy_check=self._energy_check)
+                          energy_check=self._energy_check, modes=self.modes if self.segmented else None,
+                          transitions=tuple(self.transitions))
 
 
 SHORTER = 4            # energy_check takes the interval again with steps 4, 16, 64, 256 times shorter...
@@ -390,7 +609,7 @@ ROUGH_ORDER = 2        # the energy error of a step across a jump of the curvatu
 
 def _accounted(rows: np.ndarray) -> np.ndarray:
     """The energy plus what friction and landings dissipated so far, per row (``Trajectory.energy_error``)."""
-    return rows[:, ENERGY] + (0.0 if DISSIPATED is None else rows[:, DISSIPATED.start])
+    return rows[:, ENERGY] + rows[:, DISSIPATED]
 
 
 def _start_of(run: Simulation, row: np.ndarray):

@@ -40,10 +40,8 @@ OMEGA = ROW_SLICES["omega"]        # angular velocity (world frame)
 R = ROW_SLICES["R"]                # orientation, row-major 3x3
 ENERGY = ROW_ENERGY
 NORMAL_FORCE = ROW_FORCE
-# The slip speed and the energy dissipated, where the kernel's rows hold them (None: rows of the
-# 2011 model, which never slips nor loses energy).
-SLIP_SPEED = ROW_SLICES.get("slip_speed")
-DISSIPATED = ROW_SLICES.get("dissipated")
+SLIP_SPEED = ROW_SLICES["slip_speed"].start   # the speed of the ball's point at the contact
+DISSIPATED = ROW_SLICES["dissipated"].start   # the energy dissipated so far
 
 ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
 ORTHOGONALITY_WARNING = 1e-3   # likewise ||R^T R - I|| at the end of a run
@@ -156,12 +154,12 @@ class Trajectory:
     def slip_speed(self) -> np.ndarray:
         """The speed of the ball's material point at the contact (m/s; 0 rolling; in flight the
         tangential speed of its point nearest the surface)."""
-        return np.zeros(len(self)) if SLIP_SPEED is None else self.data[:, SLIP_SPEED.start]
+        return self.data[:, SLIP_SPEED]
 
     @property
     def dissipated(self) -> np.ndarray:
         """The energy dissipated so far by sliding friction and impacts (J), for every row."""
-        return np.zeros(len(self)) if DISSIPATED is None else self.data[:, DISSIPATED.start]
+        return self.data[:, DISSIPATED]
 
     @property
     def landings(self) -> int:
@@ -219,8 +217,6 @@ class Trajectory:
         integrator alone."""
         if not len(self):
             return self.energy.copy()
-        if DISSIPATED is None:
-            return (self.energy - self.energy[0]) / self.energy_scale
         total = self.energy + self.dissipated
         return (total - total[0]) / self.energy_scale
 

@@ -10,6 +10,7 @@ from rollball.examples import EXAMPLES_DIR
 from rollball.reference import reference_solution
 from rollball.tableaus import DOPRI5
 from test_convergence import slope
+from conftest import V2_EXAMPLES
 
 TOLERANCES = [1e-4, 1e-6, 1e-8, 1e-10]
 
@@ -77,7 +78,7 @@ def test_energy_and_so3(scene_factory):
 
 
 def test_lift_off_on_the_cylinder():
-    scene = Scene.load(EXAMPLES_DIR / "cylinder.json")
+    scene = Scene.load(V2_EXAMPLES / "cylinder.json")
     traj = simulate(scene, method="dopri5", rtol=1e-10, atol=1e-13, record_dt=1e-3)
     x = np.interp(traj.liftoff_time, traj.t, traj.contact[:, 0])
     assert math.sqrt(1 - x**2) == pytest.approx(10 / 17 * math.sqrt(1 - scene.start.x**2), abs=1e-5)

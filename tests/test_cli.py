@@ -1,6 +1,7 @@
 """The command line: summaries, CSV output and exit codes, never a traceback."""
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -86,7 +87,7 @@ def test_bad_scene_file_names_the_key(tmp_path, capsys):
 def test_examples_lists_descriptions(capsys):
     assert main(["examples"]) == 0
     out = capsys.readouterr().out
-    assert "hills     Sine-cosine hills" in out and len(out.splitlines()) >= 8
+    assert re.search(r"^hills +Sine-cosine hills", out, re.MULTILINE) and len(out.splitlines()) >= 8
 
 
 def test_an_example_runs_by_name_from_any_folder(tmp_path, monkeypatch, capsys):
@@ -126,3 +127,11 @@ def test_adaptive_from_the_command_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["simulate", HILLS, "--rtol", "0"])
     assert stop.value.code == 2
+
+
+def test_simulate_prints_the_transitions(capsys):
+    assert main(["simulate", "ridge_jump", "--t-end", "1.3"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "first lift-off at t = 0.6738" in out[0] and "J dissipated" in out[0] and "WARNING" not in out[0]
+    assert out[1].startswith("  lift-off at t = 0.6738") and out[2].startswith("  landing at t = 1.2116")
+    assert "along the normal" in out[2] and "J lost" in out[2]

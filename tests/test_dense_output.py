@@ -7,7 +7,7 @@ from fractions import Fraction
 import mpmath
 import numpy as np
 import pytest
-from conftest import make_scene
+from conftest import make_scene, V2_EXAMPLES
 
 from rollball import METHODS, Scene, Status, simulate
 from rollball.examples import EXAMPLES_DIR
@@ -157,8 +157,8 @@ def reference_liftoff(scene: Scene, t_max: float) -> float:
 
 
 LIFTOFF_SCENES = {
-    "crest": Scene.load(EXAMPLES_DIR / "liftoff.json"),
-    "cylinder": Scene.load(EXAMPLES_DIR / "cylinder.json"),
+    "crest": Scene.load(V2_EXAMPLES / "liftoff.json"),
+    "cylinder": Scene.load(V2_EXAMPLES / "cylinder.json"),
     "bump": make_scene("0.4*exp(-(x^2 + 2*y^2))", x=-2.0, y=0.3, vx=5.0, vy=-0.5, spin=3.0, duration=1.5),
 }
 

@@ -8,6 +8,7 @@ import pytest
 from rollball import Reason, Status, simulate
 from rollball.examples import EXAMPLES_DIR
 from rollball.scene import Scene, SceneError
+from conftest import V2_EXAMPLES
 
 G = 9.81
 COMBOS = [(m, mk) for m in ("euler", "rk4", "lawson5") for mk in (True, False)]
@@ -96,7 +97,7 @@ def test_euler_drifts_in_energy(scene_factory):
 
 
 def test_cylinder_lift_off_where_cos_theta_is_ten_seventeenths():
-    scene = Scene.load(EXAMPLES_DIR / "cylinder.json")
+    scene = Scene.load(V2_EXAMPLES / "cylinder.json")
     traj = simulate(scene, dt=1e-4)
     assert traj.liftoff_time is not None
     x = np.interp(traj.liftoff_time, traj.t, traj.contact[:, 0])

@@ -1,0 +1,70 @@
+"""A run whose contact changes mode (rollball/simulation.py): kernel runs in one mode each, flights
+between them, the rows on one clock, the transitions in order; the 2011 model untouched."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rollball import Scene, Simulation, simulate
+
+G = 9.81
+
+
+def plane(mu, v0, omega=(0.0, 0.0, 0.0), duration=1.0):
+    return Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "0*x",
+                            "start": {"x": 0.0, "y": 0.0, "vx": v0, "vy": 0.0, "omega": list(omega)},
+                            "contact": {"friction": mu}, "duration": duration})
+
+
+@pytest.mark.parametrize("dt", [1e-2, 5e-3])
+def test_a_billiard_shot_skids_then_rolls(dt):
+    """μ = 0.2, v₀ = 2 m/s, ω₀ = 0: grips at t* = 2 v₀/(7 μ g), rolls on at 5 v₀/7, having lost
+    2/7 of its kinetic energy; with backspin ω₀ the final speed is (5 v₀ − 2 r ω₀)/7."""
+    mu, v0, r = 0.2, 2.0, 0.1
+    traj = simulate(plane(mu, v0), dt=dt)
+    assert [c.kind for c in traj.transitions] == ["grip"]
+    grip = traj.transitions[0]
+    errors = {"t*": abs(grip.time - 2 * v0 / (7 * mu * G)), "speed": abs(traj.velocity[-1, 0] - 5 * v0 / 7),
+              "dissipated": abs(traj.dissipated[-1] - 2 / 7 * 0.5 * v0 * v0)}
+    print(f"dt = {dt}: " + ", ".join(f"{k} {v:.2e}" for k, v in errors.items()))
+    assert max(errors.values()) < 1e-10
+    assert list(traj.mode[:2]) == ["sliding", "sliding"] and traj.mode[-1] == "rolling"
+    assert np.all(np.diff(traj.t) > 0)    # one clock, no row twice
+    assert np.abs(traj.energy_error()).max() < 1e-10   # what friction took is accounted for
+    w0 = 15.0   # backspin: about the axis that opposes rolling (rolling forward spins about +y)
+    back = simulate(plane(mu, v0, (0.0, -w0, 0.0)), dt=dt)
+    assert back.velocity[-1, 0] == pytest.approx((5 * v0 - 2 * r * w0) / 7, abs=1e-10)
+
+
+def test_rows_arrive_the_same_in_chunks():
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "0.2*exp(-20*x^2)",
+                             "start": {"x": -1.0, "y": 0.0, "vx": 3.0}, "contact": {"restitution": 0.5},
+                             "duration": 1.2})
+    whole = Simulation(scene, record_every=5)
+    whole.advance()
+    pieces = Simulation(scene, record_every=5)
+    got = []
+    while not pieces.done:
+        got.append(pieces.advance(37))
+        assert 0.0 <= pieces.progress <= 1.0
+    assert np.array_equal(np.concatenate(got), whole.rows)
+    a, b = whole.trajectory(), pieces.trajectory()
+    assert a.transitions == b.transitions and list(a.mode) == list(b.mode)
+    assert a.steps == b.steps and a.evaluations == b.evaluations
+    assert [c.kind for c in a.transitions][:2] == ["liftoff", "landing"]
+    assert a.liftoff_time == a.transitions[0].time   # the first lift-off is still reported
+    assert a.landings == sum(c.kind == "landing" for c in a.transitions) >= 3
+
+
+def test_the_2011_model_is_one_kernel_run():
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 2, "landscape": "0.5*exp(-x^2)",
+                             "start": {"x": -2.5, "y": 0.0, "vx": 5.0}, "duration": 1.0})
+    run = Simulation(scene)
+    run.advance()
+    traj = run.trajectory()
+    assert not run.segmented and traj.transitions == () and traj.liftoff_time is not None
+    assert set(traj.mode) == {"rolling"} and not traj.dissipated.any()
+    flying = simulate(Scene.from_dict({**scene.to_dict(), "contact": {"after_liftoff": "fly"}}))
+    assert flying.liftoff_time == pytest.approx(traj.liftoff_time, abs=1e-12)
+    assert "flying" in set(flying.mode) and math.isclose(flying.t[-1], 1.0)
