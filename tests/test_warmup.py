@@ -156,14 +156,16 @@ def test_without_the_shipped_code_numba_compiles_each_kernel_function_once_and_r
     # without its disk cache, and LLVM makes machine code of them as of the shipped code. Each
     # compiled function once: a constant bool or int passed to one would compile it again for
     # that constant, and a helper numba inlines is not compiled on its own at all. The explicit
-    # step is one function per state layout, and one more for the adaptive pairs' tries (which
-    # leave R to be carried once the try is accepted). (Empty caches: compiling everything, ~60-90 s.)
+    # step is one function per state layout, and one more per mode for the adaptive pairs' tries
+    # (which leave R to be carried once the try is accepted). (Empty caches: compiling everything, ~60-90 s.)
     cold = _cold_warm_up(tmp_path, "numba")
     assert cold["source"] == "numba"
     compiled = cold["compiled"]
     assert {name: len(ids) for name, ids in compiled.items() if len(ids) != len(set(ids))} == {}
     steps = compiled.pop("rollball.kernel.explicit._trial_step.<locals>.trial_step")
-    assert len(steps) == len(set(steps)) == 4  # MK_SIZE, CLASSIC_SIZE, MOTION_SIZE; the pairs' MK_SIZE tries
+    # rolling: MK_SIZE, CLASSIC_SIZE, MOTION_SIZE and the pairs' MK_SIZE tries; sliding:
+    # SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE and the pairs' SLIDING_MK_SIZE tries
+    assert len(steps) == len(set(steps)) == 7
     # (the adaptive loop is inlined into its entry point)
     assert {"rollball.kernel.loops.advance", "rollball.kernel.loops.advance_batch"} <= set(compiled), sorted(compiled)
     # the right-hand side is compiled once (and inlined by LLVM); the other per-stage helpers are
