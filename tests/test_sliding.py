@@ -227,3 +227,23 @@ def test_the_momentum_about_the_contact_point_is_kept_by_a_grip():
     assert np.allclose(v, [0.0, M * R_BALL * 2.0, 0.0], rtol=1e-15)
     rolling = np.array([0.0, 5.0 / 7.0 * 2.0 / R_BALL, 0.0])   # omega of the ball rolling at 5 v0 / 7
     assert np.allclose(M * R_BALL ** 2 * 1.4 * rolling, v, rtol=1e-15)
+
+
+@pytest.mark.parametrize("method", ["rk4", "dopri5", "gauss4"])
+@pytest.mark.parametrize("mu", [0.1, 0.2])
+def test_a_scene_on_an_incline_slides_or_rolls_as_its_friction_says(method, mu):
+    """The same through ``simulate`` and a version-3 scene: from rest on a 30° incline the ball slips
+    at t = 0 and slides on where mu < (2/7) tan 30°, else rolls; its speed after 0.5 s is a t."""
+    from rollball import Scene, simulate
+
+    theta = math.radians(30.0)
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": f"{math.tan(theta)!r}*x",
+                             "start": {"x": 0.0, "y": 0.0, "vx": 0.0, "vy": 0.0}, "contact": {"friction": mu},
+                             "integrator": {"method": method, "dt": 0.01}, "duration": 0.5})
+    traj = simulate(scene)
+    slides = mu < 2.0 / 7.0 * math.tan(theta)
+    a = G * (math.sin(theta) - mu * math.cos(theta)) if slides else 5.0 / 7.0 * G * math.sin(theta)
+    assert [(c.kind, c.time) for c in traj.transitions] == ([("slip", 0.0)] if slides else [])
+    assert traj.mode[-1] == ("sliding" if slides else "rolling")
+    assert np.linalg.norm(traj.velocity[-1]) == pytest.approx(a * 0.5, abs=1e-11)
+    assert (traj.dissipated[-1] > 0.0) == slides
