@@ -190,3 +190,60 @@ if __name__ == "__main__":
         print(f"curved 0.5 sin x cos y, mu 0.05, max |E + D - E0|/E0, {method} {steps[0]:g}, {steps[1]:g}: "
               f"{errors[0]:.2e}, {errors[1]:.2e} (ratio {errors[0] / errors[1]:.3g})")
     sys.exit(0)
+
+
+@pytest.mark.parametrize("sliding", [False, True])
+@pytest.mark.parametrize("munthe_kaas", [True, False])
+def test_a_state_goes_into_a_run_and_comes_back(sliding, munthe_kaas):
+    """``start_arrays`` then ``stopped_state`` give the state back in every layout; the rolling
+    run's v is T omega, T = m r² (7/5 I − N Nᵀ) (docs/design.md §1), where the state rolls."""
+    from rollball.geometry import unit_normal
+    from rollball.landscape import landscape_for
+    from rollball.sliding import start_arrays, stopped_state
+
+    d = landscape_for(CURVED).evaluate(0.3, -0.2)
+    normal = unit_normal(d)
+    omega = np.array([1.0, -2.0, 3.0])
+    rolls = BallState(0.3, -0.2, R_BALL * np.cross(omega, normal), omega, np.eye(3), 0.25)
+    p = kernel.parameters(R_BALL, M, G, dissipated=0.0 if sliding else rolls.dissipated)
+    arrays = start_arrays(rolls, d, sliding=sliding, munthe_kaas=munthe_kaas, stages=4, rows=2, radius=R_BALL, mass=M)
+    assert len(arrays["z"]) == kernel.state_size(munthe_kaas, sliding)
+    if not sliding:
+        T = M * R_BALL ** 2 * (1.4 * np.eye(3) - np.outer(normal, normal))
+        assert np.allclose(arrays["z"][2:5], T @ omega, rtol=1e-14)
+    back = stopped_state(arrays["z"], arrays["R"], p, normal)
+    assert (back.x, back.y, back.dissipated) == (0.3, -0.2, 0.25)
+    assert np.allclose(back.velocity, rolls.velocity, rtol=1e-14) and np.allclose(back.omega, omega, rtol=1e-14)
+    assert np.array_equal(back.R, np.eye(3))
+
+
+def test_the_momentum_about_the_contact_point_is_kept_by_a_grip():
+    """A slipping state's v = (2/5) m r² omega + m r N x c' (the angular momentum about the contact
+    point): on a plane from v0 = 2 m/s without spin, m r v0 about the axis N x c', which is T omega
+    of the rolling ball at 5 v0 / 7."""
+    state = _sliding(0.0, 0.0, (2.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    normal = np.array([0.0, 0.0, 1.0])
+    v = state.momentum(normal, R_BALL, M)
+    assert np.allclose(v, [0.0, M * R_BALL * 2.0, 0.0], rtol=1e-15)
+    rolling = np.array([0.0, 5.0 / 7.0 * 2.0 / R_BALL, 0.0])   # omega of the ball rolling at 5 v0 / 7
+    assert np.allclose(M * R_BALL ** 2 * 1.4 * rolling, v, rtol=1e-15)
+
+
+@pytest.mark.parametrize("method", ["rk4", "dopri5", "gauss4"])
+@pytest.mark.parametrize("mu", [0.1, 0.2])
+def test_a_scene_on_an_incline_slides_or_rolls_as_its_friction_says(method, mu):
+    """The same through ``simulate`` and a version-3 scene: from rest on a 30° incline the ball slips
+    at t = 0 and slides on where mu < (2/7) tan 30°, else rolls; its speed after 0.5 s is a t."""
+    from rollball import Scene, simulate
+
+    theta = math.radians(30.0)
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": f"{math.tan(theta)!r}*x",
+                             "start": {"x": 0.0, "y": 0.0, "vx": 0.0, "vy": 0.0}, "contact": {"friction": mu},
+                             "integrator": {"method": method, "dt": 0.01}, "duration": 0.5})
+    traj = simulate(scene)
+    slides = mu < 2.0 / 7.0 * math.tan(theta)
+    a = G * (math.sin(theta) - mu * math.cos(theta)) if slides else 5.0 / 7.0 * G * math.sin(theta)
+    assert [(c.kind, c.time) for c in traj.transitions] == ([("slip", 0.0)] if slides else [])
+    assert traj.mode[-1] == ("sliding" if slides else "rolling")
+    assert np.linalg.norm(traj.velocity[-1]) == pytest.approx(a * 0.5, abs=1e-11)
+    assert (traj.dissipated[-1] > 0.0) == slides

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from .explicit import STEP_NOT_CONVERGED, end_of_step
-from .interface import I_EVALS, I_STEPS, MOTION_SIZE
+from .interface import I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE
 from .lowlevel import COLD, JIT
-from .physics import STAGE, dexpinv, dynamics, motion_size, rodrigues, sliding_dynamics
+from .physics import STAGE, dexpinv, dynamics, rodrigues, sliding_dynamics
 
 
 # -- implicit Gauss-Legendre steps (the tableaus: implicit.py) ------------------------------------
@@ -31,53 +31,70 @@ MAX_ITERATIONS = 60
 
 @COLD  # compiled once (not into each loop): a call costs nothing beside its iterations
 def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
-    """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
-    arguments and codes of trial_step (the orientation always Munthe-Kaas).
+    """One Gauss–Legendre step (``_collocation_step``) for z's layout: rolling or sliding."""
+    if z.shape[0] == SLIDING_MK_SIZE:
+        return sliding_collocation(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return rolling_collocation(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
-    The stage equations are solved in two parts, since u does not act on the motion (rolling
-    (alpha, v), or sliding (alpha, c', omega, D): the state's length says which): first the
-    motion, evaluating the right-hand side with u = 0 (so that its u-part is omega), then the
-    increments u at the stages from those omegas, which needs no evaluations.
 
-    W (``Collocation.kernel_arrays``) holds a_ij at W[1+i, 1+j], b_i at W[last, 1+i] and the
-    extrapolation of the starting values in rows s+1 .. 2s. K[0] holds z'(z); K[1 .. s] hold
-    the stage derivatives (on entry those of the previous step, extrapolated with K[0] after
-    the first step; on return this step's); K[s+1 .. 2s] is scratch (on return its u-part
-    holds omega at the stages); K[last] = K[2s+1] and pn receive the full evaluation at zn.
-    Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the motion is not finite),
-    2 (only the orientation is not) or STEP_NOT_CONVERGED.
-    """
-    n = z.shape[0]
-    m = motion_size(n)
-    s = (last - 1) // 2
-    new = s + 1
-    # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
-    for i in range(s):
-        for q in range(m):
-            acc = K[0, q]
-            if ints[I_STEPS] > 0:
-                acc *= W[new + i, 0]
-                for j in range(s):
-                    acc += W[new + i, 1 + j] * K[1 + j, q]
-            K[new + i, q] = acc
-    for i in range(s):
-        for q in range(m):
-            K[1 + i, q] = K[new + i, q]
-    for q in range(m, n):
-        Y[q] = 0.0
-    code = _iterate(s, m, h, z, K, W, ints, fn, d, p, Y, pn)
-    if code == 0:
-        code = _increments(s, m, h, K, W)
-    if code != 0:
-        return code
-    for q in range(n):
-        zn[q] = z[q]
-    for i in range(s):
-        c = h * W[last, 1 + i]
+def _collocation_step(n: int):
+    """The Gauss step for one state layout (MK_SIZE rolling, SLIDING_MK_SIZE sliding): with its
+    sizes constants of the compiled code, the loops over the motion unroll."""
+    m = SLIDING_MOTION_SIZE if n == SLIDING_MK_SIZE else MOTION_SIZE
+
+    @JIT
+    def step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
+        """One Gauss–Legendre step of size h (h < 0 steps backwards) from z to zn, Rn, with the
+        arguments and codes of trial_step (the orientation always Munthe-Kaas).
+
+        The stage equations are solved in two parts, since u does not act on the motion (rolling
+        (alpha, v), or sliding (alpha, c', omega, D): the state's length says which): first the
+        motion, evaluating the right-hand side with u = 0 (so that its u-part is omega), then the
+        increments u at the stages from those omegas, which needs no evaluations.
+
+        W (``Collocation.kernel_arrays``) holds a_ij at W[1+i, 1+j], b_i at W[last, 1+i] and the
+        extrapolation of the starting values in rows s+1 .. 2s. K[0] holds z'(z); K[1 .. s] hold
+        the stage derivatives (on entry those of the previous step, extrapolated with K[0] after
+        the first step; on return this step's); K[s+1 .. 2s] is scratch (on return its u-part
+        holds omega at the stages); K[last] = K[2s+1] and pn receive the full evaluation at zn.
+        Counts its evaluations in ints[I_EVALS]. Returns 0 (done), 1 (the motion is not finite),
+        2 (only the orientation is not) or STEP_NOT_CONVERGED.
+        """
+        s = (last - 1) // 2
+        new = s + 1
+        # starting values: extrapolated from the previous step's stages and z'(z), or z'(z) throughout
+        for i in range(s):
+            for q in range(m):
+                acc = K[0, q]
+                if ints[I_STEPS] > 0:
+                    acc *= W[new + i, 0]
+                    for j in range(s):
+                        acc += W[new + i, 1 + j] * K[1 + j, q]
+                K[new + i, q] = acc
+        for i in range(s):
+            for q in range(m):
+                K[1 + i, q] = K[new + i, q]
+        for q in range(m, n):
+            Y[q] = 0.0
+        code = _iterate(s, m, h, z, K, W, ints, fn, d, p, Y, pn)
+        if code == 0:
+            code = _increments(s, m, h, K, W)
+        if code != 0:
+            return code
         for q in range(n):
-            zn[q] += c * K[1 + i, q]
-    rodrigues(zn[m], zn[m + 1], zn[m + 2], R, Rn)
-    return end_of_step(fn, d, p, True, n, True, zn, Rn, K, last, pn, ints)
+            zn[q] = z[q]
+        for i in range(s):
+            c = h * W[last, 1 + i]
+            for q in range(n):
+                zn[q] += c * K[1 + i, q]
+        rodrigues(zn[m], zn[m + 1], zn[m + 2], R, Rn)
+        return end_of_step(fn, d, p, True, n, True, zn, Rn, K, last, pn, ints)
+
+    return step
+
+
+rolling_collocation = _collocation_step(MK_SIZE)
+sliding_collocation = _collocation_step(SLIDING_MK_SIZE)
 
 
 @JIT
@@ -94,7 +111,7 @@ def _iterate(s, m, h, z, K, W, ints, fn, d, p, Y, pn):
                 c = h * W[1 + i, 1 + j]
                 for q in range(m):
                     Y[q] += c * K[1 + j, q]
-            if m == MOTION_SIZE:
+            if m == MOTION_SIZE:   # (m a constant of the caller: one of the two is compiled)
                 dynamics(fn, d, p, Y, 1.0, K, new + i, pn, STAGE)
             else:
                 sliding_dynamics(fn, d, p, Y, 1.0, K, new + i, pn, STAGE)

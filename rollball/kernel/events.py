@@ -277,7 +277,7 @@ def looks(r, z, probe, zn, pn):
 
 @JIT
 def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, segment, Ye,
-                Re, pe, sa, sb, sm, stepping):
+                Re, pe, sa, sb, sm, stepping, watch):
     """The validity checks and events of a finished step from t to t + h, located on its dense
     output. Returns -1 while the run may go on; otherwise the run stops (status and reason
     set) and the result is theta, the last valid point of the step (0 <= theta < 1).
@@ -298,7 +298,7 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     jolted = math.isnan(info[F_LIFTOFF]) and centre_jolted(p[0], h, z, probe, zn, pn)
-    turned = mode_changes(p, n, probe, pn) != 0
+    turned = watch and mode_changes(p, n, probe, pn) != 0   # (watch: ``contact_watched``)
     if not (fit_end or sharp or jumpy or raced or force_end or jolted or turned):
         return -1.0  # the usual step: nothing to look at closer
     valid = -1.0
@@ -308,6 +308,14 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     if turned and valid < 0.0:
         valid = locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa)
     return valid
+
+
+@JIT
+def contact_watched(p, n):
+    """Whether a run can change contact mode (a slip, grip or lift-off stop): a sliding ball, a
+    finite mu or a ball that flies. False for the 2011 model, whose loops then skip the looks
+    (decided once per call of a loop: a condition that does not change inside it)."""
+    return p[P_FLY] != 0.0 or p[P_MU] < math.inf or sliding_size(n)
 
 
 @JIT

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .dense import state_at
-from .events import TIP_REACH, fold_search, record_valid, step_events, tip_stop
+from .events import TIP_REACH, contact_watched, fold_search, record_valid, step_events, tip_stop
 from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, sliding_step_pair, trial_step_pair
 from .interface import (
     BATCH_CHUNK, D_SLIP, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
@@ -68,6 +68,7 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
         if ints[I_STATUS] != RUNNING:
             return
 
+    watch = contact_watched(p, n)
     k0 = ints[I_STEPS]
     k_stop = min(n_steps, k0 + max_steps)
     for k in range(k0 + 1, k_stop + 1):
@@ -75,7 +76,8 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
         t0 = (k - 1) * dt
         h = t_end - t0 if final else dt
         t = t_end if final else k * dt
-        slip_reference(d, probe)
+        if watch:
+            slip_reference(d, probe)
         bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
             valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
@@ -95,7 +97,7 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
             record_last(rows, ints, t0, z, R, probe, p)
             return
         valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
-                            True, Ye, Re, pe, sa, sb, sm, stepping)
+                            True, Ye, Re, pe, sa, sb, sm, stepping, watch)
         if valid >= 0.0:
             record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                          Rn, pn, Ye, sa, sb, sm, stepping)
@@ -143,6 +145,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
         info[F_TIME] = 0.0
         if ints[I_STATUS] != RUNNING:
             return
+    watch = contact_watched(p, n)
     t, h = info[F_TIME], info[F_H]
     retry = ints[I_RETRY] == 1  # right after a rejection the step may shrink but not grow (Hairer's rule)
     for _ in range(max_steps):
@@ -150,7 +153,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        slip_reference(d, probe)
+        if watch:
+            slip_reference(d, probe)
         if n == MK_SIZE:
             bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         else:
@@ -175,7 +179,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             break
         t_new = t_end if land else t + hs
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
-                            False, Ye, Re, pe, sa, sb, sm, EXPLICIT)
+                            False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
         theta = 0.0  # Re: the orientation there (the rows' orientations follow on from each other)
         for a in range(3):

@@ -146,7 +146,7 @@ def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3):
 SLIP_ZERO = 1e-12
 
 
-@STEP
+@COLD  # (called, not inlined: the sliding steps are rarer than rolling's, and the kernel's code stays smaller)
 def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     """``dynamics`` of a sliding ball, z = (x, y, c' (3), omega (3), D, orientation): the ball
     keeps contact, F_n from the constraint N.c'' = -(N' alpha').c', kinetic friction -mu F_n s
