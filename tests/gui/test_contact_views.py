@@ -124,4 +124,9 @@ def test_compare_mode_each_run_shows_its_own_transitions(qtbot, window, tmp_path
     assert len({tuple(c) for c in flying}) == 3   # rolling, sliding and flying told apart
     assert len(window.view.liftoff.pos) == 3
     assert window.readouts.titles["drift"].text() == "(E+D−E₀)/E₀" and window.readouts["slip"].isHidden()
+    summary = window.compare.summary   # each run's landings and dissipation in the summary
+    summary.set_runs(runs)
+    assert [summary.value("Landings", k) for k in (0, 1)] == ["1", "0"]
+    assert summary.value("Mode at end", 0) == "rolling"
+    assert summary.value("Dissipated (J)", 0) == f"{2 / 7 * 2.0 + 0.5:.3g}"
     window.compare_action.setChecked(False)
