@@ -62,19 +62,23 @@ def sentence(kind: str, t: float, who: str = "") -> str:
     return f"{who}{KIND_WORDS[kind].capitalize()} at t = {t:.4g} s: {words}"
 
 
-def summary(transitions) -> str:
-    """The transitions of a finished run in a few words ("; 1 lift-off, 3 landings (0.42 J
-    lost)"), or "" for none."""
-    counts = {kind: sum(1 for c in transitions if c.kind == kind) for kind in KIND_WORDS}
+def summary(transitions, listed: int = 3) -> str:
+    """The transitions of a finished run in a few words: each with its time where there are at
+    most ``listed`` ("; lift-off at t = 0.4465 s, landing at t = 0.8919 s (2.3 J lost)"), else
+    counted ("; 2 lift-offs, 5 landings (3.1 J lost)"); "" for none."""
+    def lost(changes) -> str:
+        return f" ({sum(c.energy_lost or 0.0 for c in changes):.3g} J lost)"
+
+    if len(transitions) <= listed:
+        return "".join(("; " if i == 0 else ", ") + f"{KIND_WORDS[c.kind]} at t = {c.time:.4g} s"
+                       + (lost([c]) if c.kind == "landing" else "") for i, c in enumerate(transitions))
     parts = []
-    for kind, n in counts.items():
-        if n:
-            word = KIND_WORDS[kind] + ("s" if n > 1 else "")
-            if kind == "landing":
-                lost = sum(c.energy_lost or 0.0 for c in transitions if c.kind == "landing")
-                word += f" ({lost:.3g} J lost)"
-            parts.append(f"{n} {word}")
-    return "; " + ", ".join(parts) if parts else ""
+    for kind, word in KIND_WORDS.items():
+        changes = [c for c in transitions if c.kind == kind]
+        if changes:
+            parts.append(f"{len(changes)} {word}{'s' if len(changes) > 1 else ''}"
+                         + (lost(changes) if kind == "landing" else ""))
+    return "; " + ", ".join(parts)
 
 
 def markers(transitions, label: str = "") -> list[Marker]:

@@ -7,20 +7,29 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
+from rollball.trajectory import MODES
+
 QUANTITIES = ("Status", "Error at end (m)", "Max error (m)", "Max energy error", "Steps", "Evaluations",
-              "Compute time (s)")
+              "Compute time (s)", "Mode at end", "Landings", "Dissipated (J)")
 TIPS = {"Error at end (m)": "Distance of the contact point from the reference's at the last common time",
         "Max error (m)": "Largest distance of the contact point from the reference's",
         "Max energy error": "Largest |E − E_ref| relative to the energy scale",
         "Evaluations": "Right-hand-side evaluations, rejected tries included",
-        "Compute time (s)": "Time the worker spent advancing this run (the runs share two cores)"}
+        "Compute time (s)": "Time the worker spent advancing this run (the runs share two cores)",
+        "Mode at end": "Rolling, sliding or flying at the last computed moment",
+        "Landings": "How often the ball came down after a lift-off (each with its marker on the time slider)",
+        "Dissipated (J)": "Energy taken by sliding friction and landings"}
 
 
 def summary_values(run) -> list[str]:
     """A run's column: what is known so far (errors once the reference is)."""
     sim = run.simulation
+    buffer = run.buffer
     values = [str(sim.status) if sim.status else "running", "…", "…", "…", f"{sim.steps:,}",
-              f"{sim.evaluations:,}", f"{run.seconds:.2g}" if sim.done else "…"]
+              f"{sim.evaluations:,}", f"{run.seconds:.2g}" if sim.done else "…",
+              MODES[buffer.mode_of(len(buffer) - 1)] if len(buffer) else "…",
+              f"{sum(1 for c in run.transitions if c.kind == 'landing')}",
+              f"{buffer.dissipated[-1]:.3g}" if len(buffer) else "…"]
     if run.errors is not None:
         contact, energy = run.errors["contact"], run.errors["energy"]
         known = np.isfinite(contact)

@@ -84,6 +84,7 @@ class ScriptedSimulation:
         self.status = None
         self.liftoff_time = T2
         self.adaptive = False
+        self.steps = self.evaluations = 0
 
     @property
     def modes(self) -> np.ndarray:

@@ -58,7 +58,7 @@ def test_trail_coloured_by_mode_and_a_marker_at_every_transition(qtbot, window, 
     window.timeline.events.linkActivated.emit(repr(T1))          # and so does its link
     assert window.controller.play_time == T1
     assert len(window.view.liftoff.pos) == 3                     # every transition marked in the view
-    assert "1 landing (0.5 J lost)" in window.message.toolTip()
+    assert f"landing at t = {T3:.4g} s (0.5 J lost)" in window.message.toolTip()
     window.closeup_action.setChecked(True)   # the close-up's trail by mode too
     window.runs.seek(T3 - 0.05)
     near = window.closeup.trail.color
@@ -96,7 +96,10 @@ def test_spans_from_modes():
     t = np.arange(8.0)
     assert contact_view.spans(t, [0, 1, 1, 0, 2, 2, 2, 0]) == [(1.0, 3.0, SLIDING), (4.0, 7.0, FLYING)]
     assert contact_view.spans(t[:2], [2, 2]) == [(0.0, 1.0, FLYING)]
-    assert contact_view.summary(TRANSITIONS) == "; 1 grip, 1 lift-off, 1 landing (0.5 J lost)"
+    assert contact_view.summary(TRANSITIONS) == (f"; grip at t = {T1:.4g} s, lift-off at t = {T2:.4g} s, "
+                                                 f"landing at t = {T3:.4g} s (0.5 J lost)")
+    assert contact_view.summary(TRANSITIONS, listed=2) == "; 1 grip, 1 lift-off, 1 landing (0.5 J lost)"
+    assert contact_view.summary(()) == ""
 
 
 def test_compare_mode_each_run_shows_its_own_transitions(qtbot, window, tmp_path):
@@ -124,4 +127,9 @@ def test_compare_mode_each_run_shows_its_own_transitions(qtbot, window, tmp_path
     assert len({tuple(c) for c in flying}) == 3   # rolling, sliding and flying told apart
     assert len(window.view.liftoff.pos) == 3
     assert window.readouts.titles["drift"].text() == "(E+D−E₀)/E₀" and window.readouts["slip"].isHidden()
+    summary = window.compare.summary   # each run's landings and dissipation in the summary
+    summary.set_runs(runs)
+    assert [summary.value("Landings", k) for k in (0, 1)] == ["1", "0"]
+    assert summary.value("Mode at end", 0) == "rolling"
+    assert summary.value("Dissipated (J)", 0) == f"{2 / 7 * 2.0 + 0.5:.3g}"
     window.compare_action.setChecked(False)

@@ -58,8 +58,12 @@ def test_pause_step_stop_and_reset(qtbot, hills):
     assert controller.state == READY and controller.runs == [] and controller.play_time == 0.0
 
 
-def test_liftoff_is_an_event_once(qtbot):
-    scene = Scene.load(EXAMPLES_DIR / "liftoff.json")
+@pytest.mark.parametrize("after_liftoff", ["glued", "fly"])
+def test_liftoff_is_an_event_once(qtbot, after_liftoff):
+    """A glued ball's lift-off is said once; a ball that flies says its lift-off and its landing."""
+    data = Scene.load(EXAMPLES_DIR / "liftoff.json").to_dict()
+    data["contact"]["after_liftoff"] = after_liftoff
+    scene = Scene.from_dict(data)
     controller = RunController()
     controller.speed = math.inf
     events = []
@@ -67,7 +71,12 @@ def test_liftoff_is_an_event_once(qtbot):
     runs = runs_of(scene, {})
     with qtbot.waitSignal(controller.finished, timeout=30_000):
         controller.start(runs)
-    assert events == [(0, "liftoff", runs[0].simulation.liftoff_time)]
+    if after_liftoff == "glued":
+        assert events == [(0, "liftoff", runs[0].simulation.liftoff_time)] and not runs[0].transitions
+    else:
+        assert events == [(0, change.kind, change.time) for change in runs[0].transitions]
+        assert [kind for _, kind, _ in events] == ["liftoff", "landing"]
+        assert events[0][2] == runs[0].simulation.liftoff_time
 
 
 def test_document_title_and_dirty_flag(hills):

@@ -104,8 +104,9 @@ def test_lift_off_is_a_marker_to_jump_to(qtbot, window):
     window.files.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
     run_to_end(qtbot, window)
     liftoff = window.controller.simulation.liftoff_time
-    [(position, marker)] = window.timeline.slider.markers
+    (position, marker), (_, landing) = window.timeline.slider.markers   # the ball flies, and lands
     assert marker.time == liftoff and position == round(STEPS * liftoff / window.controller.t_end)
+    assert "landing" in landing.text and landing.time > liftoff
     assert "lift-off" in window.timeline.events.text()
     window.timeline.events.linkActivated.emit(repr(liftoff))     # the link beside the slider
     assert window.controller.play_time == liftoff
