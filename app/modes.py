@@ -23,6 +23,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 DEFAULT_SIZE = (1280, 860)   # the window's size on a screen that has room for it
 FRAME_ROOM = (8, 40)         # pixels of the available screen left for a window manager's frame
 SETTLE_MS = 3000             # after leaving full screen, the window manager's moves are undone this long
+RETRY_MS = 50                # meanwhile, a window that cannot yet be put back is tried again this often
 ERROR_PLOTS_SHARE = 0.4      # of the view's and plots' height, at least, for compare mode's plots
 PRESENTATION_PLOTS_SHARE = 0.47   # the same in presentation, where their text is larger
 PLOTS_ENOUGH = 380           # pixels: the error plots need no more (a large screen's view takes the rest)
@@ -160,6 +161,10 @@ class Modes:
             w.showNormal()
         if w.geometry() != rect:
             w.setGeometry(rect)
+        if w.geometry() != rect and time.monotonic() < self._settle_until:
+            # the large text's minimum sizes are still in the layout (a plot's axis takes its
+            # new width when it is next drawn): again as soon as they have gone
+            QtCore.QTimer.singleShot(RETRY_MS, self.window, self._put_back)
         if w.geometry() == rect and self._normal_sizes and w.splitter.sizes() != self._normal_sizes:
             w.splitter.setSizes(self._normal_sizes)   # the view's and plots' heights as they were
 
