@@ -39,6 +39,16 @@ SAMPLES = 21             # the grid a closest point is looked for on, per side..
 BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
 
 
+class OffLandscape(Exception):
+    """The flying ball is where the landscape cannot be evaluated below it (outside its domain,
+    or no closest surface point is found): there is nothing to land on. ``time`` is the last
+    time a closest point was found, ``center`` the centre then."""
+
+    def __init__(self, time: float, center: np.ndarray):
+        super().__init__(f"no surface below the ball after t = {time:.6g} s")
+        self.time, self.center = time, center
+
+
 def rest_speed(radius: float, gravity: float) -> float:
     """The slowest rebound that still flies (m/s): apex REST_HEIGHT · r above the surface."""
     return math.sqrt(2.0 * gravity * REST_HEIGHT * radius)
@@ -173,7 +183,8 @@ class Flight:
 
     def landing(self, t_end: float) -> tuple[float, Foot] | None:
         """The first time in (t₀, t_end] the ball touches the surface again, and the contact
-        there; None if it is still flying at t_end (or there is no surface under it).
+        there; None if it is still flying at t_end. ``OffLandscape`` where no surface is found
+        below it.
 
         Steps are bounded so that none passes a root of the gap h = D − r (D the centre's
         distance to the surface). Two bounds, the larger taken: (1) D changes no faster than
@@ -190,7 +201,7 @@ class Flight:
         t = self.start.t
         h, foot = self.gap(t)
         if math.isnan(h):
-            return None
+            raise OffLandscape(t, self.start.center)
         clearing = FIRST_STEP if h <= tol else 0.0   # (just lifted off: not yet clear of the surface)
         for _ in range(MAX_LOOKS):
             if t >= t_end:
@@ -218,7 +229,7 @@ class Flight:
             t_next = min(t + step, t_end)
             h_next, foot_next = self.gap(t_next, guess)
             if math.isnan(h_next):
-                return None
+                raise OffLandscape(t, self.centers(np.array([t]))[0][0])
             if h_next < -tol:
                 return self._locate(t, t_next, guess)
             if clearing:

@@ -13,7 +13,7 @@ import threading
 import numpy as np
 
 from . import __version__, kernel, machine_code, sliding
-from .flight import Flight, FreeState, Surface, impact, rest_speed, settle
+from .flight import Flight, FreeState, OffLandscape, Surface, impact, rest_speed, settle
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
@@ -35,6 +35,7 @@ _STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES
            if code not in (kernel.RUNNING, kernel.TRANSITION)}
 # The mode a kernel run's transition leads to (kernel.interface.TRANSITIONS) as a row mode.
 _NEXT_MODE = {"liftoff": FLYING, "slip": SLIDING, "grip": ROLLING}
+MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -228,6 +229,8 @@ class Simulation:
         self._finished = [0, 0, 0]   # steps, rejected tries and evaluations of the finished kernel runs
         self._first_liftoff: Liftoff | None = None
         self._dissipated_now = 0.0   # J: what a flight carries
+        self._off: Failure | None = None   # a flight found no surface below the ball
+        self._stall: str | None = None     # why the contact's modes could not go on
         self.status: Status | None = None
         self._energy_check: EnergyCheck | None = None
         self.judge_energy = True  # whether the finished run looks at whose its energy error is
@@ -278,6 +281,8 @@ class Simulation:
     @property
     def failure(self) -> Failure | None:
         """Why and where the physics stopped the run (None while it has not)."""
+        if self._off is not None:
+            return self._off
         reason = kernel.reason_name(int(self._ints[kernel.I_REASON]))
         if reason is None:
             return None
@@ -442,6 +447,14 @@ class Simulation:
         x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
         self.transitions.append(Transition(t, kind, x, y))
         self._finish_kernel_run()
+        at_once = self.transitions[-MAX_AT_ONCE:]
+        if len(at_once) == MAX_AT_ONCE and all(change.time == t for change in at_once):
+            self._stall = (f"the contact changes mode {MAX_AT_ONCE} times at t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g}) "
+                           f"({', '.join(sorted({change.kind for change in at_once}))}) without the time moving on: "
+                           f"rolling needs more friction than μ F·N there, and sliding stops at once, so the run "
+                           f"cannot go on")
+            self.status = Status.NONFINITE
+            return
         last = self._out[self._count - 1]
         if kind == "liftoff":
             self._dissipated_now = float(last[DISSIPATED])
@@ -498,7 +511,15 @@ class Simulation:
         """Take the current flight to its landing (or to t_end), then the impact there."""
         flight, ball, contact = self._flight, self.scene.ball, self.scene.contact
         dissipated = self._dissipated_now
-        landing = flight.landing(self.t_end)
+        try:
+            landing = flight.landing(self.t_end)
+        except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
+            self._append(flight.rows(np.append(self._record_times(flight.start.t, off.time), off.time)
+                                     if off.time > flight.start.t else np.empty(0), dissipated))
+            self._flight = None
+            self._off = Failure(Reason.UNDEFINED, off.time, float(off.center[0]), float(off.center[1]), math.nan)
+            self.status = Status.NONFINITE
+            return
         if landing is None:
             times = np.append(self._record_times(flight.start.t, self.t_end), self.t_end)
             self._append(flight.rows(times, dissipated))
@@ -554,6 +575,8 @@ class Simulation:
         """How the run ended (or stands), in words."""
         status = status or self.status
         failure = self.failure
+        if self._stall is not None and status is Status.NONFINITE:
+            return self._stall
         if failure is not None and status in (Status.DOES_NOT_FIT, Status.NONFINITE):
             return describe(failure, self.scene.ball.radius)
         if status is Status.OK:

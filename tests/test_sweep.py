@@ -2,6 +2,7 @@
 workers, cancellation, the files and the command line."""
 
 import csv
+import dataclasses
 import json
 import os
 import signal
@@ -14,7 +15,9 @@ from rollball import Scene, simulate, sweep
 from rollball.cli import main
 from rollball.examples import EXAMPLES_DIR
 from rollball.sweeps import Grid, parse_vary
+from rollball.scene import Contact
 from rollball.sweeps.grid import with_values
+from rollball.trajectory import MODES
 
 LIFTOFF = Scene.load(EXAMPLES_DIR / "liftoff.json")
 
@@ -164,7 +167,8 @@ def test_save_writes_csv_json_and_a_map(tmp_path):
     assert [f.name for f in files] == ["sweep.csv", "sweep.json", "sweep.png"]
     rows = list(csv.reader(open(tmp_path / "sweep.csv", encoding="utf-8")))
     assert rows[0] == ["start.vx", "start.spin", "status", "t_reached", "liftoff_time", "x_end", "y_end",
-                       "energy_drift", "min_normal_force", "max_speed", "path_length", "message"]
+                       "energy_drift", "min_normal_force", "max_speed", "path_length", "end_mode", "landings",
+                       "first_slip_time", "message"]
     assert len(rows) == 7 and rows[1][:3] == ["3.0", "-1.0", "ok"] and rows[1][4] == ""   # no lift-off
     assert float(rows[5][4]) == table["liftoff_time"][4]                                  # full precision
     info = json.loads((tmp_path / "sweep.json").read_text())
@@ -233,3 +237,24 @@ def test_the_batch_loop_reads_the_columns_the_trajectory_names():
     assert (kernel.ROW_CENTER, kernel.ROW_VELOCITY, kernel.ROW_ENERGY, kernel.ROW_FORCE) == (
         trajectory.CENTER.start, trajectory.VELOCITY.start, trajectory.ENERGY, trajectory.NORMAL_FORCE)
     assert trajectory.CENTER.stop - trajectory.CENTER.start == trajectory.VELOCITY.stop - trajectory.VELOCITY.start == 3
+
+
+def test_a_contact_scenes_runs_report_their_modes():
+    """The liftoff example flies (version 3): each run goes through Simulation, and the sweep
+    says how it ended, how often it landed and when it first slipped, as the run itself does."""
+    table = sweep(LIFTOFF, {"start.vx": [3.0, 5.0]}, workers=1)
+    assert list(table["landings"]) == [0.0, 1.0] and list(table["end_mode"]) == [0.0, 0.0]   # rolling
+    assert np.isnan(table["first_slip_time"]).all()
+    fast = simulate(with_values(LIFTOFF, ("start.vx",), (5.0,)))
+    assert table["liftoff_time"][1] == fast.liftoff_time and table["x_end"][1] == fast.contact[-1, 0]
+    cylinder = dataclasses.replace(Scene.load(EXAMPLES_DIR / "cylinder.json"), contact=Contact(friction=0.3))
+    slipping = sweep(cylinder, {"duration": [1.5]}, workers=1)
+    run = simulate(dataclasses.replace(cylinder, duration=1.5))
+    slip = next(change for change in run.transitions if change.kind == "slip")
+    assert slipping["first_slip_time"][0] == slip.time and slipping["end_mode"][0] == MODES.index(run.mode[-1])
+
+
+def test_the_2011_models_runs_roll_to_the_end():
+    table = sweep(Scene.load(EXAMPLES_DIR / "hills.json"), {"start.vx": [0.0, 0.5]}, workers=1)
+    assert list(table["end_mode"]) == [0.0, 0.0] and list(table["landings"]) == [0.0, 0.0]
+    assert np.isnan(table["first_slip_time"]).all()

@@ -18,10 +18,11 @@ import numpy as np
 from .. import kernel, machine_code
 from ..landscape import landscape_of
 from ..scene import Scene, SceneError
-from ..simulation import initial_momentum, step_count
+from ..simulation import Simulation, initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
+from ..trajectory import MODES, ROLLING, Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
-from .outcomes import INVALID, NOT_RUN, OUTCOMES
+from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -102,6 +103,35 @@ def _landscape(scene: Scene):
         return landscape
 
 
+def changes_mode(scene: Scene) -> bool:
+    """Whether the scene's contact can change mode (else it is the 2011 model: the batch loop's)."""
+    return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued")
+
+
+_CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
+
+
+def run_one(scene: Scene) -> tuple[int, np.ndarray]:
+    """A run of a scene whose contact changes mode, through ``Simulation`` (every step a row),
+    and its status code and outcomes: those of the batch loop, from the rows, then the contact's."""
+    simulation = Simulation(scene, record_every=1)
+    simulation.judge_energy = False
+    simulation.advance()
+    traj = simulation.trajectory()
+    out = np.full(len(OUTCOMES), np.nan)
+    if len(traj):
+        speeds = np.linalg.norm(traj.velocity, axis=1)
+        path = float(np.sum(np.linalg.norm(np.diff(traj.center, axis=0), axis=1)))
+        out[:len(kernel.OUTCOMES)] = (traj.t[-1], np.nan if traj.liftoff_time is None else traj.liftoff_time,
+                                      traj.contact[-1, 0], traj.contact[-1, 1], traj.energy_drift,
+                                      float(np.min(traj.normal_force)), float(np.max(speeds)), path)
+        out[O_END_MODE] = MODES.index(str(traj.mode[-1]))
+    out[O_LANDINGS] = traj.landings
+    slips = [change.time for change in traj.transitions if change.kind == "slip"]
+    out[O_FIRST_SLIP] = slips[0] if slips else np.nan
+    return _CODES[traj.status], out
+
+
 def run(task: Task) -> Result:
     scene, grid = task.scene, task.grid
     values = grid.values(task.lo, task.hi)
@@ -110,6 +140,13 @@ def run(task: Task) -> Result:
     messages = validate(scene, grid, values)
     status = np.full(runs, NOT_RUN, dtype=np.int64)
     status[list(messages)] = INVALID
+    if changes_mode(scene):
+        outcomes = np.full((runs, len(OUTCOMES)), np.nan)
+        for i in range(runs):
+            if status[i] != INVALID:
+                status[i], outcomes[i] = run_one(with_values(scene, grid.keys, tuple(float(v) for v in values[i])))
+        return Result(task.lo, status.astype(np.int8), outcomes,
+                      {task.lo + i: text for i, text in messages.items()})
     c = _columns(scene, grid, values)
     landscape = _landscape(scene)   # held while the kernel runs it: its machine code lives as long
     names = [PARAMETER_PREFIX + name for name in scene.parameter_names]
@@ -137,7 +174,7 @@ def run(task: Task) -> Result:
                 n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
             except ValueError:  # too many steps: refused by validate, not run
                 pass
-    outcomes = np.full((runs, len(OUTCOMES)), np.nan)
+    outcomes = np.full((runs, len(kernel.OUTCOMES)), np.nan)   # the batch loop's
     W, _, D = method.kernel_arrays()
     for k, values_k in enumerate(sets):
         these = np.flatnonzero(of_set == k)
@@ -152,5 +189,9 @@ def run(task: Task) -> Result:
                           **kernel.run_arrays(kernel.MOTION_SIZE, len(W), kernel.BATCH_ROWS))
         if not whole:
             status[these], outcomes[these] = part_status, part_outcomes
+    # the 2011 model rolls throughout: it never lands nor slips
+    outcomes = np.column_stack([outcomes, np.full((runs, len(OUTCOMES) - len(kernel.OUTCOMES)), np.nan)])
+    done = status != INVALID
+    outcomes[done, O_END_MODE], outcomes[done, O_LANDINGS] = ROLLING, 0.0
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)

@@ -1,15 +1,21 @@
 """What a sweep reports per run: its status and a row of outcomes.
 
-The runs themselves are the kernel's (``kernel.loops.advance_batch``: each run stepped by
-``simulate``'s own fixed-step loop, in batches without the GIL); here are the
-names of the outcomes and the statuses a sweep adds to the kernel's.
+The runs of the 2011 model are the kernel's (``kernel.loops.advance_batch``: each run stepped by
+``simulate``'s own fixed-step loop, in batches without the GIL); a scene whose contact can change
+mode runs each run through ``Simulation`` (``batch.run``). Here are the names of the outcomes and
+the statuses a sweep adds to the kernel's.
 """
 
 from __future__ import annotations
 
 from .. import kernel
 
-OUTCOMES = kernel.OUTCOMES
+# The kernel's outcomes, then the contact's: the mode at the end (its position in
+# trajectory.MODES: 0 rolling, 1 sliding, 2 flying; the CSV writes its name), the number of
+# landings and the time of the first slip (NaN: none).
+CONTACT_OUTCOMES = ("end_mode", "landings", "first_slip_time")
+OUTCOMES = kernel.OUTCOMES + CONTACT_OUTCOMES
+O_END_MODE, O_LANDINGS, O_FIRST_SLIP = (OUTCOMES.index(name) for name in CONTACT_OUTCOMES)
 
 # Status codes beyond the kernel's: a run whose varied scene was refused, and one not run yet.
 INVALID, NOT_RUN = 10, kernel.NOT_RUN

@@ -14,9 +14,9 @@ import numpy as np
 from .. import __version__, kernel
 from ..files import atomic_write, check_outputs, replace_together
 from ..scene import Scene
-from ..trajectory import Status
+from ..trajectory import MODES, Status
 from .grid import Grid
-from .outcomes import INVALID, NOT_RUN, OUTCOMES
+from .outcomes import INVALID, NOT_RUN, O_END_MODE, OUTCOMES
 
 # Status codes by name, as the CSV writes them.
 STATUS_NAMES = {kernel.OK: str(Status.OK), kernel.DOES_NOT_FIT: str(Status.DOES_NOT_FIT),
@@ -90,14 +90,16 @@ class SweepTable:
 
     def write_csv(self, stream) -> None:
         """The finished runs: varied keys, status, outcomes (full precision, empty where a run
-        has no value), and a message for refused scenes."""
+        has no value; the mode at the end by name), and a message for refused scenes."""
         writer = csv.writer(stream, lineterminator="\n")
         writer.writerow(self.columns + ("message",))
         values = self.grid.values()
         status = self["status"]
         for i in np.flatnonzero(self.done):
-            writer.writerow([repr(float(v)) for v in values[i]] + [status[i]]
-                            + ["" if math.isnan(v) else repr(float(v)) for v in self.outcomes[i]]
+            cells = ["" if math.isnan(v) else repr(float(v)) for v in self.outcomes[i]]
+            mode = self.outcomes[i, O_END_MODE]
+            cells[O_END_MODE] = "" if math.isnan(mode) else MODES[int(mode)]
+            writer.writerow([repr(float(v)) for v in values[i]] + [status[i]] + cells
                             + [self.messages.get(int(i), "")])
 
     def to_csv(self, path) -> None:
