@@ -68,3 +68,15 @@ def test_the_2011_model_is_one_kernel_run():
     flying = simulate(Scene.from_dict({**scene.to_dict(), "contact": {"after_liftoff": "fly"}}))
     assert flying.liftoff_time == pytest.approx(traj.liftoff_time, abs=1e-12)
     assert "flying" in set(flying.mode) and math.isclose(flying.t[-1], 1.0)
+
+
+def test_a_flight_beyond_the_landscape_ends_the_run():
+    """sqrt(x) ends at x = 0, where the ball, rolling towards it, has already left the surface: it
+    flies on over nothing, and the run ends where no surface is found below it."""
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "sqrt(x)",
+                             "start": {"x": 0.5, "y": 0.0, "vx": -3.0}, "duration": 1.0})
+    traj = simulate(scene)
+    assert [c.kind for c in traj.transitions] == ["liftoff"]
+    assert traj.status == "nonfinite" and traj.failure.reason == "undefined"
+    assert traj.t[-1] == traj.failure.time < 1.0 and traj.mode[-1] == "flying"
+    assert np.isfinite(traj.data).all()
