@@ -20,6 +20,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
+from . import machine_code
 from .geometry import fit_ratio, unit_normal
 from .kernel.interface import ROW_SIZE, ROW_SLICES
 from .trajectory import DISSIPATED, SLIP_SPEED
@@ -35,6 +36,7 @@ GAP_TOLERANCE = 1e-12    # × r: a gap this small is contact (round-off of the d
 FIRST_STEP = 1e-9        # s: the first look after a lift-off, then doubling until the ball is clear
 CLEAR_WITHIN = 1e-2      # s: a ball not clear of the surface by then never left it
 MAX_LOOKS = 1_000_000    # steps of the landing search (a grazing flight takes the most)
+GROWTH = 0.5             # while the gap grows, a step may be this share of the time flown so far
 SAMPLES = 21             # the grid a closest point is looked for on, per side...
 BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
 
@@ -89,10 +91,24 @@ class Surface:
     def __init__(self, landscape, values=(), reach: float = 1.0):
         self.landscape, self.values = landscape, tuple(values)
         self.reach_default = reach   # m: how far to look where the point below is undefined
+        self._record = landscape.record(self.values)   # (held while its address is in use)
+        self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
 
     def evaluate(self, x, y) -> np.ndarray:
-        with np.errstate(all="ignore"):
-            return self.landscape.evaluate(x, y, self.values)
+        """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
+        from the same compiled code, its arguments packed once per number of points)."""
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        n = x.size
+        packed = self._calls.get(n)
+        if packed is None:
+            xs, ys, out = np.empty(n), np.empty(n), np.empty((6, n))
+            call = machine_code.Arguments("evaluate_points", fn=self._record.ctypes.data, xs=xs, ys=ys, out=out,
+                                          d=np.empty(6))
+            packed = self._calls[n] = (call, xs, ys, out)
+        call, xs, ys, out = packed
+        xs[:], ys[:] = x.ravel(), y.ravel()
+        call()
+        return out.reshape((6,) + x.shape).copy()
 
     def feet(self, centers: np.ndarray, guesses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For centres (n, 3) from first guesses (n, 2): the feet (n, 2), the unit normals there
@@ -191,8 +207,11 @@ class Flight:
         the centre moves, so the ball cannot touch before |ċ| Δ + ½ g Δ² = h; (2) near the
         surface D' = ċ·N at the foot and D'' ≥ −(g + |ċ|² κ/(1 − D κ)) for κ the largest
         principal curvature towards the ball there: h + D' Δ − ½ A Δ² = 0 with A twice that
-        bound. No step moves the centre by more than r (so a closest point the grid of
-        ``Surface.foot`` did not see from afar is seen nearer). Just after a lift-off the gap
+        bound; (3) while the gap grows (D' > 0) the steps may grow geometrically, to half the
+        time flown so far (just after a lift-off gravity and the surface's curvature nearly
+        cancel, so bound (2), which adds them, would take tiny steps for long). No step moves
+        the centre by more than r (so a closest point the grid of ``Surface.foot`` did not see
+        from afar is seen nearer). Just after a lift-off the gap
         grows from 0 (like τ³): the first looks double from FIRST_STEP until it is clear. A
         look ahead to where D' predicts the touch (plus a tenth) brackets it sooner; the root
         is then located by Brent's method to round-off."""
@@ -218,6 +237,8 @@ class Flight:
                 bend = 2.0 * (g + speed * speed * kappa / room)
                 local = (rate + math.sqrt(rate * rate + 2.0 * bend * h)) / bend if bend > 0 else math.inf
                 step = max(step, local)
+            if rate > 0 and not clearing:   # moving away from the surface: steps may grow with the flight
+                step = max(step, GROWTH * (t - self.start.t))
             step = min(step, r / speed) if speed > 0 else step
             if clearing:
                 step = max(step, clearing)
