@@ -88,7 +88,7 @@ def test_the_scratch_views_tile_the_scratch_array_the_interface_sizes():
         work = np.arange(float(kernel.work_size(n)))
         views = scratch(work, n)
         assert np.concatenate([v.ravel() for v in views]).tolist() == work.tolist()
-        assert [v.shape for v in views][:5] == [(kernel.D_SLIP + 3,), (n,), (n,), (kernel.PROBE_SIZE,), (3, 3)]
+        assert [v.shape for v in views][:5] == [(kernel.D_SLIP + 4,), (n,), (n,), (kernel.PROBE_SIZE,), (3, 3)]
 
 
 def test_run_arrays_are_the_arrays_every_loop_takes():
@@ -103,7 +103,7 @@ def test_row_columns_reasons_and_statuses_come_from_the_interface():
 
     assert len(trajectory.COLUMNS) == 23 and kernel.ROW_SIZE == 25   # (the 2011 model's, then slip and dissipated)
     assert trajectory.R == slice(12, 21) and trajectory.CENTER == slice(3, 6) and trajectory.NORMAL_FORCE == 22
-    assert trajectory.SLIP_SPEED == slice(23, 24) and trajectory.DISSIPATED == slice(24, 25)
+    assert trajectory.SLIP_SPEED == kernel.ROW_SLIP == 23 and trajectory.DISSIPATED == kernel.ROW_DISSIPATED == 24
     assert [str(s) for s in trajectory.Status] == [s for s in interface.STATUSES if s != "running"]
     assert [str(r) for r in trajectory.Reason] == list(interface.REASONS)
     assert interface.reason_name(kernel.R_KINK) == "kink" and interface.reason_name(0) is None

@@ -95,3 +95,21 @@ def test_a_flying_ball_stops_at_a_ridge(method):
     t, x, _ = run.event
     assert t == pytest.approx(t_ridge, abs=1e-8) and abs(x) < 1e-8
     assert -1e-6 < run.state.x <= 0.0 and run.rows[-1, kernel.ROW_T] <= t
+
+
+def test_after_a_slip_on_the_cylinder_every_method_slides_on_and_lifts_off_alike():
+    """From the slip (μ = 0.3), where the friction rolling needs has just reached μ F·N, the slip
+    starts from zero in a stiff direction (the friction would stop a small slip within a step):
+    every method slides on (no grip at once), keeps energy + dissipated, and lifts off at the
+    same place."""
+    start = rolling_state(CYLINDER, X0, 0.0, 0.0, 0.0)
+    slip = segment(CYLINDER, start, sliding=False, method="rk4", dt=1e-3, t_end=1.6, mu=0.3, fly=True)
+    assert slip.transition == "slip"
+    places = []
+    for method in METHODS:
+        run = segment(CYLINDER, slip.state, sliding=True, method=method, dt=1e-3, t_end=0.5, mu=0.3, fly=True)
+        assert (run.status, run.transition) == ("transition", "liftoff")
+        total = run.rows[:, kernel.ROW_ENERGY] + run.rows[:, kernel.ROW_DISSIPATED]
+        assert np.abs(total - total[0]).max() < 1e-6 * abs(total[0]) and run.state.dissipated > 0.005
+        places.append(run.event[1])
+    assert max(places) - min(places) < 1e-4

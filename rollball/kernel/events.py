@@ -371,6 +371,8 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info
             a, b = locate(SLIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
             if b < best:
                 best, kind = b, T_SLIP
+        elif 0.0 < gb:   # at the limit already at the step's start (a grip there, within round-off)
+            best, kind = 0.0, T_SLIP
     if kind == 0:
         return -1.0
     state_at(fn, d, p, z, R, h, P, K, 0.0, best, Ye, Re, pe)

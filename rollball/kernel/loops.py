@@ -13,8 +13,8 @@ from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, slidi
 from .interface import (
     BATCH_CHUNK, D_SLIP, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
-    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_SLIP, ROW_CENTER, ROW_ENERGY, ROW_FORCE, ROW_SIZE,
-    ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED)
+    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_MU, ROW_CENTER, ROW_ENERGY,
+    ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED)
 from .lowlevel import COLD, JIT
 from .physics import motion_size, shape_of
 from .recording import _fail, record, record_last, start
@@ -37,10 +37,16 @@ def reach_of(K, h, z):
 
 
 @JIT
-def slip_reference(d, probe):
+def slip_reference(d, probe, p, h):
     """The slip velocity at the step's start, which a sliding ball's friction keeps its side of
-    through the step (``sliding_dynamics``), into d[D_SLIP:] (rolling: 0, never read)."""
-    d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
+    through the step (``sliding_dynamics``), into d[D_SLIP:D_SLIP + 3] (rolling: 0, never read);
+    d[D_SLIP + 3] 1 where friction would stop that slip within the step (|u| < 7/2 mu F_n h / m):
+    the slip's direction is then held through the step (a slip starting or ending, where its
+    direction's own dynamics is stiff, ~ mu g / |u|)."""
+    u1, u2, u3 = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
+    d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = u1, u2, u3
+    held = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3) * p[1] < 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) * h
+    d[D_SLIP + 3] = 1.0 if held else 0.0
 
 
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
@@ -77,7 +83,7 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
         h = t_end - t0 if final else dt
         t = t_end if final else k * dt
         if watch:
-            slip_reference(d, probe)
+            slip_reference(d, probe, p, h)
         bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
             valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
@@ -154,7 +160,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
         if watch:
-            slip_reference(d, probe)
+            slip_reference(d, probe, p, hs)
         if n == MK_SIZE:
             bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         else:

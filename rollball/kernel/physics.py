@@ -183,17 +183,25 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     u3 = c3 - r * (o1 * n2 - o2 * n1)
     us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
     speeds = c1 * c1 + c2 * c2 + c3 * c3 + r * r * (o1 * o1 + o2 * o2 + o3 * o3)
-    if us * us > SLIP_ZERO * SLIP_ZERO * speeds:
+    zero = not us * us > SLIP_ZERO * SLIP_ZERO * speeds
+    if zero:
+        u1, u2, u3, us = 0.0, 0.0, 0.0, 0.0
+    r1, r2, r3 = d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2]
+    rn = math.sqrt(r1 * r1 + r2 * r2 + r3 * r3)
+    if d[D_SLIP + 3] != 0.0 and rn > 0.0:   # the direction held through the step (``slip_reference``)
+        s1, s2, s3 = r1 / rn, r2 / rn, r3 / rn
+        us = u1 * s1 + u2 * s2 + u3 * s3
+    elif not zero and d[D_SLIP + 3] == 0.0:
         side = us
-        if u1 * d[D_SLIP] + u2 * d[D_SLIP + 1] + u3 * d[D_SLIP + 2] < 0.0:
+        if u1 * r1 + u2 * r2 + u3 * r3 < 0.0:
             side = -us   # past the slip's zero: the friction keeps its side (above)
         s1, s2, s3 = u1 / side, u2 / side, u3 / side
         us = side
-    else:  # the slip starts against the friction rolling needs
-        u1, u2, u3, us = 0.0, 0.0, 0.0, 0.0
+    else:  # the slip starts (or is held at its start) against the friction rolling needs
         t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
         tn = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         s1, s2, s3 = (-t1 / tn, -t2 / tn, -t3 / tn) if tn > 0.0 else (0.0, 0.0, 0.0)
+        us = u1 * s1 + u2 * s2 + u3 * s3
     f = mu * abs(fn_)
     K[row, 0] = a1
     K[row, 1] = a2

@@ -100,7 +100,7 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
         _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
         return
     sliding = sliding_size(n)
-    d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = 0.0, 0.0, 0.0   # (no step yet)
+    d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2], d[D_SLIP + 3] = 0.0, 0.0, 0.0, 0.0   # (no step yet)
     # (np.int64(0): a literal 0 would compile dynamics anew for it)
     rates(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
     ints[I_EVALS] += 1
@@ -126,17 +126,22 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
         info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = 0.0, z[0], z[1]
 
 
+# A sliding start with zero slip grips only where rolling needs less than mu F.N by this share of
+# it: at a slip the two are equal to round-off, and the slip must not turn into a grip at once.
+GRIP_MARGIN = 1e-9
+
+
 @JIT
 def start_mode(p, sliding, probe):
     """The change of contact mode a run's start makes at once (probe: its state's), or 0:
     a lift-off where F.N < 0 and the ball flies (p[P_FLY]); rolling, a slip where the friction
-    it needs exceeds mu F.N; sliding with zero slip, a grip where it does not."""
+    it needs exceeds mu F.N; sliding with zero slip, a grip where it needs less (GRIP_MARGIN)."""
     force, need, mu = probe[PROBE_FORCE], probe[PROBE_NEED], p[P_MU]
     if p[P_FLY] != 0.0 and force < 0.0:
         return T_LIFTOFF
     if sliding:
         slip = probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2
-        return T_GRIP if slip == 0.0 and need <= mu * force else 0
+        return T_GRIP if slip == 0.0 and need <= mu * force * (1.0 - GRIP_MARGIN) else 0
     if mu < math.inf and need > mu * force:
         return T_SLIP
     return 0
