@@ -21,9 +21,9 @@ from .tableaus import MethodKind, get_method
 from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, ROLLING, SLIDING, T, VELOCITY,
                          EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
-# 23 doubles a row: 0.92 GB at the limit, handed to the trajectory without a copy. A run
-# recording every adaptive step grows its buffer by doubling up to the limit, holding the
-# old and the new buffer for a moment (1.4 GB at the last doubling).
+# kernel.ROW_SIZE (25) doubles a row: 1.0 GB at the limit, handed to the trajectory without a
+# copy. A run recording every adaptive step grows its buffer by doubling up to the limit,
+# holding the old and the new buffer for a moment (1.5 GB at the last doubling).
 MAX_ROWS = 5_000_000
 MAX_STEPS = 2 ** 53    # beyond this, step counts and k·dt are no longer exact in a double
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
