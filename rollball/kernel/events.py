@@ -11,10 +11,10 @@ from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
     F_LIFT_Y, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE,
-    PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SIZE, PROBE_SLIP, P_FLY, P_MU, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT,
+    PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY, P_MU, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT,
     R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import curvatures, shape_of, sliding_size
+from .physics import copy_state, curvatures, shape_of, sliding_size
 from .recording import _fail, hold, record, record_last
 from .steps import accept, search_step
 
@@ -497,14 +497,7 @@ def kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, clean):
     the run as a transition whose state is the last one before the kink: zn, Rn, pn where the
     ``approach`` reached one (clean > 0), else the step's start."""
     if not clean > 0.0:
-        n = z.shape[0]
-        for q in range(n):
-            zn[q] = z[q]
-        for a in range(3):
-            for c in range(3):
-                Rn[a, c] = R[a, c]
-        for q in range(PROBE_SIZE):
-            pn[q] = probe[q]
+        copy_state(z.shape[0], z, R, probe, zn, Rn, pn)
     ints[I_HELD] = 1
     ints[I_STATUS] = TRANSITION
     ints[I_TRANSITION] = T_LIFTOFF
@@ -598,14 +591,9 @@ def fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints,
     n, mk = shape_of(z)
     r = p[0]
     spare = K.shape[0] - 1
+    copy_state(n, z, R, probe, Zs, Rs, ps)
     for q in range(n):
-        Zs[q] = z[q]
         K[spare, q] = K[0, q]
-    for a in range(3):
-        for c in range(3):
-            Rs[a, c] = R[a, c]
-    for q in range(PROBE_SIZE):
-        ps[q] = probe[q]
     ts, grow, edge = 0.0, 0.25, -1.0
     for _ in range(FOLD_TRIES):
         reach = fold_time(fn, d, r, Zs, K, ps) / h
@@ -639,13 +627,7 @@ def fold_search(fn, d, p, W, P, t, h, z, R, K, last, probe, Y, zn, Rn, pn, ints,
     ints[I_DENSE] = -1
     if edge < 0.0:
         return -1.0
-    for q in range(n):
-        zn[q] = Zs[q]
-    for a in range(3):
-        for c in range(3):
-            Rn[a, c] = Rs[a, c]
-    for q in range(PROBE_SIZE):
-        pn[q] = ps[q]
+    copy_state(n, Zs, Rs, ps, zn, Rn, pn)
     ints[I_HELD] = 1
     _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t + edge * h, Zs[0], Zs[1], max(ps[PROBE_FIT], 1.0))
     return ts

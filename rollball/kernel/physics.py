@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .interface import (
-    D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SLIP, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
+    D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
     SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
 from .lowlevel import COLD, JIT, STEP, data_pointer, landscape
 
@@ -49,12 +49,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     elif mk != 0.0:
         K[row, 5], K[row, 6], K[row, 7] = dexpinv(z[5], z[6], z[7], o1, o2, o3)
     else:
-        # R' = A(omega) R, column by column
-        for j in range(3):
-            q1, q2, q3 = z[5 + j], z[8 + j], z[11 + j]
-            K[row, 5 + j] = o2 * q3 - o3 * q2
-            K[row, 8 + j] = o3 * q1 - o1 * q3
-            K[row, 11 + j] = o1 * q2 - o2 * q1
+        rotation_rate(z, K, row, 5, o1, o2, o3)
     if full != 0.0:
         probe[0], probe[1], probe[2] = n1, n2, n3
         probe[3], probe[4], probe[5] = o1, o2, o3
@@ -72,6 +67,29 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
             need = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_NEED] = need
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = 0.0, 0.0, 0.0
+
+
+@JIT
+def rotation_rate(z, K, row, base, o1, o2, o3):
+    """The classic scheme's R' = A(omega) R, column by column, for R carried row-major in
+    z[base:base + 9] (rolling and sliding states alike)."""
+    for j in range(3):
+        q1, q2, q3 = z[base + j], z[base + 3 + j], z[base + 6 + j]
+        K[row, base + j] = o2 * q3 - o3 * q2
+        K[row, base + 3 + j] = o3 * q1 - o1 * q3
+        K[row, base + 6 + j] = o1 * q2 - o2 * q1
+
+
+@JIT
+def copy_state(n, z, R, probe, z_to, R_to, probe_to):
+    """z_to[:n], R_to, probe_to = z[:n], R, probe: a state, its orientation and its probe."""
+    for q in range(n):
+        z_to[q] = z[q]
+    for a in range(3):
+        for c in range(3):
+            R_to[a, c] = R[a, c]
+    for q in range(PROBE_SIZE):
+        probe_to[q] = probe[q]
 
 
 @JIT
@@ -220,11 +238,7 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     elif mk != 0.0:
         K[row, 9], K[row, 10], K[row, 11] = dexpinv(z[9], z[10], z[11], o1, o2, o3)
     else:
-        for j in range(3):
-            q1, q2, q3 = z[9 + j], z[12 + j], z[15 + j]
-            K[row, 9 + j] = o2 * q3 - o3 * q2
-            K[row, 12 + j] = o3 * q1 - o1 * q3
-            K[row, 15 + j] = o1 * q2 - o2 * q1
+        rotation_rate(z, K, row, 9, o1, o2, o3)
     if full != 0.0:
         probe[0], probe[1], probe[2] = n1, n2, n3
         probe[3], probe[4], probe[5] = o1, o2, o3
