@@ -21,7 +21,7 @@ from .timeline import Marker
 # white flying; each drawn over a dark edge that keeps it readable on every colour of the surface.
 MODE_COLORS = {ROLLING: "#d55e00", SLIDING: "#56b4e9", FLYING: "#ffffff"}
 MODE_WORDS = {ROLLING: "rolling", SLIDING: "sliding", FLYING: "flying"}
-# The plots' spans (behind the curves): none rolling, the same hues pale.
+# The plots' spans (behind the curves): none rolling, sliding in the trail's sky blue, flight grey; pale.
 SPAN_COLORS = {SLIDING: (86, 180, 233, 60), FLYING: (120, 120, 120, 45)}
 # Markers by kind of transition (slider, 3-D view); lift-off keeps the orange it always had.
 KIND_COLORS = {"slip": "#0072b2", "grip": "#009e73", "liftoff": "#ff8c00", "landing": "#cc79a7"}

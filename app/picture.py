@@ -10,10 +10,13 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import METHODS, Scene
 
+from .contact_view import KIND_COLORS, MODE_COLORS, rgba
 from .view3d import BALL_STRIPES, LIFTOFF_COLOR, NO_FIT_COLOR, TRAIL_COLOR, label_pixels
 
-# colours of the view that must stay recognisable in a GIF's palette
-ACCENTS = (TRAIL_COLOR[:3], LIFTOFF_COLOR[:3], NO_FIT_COLOR[:3], *BALL_STRIPES, (0.97, 0.97, 0.97))
+# colours of the view that must stay recognisable in a GIF's palette (the trail's by mode and the
+# transitions' markers among them)
+ACCENTS = (TRAIL_COLOR[:3], LIFTOFF_COLOR[:3], NO_FIT_COLOR[:3], *BALL_STRIPES, (0.97, 0.97, 0.97),
+           *(tuple(rgba(color)[:3]) for color in (*MODE_COLORS.values(), *KIND_COLORS.values())))
 MAX_TEXTURE = 4096          # pixels per side of one off-screen rendering pass
 INSET_FRACTION = 0.3       # the close-up's width as a fraction of the picture's
 CAPTION_FRACTION = 0.028   # caption text height as a fraction of the picture's width (at least 11 px)

@@ -22,7 +22,7 @@ from .session import run_spec
 from .timeline import Marker
 from .warmup import WarmUp
 
-LIFTOFF_COLOR, STOP_COLOR = "#ff8c00", "#c0392b"   # markers on the time slider
+LIFTOFF_COLOR, STOP_COLOR = contact_view.KIND_COLORS["liftoff"], "#c0392b"   # markers on the time slider
 START_WORDS = {READY: ("Start", "Start the run from t = 0"),                # what Start does, by state
                PAUSED: ("Resume", "Resume playback from where it was paused"),
                FINISHED: ("Restart", "Run again from t = 0"),

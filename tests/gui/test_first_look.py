@@ -9,6 +9,7 @@ import pytest
 from PySide6 import QtCore, QtGui
 
 from rollball_app.main import screenshot
+from rollball import Scene
 from rollball.examples import example_names, scene_path
 
 from .guitools import run_to_end, set_field
@@ -151,11 +152,18 @@ def test_what_a_stopped_run_computed_can_be_exported(qtbot, window, tmp_path):
     assert len(out.read_text().splitlines()) > 10
 
 
-def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window):
-    assert window.files.open_scene(scene_path("cylinder"), remember=False)
+def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window, tmp_path):
+    assert window.files.open_scene(scene_path("cylinder"), remember=False)   # the ball flies off and lands
     run_to_end(qtbot, window)
     text = window.message.text()
-    assert text.startswith("Stopped early") and "lift-off at t = " in text
+    assert text.startswith("Finished") and "lift-off at t = " in text and "landing at t = " in text
+    data = window.scene.to_dict()   # glued on, as in 2011: it rolls down the side until it no longer fits
+    data["contact"]["after_liftoff"] = "glued"
+    Scene.from_dict(data).save(tmp_path / "glued.json")
+    assert window.files.open_scene(tmp_path / "glued.json", remember=False)
+    run_to_end(qtbot, window)
+    text = window.message.text()
+    assert text.startswith("Stopped early") and "lift-off at t = " in text and "not physical" in text
 
 
 def test_start_goes_as_soon_as_its_method_is_ready(qtbot, window):
