@@ -14,6 +14,7 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball import Scene
 
+from .field_row import field_row
 from .help import set_topic
 
 FRICTION, RESTITUTION, AFTER_LIFTOFF, OMEGA = ("contact.friction", "contact.restitution",
@@ -74,13 +75,6 @@ def parse(key: str, text: str):
         return None, "not a number"
 
 
-def message_label(name: str) -> QtWidgets.QLabel:
-    label = QtWidgets.QLabel(wordWrap=True, objectName=name)
-    label.setTextFormat(QtCore.Qt.TextFormat.PlainText)
-    label.hide()
-    return label
-
-
 class ContactFields(QtCore.QObject):
     """The fields, their labels and messages (by key), built into forms the panel gives.
     ``edited(key)`` when the user changes one."""
@@ -96,18 +90,7 @@ class ContactFields(QtCore.QObject):
     # -- building ---------------------------------------------------------------------
 
     def _row(self, form: QtWidgets.QFormLayout, key: str, field: QtWidgets.QWidget, unit: str) -> None:
-        row = QtWidgets.QWidget()
-        v = QtWidgets.QVBoxLayout(row)
-        v.setContentsMargins(0, 0, 0, 0)
-        v.setSpacing(1)
-        h = QtWidgets.QHBoxLayout()
-        h.addWidget(field, 1)
-        units = QtWidgets.QLabel(unit)
-        units.setMinimumWidth(42)
-        h.addWidget(units)
-        v.addLayout(h)
-        self.messages[key] = message_label(f"{key}.error")
-        v.addWidget(self.messages[key])
+        row, self.messages[key] = field_row(field, unit, key)
         self.labels[key] = QtWidgets.QLabel(LABELS[key])
         self.edits[key] = field
         form.addRow(self.labels[key], row)

@@ -20,6 +20,7 @@ from rollball import METHODS, MethodKind
 
 from . import contact_fields
 from .contact_fields import ContactFields
+from .field_row import ERROR_STYLE, field_row, message_label
 from .parameters import ParameterRows
 from .worker import Worker
 
@@ -80,7 +81,7 @@ MAX_REASON = 160               # characters of a compiler's reason shown under t
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")                       # terminal colours
 _PATH = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.~+-]+){2,}[\\/]?")   # an absolute file path
 _NOISE = ("Failed in ", "During:", "File ", "There are ", "^", "- Of which", "Type Restricted")
-ERROR_STYLE, CHECKING_STYLE = "color: #c0392b;", "color: #555;"
+CHECKING_STYLE = "color: #555;"
 # how a mark looks: the field, its label in the form, the message under it
 MARKS = {"error": ("QLineEdit { border: 2px solid #c0392b; background: #fdecea; }",
                    "color: #c0392b; font-weight: bold;", ERROR_STYLE),
@@ -135,14 +136,6 @@ def _style(widget: QtWidgets.QWidget, sheet: str) -> None:
         widget.setStyleSheet(sheet)
 
 
-def _message_label(name: str) -> QtWidgets.QLabel:
-    label = QtWidgets.QLabel(wordWrap=True, objectName=name)
-    label.setTextFormat(QtCore.Qt.TextFormat.PlainText)
-    label.setStyleSheet(ERROR_STYLE)
-    label.hide()
-    return label
-
-
 def check_formula(text: str, names: tuple[str, ...] = ()) -> str | None:
     """Why a formula is refused (parsed, differentiated and compiled: seconds at worst), or None."""
     try:
@@ -188,7 +181,7 @@ class ScenePanel(QtWidgets.QWidget):
 
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(6, 6, 6, 6)
-        self.error = _message_label("fieldError")   # a refusal that names no field of the panel
+        self.error = message_label("fieldError")   # a refusal that names no field of the panel
         layout.addWidget(self.error)
         layout.addWidget(self._landscape_group())
         for title, fields in NUMBER_FIELDS.items():
@@ -219,7 +212,7 @@ class ScenePanel(QtWidgets.QWidget):
                                 "sinh cosh tanh exp log sqrt abs min max …")
         self.formula.setPlaceholderText("e.g. 0.5*sin(x)*cos(y)")
         self.formula.textEdited.connect(lambda: self._edited("landscape"))
-        self.formula_error = self.messages["landscape"] = _message_label("formulaError")
+        self.formula_error = self.messages["landscape"] = message_label("formulaError")
         self.description = QtWidgets.QLineEdit(objectName="description")
         self.description.setPlaceholderText("Description (shown in the Examples menu)")
         self.description.textEdited.connect(lambda: self._edited())
@@ -240,18 +233,7 @@ class ScenePanel(QtWidgets.QWidget):
         edit.setToolTip(tip)
         edit.textEdited.connect(lambda: self._edited(key))
         self.numbers[key] = edit
-        row = QtWidgets.QWidget()
-        v = QtWidgets.QVBoxLayout(row)
-        v.setContentsMargins(0, 0, 0, 0)
-        v.setSpacing(1)
-        h = QtWidgets.QHBoxLayout()
-        h.addWidget(edit, 1)
-        units = QtWidgets.QLabel(unit)
-        units.setMinimumWidth(42)
-        h.addWidget(units)
-        v.addLayout(h)
-        self.messages[key] = _message_label(f"{key}.error")
-        v.addWidget(self.messages[key])
+        row, self.messages[key] = field_row(edit, unit, key)
         return row
 
     def _method_rows(self, form: QtWidgets.QFormLayout) -> None:
