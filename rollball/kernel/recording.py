@@ -15,7 +15,7 @@ from .interface import (
     ROW_R, ROW_SIZE, ROW_SLIP, ROW_T, ROW_VELOCITY, R_NO_FIT, R_START_OVERFLOW, R_START_UNDEFINED, S_DISSIPATED,
     S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import FULL, _finite, _finite_row, motion_size, rates, shape_of, sliding_size
+from .physics import FULL, _finite, _finite_row, copy_state, motion_size, rates, shape_of, sliding_size
 
 
 @JIT
@@ -59,19 +59,13 @@ def hold(p, z, R, probe, zn, Rn, pn):
     the Munthe-Kaas increment u zero (R holds the orientation), a rolling pair's omega exact."""
     n, mk = shape_of(z)
     m = motion_size(n)
-    for q in range(n):
-        z[q] = zn[q]
+    copy_state(n, zn, Rn, pn, z, R, probe)
     if mk and p[P_TURN] > 0.0 and m == 5:
         for q in range(3):
             z[5 + q] = pn[PROBE_OMEGA + q]
     elif mk and n > m:
         for q in range(3):
             z[m + q] = 0.0
-    for a in range(3):
-        for c in range(3):
-            R[a, c] = Rn[a, c]
-    for q in range(PROBE_SIZE):
-        probe[q] = pn[q]
 
 
 @COLD
