@@ -98,3 +98,40 @@ def test_a_ray_meets_a_plane_and_dragged_values_read_plainly():
     assert ray_plane(np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, 0, 1.0])) is None
     assert rounded(0.43712873, 0.006) == 0.437 and rounded(-0.0001, 0.01) == 0.0
     assert str(rounded(-0.0001, 0.01)) == "0.0"
+
+
+@pytest.mark.parametrize("between", [("other",), ("other", "first"), ("clear", "first"), ("first",)])
+def test_a_request_between_a_workers_done_and_ended_is_not_lost(qtbot, monkeypatch, between):
+    """The worker says done, then ended (both queued to the GUI thread), then lets go: whatever
+    is asked for in between (another scene, back to the first, cleared and asked again) is the
+    preview brought last."""
+    import dataclasses
+
+    import rollball_app.preview as preview_module
+    first = Scene.load(EXAMPLES_DIR / "incline.json")
+    other = dataclasses.replace(first, start=dataclasses.replace(first.start, x=first.start.x + 0.5))
+    hooked_up = threading.Event()
+
+    def held(scene, cancel=None):   # the first computation waits until the hook below is connected
+        hooked_up.wait(10)
+        return compute(scene, cancel)
+    monkeypatch.setattr(preview_module, "compute", held)
+    preview = PathPreview()
+    brought, hooked = [], []
+    preview.ready.connect(brought.append)
+    preview.request(first)
+
+    def in_between(_result):   # connected after the preview's own slot: runs between its done and ended
+        hooked.append(preview.busy)
+        for step in between:
+            preview.clear() if step == "clear" else preview.request(first if step == "first" else other)
+    preview.worker.done.connect(in_between)
+    hooked_up.set()
+    latest = first if between[-1] == "first" else other
+    qtbot.waitUntil(lambda: bool(hooked and not preview.busy and brought and brought[-1].scene == latest),
+                    timeout=30_000)
+    assert hooked == [True]                   # the hook ran while the first worker was still held
+    assert brought[0].scene == first          # the first one was brought at its done
+    qtbot.wait(100)
+    assert not preview.busy and brought[-1].scene == latest
+    preview.shutdown()
