@@ -313,7 +313,7 @@ class ParameterDialog(QtWidgets.QDialog):
         self.ok.setText("Add")
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
-        form = QtWidgets.QFormLayout(self)
+        form = QtWidgets.QFormLayout()
         form.addRow("Name", self.name)
         form.addRow("Value", self.value)
         rng = QtWidgets.QHBoxLayout()
@@ -322,7 +322,10 @@ class ParameterDialog(QtWidgets.QDialog):
         rng.addWidget(self.high)
         form.addRow("Slider range", rng)
         form.addRow(self.message)
-        form.addRow(self.buttons)
+        column = QtWidgets.QVBoxLayout(self)
+        column.addLayout(form)
+        column.addStretch(1)              # room to spare goes above the buttons, never under them
+        column.addWidget(self.buttons)
         for edit in (self.name, self.value, self.low, self.high):
             edit.textChanged.connect(self.check)
         self.check()
@@ -355,8 +358,25 @@ class ParameterDialog(QtWidgets.QDialog):
     def check(self) -> None:
         parameter, why = self.parameter()
         self.ok.setEnabled(parameter is not None)
+        shown = bool(why) and bool(self.name.text().strip())
+        if why == self.message.text() and shown == self.message.isVisibleTo(self):
+            return
         self.message.setText(why)
-        self.message.setVisible(bool(why) and bool(self.name.text().strip()))
+        self.message.setVisible(shown)
+        self._fit_height()
+
+    def _fit_height(self) -> None:
+        """As tall as the fields, the message (shown, hidden, one line or two) and the buttons
+        need at the dialog's width: a message gone leaves no empty strip. (Before it is shown, the
+        dialog takes its size hint anyway.)"""
+        if not self.isVisible():
+            return
+        column = self.layout()
+        column.invalidate()
+        column.activate()
+        height = (column.totalHeightForWidth(self.width()) if column.hasHeightForWidth()
+                  else column.totalSizeHint().height())
+        self.resize(self.width(), max(height, column.totalMinimumSize().height()))
 
     def accept(self) -> None:
         parameter, _ = self.parameter()

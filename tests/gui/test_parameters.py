@@ -232,6 +232,27 @@ def test_a_new_parameter_is_checked_as_a_scene_file_is(qtbot, ripples, name, val
     assert list(ripples.panel.parameter_rows.rows) == ["a", "k"]
 
 
+def test_the_add_parameter_dialog_fits_its_message_and_leaves_no_strip_under_its_buttons(qtbot, ripples):
+    dialog = _add(qtbot, ripples, "c")
+    layout = dialog.layout()
+
+    def strip() -> int:   # the empty height under the buttons
+        qtbot.wait(20)
+        return dialog.height() - dialog.buttons.geometry().bottom() - 1 - layout.contentsMargins().bottom()
+    assert strip() == 0 and not dialog.message.isVisible()
+    for name in ("2a", "a", "c"):   # a long message (two lines), a short one, none
+        dialog.name.setText(name)
+        assert strip() == 0
+        message = dialog.message
+        assert message.isVisible() == (name != "c")
+        if message.isVisible():   # wholly shown, above the buttons
+            assert message.geometry().bottom() < dialog.buttons.geometry().top()
+            assert message.height() >= message.heightForWidth(message.width())
+    dialog.resize(dialog.width(), dialog.height() + 60)   # made taller by hand: the room goes above the buttons
+    assert strip() == 0
+    dialog.reject()
+
+
 def test_removing_a_parameter_keeps_what_was_typed_and_the_formula_is_checked_again(qtbot, ripples):
     window, panel = ripples, ripples.panel
     rows = panel.parameter_rows
