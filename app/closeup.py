@@ -23,6 +23,64 @@ DISTANCE_RADII = 9.0   # camera distance from the ball's centre
 LINE_EVERY = 5         # a darker grid line every this many cells (a ball radius apart)
 
 
+INSET_WIDTH = 0.3      # the close-up's width on screen as a fraction of the view's, at most
+INSET_SMALLEST = 160   # and at least, in pixels
+INSET_RATIO = 0.75     # its height over its width
+INSET_MARGIN = 8       # pixels from the view's edges
+
+
+def inset_corners(size: tuple[int, int], width: int) -> list[QtCore.QRect]:
+    """The close-up ``width`` wide in the corners of a view of ``size``: top right (first: where
+    it always was), top left, bottom right, bottom left."""
+    w, h = size
+    iw, ih = width, round(INSET_RATIO * width)
+    left, right, top, bottom = INSET_MARGIN, w - iw - INSET_MARGIN, INSET_MARGIN, h - ih - INSET_MARGIN
+    return [QtCore.QRect(x, y, iw, ih) for x, y in ((right, top), (left, top), (right, bottom), (left, bottom))]
+
+
+def covered(rect: QtCore.QRect, labels, lines: np.ndarray) -> int:
+    """How many of the axis ``labels`` (rectangles) and ``lines`` ((m, 2, 2): ends on screen) the
+    close-up at ``rect`` would cover (a line: any part of it)."""
+    box = QtCore.QRectF(rect).adjusted(-2, -2, 2, 2)   # its frame and a hair
+    count = sum(1 for label in labels if box.intersects(label))
+    if len(lines):
+        x0, y0, x1, y1 = box.left(), box.top(), box.right(), box.bottom()
+        a, b = lines[:, 0], lines[:, 1]
+        t = np.linspace(0.0, 1.0, 65)[None, :, None]   # along each line: a point every few pixels
+        points = a[:, None] + t * (b - a)[:, None]
+        inside = ((points[..., 0] >= x0) & (points[..., 0] <= x1) & (points[..., 1] >= y0) & (points[..., 1] <= y1))
+        count += int(inside.any(axis=1).sum())
+    return count
+
+
+def inset_place(size: tuple[int, int], labels, lines: np.ndarray, current: QtCore.QRect | None = None) -> QtCore.QRect:
+    """Where the close-up goes in a view of ``size`` whose axes take ``labels`` and ``lines``
+    (``SceneView.taken``): the largest size from ``INSET_WIDTH`` of the view (as tall as the
+    view at most) down to ``INSET_SMALLEST`` pixels at which a corner leaves every axis label, number and line in
+    sight (the corner it is in, ``current``, first: it does not jump about while the camera
+    turns); failing that, the smallest, in the corner covering least."""
+    w, h = size
+    tallest = int((h - 2 * INSET_MARGIN) / INSET_RATIO)   # (never taller than the view)
+    smallest = min(INSET_SMALLEST, tallest)
+    widest = max(smallest, min(round(INSET_WIDTH * w), tallest))
+    widths = [widest]
+    while widths[-1] > smallest:
+        widths.append(max(smallest, round(widths[-1] * 0.9)))
+    order = [0, 1, 2, 3]
+    if current is not None:
+        for k, rect in enumerate(inset_corners(size, current.width())):
+            if rect.topLeft() == current.topLeft():
+                order = [k] + [i for i in order if i != k]
+                break
+    for width in widths:
+        corners = inset_corners(size, width)
+        for k in order:
+            if covered(corners[k], labels, lines) == 0:
+                return corners[k]
+    corners = inset_corners(size, widths[-1])
+    return min((corners[k] for k in order), key=lambda rect: covered(rect, labels, lines))
+
+
 class CloseUp(gl.GLViewWidget):
     def __init__(self, parent=None):
         super().__init__(parent)

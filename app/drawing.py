@@ -17,6 +17,7 @@ from rollball import Scene
 from rollball.geometry import unit_normal
 from rollball.trajectory import CENTER, CONTACT, R
 
+from .closeup import inset_place
 from .contact_view import beyond_2011, trail_colors
 from .controller import RUNNING
 
@@ -137,10 +138,16 @@ class Drawing:
             self.draw_start(w.scene)
 
     def place_closeup(self) -> None:
-        """In the view's top right corner, 0.3 of its width."""
+        """In a corner of the view where it covers none of the axes, their numbers and names
+        (``closeup.inset_place``: the top right one first, 0.3 of the view's width; smaller if
+        need be); placed again whenever the axes move on screen (``SceneView.axesPlaced``)."""
         w = self.window
-        width = max(160, round(0.3 * w.view.width()))
-        w.closeup_frame.setGeometry(w.view.width() - width - 8, 8, width, round(0.75 * width))
+        labels, lines = w.view.taken
+        frame = w.closeup_frame
+        place = inset_place((w.view.width(), w.view.height()), labels, lines,
+                            frame.geometry() if frame.width() > 0 else None)
+        if place != frame.geometry():
+            frame.setGeometry(place)
 
     def _show_closeup_at(self, center, R, contact, trail, color: str | None = None, colors=None) -> None:
         w = self.window

@@ -311,6 +311,7 @@ class SceneView(gl.GLViewWidget):
     startDragged = QtCore.Signal(float, float)      # the start contact point dragged to (x, y)
     velocityDragged = QtCore.Signal(float, float)   # the start velocity's arrow dragged to (vx, vy)
     dragFinished = QtCore.Signal()                  # the button let go: the drag is over
+    axesPlaced = QtCore.Signal()                    # the axes moved on screen (``taken``)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -334,6 +335,11 @@ class SceneView(gl.GLViewWidget):
         self.axes = gl.GLLinePlotItem(color=AXIS_COLOR, width=1.5, antialias=True, mode="lines")
         self.axis_labels: list[gl.GLTextItem] = []
         self._thinned_for = None   # what the labels were last thinned for (_thin_labels)
+        self._kept: tuple = (None, [])   # (size, the shown labels' rectangles) as last thinned
+        # where the axes are on screen: the shown labels' rectangles and the axes' lines (m, 2, 2), in
+        # the widget's pixels, as last painted (the close-up keeps out of them: ``drawing.place_closeup``)
+        self.taken: tuple[list[QtCore.QRectF], np.ndarray] = ([], np.zeros((0, 2, 2)))
+        self._taken_for = None
         self.ball = gl.GLMeshItem(meshdata=ball_mesh(), smooth=False, shader="shaded", glOptions="opaque")
         self.trail = self._trail_items(TRAIL_COLOR)
         self.casing = self.trail.casing
@@ -599,6 +605,8 @@ class SceneView(gl.GLViewWidget):
                     kept.append(rect)
             if item.visible() != show:
                 item.setVisible(show)
+        self._kept = ((w, h), [QtCore.QRectF(r.x() / scale, r.y() / scale, r.width() / scale, r.height() / scale)
+                               for r in kept])
 
     @staticmethod
     def _place_name(item: gl.GLTextItem, screen, numbers: float, name: float, gap: float) -> None:
@@ -614,6 +622,29 @@ class SceneView(gl.GLViewWidget):
         pos = np.asarray(top, dtype=float) + reach * np.asarray(out)
         if not np.allclose(pos, item.pos):
             item.setData(pos=pos)
+
+    def paintGL(self) -> None:
+        super().paintGL()
+        self._note_taken()
+
+    def _note_taken(self) -> None:
+        """``taken`` for the picture on screen as just painted; ``axesPlaced`` when it changed."""
+        w, h = self.width(), self.height()
+        size, rects = self._kept
+        if size != (w, h) or self._thinned_for == self._taken_for:
+            return
+        self._taken_for = self._thinned_for
+        matrix = np.array(self.projectionMatrix((0, 0, w, h), (0, 0, w, h)).data()).reshape(4, 4).T @ \
+            np.array(self.viewMatrix().data()).reshape(4, 4).T
+        pos = np.asarray(self.axes.pos if self.axes.pos is not None else np.zeros((0, 3)), dtype=float)
+        pairs = pos[: len(pos) // 2 * 2].reshape(-1, 2, 3)
+        clip = np.concatenate([pairs, np.ones(pairs.shape[:2] + (1,))], axis=2) @ matrix.T
+        ahead = (clip[:, :, 3] > 0).all(axis=1)   # (a line reaching behind the camera: left out)
+        clip = clip[ahead]
+        ndc = clip[:, :, :2] / clip[:, :, 3:]
+        lines = np.stack([(ndc[:, :, 0] + 1) / 2 * w, (1 - ndc[:, :, 1]) / 2 * h], axis=-1)
+        self.taken = (rects, lines)
+        self.axesPlaced.emit()
 
     def resizeEvent(self, event) -> None:
         super().resizeEvent(event)

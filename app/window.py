@@ -100,6 +100,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.undo_stack.cleanChanged.connect(lambda _clean: runs.update_controls())
         self.compare.panel.followChanged.connect(lambda _i: drawing.follow(self.follow_action.isChecked()))
         self.view.installEventFilter(self)   # keeps the close-up in the view's corner
+        self.view.axesPlaced.connect(drawing.place_closeup, QtCore.Qt.ConnectionType.QueuedConnection)   # (after the paint)
 
     # -- layout ----------------------------------------------------------------------
 
