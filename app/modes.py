@@ -27,6 +27,7 @@ RETRY_MS = 50                # meanwhile, a window that cannot yet be put back i
 ERROR_PLOTS_SHARE = 0.4      # of the view's and plots' height, at least, for compare mode's plots
 PRESENTATION_PLOTS_SHARE = 0.47   # the same in presentation, where their text is larger
 PLOTS_ENOUGH = 380           # pixels: the error plots need no more (a large screen's view takes the rest)
+PRESENTATION_PLOTS_LEAST = 240   # pixels the error plots keep in presentation, where the 3-D view comes first
 
 
 @dataclass(frozen=True)
@@ -228,6 +229,14 @@ class Modes:
             self._editing_sizes = sizes
         share = PRESENTATION_PLOTS_SHARE if self.presentation else ERROR_PLOTS_SHARE
         below = min(round(share * total), PLOTS_ENOUGH)   # on a large screen the view takes the rest
+        if self.presentation:
+            # the 3-D view at least as tall as the plots (the balls seen from the back of the room; a
+            # projector's 1024x768 left it 200 pixels), the plots keeping PRESENTATION_PLOTS_LEAST
+            column = self.window.view.parentWidget().layout()   # the view, the time slider, the readouts
+            beside = sum(column.itemAt(i).sizeHint().height() for i in range(column.count())
+                         if column.itemAt(i).widget() is not self.window.view)
+            beside += column.spacing() * (column.count() - 1)
+            below = min(below, max(PRESENTATION_PLOTS_LEAST, (total - beside) // 2))
         if shown.error_plots and total and (sizes[1] < below or self.presentation and sizes[1] != below):
             splitter.setSizes([total - below, below])
 

@@ -93,7 +93,8 @@ def state(window: MainWindow) -> dict:
             "title": window.windowTitle(), "presentation": window.presentation.active,
             "compare": window.compare.active, "scene_panel": window.scene_dock.isVisible(),
             "compare_panel": window.compare.dock.isVisible(), "outside": outside(window),
-            "minimum": [window.minimumSizeHint().width(), window.minimumSizeHint().height()]}
+            "minimum": [window.minimumSizeHint().width(), window.minimumSizeHint().height()],
+            "view_height": window.view.height(), "plots_height": window.bottom.height()}
 
 
 def main() -> None:

@@ -14,7 +14,7 @@ from PySide6 import QtCore, QtWidgets
 
 from rollball_app.compare_runs import CompareRun
 from rollball_app.controller import FINISHED
-from rollball_app.modes import DEFAULT_SIZE, fitted, layout
+from rollball_app.modes import DEFAULT_SIZE, PRESENTATION_PLOTS_LEAST, fitted, layout
 from rollball_app.preferences import Preferences
 from rollball_app.timeline import STEPS
 from rollball_app.window import MainWindow
@@ -254,6 +254,9 @@ def test_on_a_projector_screen_every_mode_fits_and_cycles_back(tmp_path, screen)
     assert report["compare_left"]["compare_panel"] and not report["restart"]["compare_panel"]
     assert not report["restart"]["compare"]
     assert report["error_plot_font"] >= 1.5 * 9
+    # compare in presentation: the 3-D view at least as tall as the error plots, which keep their least
+    both = report["compare_presentation"]
+    assert both["view_height"] + 1 >= both["plots_height"] >= PRESENTATION_PLOTS_LEAST, both
 
 
 def test_help_explains_comparing_methods_honestly(qtbot, window):
