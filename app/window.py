@@ -100,7 +100,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.undo_stack.cleanChanged.connect(lambda _clean: runs.update_controls())
         self.compare.panel.followChanged.connect(lambda _i: drawing.follow(self.follow_action.isChecked()))
         self.view.installEventFilter(self)   # keeps the close-up in the view's corner
-        self.view.axesPlaced.connect(drawing.place_closeup, QtCore.Qt.ConnectionType.QueuedConnection)   # (after the paint)
+        # the close-up out of the axes' way, after the paint that moved them
+        self.view.axesPlaced.connect(drawing.place_closeup, QtCore.Qt.ConnectionType.QueuedConnection)
 
     # -- layout ----------------------------------------------------------------------
 
