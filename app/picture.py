@@ -88,10 +88,18 @@ def draw_labels(painter: QtGui.QPainter, view, size: tuple[int, int]) -> None:
         painter.drawText(QtCore.QPointF(x, y), item.text)
 
 
+def inset_corner(view, inset) -> tuple[bool, bool]:
+    """(right, top): the corner of the view the close-up ``inset`` is in on screen, where it
+    covers none of the axes (``closeup.inset_place``); a picture puts it in the same corner."""
+    centre = inset.mapToGlobal(QtCore.QPoint(inset.width() // 2, inset.height() // 2))
+    origin = view.mapToGlobal(QtCore.QPoint(0, 0))
+    return centre.x() - origin.x() >= view.width() / 2, centre.y() - origin.y() < view.height() / 2
+
+
 def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
             plots: QtWidgets.QWidget | None = None) -> QtGui.QImage:
-    """The view at ``size``; ``inset`` (a GL view, e.g. the close-up) drawn in the top right
-    corner; a caption bar under it; the plots widget rendered below at the same width."""
+    """The view at ``size``; ``inset`` (a GL view, e.g. the close-up) drawn in the corner it
+    takes on screen (``inset_corner``); a caption bar under it; the plots widget rendered below at the same width."""
     width, height = map(int, size)
     picture = render_view(view, (width, height))
     text_px = caption_pixels(width)
@@ -108,9 +116,12 @@ def compose(view, size: tuple[int, int], inset=None, caption: str | None = None,
         w = round(INSET_FRACTION * width)
         h = round(w * inset.height() / max(1, inset.width()))
         margin = max(4, width // 100)
-        painter.drawImage(width - w - margin, margin, render_view(inset, (w, h)))
+        right, top = inset_corner(view, inset)
+        x = width - w - margin if right else margin
+        y = margin if top else height - h - margin
+        painter.drawImage(x, y, render_view(inset, (w, h)))
         painter.setPen(QtGui.QPen(QtGui.QColor("#333333"), max(1, width // 600)))
-        painter.drawRect(width - w - margin, margin, w, h)
+        painter.drawRect(x, y, w, h)
     if caption:
         font = QtGui.QFont(QtWidgets.QApplication.font())
         font.setPixelSize(text_px)

@@ -7,6 +7,7 @@ from PySide6 import QtGui
 
 from rollball_app.compare_runs import CompareRun
 from rollball_app.controller import FINISHED, READY, RUNNING
+from rollball_app.picture import inset_corner
 from rollball_app.worker import Worker
 from rollball import parse_runs
 from rollball.examples import EXAMPLES_DIR
@@ -47,7 +48,9 @@ def test_presentation_with_compare_exports_every_ball_and_the_closeup_and_stays(
     assert window.closeup.isVisible() and window.compare.active
     picture = window.exports.picture((640, 360), caption=True)
     assert picture.height() > 360
-    inset = picture.copy(640 - round(0.3 * 640) - 6, 6, round(0.3 * 640), 40)   # the close-up's corner
+    right, top = inset_corner(window.view, window.closeup)   # where it covers no axis on screen
+    w, h = round(0.3 * 640), 40
+    inset = picture.copy(640 - w - 6 if right else 6, 6 if top else 360 - h - 6, w, h)   # the same corner
     assert np.std(np.array([QtGui.QColor(inset.pixel(x, y)).value() for x in range(0, inset.width(), 7)
                             for y in range(0, inset.height(), 5)])) > 5   # drawn, not blank
     path = tmp_path / "lecture.gif"
