@@ -225,3 +225,16 @@ def test_a_flying_scene_is_compared_over_the_whole_run():
     assert np.nanmax(errors[traj.t > landing]) < 1e-5
     (order,) = result.orders
     assert abs(order.contact - 4) < 0.3 and abs(order.orientation - 4) < 0.3
+
+
+def test_a_reference_that_stops_after_a_transition_is_compared_up_to_its_stop():
+    """sqrt(x) ends at x = 0: the ball lifts off before it and flies on over nothing, where the
+    reference stops. The comparison goes up to the last common time it reached, in the flight,
+    not only to the lift-off (whose row is not a common time)."""
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "sqrt(x)",
+                             "start": {"x": 0.5, "y": 0.0, "vx": -3.0}, "duration": 1.0})
+    result = compare(scene, runs="rk4", quick=True)
+    ref = result.reference_trajectory
+    assert ref.status == "nonfinite" and [c.kind for c in ref.transitions] == ["liftoff"]
+    assert result.t_end > ref.transitions[0].time and ref.mode[-1] == "flying"
+    assert result.t_end == pytest.approx(result.record_dt * round(result.t_end / result.record_dt), abs=1e-12)
