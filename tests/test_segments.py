@@ -110,3 +110,14 @@ def test_every_segment_steps_and_records_on_the_runs_one_grid(every):
         adaptive = simulate(scene, method="dopri5", rtol=1e-8, record_dt=0.01)
         assert kinds <= {c.kind for c in adaptive.transitions}
         assert _off_grid(adaptive, 0.01) == [] and np.all(np.diff(adaptive.t) > 0)
+
+
+def test_the_grid_a_segment_joins():
+    """A kernel run from t_start has passed the grid times k·dt at or before it; one less than
+    10⁻⁹·dt after it counts as passed (its first step takes the sliver with it, no step of 1e-17 s)."""
+    from rollball.kernel import grid_steps_before
+
+    assert grid_steps_before(0.0, 0.1) == 0 and grid_steps_before(0.05, 0.1) == 0
+    assert grid_steps_before(0.3, 0.1) == 3          # 0.3 / 0.1 = 2.9999999999999996
+    assert grid_steps_before(0.1 * 7 - 1e-12, 0.1) == 7 and grid_steps_before(0.1 * 7 - 1e-9, 0.1) == 6
+    assert grid_steps_before(0.71, 0.1) == 7
