@@ -644,10 +644,10 @@ def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_e
     ref_traj, reference = _reference(scene, float(t_end), record_dt, cancel)
     if reference.status is not Status.OK:  # compare up to the last common time it reached
         steps = ref_traj.t / record_dt
-        on_grid = np.abs(steps - np.round(steps)) < 1e-6
-        reached = len(on_grid) if on_grid.all() else int(np.argmin(on_grid))
-        if reached < 2:
+        on_grid = np.abs(steps - np.round(steps)) < 1e-6   # (the rows at transitions are not)
+        if np.count_nonzero(on_grid) < 2:
             raise NothingToCompare(f"nothing to compare: the reference run stopped at once ({reference.message})")
+        reached = int(np.flatnonzero(on_grid)[-1]) + 1
         ref_traj = replace(ref_traj, data=ref_traj.data[:reached])
         t_end = float(ref_traj.t[-1])
     runner = _Runner(scene, float(t_end), record_dt, ref_traj, reference, effort, cancel)

@@ -214,9 +214,8 @@ class Simulation:
             if not mk:
                 arrays["z"][5:] = arrays["R"].ravel()
         arrays["info"][kernel.F_H] = self.dt
-        self._arm(arrays, self.t_end, self.n_steps)
+        self._arm(arrays, 0.0)
         # the runs after the first, where the contact changes mode
-        self._offset = 0.0         # the time the current kernel run started at
         self._taken = 0            # its rows already moved to _out
         self._skip_first = False   # its first row repeats the last one (a slip or a grip)
         self._out = np.empty((n_rows if self.segmented else 0, kernel.ROW_SIZE))
@@ -244,19 +243,24 @@ class Simulation:
         return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn, friction=contact.friction,
                                  fly=contact.after_liftoff == "fly", dissipated=dissipated)
 
-    def _arm(self, arrays: dict, t_end: float, n_steps: int | None) -> None:
-        """Make ``arrays`` the current kernel run, from its time 0 to ``t_end`` (n_steps fixed steps)."""
-        self._run_end, self._run_steps = t_end, n_steps
+    def _arm(self, arrays: dict, t_start: float) -> None:
+        """Make ``arrays`` the current kernel run, from t_start to t_end on the run's one clock (its
+        fixed steps and rows on the grid of a run from t = 0: ``kernel.grid_steps_before``)."""
+        t_end, n_steps = self.t_end, self.n_steps
+        self._run_start = t_start
+        if not self.adaptive:   # this kernel run's steps
+            before = kernel.grid_steps_before(t_start, self.dt)
+            self._run_before, self._run_steps = before, max(1, n_steps - before)
         self._z, self._R, self._K, self._rows = arrays["z"], arrays["R"], arrays["K"], arrays["rows"]
         self._ints, self._info, self._probe = arrays["ints"], arrays["info"], arrays["probe"]
         if self.adaptive:
             self._kernel = machine_code.Arguments(
                 "advance_adaptive", fn=self._fn, W=self._W, E=self._E, P=self._P, p=self._p, err_kind=self._error_kind,
-                err_exp=self.tableau.error_exponent, t_end=t_end, record_dt=self.record_dt or 0.0,
+                err_exp=self.tableau.error_exponent, t_start=t_start, t_end=t_end, record_dt=self.record_dt or 0.0,
                 rtol=self.rtol, atol=self.atol, max_steps=1, **arrays)
         else:
             self._kernel = machine_code.Arguments(
-                "advance", fn=self._fn, W=self._W, P=self._P, p=self._p, dt=self.dt, t_end=t_end,
+                "advance", fn=self._fn, W=self._W, P=self._P, p=self._p, dt=self.dt, t_start=t_start, t_end=t_end,
                 n_steps=n_steps, every=self.record_every, max_steps=1, **arrays,
                 stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
 
@@ -287,7 +291,7 @@ class Simulation:
         if reason is None:
             return None
         info = self._info
-        return Failure(Reason(reason), self._offset + float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
+        return Failure(Reason(reason), float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
                        float(info[kernel.F_FAIL_Y]), float(info[kernel.F_FAIL_VALUE]))
 
     @property
@@ -300,9 +304,11 @@ class Simulation:
                 return self._flight.start.t
         if self.adaptive:
             t = self._info[kernel.F_TIME]
-            return self._offset + (0.0 if math.isnan(t) else float(t))
+            return self._run_start if math.isnan(t) else float(t)
         k = int(self._ints[kernel.I_STEPS])
-        return self._offset + (self._run_end if k == self._run_steps else k * self.dt)
+        if k == 0:
+            return self._run_start
+        return self.t_end if k == self._run_steps else (self._run_before + k) * self.dt
 
     @property
     def progress(self) -> float:
@@ -417,21 +423,20 @@ class Simulation:
         self._count = need
 
     def _collect(self) -> None:
-        """Move the current kernel run's new rows to the run's rows, on the run's clock."""
+        """Move the current kernel run's new rows to the run's rows."""
         count = int(self._ints[kernel.I_ROWS])
         start = self._taken
         if self._skip_first and start == 0 and count > 0:
             start = 1
         rows = self._rows[start:count].copy()
-        rows[:, T] += self._offset
         self._taken = count
         self._append(rows)
 
     def _note_liftoff(self) -> None:
-        """Keep the first lift-off a kernel run found (where the ball flies, a transition's), on the run's clock."""
+        """Keep the first lift-off a kernel run found (where the ball flies, a transition's)."""
         info = self._info
         if self._first_liftoff is None and not math.isnan(info[kernel.F_LIFTOFF]):
-            self._first_liftoff = Liftoff(self._offset + float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]),
+            self._first_liftoff = Liftoff(float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]),
                                           float(info[kernel.F_LIFT_Y]), bool(info[kernel.F_LIFT_KINK]))
 
     def _finish_kernel_run(self) -> None:
@@ -443,7 +448,7 @@ class Simulation:
         """The kernel run stopped where the contact changes mode: go on in the new one."""
         info = self._info
         kind = kernel.transition_name(int(self._ints[kernel.I_TRANSITION]))
-        t = self._offset + float(info[kernel.F_EVENT_T])
+        t = float(info[kernel.F_EVENT_T])
         x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
         self.transitions.append(Transition(t, kind, x, y))
         self._finish_kernel_run()
@@ -483,28 +488,29 @@ class Simulation:
             self.status = Status.OK
             return
         if self.adaptive:
-            n_steps = None
-            rows = FIRST_ROWS if self.record_dt is None else 2 + left / self.record_dt * (1 + 1e-12)
-        else:
-            n_steps = step_count(self.dt, left)
-            rows = 1 + n_steps // self.record_every + 1
+            rows = FIRST_ROWS if self.record_dt is None else 3 + left / self.record_dt * (1 + 1e-12)
+        else:   # (the start, every record_every-th step on the grid from t = 0, the end)
+            own = max(1, self.n_steps - kernel.grid_steps_before(t, self.dt))
+            rows = 1 + own // self.record_every + 2
         d = self.landscape.evaluate(state.x, state.y, self.scene.parameter_values)
         h = float(self._info[kernel.F_H]) if self.adaptive and math.isfinite(self._info[kernel.F_H]) else self.dt
         arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=len(self._W),
                                rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass)
         arrays["info"][kernel.F_H] = h
         self._p = self._parameters(state.dissipated)
-        self._arm(arrays, left, n_steps)
-        self._offset, self._taken, self._skip_first = t, 0, repeat
+        self._arm(arrays, t)
+        self._taken, self._skip_first = 0, repeat
 
     def _record_times(self, t0: float, t1: float) -> np.ndarray:
         """The run's recording times strictly between t0 and t1 (fixed steps: every
-        record_every-th multiple of dt; adaptive: the multiples of record_dt, or of dt)."""
-        spacing = self.record_every * self.dt if not self.adaptive else (self.record_dt or self.dt)
+        record_every-th multiple of dt; adaptive: the multiples of record_dt, or of dt), each
+        computed as the kernel computes its rows' times (k·dt, k·record_dt)."""
+        every, step = (self.record_every, self.dt) if not self.adaptive else (1, self.record_dt or self.dt)
+        spacing = every * step
         k0, k1 = math.floor(t0 / spacing) + 1, math.ceil(t1 / spacing) - 1
         if k1 - k0 + 1 > MAX_ROWS:
             raise ValueError(f"this flight would record more than {MAX_ROWS:,} rows")
-        times = np.arange(k0, k1 + 1) * spacing
+        times = (np.arange(k0, k1 + 1) * every) * step
         return times[(times > t0) & (times < t1)]
 
     def _fly(self) -> None:

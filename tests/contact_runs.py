@@ -58,11 +58,11 @@ def segment(formula, state, *, sliding, method="rk4", dt=1e-3, t_end=1.0, mu=Non
                           radius=radius, mass=mass)
     arrays["info"][kernel.F_H] = dt
     if tableau.adaptive:
-        run = machine_code.Arguments("advance_adaptive", fn=record.ctypes.data, W=W, E=E, P=P, p=p,
+        run = machine_code.Arguments("advance_adaptive", fn=record.ctypes.data, W=W, E=E, P=P, p=p, t_start=0.0,
                                      err_kind=max(len(E) - 1, 0), err_exp=tableau.error_exponent, t_end=t_end,
                                      record_dt=record_dt or 0.0, rtol=rtol, atol=atol, max_steps=10 ** 9, **arrays)
     else:
-        run = machine_code.Arguments("advance", fn=record.ctypes.data, W=W, P=P, p=p, dt=dt, t_end=t_end,
+        run = machine_code.Arguments("advance", fn=record.ctypes.data, W=W, P=P, p=p, dt=dt, t_start=0.0, t_end=t_end,
                                      n_steps=n_steps, every=every, max_steps=10 ** 9, **arrays,
                                      stepping=kernel.IMPLICIT if tableau.kind is MethodKind.IMPLICIT
                                      else kernel.EXPLICIT)

@@ -203,3 +203,38 @@ def test_a_scene_that_stops_is_compared_up_to_where_it_stops(tmp_path):
     doc = json.loads((tmp_path / "compare.json").read_text())
     check_compare_json(doc)
     assert doc["reference"]["status"] != "ok" and doc["t_end"] == cmp.t_end
+
+
+def test_a_flying_scene_is_compared_over_the_whole_run():
+    """The cylinder example leaves the surface, flies and lands, then rolls on: every kernel run and
+    flight records on the run's one grid, so the reference and a fixed-step run share every
+    recorded time after the landing too (not only those before the lift-off), and the order fitted
+    over those errors is the method's (the transitions located to its accuracy)."""
+    scene = Scene.load(EXAMPLES_DIR / "cylinder.json")
+    result = compare(scene, runs="rk4", quick=True)
+    ref = result.reference_trajectory
+    assert [c.kind for c in ref.transitions] == ["liftoff", "landing"]
+    landing = ref.transitions[-1].time
+    grid = ref.t[np.abs(ref.t / result.record_dt - np.round(ref.t / result.record_dt)) < 1e-9]
+    assert len(grid) == round(scene.duration / result.record_dt) + 1 and np.sum(grid > landing) >= 10
+    dt, every = result.record_dt / 4, 4
+    traj = simulate(scene, method="rk4", dt=dt, record_every=every)
+    errors = error_series(traj, ref)["contact"]
+    measured = traj.t[~np.isnan(errors)]
+    assert set(grid) <= set(measured)   # every common time, after the landing too
+    assert np.nanmax(errors[traj.t > landing]) < 1e-5
+    (order,) = result.orders
+    assert abs(order.contact - 4) < 0.3 and abs(order.orientation - 4) < 0.3
+
+
+def test_a_reference_that_stops_after_a_transition_is_compared_up_to_its_stop():
+    """sqrt(x) ends at x = 0: the ball lifts off before it and flies on over nothing, where the
+    reference stops. The comparison goes up to the last common time it reached, in the flight,
+    not only to the lift-off (whose row is not a common time)."""
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 3, "landscape": "sqrt(x)",
+                             "start": {"x": 0.5, "y": 0.0, "vx": -3.0}, "duration": 1.0})
+    result = compare(scene, runs="rk4", quick=True)
+    ref = result.reference_trajectory
+    assert ref.status == "nonfinite" and [c.kind for c in ref.transitions] == ["liftoff"]
+    assert result.t_end > ref.transitions[0].time and ref.mode[-1] == "flying"
+    assert result.t_end == pytest.approx(result.record_dt * round(result.t_end / result.record_dt), abs=1e-12)

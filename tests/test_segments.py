@@ -80,3 +80,44 @@ def test_a_flight_beyond_the_landscape_ends_the_run():
     assert traj.status == "nonfinite" and traj.failure.reason == "undefined"
     assert traj.t[-1] == traj.failure.time < 1.0 and traj.mode[-1] == "flying"
     assert np.isfinite(traj.data).all()
+
+
+def _off_grid(traj, spacing):
+    """The row times that are neither a multiple of spacing, nor a change of mode, nor the end."""
+    changes = {c.time for c in traj.transitions} | {traj.t[-1]}
+    k = traj.t / spacing
+    return [t for t, n in zip(traj.t, k) if abs(n - round(n)) > 1e-6 and t not in changes]
+
+
+BOUNCING = {"format": "rollball-scene", "version": 3, "landscape": "0.2*exp(-20*x^2)",
+            "start": {"x": -1.0, "y": 0.0, "vx": 3.0}, "contact": {"restitution": 0.5}, "duration": 1.2}
+
+
+@pytest.mark.parametrize("every", [1, 7])
+def test_every_segment_steps_and_records_on_the_runs_one_grid(every):
+    """After a lift-off, the landings and a grip, the kernel runs step and record as a run with one clock
+    from t = 0 would: fixed steps end at multiples of dt (every = 1: every step is a row), the rows at
+    multiples of dt·every; adaptive rows at multiples of record_dt."""
+    dt = 2e-3
+    bouncing = Scene.from_dict(BOUNCING)
+    for scene, kinds in ((bouncing, {"liftoff", "landing"}), (plane(0.2, 2.0, duration=0.5), {"grip"})):
+        traj = simulate(scene, dt=dt, record_every=every)
+        assert kinds <= {c.kind for c in traj.transitions}
+        after = (np.asarray(traj.mode) != "flying") & (traj.t > traj.transitions[0].time)
+        assert np.sum(after) > 0.03 / (dt * every)   # rows of kernel runs after the first change
+        assert _off_grid(traj, dt * every) == []
+        assert np.all(np.diff(traj.t) > 0)
+        adaptive = simulate(scene, method="dopri5", rtol=1e-8, record_dt=0.01)
+        assert kinds <= {c.kind for c in adaptive.transitions}
+        assert _off_grid(adaptive, 0.01) == [] and np.all(np.diff(adaptive.t) > 0)
+
+
+def test_the_grid_a_segment_joins():
+    """A kernel run from t_start has passed the grid times k·dt at or before it; one less than
+    10⁻⁹·dt after it counts as passed (its first step takes the sliver with it, no step of 1e-17 s)."""
+    from rollball.kernel import grid_steps_before
+
+    assert grid_steps_before(0.0, 0.1) == 0 and grid_steps_before(0.05, 0.1) == 0
+    assert grid_steps_before(0.3, 0.1) == 3          # 0.3 / 0.1 = 2.9999999999999996
+    assert grid_steps_before(0.1 * 7 - 1e-12, 0.1) == 7 and grid_steps_before(0.1 * 7 - 1e-9, 0.1) == 6
+    assert grid_steps_before(0.71, 0.1) == 7

@@ -8,6 +8,8 @@ hands the kernel (``run_arrays``). Plain Python: nothing here is compiled. kerne
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 VERSION = 3   # of the slot convention and the landscape's record below (kernel.json records it)
@@ -28,12 +30,17 @@ ENTRY_SLOTS = 64
 RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("rows", MATRIX), ("ints", INTS),
               ("info", VECTOR), ("work", VECTOR))
 
+# advance and advance_adaptive take the absolute time ``t_start`` of the run's start and its
+# absolute ``t_end``: a run that goes on after a change of contact mode keeps the whole run's clock
+# (its steps and rows on the grid a run from t = 0 has, ``grid_steps_before``; advance's n_steps
+# counts the whole run's steps, those before t_start included).
 ENTRIES = {
-    "advance": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("p", VECTOR), ("dt", FLOAT), ("t_end", FLOAT),
-                ("n_steps", INT), ("every", INT), ("max_steps", INT), *RUN_ARRAYS, ("stepping", FLOAT)),
+    "advance": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("p", VECTOR), ("dt", FLOAT), ("t_start", FLOAT),
+                ("t_end", FLOAT), ("n_steps", INT), ("every", INT), ("max_steps", INT), *RUN_ARRAYS,
+                ("stepping", FLOAT)),
     "advance_adaptive": (("fn", ADDRESS), ("W", MATRIX), ("E", MATRIX), ("P", MATRIX), ("p", VECTOR),
-                         ("err_kind", INT), ("err_exp", FLOAT), ("t_end", FLOAT), ("record_dt", FLOAT),
-                         ("rtol", FLOAT), ("atol", FLOAT), ("max_steps", INT), *RUN_ARRAYS),
+                         ("err_kind", INT), ("err_exp", FLOAT), ("t_start", FLOAT), ("t_end", FLOAT),
+                         ("record_dt", FLOAT), ("rtol", FLOAT), ("atol", FLOAT), ("max_steps", INT), *RUN_ARRAYS),
     "advance_batch": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("Z0", MATRIX), ("PARAMS", MATRIX),
                       ("DT", VECTOR), ("T_END", VECTOR), ("N_STEPS", INTS), ("status", INTS), ("out", MATRIX),
                       *RUN_ARRAYS, ("acc", VECTOR)),
@@ -298,6 +305,22 @@ def run_arrays(n: int, stages: int, rows: int) -> dict[str, np.ndarray]:
             "work": np.empty(work_size(n))}
 
 
+# -- the run's clock --------------------------------------------------------------------------------
+
+GRID_SLIVER = 1e-9   # a run's first step or row closer than this many dt (or record_dt) to t_start joins the next
+
+
+def grid_steps_before(t_start: float, spacing: float) -> int:
+    """The grid times k·spacing (k = 1, 2, ...) a run starting at t_start has passed: its first step
+    ends at (k + 1)·dt, its first row after the start is at (k + 1)·record_dt. A grid time less than
+    GRID_SLIVER·spacing after t_start counts as passed: the first step takes that sliver with it.
+    0 for t_start = 0. (Plain Python that the kernel compiles too: one definition for both.)"""
+    k = math.floor(t_start / spacing)
+    if (k + 1) * spacing - t_start < GRID_SLIVER * spacing:
+        k += 1
+    return k
+
+
 # -- sweeps: batches of fixed-step runs ----------------------------------------------------------
 #
 # A run of a sweep needs only the motion (contact point and angular momentum): its state has
@@ -323,4 +346,4 @@ def description() -> dict:
                         for name, arguments in ENTRIES.items()}}
 
 
-__all__ = [name for name in dir() if not name.startswith("_") and name not in ("annotations", "np")]
+__all__ = [name for name in dir() if not name.startswith("_") and name not in ("annotations", "math", "np")]

@@ -14,13 +14,16 @@ from .interface import (
     BATCH_CHUNK, D_SLIP, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_MU, ROW_CENTER, ROW_ENERGY,
-    ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED)
+    ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
+    grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import motion_size, shape_of
 from .recording import _fail, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
 from .unpacking import scratch
+
+grid_before = JIT(grid_steps_before)
 
 
 @JIT
@@ -50,7 +53,7 @@ def slip_reference(d, probe, p, h):
 
 
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
-def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
+def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
             stepping):
     """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
@@ -61,6 +64,12 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
     call (no rows yet) the initial state is checked and recorded. The run stops early, with
     ints[I_STATUS] set, where the state turns non-finite or a check fails; the last valid state
     is then the last row.
+
+    The run's clock is the whole run's (``interface.grid_steps_before``): it starts at t_start
+    (0, or where the contact changed mode) and its steps end at the multiples k·dt of the grid, the
+    first one at the first grid time after t_start, the last at t_end; n_steps counts the grid's
+    steps to t_end, those before t_start too. Rows: the start (at t_start), the steps whose k is
+    a multiple of ``every``, and the last. ints[I_STEPS] counts this run's steps.
     """
     n, mk = shape_of(z)
     last = W.shape[0] - 1
@@ -70,18 +79,22 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
         for a in range(3):   # (a state without orientation never writes these: they are checked as R)
             for c in range(3):
                 Rn[a, c] = Re[a, c] = R[a, c]
-        start(fn, d, p, z, R, K, probe, rows, ints, info)
+        start(fn, d, p, z, R, K, probe, rows, ints, info, t_start)
         if ints[I_STATUS] != RUNNING:
             return
 
     watch = contact_watched(p, n)
+    before = grid_before(t_start, dt)   # the grid's steps before this run (0 from t = 0)
+    own = max(1, n_steps - before)      # this run's steps
+    phase = before % every              # the first row after the start: at the step every - phase
     k0 = ints[I_STEPS]
-    k_stop = min(n_steps, k0 + max_steps)
+    k_stop = min(own, k0 + max_steps)
     for k in range(k0 + 1, k_stop + 1):
-        final = k == n_steps
-        t0 = (k - 1) * dt
-        h = t_end - t0 if final else dt
-        t = t_end if final else k * dt
+        final = k == own
+        g = before + k
+        t0 = (g - 1) * dt if k > 1 else t_start
+        h = t_end - t0 if final else dt if k > 1 else g * dt - t0
+        t = t_end if final else g * dt
         if watch:
             slip_reference(d, probe, p, h)
         bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
@@ -110,17 +123,18 @@ def advance(fn, W, P, p, dt, t_end, n_steps, every, max_steps, z, R, K, probe, r
             return
         accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] = k
-        if k - ints[I_LAST_RECORDED] == every or final:  # (no division in the loop)
+        if k - ints[I_LAST_RECORDED] == (every if ints[I_LAST_RECORDED] > 0 else every - phase) or final:
+            # (no division in the loop)
             record(rows, ints[I_ROWS], t, z, R, probe, p)
             ints[I_ROWS] += 1
             ints[I_LAST_RECORDED] = k
-    if ints[I_STEPS] == n_steps:
+    if ints[I_STEPS] == own:
         ints[I_STATUS] = OK
 
 
 @JIT
-def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, atol, max_steps, z, R, K,
-                     probe, rows, ints, info, work):
+def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_dt, rtol, atol, max_steps, z, R,
+                     K, probe, rows, ints, info, work):
     """Run up to ``max_steps`` further trial steps of an embedded pair with step-size control
     (carrying omega, p[P_TURN] > 0); info[F_TIME] is the time reached and info[F_H] the next
     step to try. The error is controlled on the motion (rolling or sliding, by z's length);
@@ -137,8 +151,10 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
       ``dense_stages`` only for steps that are interpolated (a row or an event inside them).
     K has ``stage_rows(W.shape[0])`` rows.
 
-    Steps are cut only to land on t_end. Rows at the multiples of record_dt are the dense
-    output at those times (record_dt 0: every accepted step is a row). Events are located on
+    The run's clock is the whole run's: time starts at t_start (0, or where the contact changed
+    mode). Steps are cut only to land on t_end. Rows at the multiples of record_dt after t_start
+    (``interface.grid_steps_before``) are the dense output at those times (record_dt 0: every
+    accepted step is a row). Events are located on
     the dense output (``step_events``). Returns early, still running, when ``rows`` has fewer
     than two free rows while recording every step: the caller grows it and calls again.
     """
@@ -147,11 +163,12 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
     last = E.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     if ints[I_ROWS] == 0:
-        start(fn, d, p, z, R, K, probe, rows, ints, info)
-        info[F_TIME] = 0.0
+        start(fn, d, p, z, R, K, probe, rows, ints, info, t_start)
+        info[F_TIME] = t_start
         if ints[I_STATUS] != RUNNING:
             return
     watch = contact_watched(p, n)
+    skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
     t, h = info[F_TIME], info[F_H]
     retry = ints[I_RETRY] == 1  # right after a rejection the step may shrink but not grow (Hairer's rule)
     for _ in range(max_steps):
@@ -192,7 +209,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_end, record_dt, rtol, 
             for c in range(3):
                 Re[a, c] = R[a, c]
         while record_dt > 0.0:  # the rows inside the step, from its dense output
-            t_row = ints[I_ROWS] * record_dt
+            t_row = (ints[I_ROWS] + skipped) * record_dt
             if t_end - t_row < 1e-9 * record_dt:
                 t_row = t_end
             if t_row > t_new or (valid >= 0.0 and t_row >= t_stop) or t_row <= rows[ints[I_ROWS] - 1, 0]:
@@ -273,7 +290,7 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K
         first = 0
         while ints[I_STATUS] == RUNNING:
             # (np.int64: a literal int would compile advance anew for it)
-            advance(fn, W, P, p, DT[b], T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R, K, probe,
+            advance(fn, W, P, p, DT[b], 0.0, T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R, K, probe,
                     rows, ints, info, work, EXPLICIT)
             count = ints[I_ROWS]
             if count == 0:  # the initial state is not finite: nothing to report

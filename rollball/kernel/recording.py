@@ -85,13 +85,13 @@ def _fail(ints, info, status, reason, t, x, y, value):
 
 
 @COLD
-def start(fn, d, p, z, R, K, probe, rows, ints, info):
-    """Check and record the initial state; K[0] and probe describe it afterwards. A start that
-    changes contact mode at once stops the run there (status TRANSITION, ``start_mode``)."""
+def start(fn, d, p, z, R, K, probe, rows, ints, info, t_start):
+    """Check and record the initial state, at time t_start; K[0] and probe describe it afterwards.
+    A start that changes contact mode at once stops the run there (status TRANSITION, ``start_mode``)."""
     n, mk = shape_of(z)
     landscape(fn, z[0], z[1], data_pointer(d))
     if not _finite(d, 0, 6):
-        _fail(ints, info, NONFINITE, R_START_UNDEFINED, 0.0, z[0], z[1], math.nan)
+        _fail(ints, info, NONFINITE, R_START_UNDEFINED, t_start, z[0], z[1], math.nan)
         return
     sliding = sliding_size(n)
     d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2], d[D_SLIP + 3] = 0.0, 0.0, 0.0, 0.0   # (no step yet)
@@ -102,22 +102,22 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info):
     if mk and p[P_TURN] > 0.0 and not sliding:
         for q in range(3):
             z[5 + q] = probe[PROBE_OMEGA + q]
-    record(rows, 0, 0.0, z, R, probe, p)
+    record(rows, 0, t_start, z, R, probe, p)
     if not (_finite(z, 0, n) and _finite_row(K, 0, 0, n) and _finite(probe, 0, PROBE_SIZE)
             and _finite_row(rows, 0, 0, ROW_SIZE)):
-        _fail(ints, info, NONFINITE, R_START_OVERFLOW, 0.0, z[0], z[1], math.nan)
+        _fail(ints, info, NONFINITE, R_START_OVERFLOW, t_start, z[0], z[1], math.nan)
         return
     ints[I_ROWS] = 1
     if probe[PROBE_FORCE] < 0.0:
-        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = 0.0, z[0], z[1], 0.0
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t_start, z[0], z[1], 0.0
     if probe[PROBE_FIT] >= 1.0:
-        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, 0.0, z[0], z[1], probe[PROBE_FIT])
+        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t_start, z[0], z[1], probe[PROBE_FIT])
         return
     kind = start_mode(p, sliding, probe)
     if kind != 0:
         ints[I_STATUS] = TRANSITION
         ints[I_TRANSITION] = kind
-        info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = 0.0, z[0], z[1]
+        info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t_start, z[0], z[1]
 
 
 # A sliding start with zero slip grips only where rolling needs less than mu F.N by this share of
