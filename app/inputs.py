@@ -10,6 +10,7 @@ below Min), the field whose change broke the scene is the one marked.
 from __future__ import annotations
 
 import re
+import time
 
 from PySide6 import QtCore, QtWidgets
 
@@ -51,6 +52,8 @@ NUMBER_FIELDS = {
     ),
 }
 DEBOUNCE_MS = 250              # typing pause before a change is applied (a valid formula: none)
+REDRAW_MS = 250                # while typing on: from a landscape drawn to the next (drawing one takes
+                               # the GUI thread ~0.1 s, and keys must not wait for it)
 METHODS_PER_LINE = 3           # method buttons per line of the panel
 METHOD_KINDS = {MethodKind.FIXED: "explicit", MethodKind.ADAPTIVE: "adaptive, explicit",
                 MethodKind.IMPLICIT: "implicit, symmetric"}
@@ -158,8 +161,10 @@ class ScenePanel(QtWidgets.QWidget):
     text superseded by a key meanwhile is not applied); a refused text is marked only when the
     pause ends, so nothing is shown against a word half typed. If the pause ends before the
     check, the field says "checking…" meanwhile, the window stays responsive and the last valid
-    scene stays current; ``checking`` is True until the result is in. The scenes applied during
-    one burst of typing (until the pause ends) are one undo step: ``gesture`` is the burst's.
+    scene stays current; ``checking`` is True until the result is in. While typing goes on, a
+    landscape is drawn at most ``REDRAW_MS`` after the one before (the newest valid text then),
+    so that keys do not wait for drawing. The scenes applied during one burst of typing (until
+    the pause ends) are one undo step: ``gesture`` is the burst's.
     """
 
     sceneChanged = QtCore.Signal(object)
@@ -181,6 +186,9 @@ class ScenePanel(QtWidgets.QWidget):
         self.noticed: str | None = None                      # the key of a field with a notice
         self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
         self._timer.timeout.connect(self.apply)
+        self._redraw = QtCore.QTimer(self, singleShot=True)   # the next valid text typed, drawn
+        self._redraw.timeout.connect(self._apply_typed_now)
+        self._drawn_at = -float("inf")                        # when the last text typed was drawn
         self.contact = ContactFields(self)   # friction, restitution, after lift-off, start ω
         self.contact.edited.connect(self._edited)
 
@@ -298,6 +306,7 @@ class ScenePanel(QtWidgets.QWidget):
     def set_scene(self, scene: Scene) -> None:
         """Show a scene in the fields (no ``sceneChanged``)."""
         self._timer.stop()
+        self._redraw.stop()
         self._burst += 1
         self._scene = scene
         self._edits = []
@@ -341,6 +350,13 @@ class ScenePanel(QtWidgets.QWidget):
             self._start_check(*now)
 
     def _apply_typed(self) -> None:
+        """The text typed is valid: drawn once the GUI thread has had ``REDRAW_MS`` for keys
+        since the last landscape drawn (at once after a pause), after the keys waiting."""
+        if not self._redraw.isActive():
+            wait = self._drawn_at + REDRAW_MS / 1e3 - time.monotonic()
+            self._redraw.start(round(1e3 * max(0.0, wait)))
+
+    def _apply_typed_now(self) -> None:
         """Mid-burst, the fields as typed, if they make a new valid scene with a formula known
         to be valid: applied now, as part of the burst's undo step. A refusal waits for the
         typing pause (the pause goes on)."""
@@ -356,6 +372,7 @@ class ScenePanel(QtWidgets.QWidget):
             self.sceneChanged.emit(scene)
         finally:
             self.gesture = None
+            self._drawn_at = time.monotonic()
 
     def _dragged(self, name: str) -> None:
         """A slider moved: applied at once (no typing pause), one undo step a drag."""
@@ -407,6 +424,7 @@ class ScenePanel(QtWidgets.QWidget):
         """Validate the fields now; emit ``sceneChanged`` if they make a new valid scene. A
         formula not checked yet is checked in the background first (None meanwhile)."""
         self._timer.stop()
+        self._redraw.stop()
         text = self._formula_text()
         if (text, self.parameter_names()) not in self._checked:
             self._check_formula(text)
