@@ -10,6 +10,7 @@ below Min), the field whose change broke the scene is the one marked.
 from __future__ import annotations
 
 import re
+import time
 
 from PySide6 import QtCore, QtWidgets
 
@@ -50,7 +51,9 @@ NUMBER_FIELDS = {
         ("view.step", "Spacing", "m", "Distance between grid lines"),
     ),
 }
-DEBOUNCE_MS = 250              # typing pause before a change is applied
+DEBOUNCE_MS = 250              # typing pause before a change is applied (a valid formula: none)
+REDRAW_MS = 250                # while typing on: from a landscape drawn to the next (drawing one takes
+                               # the GUI thread ~0.1 s, and keys must not wait for it)
 METHODS_PER_LINE = 3           # method buttons per line of the panel
 METHOD_KINDS = {MethodKind.FIXED: "explicit", MethodKind.ADAPTIVE: "adaptive, explicit",
                 MethodKind.IMPLICIT: "implicit, symmetric"}
@@ -153,9 +156,15 @@ class ScenePanel(QtWidgets.QWidget):
     ``error_text`` shown right under it.
 
     A new formula is parsed, differentiated and compiled by a background ``Worker`` (that can take
-    seconds), from the keystroke on, so that it is mostly ready when the typing pause ends; if it
-    is not, the field says "checking…" meanwhile, the window stays responsive and the last valid
-    scene stays current; ``checking`` is True until the result is in.
+    seconds), from the keystroke on, one text at a time, the newest next. A formula is applied as
+    soon as the text in the field is known to be valid, without waiting for the typing pause (a
+    text superseded by a key meanwhile is not applied); a refused text is marked only when the
+    pause ends, so nothing is shown against a word half typed. If the pause ends before the
+    check, the field says "checking…" meanwhile, the window stays responsive and the last valid
+    scene stays current; ``checking`` is True until the result is in. While typing goes on, a
+    landscape is drawn at most ``REDRAW_MS`` after the one before (the newest valid text then),
+    so that keys do not wait for drawing. The scenes applied during one burst of typing (until
+    the pause ends) are one undo step: ``gesture`` is the burst's.
     """
 
     sceneChanged = QtCore.Signal(object)
@@ -167,7 +176,8 @@ class ScenePanel(QtWidgets.QWidget):
         # (formula, parameter names) -> why it is refused (None: ready)
         self._checked: dict[tuple[str, tuple[str, ...]], str | None] = {}
         self._checking: tuple[str, tuple[str, ...]] | None = None   # being checked in the background
-        self.gesture = None                        # while a slider's change is applied: its drag
+        self.gesture = None                        # while a change is applied: its drag or typing burst
+        self._burst = 0                            # counts bursts of typing: one undo step each
         self.numbers: dict[str, QtWidgets.QLineEdit] = {}
         self.messages: dict[str, QtWidgets.QLabel] = {}      # under each field, by key
         self.row_labels: dict[str, QtWidgets.QLabel] = {}    # the form's label of each number field
@@ -176,6 +186,9 @@ class ScenePanel(QtWidgets.QWidget):
         self.noticed: str | None = None                      # the key of a field with a notice
         self._timer = QtCore.QTimer(self, singleShot=True, interval=DEBOUNCE_MS)
         self._timer.timeout.connect(self.apply)
+        self._redraw = QtCore.QTimer(self, singleShot=True)   # the next valid text typed, drawn
+        self._redraw.timeout.connect(self._apply_typed_now)
+        self._drawn_at = -float("inf")                        # when the last text typed was drawn
         self.contact = ContactFields(self)   # friction, restitution, after lift-off, start ω
         self.contact.edited.connect(self._edited)
 
@@ -293,6 +306,8 @@ class ScenePanel(QtWidgets.QWidget):
     def set_scene(self, scene: Scene) -> None:
         """Show a scene in the fields (no ``sceneChanged``)."""
         self._timer.stop()
+        self._redraw.stop()
+        self._burst += 1
         self._scene = scene
         self._edits = []
         self._checked[(scene.landscape, scene.parameter_names)] = None  # a Scene's formula is valid
@@ -321,14 +336,43 @@ class ScenePanel(QtWidgets.QWidget):
             self._edits = [k for k in self._edits if k != key] + [key]
         self._timer.start()
         if key == "landscape":
-            self._check_ahead()
+            now = (self._formula_text(), self.parameter_names())
+            if now in self._checked:
+                self._apply_typed()
+            else:
+                self._check_ahead()
 
     def _check_ahead(self) -> None:
-        """Check the formula as typed in the background now, during the typing pause: when the
-        pause ends, a new formula is ready, as one seen before (nothing is shown meanwhile)."""
+        """Check the formula as typed in the background now, during the typing pause (nothing is
+        shown meanwhile); a valid one is applied when its check is in."""
         now = (self._formula_text(), self.parameter_names())
         if self._checking is None and now not in self._checked:
             self._start_check(*now)
+
+    def _apply_typed(self) -> None:
+        """The text typed is valid: drawn once the GUI thread has had ``REDRAW_MS`` for keys
+        since the last landscape drawn (at once after a pause), after the keys waiting."""
+        if not self._redraw.isActive():
+            wait = self._drawn_at + REDRAW_MS / 1e3 - time.monotonic()
+            self._redraw.start(round(1e3 * max(0.0, wait)))
+
+    def _apply_typed_now(self) -> None:
+        """Mid-burst, the fields as typed, if they make a new valid scene with a formula known
+        to be valid: applied now, as part of the burst's undo step. A refusal waits for the
+        typing pause (the pause goes on)."""
+        if self._checked.get((self._formula_text(), self.parameter_names()), "") is not None:
+            return
+        scene, _, _ = self.read()
+        if scene is None or scene == self._scene:
+            return
+        self._show_notice(scene)
+        self._scene = scene
+        self.gesture = ("typing", self._burst)
+        try:
+            self.sceneChanged.emit(scene)
+        finally:
+            self.gesture = None
+            self._drawn_at = time.monotonic()
 
     def _dragged(self, name: str) -> None:
         """A slider moved: applied at once (no typing pause), one undo step a drag."""
@@ -380,10 +424,13 @@ class ScenePanel(QtWidgets.QWidget):
         """Validate the fields now; emit ``sceneChanged`` if they make a new valid scene. A
         formula not checked yet is checked in the background first (None meanwhile)."""
         self._timer.stop()
+        self._redraw.stop()
         text = self._formula_text()
         if (text, self.parameter_names()) not in self._checked:
             self._check_formula(text)
             return None
+        gesture = self.gesture if self.gesture is not None else ("typing", self._burst)
+        self._burst += 1   # the burst ends here: the next key begins a new undo step
         scene, key, message = self.read()
         if scene is None:
             self._show_errors(key, message)
@@ -391,7 +438,11 @@ class ScenePanel(QtWidgets.QWidget):
             self._show_notice(scene)
         if scene is not None and scene != self._scene:
             self._scene = scene
-            self.sceneChanged.emit(scene)
+            self.gesture, outer = gesture, self.gesture
+            try:
+                self.sceneChanged.emit(scene)
+            finally:
+                self.gesture = outer
         return scene
 
     def _check_formula(self, text: str) -> None:
@@ -416,8 +467,11 @@ class ScenePanel(QtWidgets.QWidget):
         self._checked[checked] = problem
         self._checking = None
         now = (self._formula_text(), self.parameter_names())
-        if self._timer.isActive():   # checked ahead, the typing pause still on: the newest text next
-            self._check_ahead()
+        if self._timer.isActive():   # checked ahead, the typing pause still on
+            if now == checked:
+                self._apply_typed()   # valid: applied now; refused: marked when the pause ends
+            else:
+                self._check_ahead()   # superseded: the newest text next
         elif now == checked or now not in self._checked:
             self.apply()
 

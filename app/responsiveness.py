@@ -11,14 +11,17 @@ integrator), and the latencies of ``latency`` (``--latency``: those alone). It n
 The latency is timed from the change to the 3-D view's next frame on screen (``frameSwapped``,
 Xvfb's software GL included), on the ripples example (a sin(k x) cos(k y), a 81 × 81 grid):
 a parameter's slider moved (the scene made anew, the surface evaluated with the new values
-and redrawn, the run reset: nothing compiled), and a formula keystroke, counted from the end
-of the typing pause (``inputs.DEBOUNCE_MS`` after the key itself) — to a formula seen before
-(the app's own part) and to one never seen (parsed, derived and compiled in the background from
-the key on, so mostly during the pause; ``formula_new_key``: the same counted from the key).
-Then the path's preview (``preview``): from a slider moved to the frame that shows its preview
-(computed in the background after the landscape is drawn); and a key typed into the formula
-field to the field painted (``keystroke``), once with nothing else to do and once while
-previews are computed back to back (``keystroke_previewing``: typing must not wait for them).
+and redrawn, the run reset: nothing compiled), and a formula's last key, counted from the key
+(a valid formula is applied as soon as it is checked, without a typing pause) — to a formula
+seen before (the app's own part) and to one never seen (parsed, derived and compiled in the
+background from the key on). Then the path's preview (``preview``): from a slider moved to the
+frame that shows its preview (computed in the background after the landscape is drawn); and a
+key typed into the formula field to the field painted (``keystroke``), once with nothing else
+to do, once while previews are computed back to back (``keystroke_previewing``: typing must not
+wait for them), and while typing on without a pause (``keystroke_typing``: a key every
+``TYPING_INTERVAL_MS``, a term of never-seen formulas typed and then deleted again key by key,
+each valid text on the way drawn when it is ready, the deleted ones at once as seen before;
+``typing_applied``: how many landscapes were drawn meanwhile).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import numpy as np
 
 TICK_MS = 5
 LATENCY_GOAL_MS = 150      # from an edit to the landscape drawn, the app's part (issue 25)
+TYPING_INTERVAL_MS = 100   # between the keys of ``keystroke_typing``: a fast typist
 
 
 def measure() -> dict:
@@ -140,24 +144,16 @@ def latency(repeats: int = 9) -> dict:
                 while panel.checking:
                     app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 5)
 
-            pause_ended = [0.0]   # when the typing pause ended (the panel's timer fired), before it applies
-            panel._timer.timeout.disconnect()
-            panel._timer.timeout.connect(lambda: (pause_ended.__setitem__(0, time.perf_counter()), panel.apply()))
-
-            def keystroke(text: str) -> None:   # the formula's last key; the typing pause ends by itself
+            def keystroke(text: str) -> None:   # the formula's last key
                 field.setText(text[:-1])
                 field.setCursorPosition(len(text) - 1)
                 QtTest.QTest.keyClicks(field, text[-1])
-            since_pause = lambda: pause_ended[0]   # noqa: E731
-            fresh = [f"{base}+{random.randrange(10**8, 10**9)}e-10*x" for _ in range(2 * repeats)]   # never seen
+            fresh = [f"{base}+{random.randrange(10**8, 10**9)}e-10*x" for _ in range(repeats)]   # never seen
             seen_s, new_s = [], []
             for i in range(repeats):   # in turns, so that the machine's load weighs on both alike
                 seen_s.append(drawn_after(lambda t=seen[i % 2]: keystroke(t),
-                                          lambda t=seen[i % 2]: window.scene.landscape == t, since_pause))
-                new_s.append(drawn_after(lambda t=fresh[i]: keystroke(t), lambda t=fresh[i]: window.scene.landscape == t,
-                                         since_pause))
-            new_key_s = [drawn_after(lambda t=t: keystroke(t), lambda t=t: window.scene.landscape == t)
-                         for t in fresh[repeats:]]
+                                          lambda t=seen[i % 2]: window.scene.landscape == t))
+                new_s.append(drawn_after(lambda t=fresh[i]: keystroke(t), lambda t=fresh[i]: window.scene.landscape == t))
         finally:
             core._compile = real
         editing = window.start_editing
@@ -193,6 +189,26 @@ def latency(repeats: int = 9) -> dict:
             return elapsed
         field.setText(base)
         keys_s = [typed() for _ in range(repeats)]
+
+        applied = []
+        panel.sceneChanged.connect(applied.append)
+
+        def typing_on(key) -> float:   # keys at a typist's pace, each to the field painted
+            seen, started = painted[0], time.perf_counter()
+            QtTest.QTest.keyClick(field, key)
+            while painted[0] == seen and time.perf_counter() < started + 10:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.WaitForMoreEvents, 1)
+            elapsed = time.perf_counter() - started
+            while time.perf_counter() < started + TYPING_INTERVAL_MS / 1e3:
+                app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 1)
+            return elapsed
+        field.setText(base)
+        field.setCursorPosition(len(base))
+        settle()
+        term = f"+0.{random.randrange(10**6, 10**7)}*x"   # never seen, valid from "+0" on
+        typing_s = [typing_on(char) for char in term] + [typing_on(QtCore.Qt.Key.Key_Backspace) for _ in term]
+        panel.sceneChanged.disconnect(applied.append)
+        panel._timer.stop()
         scenes = [dataclasses.replace(window.scene, start=dataclasses.replace(window.scene.start, x=x))
                   for x in (0.3, 0.35)]
         busy = []
@@ -220,8 +236,9 @@ def latency(repeats: int = 9) -> dict:
     def ms(values):
         return {"median_ms": float(1e3 * np.median(values)), "longest_ms": float(1e3 * np.max(values))}
     return {"slider": ms(slider_s), "slider_compiles": slider_compiles, "formula_seen": ms(seen_s),
-            "formula_new": ms(new_s), "formula_new_key": ms(new_key_s), "preview": ms(preview_s), "keystroke": ms(keys_s),
-            "keystroke_previewing": ms(previewing_s), "previews_during_keys": len(busy),
+            "formula_new": ms(new_s), "preview": ms(preview_s), "keystroke": ms(keys_s),
+            "keystroke_previewing": ms(previewing_s), "keystroke_typing": ms(typing_s), "typing_applied": len(applied),
+            "typing_keys": len(typing_s), "typing_interval_ms": TYPING_INTERVAL_MS, "previews_during_keys": len(busy),
             "preview_busy_at_key": int(sum(busy_at_key)), "debounce_ms": DEBOUNCE_MS, "goal_ms": LATENCY_GOAL_MS,
             "repeats": repeats}
 

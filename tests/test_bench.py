@@ -95,3 +95,8 @@ def test_the_report_states_the_apps_latency_against_its_goal():
     latency.update(preview=figure(110.0), keystroke_previewing=figure(14.0))   # reported, no goal
     text = _targets(app=app)
     assert "preview drawn (median of 9) | 110 ms" in text and "back to back (median of 9) | 14 ms" in text
+    latency.update(keystroke_typing=figure(30.0), typing_keys=24, typing_interval_ms=100, typing_applied=9)
+    assert "9 landscapes drawn meanwhile) (median of 24) | 30 ms (longest 60 ms) | ≤ 50 ms |" in _targets(app=app)
+    latency["keystroke_typing"] = figure(70.0)   # typing lags
+    missed = [line for line in _targets(app=app).splitlines() if "missed" in line]
+    assert len(missed) == 2 and "typing on" in missed[1]
