@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import rollball
 
 
@@ -43,3 +45,48 @@ def test_the_tests_import_the_app_by_its_installed_name():
             words = line.split()
             if words[:1] in (["import"], ["from"]) and len(words) > 1:
                 assert words[1].split(".")[0] != "app", (path, line)
+
+
+# The distribution that brings each module a package imports (pyproject.toml's names).
+DISTRIBUTIONS = {"numpy": "numpy", "numba": "numba", "llvmlite": "llvmlite", "sympy": "sympy",
+                 "matplotlib": "matplotlib", "tqdm": "tqdm", "scipy": "scipy", "PySide6": "PySide6-Essentials",
+                 "pyqtgraph": "pyqtgraph", "OpenGL": "PyOpenGL", "imageio": "imageio",
+                 "imageio_ffmpeg": "imageio-ffmpeg"}
+
+
+def _declared(*groups: str) -> set[str]:
+    """The distributions pyproject.toml declares: the core's, and the named extras'."""
+    import re
+    tomllib = pytest.importorskip("tomllib")   # (Python 3.11 and newer)
+    project = tomllib.loads((Path(__file__).resolve().parent.parent / "pyproject.toml").read_text())["project"]
+    lists = [project["dependencies"]] + [project["optional-dependencies"][group] for group in groups]
+    return {re.split(r"[\[<>=!~; ]", item, maxsplit=1)[0] for items in lists for item in items}
+
+
+def _imported_at_load(folder: Path, leave_out=()) -> dict[str, Path]:
+    """Top-level third-party modules the files of ``folder`` import when they are loaded (a
+    module imported inside a function, for an optional extra, is not counted)."""
+    import ast
+    found = {}
+    for path in folder.rglob("*.py"):
+        if any(part in leave_out for part in path.relative_to(folder).parts):
+            continue
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                     else [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 else [])
+            for name in names:
+                top = name.split(".")[0]
+                if top not in sys.stdlib_module_names and top not in ("rollball", "rollball_app", "app"):
+                    found.setdefault(top, path)
+    return found
+
+
+def test_what_the_core_and_the_app_import_is_what_they_declare():
+    """`scripts/run` installs the core and the app's extra only: a module they import on loading
+    that only the test or bench extras bring would fail for a new user (a flight's scipy did)."""
+    root = Path(__file__).resolve().parent.parent
+    for folder, groups, leave_out in ((root / "rollball", (), ("bench",)), (root / "app", ("app",), ())):
+        declared = _declared(*groups)
+        missing = {module: str(path) for module, path in _imported_at_load(folder, leave_out).items()
+                   if DISTRIBUTIONS.get(module, module) not in declared}
+        assert missing == {}, (folder.name, missing)
