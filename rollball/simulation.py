@@ -18,8 +18,8 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import MethodKind, get_method
-from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, ROLLING, SLIDING, T, VELOCITY,
-                         EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
+from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, R, ROLLING, SLIDING, T,
+                         VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
 # kernel.ROW_SIZE (25) doubles a row: 1.0 GB at the limit, handed to the trajectory without a
 # copy. A run recording every adaptive step grows its buffer by doubling up to the limit,
@@ -395,11 +395,7 @@ class Simulation:
             elif code != kernel.RUNNING:
                 self.status = _STATUS[code]
                 break
-        # (a run that changed mode, or slid from its start, is not judged: the check takes an
-        # interval again from a rolling start)
-        rolled = all(mode == ROLLING for _, mode in self._mode_starts)
-        if self.judge_energy and not self.transitions and rolled and self.status in (
-                Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
+        if self.judge_energy and self.status in (Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
             # (here, where the run runs: never in the thread that reads the trajectory)
             self._energy_check = energy_check(self)
         return self.rows[first:].copy()
@@ -654,29 +650,75 @@ def _start_of(run: Simulation, row: np.ndarray):
         return None
 
 
-def _interval_change(run: Simulation, row: np.ndarray, duration: float, delay: float = 0.0, **options) -> float | None:
-    """|E(end) − E(row)| of the interval of ``duration`` taken again from ``row`` with
-    ``options`` (Simulation's), its first step ``delay`` long where ``delay`` > 0 (so that the
-    steps after it fall elsewhere); None where a run does not end ok."""
-    scene, start, e0 = run.scene, _start_of(run, row), float(row[ENERGY])
-    if delay > 0.0 and start is not None:
-        lead = Simulation(dataclasses.replace(scene, start=start, duration=delay), **{**options, "dt": delay})
-        lead.judge_energy = False
-        lead.advance()
-        start = _start_of(lead, lead.rows[-1]) if lead.status is Status.OK else None
-        e0 -= 0.0 if start is None else float(_accounted(lead.rows)[-1] - lead.rows[-1, ENERGY])
+def _state_of(run: Simulation, row: np.ndarray) -> sliding.BallState:
+    """A recorded row's state, the same in every mode (contact point, ċ, ω, R, D), with ċ in the
+    tangent plane at the contact point: a sliding run's ċ drifts off it by the step's error (its
+    normal part is not a variable of the motion, only kept at 0 by F_n), and the exact motion
+    from a state off it does not keep E + D."""
+    x, y = (float(value) for value in row[CONTACT])
+    normal = unit_normal(run.landscape.evaluate(x, y, run.scene.parameter_values))
+    velocity = row[VELOCITY] - np.dot(row[VELOCITY], normal) * normal
+    return sliding.BallState(x, y, velocity, row[OMEGA].copy(), row[R].reshape(3, 3).copy(), float(row[DISSIPATED]))
+
+
+def _run_from(run: Simulation, row: np.ndarray, mode: int, duration: float, **options) -> Simulation | None:
+    """The scene run for ``duration`` from a recorded row's state with ``options`` (Simulation's),
+    finished; None where it does not end ok. A run that only ever rolls (the 2011 model) starts
+    from the row as a scene's start (``_start_of``); one whose contact can change mode from the
+    row's whole state (``_state_of``, its dissipated energy too) in ``mode`` (ROLLING or SLIDING)
+    on a clock from 0, where it may change mode again as the run did."""
+    start = _start_of(run, row) if not run.segmented else run.scene.start
     if start is None:
         return None
     try:
-        redo = Simulation(dataclasses.replace(scene, start=start, duration=duration - delay), **options)
-    except ValueError:
+        redo = Simulation(dataclasses.replace(run.scene, start=start, duration=duration), **options)
+    except ValueError:   # (a SceneError too: an interval shorter than its first step's delay)
         return None
     redo.judge_energy = False  # (the check's own runs are not checked)
+    if run.segmented:
+        redo._mode, redo._mode_starts = mode, [(0, mode)]
+        redo._start_kernel_run(_state_of(run, row), 0.0, slides=mode == SLIDING, repeat=False)
     redo.advance()
-    e = _accounted(redo.rows)
-    if redo.status is not Status.OK or len(e) < 2:
+    return redo if redo.status is Status.OK and len(redo.rows) >= 2 else None
+
+
+def _interval_change(run: Simulation, row: np.ndarray, mode: int, duration: float, delay: float = 0.0,
+                     **options) -> float | None:
+    """How much E + D (D is 0 where the ball only rolls) changes over the interval of
+    ``duration`` taken again from ``row`` in ``mode`` with ``options`` (Simulation's), its first
+    step ``delay`` long where ``delay`` > 0 (so that the steps after it fall elsewhere), from the
+    state it starts from (``_run_from``); None where a run does not end ok."""
+    e0 = None
+    if delay > 0.0:
+        lead = _run_from(run, row, mode, delay, **{**options, "dt": delay})
+        if lead is None or (run.segmented and lead.modes[-1] == FLYING):
+            return None
+        e0 = float(_accounted(lead.rows[:1])[0])
+        row, mode = lead.rows[-1], int(lead.modes[-1]) if run.segmented else ROLLING
+        duration -= delay
+    redo = _run_from(run, row, mode, duration, **options)
+    if redo is None:
         return None
-    return abs(float(e[-1]) - e0)
+    energy = _accounted(redo.rows)
+    if e0 is None:
+        e0 = float(energy[0])
+    elif not run.segmented:   # (a run from a scene's start counts D from 0: carry the lead's)
+        energy = energy + float(row[DISSIPATED])
+    return abs(float(energy[-1]) - e0)
+
+
+def _judged(run: Simulation, rows: np.ndarray) -> np.ndarray:
+    """Which recorded intervals (rows i to i + 1) the energy check may take again: those the
+    contact integrated in one mode, rolling or sliding. A flight is exact, so an interval that
+    ends in one, or that holds a landing (its impact is counted in D), is not the step's."""
+    if not run.segmented:
+        return np.ones(len(rows) - 1, dtype=bool)
+    contact = run.modes[1: len(rows)] != FLYING
+    t = rows[:, T]
+    for change in run.transitions:
+        if change.kind == "landing":
+            contact &= ~((t[:-1] < change.time) & (change.time <= t[1:]))
+    return contact
 
 
 def energy_check(run: Simulation) -> EnergyCheck | None:
@@ -709,14 +751,16 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
     with np.errstate(invalid="ignore"):
         drift = float(np.nanmax(np.abs(error)))
         jumps = np.abs(np.diff(error))
+    jumps[~_judged(run, rows)] = np.nan
     if not (drift > ENERGY_WARNING and np.isfinite(jumps).any()):
         return None
     i = int(np.nanargmax(jumps))
     if not jumps[i] >= 0.5 * drift:
         return None
     row, t0, t1 = rows[i], float(rows[i][T]), float(rows[i + 1][T])
+    mode = int(run.modes[i + 1]) if run.segmented else ROLLING   # (the mode that integrated the interval)
     if run.adaptive:
-        changes = [_interval_change(run, row, t1 - t0, method=run.tableau.name, dt=run.dt,
+        changes = [_interval_change(run, row, mode, t1 - t0, method=run.tableau.name, dt=run.dt,
                                     rtol=max(run.rtol / tighter, MIN_TOLERANCE),
                                     atol=max(run.atol / tighter, MIN_TOLERANCE * 1e-3), record_dt=t1 - t0)
                    for tighter in (1.0, TIGHTER)]
@@ -727,13 +771,13 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
     else:
         probe = run.tableau if run.tableau.order >= PROBE_ORDER else get_method("rk4")
         same = dict(method=probe.name, munthe_kaas=run.munthe_kaas, record_every=MAX_STEPS)
-        changes = [_interval_change(run, row, t1 - t0, dt=run.dt, **same)]
+        changes = [_interval_change(run, row, mode, t1 - t0, dt=run.dt, **same)]
         level = 0
         while (level < LEVELS and changes[-1] is not None and (level == 0 or changes[-1] >= FLOOR * scale)
                and (level == 0 or (t1 - t0) * SHORTER ** (level + 1) <= run.dt * MAX_CHECK_STEPS)):
             level += 1
             h = run.dt / SHORTER ** level
-            phases = [_interval_change(run, row, t1 - t0, k * h / PHASES, dt=h, **same) for k in range(PHASES)]
+            phases = [_interval_change(run, row, mode, t1 - t0, k * h / PHASES, dt=h, **same) for k in range(PHASES)]
             changes.append(None if None in phases else max(phases))
         if None in changes:
             return None

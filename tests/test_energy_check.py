@@ -3,6 +3,7 @@ interval again with a shorter step (tighter tolerances, adaptive). On a smooth l
 error shrinks as the method's order predicts and is the step's; over a kink or a jump of the
 curvature it does not shrink and is the landscape's (docs/design.md §1)."""
 
+import dataclasses
 import threading
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 from conftest import make_scene
 from rollball import simulate, simulation
+from rollball.scene import Contact, Start
 from rollball.simulation import Simulation
 
 BUMP = "0.3*exp(-(x/0.3)^2)"  # smooth
@@ -95,6 +97,63 @@ def test_a_smooth_landscape_at_steps_that_do_not_resolve_it_is_the_steps(landsca
     check = traj.energy_check
     assert check is not None and not check.landscape and check.shrink > check.expected / 4, check
     assert "the step is too large" in traj.warnings()[0]
+
+
+def sliding(landscape, *, x, vx, dt, duration, friction=0.05, y=0.0):
+    """A ball shot without spin (it slides from the start), flying where it lifts off."""
+    scene = make_scene(landscape, x=x, y=y, vx=vx, duration=duration, dt=dt,
+                       contact=Contact(friction=friction, restitution=0.0, after_liftoff="fly"))
+    return dataclasses.replace(scene, start=Start(x, y, vx, 0.0, 0.0, omega=(0.0, 0.0, 0.0)))
+
+
+@pytest.mark.parametrize("method, dt", [("rk4", 0.2), ("lawson5", 0.3)])
+def test_a_sliding_ball_on_a_smooth_landscape_at_too_large_a_step_is_the_steps(method, dt):
+    # it slides throughout (the check used to judge only runs that rolled throughout); the
+    # interval is taken again from its sliding state (x, y, ċ, ω, D), and E + D's change over it
+    # shrinks at the method's order (rk4 156-fold, lawson5 1235-fold per step 4 times shorter)
+    traj = simulate(sliding("-0.5*exp(-4*(x^2+y^2))", x=-0.6, y=0.1, vx=1.0, dt=dt, duration=0.6), method=method)
+    assert set(traj.mode) == {"sliding"}
+    check = traj.energy_check
+    assert check is not None and not check.landscape and check.shrink > check.expected / 4, check
+    assert "the step is too large" in traj.warnings()[0]
+
+
+def test_a_sliding_ball_across_a_jump_of_the_curvature_is_the_landscapes():
+    # f'' jumps from 0 to 8 at x = 0: a step 4 times shorter shrinks E + D's change there ~4-fold
+    traj = simulate(sliding("4*max(x,0)^2", x=-0.5, vx=2.0, dt=0.05, duration=0.5), method="rk4")
+    check = traj.energy_check
+    assert check is not None and check.landscape and check.shrink < 64.0, check
+    i, j = np.searchsorted(traj.t, [check.time, check.end])
+    assert traj.mode[j] == "sliding" and traj.contact[i, 0] < 0.0 < traj.contact[j, 0]
+    assert "the landscape is not smooth there" in traj.warnings()[0]
+
+
+def test_a_run_that_slid_then_rolls_across_a_jump_of_the_curvature_is_the_landscapes():
+    # slides, grips at t = 2 v0 / (7 mu g) = 0.204 s, then rolls across the jump at x = 0: the
+    # interval is taken again from its rolling state, in a run that may change mode as this one did
+    traj = simulate(sliding("4*max(x,0)^2", x=-1.0, vx=3.5, friction=0.5, dt=0.05, duration=0.5), method="rk4")
+    assert [change.kind for change in traj.transitions] == ["grip"]
+    check = traj.energy_check
+    assert check is not None and check.landscape and check.shrink < 64.0, check
+    assert check.time > traj.transitions[0].time
+    i, j = np.searchsorted(traj.t, [check.time, check.end])
+    assert traj.mode[j] == "rolling" and traj.contact[i, 0] < 0.0 < traj.contact[j, 0]
+
+
+def test_intervals_of_flight_or_with_a_landing_are_not_taken_again():
+    # a flight is exact and an impact's loss is in D: only what the contact integrated is judged
+    run = Simulation(sliding("-4*x*abs(x)", x=-1.0, vx=3.0, friction=1.0, dt=0.1, duration=0.5), method="rk4")
+    run.advance()
+    traj = run.trajectory()
+    kinds = [change.kind for change in traj.transitions]
+    assert "liftoff" in kinds and "landing" in kinds
+    judged = simulation._judged(run, run.rows)
+    flying = traj.mode[1:] == "flying"
+    assert flying.any() and not judged[flying].any()
+    for change in traj.transitions:
+        if change.kind == "landing":
+            k = np.searchsorted(traj.t, change.time) - 1   # the interval that ends at or holds it
+            assert not judged[k]
 
 
 def test_no_check_where_the_energy_is_kept():
