@@ -460,7 +460,12 @@ class Simulation:
         if kind == "liftoff":
             self._dissipated_now = float(last[DISSIPATED])
             self._mode = FLYING
-            self._flight = self._new_flight(FreeState.from_row(last))
+            # the flight leaves along the tangent plane: a sliding state's c'.N is the integrator's
+            # drift (0 in the exact motion), and a c' into the surface would land it at once
+            start = FreeState.from_row(last)
+            normal = self._probe_normal()
+            velocity = start.velocity - float(np.dot(start.velocity, normal)) * normal
+            self._flight = self._new_flight(dataclasses.replace(start, velocity=velocity))
             return
         normal = self._probe_normal()
         state = sliding.stopped_state(self._z, self._R, self._p, normal)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .interface import (
-    D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
+    D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_FLY, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
     SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
 from .lowlevel import COLD, JIT, STEP, data_pointer, landscape
 
@@ -199,12 +199,19 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     u1 = c1 - r * (o2 * n3 - o3 * n2)
     u2 = c2 - r * (o3 * n1 - o1 * n3)
     u3 = c3 - r * (o1 * n2 - o2 * n1)
+    # its part in the tangent plane: u.N = c'.N is 0 in the exact motion and only the integrator's
+    # drift here; left in, it would turn the friction off the plane and, while |u| is small, drive
+    # that drift at the stiff rate mu F_n / (m |u|) (docs/design.md §1, "Sliding")
+    un = u1 * n1 + u2 * n2 + u3 * n3
+    u1, u2, u3 = u1 - un * n1, u2 - un * n2, u3 - un * n3
     us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
     speeds = c1 * c1 + c2 * c2 + c3 * c3 + r * r * (o1 * o1 + o2 * o2 + o3 * o3)
     zero = not us * us > SLIP_ZERO * SLIP_ZERO * speeds
     if zero:
         u1, u2, u3, us = 0.0, 0.0, 0.0, 0.0
     r1, r2, r3 = d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2]
+    rn = r1 * n1 + r2 * n2 + r3 * n3   # (held in the tangent plane here, which turns within the step)
+    r1, r2, r3 = r1 - rn * n1, r2 - rn * n2, r3 - rn * n3
     rn = math.sqrt(r1 * r1 + r2 * r2 + r3 * r3)
     if d[D_SLIP + 3] != 0.0 and rn > 0.0:   # the direction held through the step (``slip_reference``)
         s1, s2, s3 = r1 / rn, r2 / rn, r3 / rn
@@ -220,7 +227,10 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
         tn = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         s1, s2, s3 = (-t1 / tn, -t2 / tn, -t3 / tn) if tn > 0.0 else (0.0, 0.0, 0.0)
         us = u1 * s1 + u2 * s2 + u3 * s3
-    f = mu * abs(fn_)
+    # where the ball flies the run stops where F_n reaches 0: mu F_n, smooth through that zero, keeps
+    # the stages of the step across it (and its dense output, on which the lift-off is located)
+    # those of a smooth motion; glued, a pulling F_n < 0 rubs too
+    f = mu * (fn_ if p[P_FLY] != 0.0 else abs(fn_))
     K[row, 0] = a1
     K[row, 1] = a2
     K[row, 2] = (fn_ * n1 - f * s1) / m
