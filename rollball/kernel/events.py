@@ -10,9 +10,9 @@ from .dense import interpolate, state_at, turn
 from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
-    F_LIFT_Y, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE,
-    PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY, P_MU, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT,
-    R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
+    F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION,
+    PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY, P_MU, P_TURN,
+    R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import copy_state, curvatures, shape_of, sliding_size
 from .recording import _fail, hold, record, record_last
@@ -72,6 +72,17 @@ def surface_at(fn, d, r, z, h, P, K, theta, Ye, s):
     s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7] = Ye[0], Ye[1], d[0], -fx * iW, -fy * iW, iW, r * hi, r * lo
 
 
+@JIT
+def condition(kind, p, s, pe):
+    """g of a change of contact mode at a state with probe pe, negative before it: -F.N
+    (FORCE_EVENT), |F_t| - mu F.N (SLIP_EVENT) or -u_slip . u0 (GRIP_EVENT, u0 in s[0:3])."""
+    if kind == FORCE_EVENT:
+        return -pe[PROBE_FORCE]
+    if kind == SLIP_EVENT:
+        return pe[PROBE_NEED] - p[P_MU] * pe[PROBE_FORCE]
+    return -(pe[PROBE_SLIP] * s[0] + pe[PROBE_SLIP + 1] * s[1] + pe[PROBE_SLIP + 2] * s[2])
+
+
 @COLD
 def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
     """g(theta) of an event, negative before it: -F.N (lift-off), r*kappa - 1 (no fit),
@@ -80,12 +91,7 @@ def event_value(kind, fn, d, p, z, R, h, P, K, theta, Ye, Re, pe, s):
     the state is not finite (past any event)."""
     if kind != FIT_EVENT:
         ok = state_at(fn, d, p, z, R, h, P, K, 0.0, theta, Ye, Re, pe)
-        if kind == FORCE_EVENT:
-            g = -pe[PROBE_FORCE]
-        elif kind == SLIP_EVENT:
-            g = pe[PROBE_NEED] - p[P_MU] * pe[PROBE_FORCE]
-        else:
-            g = -(pe[PROBE_SLIP] * s[0] + pe[PROBE_SLIP + 1] * s[1] + pe[PROBE_SLIP + 2] * s[2])
+        g = condition(kind, p, s, pe)
     else:
         surface_at(fn, d, p[0], z, h, P, K, theta, Ye, s)
         ok = True
@@ -299,6 +305,8 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     jolted = math.isnan(info[F_LIFTOFF]) and centre_jolted(p[0], h, z, probe, zn, pn)
     turned = watch and mode_changes(p, n, probe, pn) != 0   # (watch: ``contact_watched``)
+    dips = dipping(p, n, h, probe, pn, info) if watch else 0
+    turned |= dips != 0
     if not (fit_end or sharp or jumpy or raced or force_end or jolted or turned):
         return -1.0  # the usual step: nothing to look at closer
     valid = -1.0
@@ -306,7 +314,8 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
         valid = examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
                              sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping)
     if turned and valid < 0.0:
-        valid = locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, sa)
+        valid = locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
+                                  pe, sa, sb, dips, stepping, segment)
     return valid
 
 
@@ -338,24 +347,183 @@ def mode_changes(p, n, probe, pn):
     return 0
 
 
+# A change of contact mode that begins and ends inside one step (F.N dipping below 0 and back, or
+# the friction rolling needs rising past mu F.N and back) leaves both ends of the step on the same
+# side. Where a condition at the step's ends is within DIP_REACH times what it changed by over this
+# step or the last (per step) of 0, the step's dense output is searched for it: the condition at
+# DIP_SAMPLES - 1 evenly spaced points, then, where none has crossed, a golden-section search for
+# the condition's largest value (DIP_ITERATIONS at most) around the largest sample. A quadratic
+# dip whose ends are both on one side reaches at most a quarter of what the step before changed
+# by: DIP_REACH 1 leaves a margin of four. The first step of a run (no step before) is searched.
+DIP_REACH = 1.0
+DIP_SAMPLES = 8
+DIP_ITERATIONS = 40
+GOLDEN = 0.6180339887498949
+REFINE_TRIES = 16   # the method's own steps tried to place a change of mode (``refine_transition``)
+REFINE_SPAN = 1e-3  # the dense output's slope of the condition is taken over this much of the step
+
+
+@JIT
+def near_zero(g0, g1, h, info, slot):
+    """Whether a condition negative at both ends of a step of h (g0, g1) comes near enough to 0
+    that it may cross inside (DIP_REACH); info[slot] holds its rate over the last step, and then
+    this step's."""
+    rate = (g1 - g0) / h
+    before = info[slot]
+    info[slot] = rate
+    if not (g0 < 0.0 and g1 < 0.0):   # (a crossing at the ends is ``mode_changes``'s)
+        return False
+    if math.isnan(before):   # the run's first step
+        return True
+    return max(g0, g1) >= -DIP_REACH * h * max(abs(rate), abs(before))
+
+
+@JIT
+def dipping(p, n, h, probe, pn, info):
+    """The changes of contact mode that may begin and end inside a step (``near_zero``) for a
+    state of length n: 1 lift-off (where the ball flies), 2 slip (rolling with a finite mu), or
+    both (3); 0 none."""
+    dips = 0
+    if p[P_FLY] != 0.0 and near_zero(-probe[PROBE_FORCE], -pn[PROBE_FORCE], h, info, F_RATE_FORCE):
+        dips += 1
+    mu = p[P_MU]
+    if mu < math.inf and not sliding_size(n) and near_zero(
+            probe[PROBE_NEED] - mu * probe[PROBE_FORCE], pn[PROBE_NEED] - mu * pn[PROBE_FORCE], h, info, F_RATE_SLIP):
+        dips += 2
+    return dips
+
+
 @COLD
-def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info, Ye, Re, pe, s):
-    """A step whose ends say the contact changes mode (``mode_changes``): locate the earliest
-    change on the step's dense output to ROOT_TOL of the step, stop the run there (status
+def dip_bracket(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out):
+    """Search the step's dense output for a change of mode whose condition g is ga < 0 at the
+    step's start and negative at its end (see DIP_REACH): out = (a, g(a), b, g(b)) with
+    g(a) < 0 <= g(b) around the first crossing found; returns whether one was found."""
+    a, g_a, top, g_top = 0.0, ga, 0.0, ga
+    for j in range(1, DIP_SAMPLES):
+        x = j / DIP_SAMPLES
+        g = event_value(kind, fn, d, p, z, R, h, P, K, x, Ye, Re, pe, s)
+        ints[I_EVALS] += 1
+        if g >= 0.0:
+            out[0], out[1], out[2], out[3] = a, g_a, x, g
+            return True
+        if g > g_top:
+            top, g_top = x, g
+        a, g_a = x, g
+    # none of the samples crossed: the condition's largest value near the largest sample
+    lo = max(top - 1.0 / DIP_SAMPLES, 0.0)
+    hi = min(top + 1.0 / DIP_SAMPLES, 1.0)
+    g_lo = event_value(kind, fn, d, p, z, R, h, P, K, lo, Ye, Re, pe, s)
+    c, e = hi - GOLDEN * (hi - lo), lo + GOLDEN * (hi - lo)
+    gc = event_value(kind, fn, d, p, z, R, h, P, K, c, Ye, Re, pe, s)
+    ge = event_value(kind, fn, d, p, z, R, h, P, K, e, Ye, Re, pe, s)
+    ints[I_EVALS] += 3
+    for _ in range(DIP_ITERATIONS):
+        if gc >= 0.0 or ge >= 0.0:
+            if gc >= 0.0:
+                out[0], out[1], out[2], out[3] = lo, g_lo, c, gc
+            else:
+                out[0], out[1], out[2], out[3] = c, gc, e, ge
+            return True
+        if gc > ge:   # the largest value lies in [lo, e]
+            hi, e, ge = e, c, gc
+            c = hi - GOLDEN * (hi - lo)
+            gc = event_value(kind, fn, d, p, z, R, h, P, K, c, Ye, Re, pe, s)
+        else:         # in [c, hi]
+            lo, g_lo, c, gc = c, gc, e, ge
+            e = lo + GOLDEN * (hi - lo)
+            ge = event_value(kind, fn, d, p, z, R, h, P, K, e, Ye, Re, pe, s)
+        ints[I_EVALS] += 1
+    return False
+
+
+@COLD
+def step_condition(kind, stepping, fn, d, p, W, P, h, theta, z, R, K, last, Y, zn, Rn, pn, ints, s):
+    """g of a change of mode (``condition``) at the end of the method's own step from the step's
+    start to theta (zn, Rn, pn then hold that state); +inf where the step fails."""
+    bad = search_step(stepping, fn, d, p, W, P, theta * h, z, R, K, last, Y, zn, Rn, pn, ints)
+    g = condition(kind, p, s, pn)
+    return g if bad == 0 and math.isfinite(g) else math.inf
+
+
+@COLD
+def refine_transition(kind, stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints, s, Ye, Re, pe,
+                      theta, b, gb):
+    """Place a change of mode located at theta on the step's dense output to the method's own
+    accuracy. The dense output's order may be below the method's (the cubic Hermite of Lawson5,
+    the collocation polynomial of the Gauss methods: an error O(h^4) inside the step), and a
+    change of mode placed on it carries that error into everything after; here the change is
+    the root of g at the end of the method's own step from the step's start (a step of theta h,
+    ``step_condition``), found by a Newton step with the dense output's slope from theta, then
+    by the secant through the last two tries, bisecting where it leaves the bracket.
+
+    b, gb: the end of the bracket on the dense output (g < 0 at the step's start), gb the
+    method's g there if known (the step's end), else nan. Returns the fraction of the step, on
+    the side where the change has happened (g >= 0), with zn, Rn, pn the state there; -1 where
+    none is found within REFINE_TRIES (the step's buffers are then spoilt: take it again)."""
+    lo, hi = max(theta - REFINE_SPAN, 0.0), min(theta + REFINE_SPAN, 1.0)
+    slope = (event_value(kind, fn, d, p, z, R, h, P, K, hi, Ye, Re, pe, s)
+             - event_value(kind, fn, d, p, z, R, h, P, K, lo, Ye, Re, pe, s)) / (hi - lo)
+    a, bracketed = 0.0, not math.isnan(gb)
+    x, x_old, g_old, reached, found = theta, math.nan, math.nan, -1.0, False
+    for it in range(REFINE_TRIES):
+        g = step_condition(kind, stepping, fn, d, p, W, P, h, x, z, R, K, last, Y, zn, Rn, pn, ints, s)
+        reached = x
+        if g >= 0.0:
+            b, bracketed = x, True
+        else:
+            a = x
+        if bracketed and b - a <= ROOT_TOL:
+            found = True
+            break
+        # Newton with the dense output's slope first, then the secant through the last two tries
+        rate = slope if it == 0 else (g - g_old) / (x - x_old)
+        move = -g / rate
+        if math.isfinite(move) and abs(move) < 0.5 * ROOT_TOL:   # converged: step across the root
+            move = 0.5 * ROOT_TOL if g < 0.0 else -0.5 * ROOT_TOL
+        x_old, g_old = x, g
+        x += move
+        if bracketed and not a < x < b:   # (also a move that is not finite)
+            x = 0.5 * (a + b)
+        elif not 0.0 < x <= 1.0:
+            return -1.0
+    if not found:
+        return -1.0
+    if reached != b and not step_condition(kind, stepping, fn, d, p, W, P, h, b, z, R, K, last, Y, zn, Rn, pn,
+                                           ints, s) >= 0.0:
+        return -1.0
+    return b
+
+
+@COLD
+def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, s, out,
+                      dips, stepping, refine):
+    """A step whose ends say the contact changes mode (``mode_changes``), or inside which it may
+    (``dipping``: dips, whose dense output is searched, ``dip_bracket``): locate the earliest
+    change on the step's dense output to ROOT_TOL of the step, and where ``refine`` (fixed
+    steps) to the method's own accuracy (``refine_transition``); stop the run there (status
     TRANSITION, its kind, time and contact point in ints and info) and return the fraction of
-    the step where it happens (``record_valid`` then records the state there); -1 when the
-    dense output shows none after all.
+    the step where it happens (``record_valid`` then records the state there, the one zn, Rn,
+    pn hold where ints[I_HELD] is set); -1 when the dense output shows none after all.
 
     A slip that stops where rolling would need more friction than mu F.N is not a grip: the
     slip turns about, and the run stops as a slip (the next run slides on from zero slip)."""
     n, mk = shape_of(z)
     dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
     mu = p[P_MU]
-    best, kind = 2.0, 0
-    if p[P_FLY] != 0.0 and pn[PROBE_FORCE] < 0.0 < probe[PROBE_FORCE]:
-        a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, -probe[PROBE_FORCE], 1.0,
-                      -pn[PROBE_FORCE], ints)
-        best, kind = b, T_LIFTOFF
+    best, kind, event = 2.0, 0, FORCE_EVENT
+    b_end, g_end = 1.0, math.nan   # the chosen change's bracket's end on the dense output (g there)
+    if p[P_FLY] != 0.0:
+        ga, gb = -probe[PROBE_FORCE], -pn[PROBE_FORCE]
+        found = ga < 0.0 < gb
+        if not found and dips % 2 == 1:
+            found = dip_bracket(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out)
+        if found:
+            a, hi = 0.0, 1.0
+            if not gb > 0.0:   # (inside the step)
+                a, ga, hi, gb = out[0], out[1], out[2], out[3]
+            a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, hi, gb, ints)
+            best, kind, event = b, T_LIFTOFF, FORCE_EVENT
+            b_end, g_end = hi, -pn[PROBE_FORCE] if hi == 1.0 else math.nan
     if sliding_size(n):
         s[0], s[1], s[2] = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
         ga = -(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
@@ -363,23 +531,47 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, pn, ints, info
         if ga < 0.0 <= gb:
             a, b = locate(GRIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
             if b < best:
-                best, kind = b, T_GRIP
+                best, kind, event = b, T_GRIP, GRIP_EVENT
+                b_end, g_end = 1.0, gb
     elif mu < math.inf:
         ga = probe[PROBE_NEED] - mu * probe[PROBE_FORCE]
         gb = pn[PROBE_NEED] - mu * pn[PROBE_FORCE]
-        if ga < 0.0 < gb:
-            a, b = locate(SLIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+        found = ga < 0.0 < gb
+        if not found and ga < 0.0 and dips >= 2:
+            found = dip_bracket(SLIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out)
+        if found:
+            a, hi = 0.0, 1.0
+            if not gb > 0.0:
+                a, ga, hi, gb = out[0], out[1], out[2], out[3]
+            a, b = locate(SLIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, hi, gb, ints)
             if b < best:
-                best, kind = b, T_SLIP
+                best, kind, event = b, T_SLIP, SLIP_EVENT
+                b_end, g_end = hi, pn[PROBE_NEED] - mu * pn[PROBE_FORCE] if hi == 1.0 else math.nan
         elif 0.0 < gb:   # at the limit already at the step's start (a grip there, within round-off)
             best, kind = 0.0, T_SLIP
     if kind == 0:
         return -1.0
-    state_at(fn, d, p, z, R, h, P, K, 0.0, best, Ye, Re, pe)
+    held = False
+    if refine and best > 0.0:
+        # (a grip's reference slip u0 is s[0:3], set above)
+        theta = refine_transition(event, stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints, s, Ye,
+                                  Re, pe, best, b_end, g_end)
+        ints[I_DENSE] = -1
+        if theta >= 0.0:
+            best, held = theta, True
+            copy_state(n, zn, Rn, pn, Ye, Re, pe)
+        else:   # not found: the dense output's place stands (the step taken again)
+            retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
+    if not held:
+        state_at(fn, d, p, z, R, h, P, K, 0.0, best, Ye, Re, pe)
     if kind == T_GRIP and pe[PROBE_NEED] > mu * pe[PROBE_FORCE]:
         kind = T_SLIP
-    if kind == T_LIFTOFF and math.isnan(info[F_LIFTOFF]):
+    # (the first lift-off, or this step's, which ``examine_step`` put on the dense output)
+    if kind == T_LIFTOFF and (math.isnan(info[F_LIFTOFF]) or (info[F_LIFTOFF] >= t and info[F_LIFT_KINK] == 0.0)):
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + best * h, Ye[0], Ye[1], 0.0
+    if held:
+        ints[I_HELD] = 1
     ints[I_STATUS] = TRANSITION
     ints[I_TRANSITION] = kind
     info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t + best * h, Ye[0], Ye[1]

@@ -152,9 +152,12 @@ PROBE_SIZE = 14
 # F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
 # F_ERR_OLD: the adaptive step-size control's error of the last accepted step (PI control).
 # F_EVENT_T, F_EVENT_X, F_EVENT_Y: the time and contact point of the transition the run stopped at.
+# F_RATE_FORCE, F_RATE_SLIP: how fast the lift-off and slip conditions (-F.N, |F_t| - mu F.N) changed
+# over the last step (per s; nan before the first), for seeing a change that begins and ends inside
+# a step (``events.dipping``).
 (F_LIFTOFF, F_LIFT_X, F_LIFT_Y, F_LIFT_KINK, F_FAIL_T, F_FAIL_X, F_FAIL_Y, F_FAIL_VALUE, F_TIME, F_H, F_FOLD,
- F_ERR_OLD, F_EVENT_T, F_EVENT_X, F_EVENT_Y) = range(15)
-INTS_SIZE, INFO_SIZE = 12, 15
+ F_ERR_OLD, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_RATE_FORCE, F_RATE_SLIP) = range(17)
+INTS_SIZE, INFO_SIZE = 12, 17
 
 # -- recorded rows: the CSV columns of docs/design.md §5 ------------------------------------------
 
@@ -191,8 +194,8 @@ RUNNING, OK, DOES_NOT_FIT, NONFINITE, TRANSITION = range(len(KERNEL_STATUSES))
 # The changes of contact mode a run stops at (status "transition"): the kind's code in
 # ints[I_TRANSITION] is its position here plus 1, its time and contact point are info[F_EVENT_T],
 # info[F_EVENT_X], info[F_EVENT_Y], and the run's last row and z, R, probe hold the state there,
-# located on the method's dense output. Each with the mode the ball goes on in and the sentence
-# made from the event's fields.
+# located to the method's own accuracy (``events.refine_transition``). Each with the mode the ball
+# goes on in and the sentence made from the event's fields.
 TRANSITIONS = {
     "liftoff": ("flying", "the ball leaves the surface at {where}: the normal force F·N reaches 0"),
     "slip": ("sliding", "the ball starts to slip at {where}: rolling would need a friction force beyond μ F·N"),

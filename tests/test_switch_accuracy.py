@@ -1,0 +1,90 @@
+"""Changes of contact mode located to the method's own accuracy, and those that begin and end
+inside one step, against exact answers: the cylinder's lift-off time (a quadrature, test_flight)
+at several steps, and a lift-off over a small bump that lasts less than a step (scipy's DOP853
+with its event location on the independent equations of rollball.reference)."""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import make_scene
+from scipy.integrate import solve_ivp
+
+from rollball import simulate
+from rollball.landscape import landscape_for
+from rollball.reference import reference_rhs
+from rollball.scene import Contact
+from rollball.tableaus import get_method
+
+from test_flight import cylinder_scene, exact_liftoff_time
+
+# Steps where each method's lift-off time error lies above round-off (1e-14 s here) and in its
+# asymptotic range. The dense outputs of Lawson5 (a cubic Hermite) and the Gauss methods (the
+# collocation polynomial) are of order 3: located on them, the lift-off time's error went as
+# h^4 (Lawson5, Gauss6: fitted 2.5 to 7.5, not monotone, at these steps).
+LADDERS = {"rk4": (0.02, 0.01, 0.005), "gauss4": (0.02, 0.01, 0.005), "lawson5": (0.04, 0.02, 0.01),
+           "gauss6": (0.08, 0.04, 0.02)}
+
+
+@pytest.mark.parametrize("method", list(LADDERS))
+def test_the_liftoff_time_converges_at_the_methods_order(method):
+    t_exact = exact_liftoff_time()
+    dts = LADDERS[method]
+    errors = []
+    for dt in dts:
+        traj = simulate(cylinder_scene(), method=method, dt=dt, t_end=t_exact + 0.05, record_every=1000)
+        lift = next(change for change in traj.transitions if change.kind == "liftoff")
+        errors.append(abs(lift.time - t_exact))
+    print(method, ", ".join(f"dt {dt}: {e:.2e} s" for dt, e in zip(dts, errors)))
+    assert min(errors) > 1e-14   # (the fit is of the method, not of round-off)
+    order = np.polyfit(np.log(dts), np.log(errors), 1)[0]
+    assert order >= get_method(method).order - 0.3, (method, order, errors)
+
+
+# -- a lift-off that begins and ends inside one step -------------------------------------------------
+
+FLY = Contact(friction=None, restitution=0.0, after_liftoff="fly")
+BUMP = make_scene("0.01*exp(-(x/0.1)^2)", x=-0.5, vx=2.47, duration=0.3, contact=FLY)
+DIP_DT = 0.015   # no multiple of it falls inside the 7 ms the rolling ball's F·N is below 0
+
+
+def normal_force_zeros(scene, t_max):
+    """The times F·N of the rolling ball (the 2011 equations, no lift-off) crosses 0, by scipy's
+    DOP853 (rtol = atol = 1e-12) with its event location."""
+    landscape = landscape_for(scene.landscape)
+    r, m, g0 = scene.ball.radius, scene.ball.mass, scene.gravity
+    rhs = reference_rhs(scene)
+
+    def force(t, y):
+        alpha, v = y[:2], y[2:5]
+        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1])
+        n = np.array([-fx, -fy, 1.0])
+        N = n / np.linalg.norm(n)
+        omega = 5 / (7 * m * r * r) * (v + 2.5 * N * (N @ v))
+        dN = (np.eye(3) - np.outer(N, N)) @ np.array([[-fxx, -fxy], [-fxy, -fyy], [0, 0]]) / np.linalg.norm(n)
+        return m * r * np.cross(omega, dN @ rhs(t, y)[:2]) @ N + m * g0 * N[2]   # m (c'' - g).N
+
+    from rollball.simulation import initial_state
+    alpha, v = initial_state(landscape, scene)
+    sol = solve_ivp(rhs, (0.0, t_max), np.concatenate([alpha, v, np.eye(3).ravel()]), method="DOP853",
+                    rtol=1e-12, atol=1e-12, events=force)
+    return sol.t_events[0]
+
+
+@pytest.fixture(scope="module")
+def dip():
+    return normal_force_zeros(BUMP, BUMP.duration)
+
+
+def test_the_bump_dips_below_zero_inside_one_step(dip):
+    down, up = dip[:2]
+    assert len(dip) == 2 and 0 < up - down < DIP_DT
+    assert math.floor(down / DIP_DT) == math.floor(up / DIP_DT)   # both ends of that step roll
+
+
+@pytest.mark.parametrize("method, tolerance", [("rk4", 1e-6), ("lawson5", 2e-7), ("gauss6", 2e-8)])
+def test_a_liftoff_inside_one_step_is_found(dip, method, tolerance):
+    traj = simulate(BUMP, method=method, dt=DIP_DT)
+    kinds = [change.kind for change in traj.transitions]
+    assert kinds[:2] == ["liftoff", "landing"], kinds
+    assert abs(traj.transitions[0].time - dip[0]) < tolerance
