@@ -91,6 +91,9 @@ class Surface:
     def __init__(self, landscape, values=(), reach: float = 1.0):
         self.landscape, self.values = landscape, tuple(values)
         self.reach_default = reach   # m: how far to look where the point below is undefined
+        # surface points (x, y, f) flights left from, measured directly (a closest point at the tip
+        # of a cone is no root of Newton's method; elsewhere the feet Newton finds are as near)
+        self.tips: list[np.ndarray] = []
         self._record = landscape.record(self.values)   # (held while its address is in use)
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
 
@@ -163,10 +166,25 @@ class Surface:
         starts = [center[:2]] + ([] if guess is None else [guess])
         starts += [(gx.ravel()[i], gy.ravel()[i]) for i in nearest if np.isfinite(far[i])]
         alpha, normal, distance = self.feet(np.repeat(center[None, :], len(starts), axis=0), np.array(starts))
+        alpha, normal, distance = self._nearer_tips(center[None, :].repeat(len(starts), 0), alpha, normal, distance)
         if np.isnan(distance).all():
             return Foot(math.nan, math.nan, np.full(3, math.nan), math.nan)
         i = int(np.nanargmin(distance))
         return Foot(float(alpha[i, 0]), float(alpha[i, 1]), normal[i], float(distance[i]))
+
+    def _nearer_tips(self, centers, alpha, normal, distance):
+        """The feet (alpha, normal, distance per centre) with a tip put in where it is nearer
+        (or no foot was found): its distance |c − T|, its normal the direction from it to c."""
+        for tip in self.tips:
+            arm = centers - tip
+            far = np.linalg.norm(arm, axis=1)
+            nearer = ~(distance <= far) & (far > 0)
+            if nearer.any():
+                alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
+                alpha[nearer] = tip[:2]
+                normal[nearer] = arm[nearer] / far[nearer, None]
+                distance[nearer] = far[nearer]
+        return alpha, normal, distance
 
 
 class Flight:
@@ -285,7 +303,8 @@ class Flight:
             return rows
         centers, velocities = self.centers(times)
         start = np.repeat(np.asarray(guess if guess is not None else self.start.center[:2], float)[None, :], n, 0)
-        alpha, normals, _ = self.surface.feet(centers, start)
+        alpha, normals, distance = self.surface.feet(centers, start)
+        alpha, normals, _ = self.surface._nearer_tips(centers, alpha, normals, distance)
         for i in np.flatnonzero(np.isnan(alpha[:, 0])):   # the full search where that does not converge
             foot = self.surface.foot(centers[i])
             alpha[i], normals[i] = (foot.x, foot.y), foot.normal

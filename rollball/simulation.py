@@ -228,7 +228,7 @@ class Simulation:
         self._finished = [0, 0, 0]   # steps, rejected tries and evaluations of the finished kernel runs
         self._first_liftoff: Liftoff | None = None
         self._dissipated_now = 0.0   # J: what a flight carries
-        self._off: Failure | None = None   # a flight found no surface below the ball
+        self._off: Failure | None = None   # a flight found no surface below the ball, or a tip too slow to leave
         self._stall: str | None = None     # why the contact's modes could not go on
         self.status: Status | None = None
         self._energy_check: EnergyCheck | None = None
@@ -463,6 +463,21 @@ class Simulation:
             # the flight leaves along the tangent plane: a sliding state's c'.N is the integrator's
             # drift (0 in the exact motion), and a c' into the surface would land it at once
             start = FreeState.from_row(last)
+            if info[kernel.F_LIFT_KINK] == kernel.LIFT_TIP:
+                force = self._pivot_force(start, x, y)
+                if force > 0.0:   # too slow to leave the tip: the ball would roll over it, pivoting
+                    self.transitions.pop()
+                    if self._first_liftoff is not None and self._first_liftoff.time == float(info[kernel.F_LIFTOFF]):
+                        self._first_liftoff = None
+                    self._off = Failure(Reason.PIVOT, t, x, y, force)
+                    self.status = Status.DOES_NOT_FIT
+                    return
+            # a tip left (or one F·N reached 0 within round-off of) is measured directly in the flight's
+            # distances too: Newton's method finds no closest point there
+            point = np.array([x, y, float(self.landscape.evaluate(x, y, self.scene.parameter_values)[0])])
+            if (self._at_tip(x, y) and np.isfinite(point).all()
+                    and not any(np.array_equal(point, known) for known in self._surface.tips)):
+                self._surface.tips.append(point)
             normal = self._probe_normal()
             velocity = start.velocity - float(np.dot(start.velocity, normal)) * normal
             self._flight = self._new_flight(dataclasses.replace(start, velocity=velocity))
@@ -472,6 +487,29 @@ class Simulation:
         self._mode = _NEXT_MODE[kind]
         self._dissipated_now = state.dissipated
         self._start_kernel_run(state, t, slides=kind == "slip", repeat=True)
+
+    def _at_tip(self, x: float, y: float) -> bool:
+        """Whether (x, y) is (within 10⁻⁶ of) a point where the normal turns through a finite angle:
+        the unit normals on a ring of that radius about it differ by more than 10⁻² (a smooth
+        surface's by about its curvature times 10⁻⁶)."""
+        ring = 1e-6 * (1.0 + abs(x) + abs(y))
+        angles = np.arange(8) * (np.pi / 4)
+        d = self.landscape.evaluate(x + ring * np.cos(angles), y + ring * np.sin(angles), self.scene.parameter_values)
+        normals = unit_normal(d).T
+        spread = np.linalg.norm(normals[:, None, :] - normals[None, :, :], axis=2)
+        return bool(np.nanmax(spread) > 1e-2) if np.isfinite(spread).any() else False
+
+    def _pivot_force(self, start: FreeState, x: float, y: float) -> float:
+        """F·N (N) the ball at ``start`` would need to turn about the tip at (x, y): its centre on
+        the sphere about the tip, m (g₀ e_z − |ċ_t|² / |c − T|) for e the unit vector from the tip T
+        to the centre and ċ_t the velocity across it (docs/design.md §1, "A tip"). At most 0: the
+        ball leaves the tip as it reaches it."""
+        f = float(self.landscape.evaluate(x, y, self.scene.parameter_values)[0])
+        arm = start.center - np.array([x, y, f])
+        distance = float(np.linalg.norm(arm))
+        e = arm / distance
+        across = start.velocity - float(np.dot(start.velocity, e)) * e
+        return self.scene.ball.mass * (self.scene.gravity * e[2] - float(np.dot(across, across)) / distance)
 
     def _probe_normal(self) -> np.ndarray:
         return self._probe[kernel.PROBE_N: kernel.PROBE_N + 3].copy()

@@ -11,8 +11,9 @@ from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
     F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION,
-    PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY, P_MU, P_TURN,
-    R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
+    LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY, P_MU,
+    P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF,
+    T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import copy_state, curvatures, shape_of, sliding_size
 from .recording import _fail, hold, record, record_last
@@ -237,20 +238,26 @@ def find_tip(fn, d, x, y, half):
 
 
 @COLD
-def tip_stop(fn, d, ints, info, t, x, y, half, speed):
+def tip_stop(fn, d, ints, info, t, x, y, half, speed, fly):
     """Before a run stops because its step cannot pass (the adaptive step underflows, the
     implicit stage equations do not converge, a step's secant says the ball does not fit):
     whether a tip or kink of the surface lies within ``half`` of the contact point (x, y),
     where the normal turns by more than TIP_MIN over a vanishing span. A convex one is the
     real ball's lift-off (reported, at the time the contact point at ``speed`` would reach it
-    from t) and the stop's reason (R_TIP); a valley's is a kink where the ball does not fit.
-    Returns whether one was found (the failure is then set)."""
+    from t) and the stop's reason (R_TIP); where the ball flies (``fly``, p[P_FLY]) it is a
+    lift-off at a tip instead (``tip_liftoff``), from the run's state. A valley's is a kink
+    where the ball does not fit. Returns whether one was found (the stop is then set)."""
     turn, tx, ty, convex = find_tip(fn, d, x, y, half)
     if not turn > TIP_MIN:
         return False
     reach = math.sqrt((tx - x) ** 2 + (ty - y) ** 2)
     when = t + reach / speed if speed > 0.0 else t
-    if convex:
+    if convex and fly != 0.0:
+        info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = when, tx, ty, LIFT_TIP
+        ints[I_STATUS] = TRANSITION
+        ints[I_TRANSITION] = T_LIFTOFF
+        info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = when, tx, ty
+    elif convex:
         if math.isnan(info[F_LIFTOFF]):
             info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = when, tx, ty, 1.0
         _fail(ints, info, DOES_NOT_FIT, R_TIP, when, tx, ty, turn)
@@ -651,7 +658,10 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
             # a step passing a tip of the surface within round-off of its stages bends like that too
             # (the normal turns through a finite angle over a span the dense output cannot resolve)
             turn, tx, ty, convex = find_tip(fn, d, sb[0], sb[1], max(math.sqrt(chord2), BREAK_SPAN))
-            if turn > TIP_MIN and convex:  # the real ball leaves the surface there: a lift-off and a stop
+            if turn > TIP_MIN and convex and p[P_FLY] != 0.0:   # the ball flies: from the state before the tip
+                stop = valid = tip_liftoff(fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, info,
+                                           tx, ty, stepping)
+            elif turn > TIP_MIN and convex:  # the real ball leaves the surface there: a lift-off and a stop
                 if math.isnan(info[F_LIFTOFF]):
                     info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + b * h, tx, ty, 1.0
                 _fail(ints, info, DOES_NOT_FIT, R_TIP, t + b * h, tx, ty, turn)
@@ -674,6 +684,13 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
     if jolted and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
         a, b, _ = locate_break(JOLT, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sb[0], sb[1], 1.0
+        if p[P_FLY] != 0.0:   # the ball flies: from the state before the tip the contact point jumped over
+            # (within the step's travel: a step may pass beside the tip the exact motion reaches)
+            travel = math.sqrt((zn[0] - z[0]) ** 2 + (zn[1] - z[1]) ** 2 + (sb[0] - sa[0]) ** 2 + (sb[1] - sa[1]) ** 2)
+            turn, tx, ty, convex = find_tip(fn, d, sb[0], sb[1], travel + BREAK_SPAN)
+            if turn > TIP_MIN and convex:
+                stop = valid = tip_liftoff(fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, info,
+                                           tx, ty, stepping)
     # lift-off: F.N turns negative (first time only, before any stop)
     if force_end and stop > 1.0 and math.isnan(info[F_LIFTOFF]):
         a, b = locate(FORCE_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, sa, 0.0,
@@ -694,6 +711,58 @@ def kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, clean):
     ints[I_STATUS] = TRANSITION
     ints[I_TRANSITION] = T_LIFTOFF
     info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y]
+
+
+TIP_HALVINGS = 60   # sub-steps that bisect the time the contact point reaches a tip (``tip_liftoff``)...
+TIP_RESTARTS = 30   # ...from the last clean one again, at most this many times
+
+
+@COLD
+def tip_liftoff(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, info, tx, ty, stepping):
+    """Where the ball flies, the contact point reaching a convex tip at (tx, ty) (a point where the
+    normal turns through a finite angle: the tip of a cone) stops the run as a lift-off
+    (``kink_liftoff``) at the last state before it, marked info[F_LIFT_KINK] = LIFT_TIP: the ball
+    then leaves the tip or would pivot about it (docs/design.md §1, "A tip"). That state is the
+    end of a sub-step whose length is bisected, from a first guess theta (a fraction of the
+    step), between sub-steps that end before the tip and ones that pass it (or jolt the centre,
+    or fail, or come within 4 BREAK_SPAN of it: in the model's motion the contact point may creep
+    into the tip while the centre turns about it), to round-off of the time; then again from the
+    state reached (z, R, probe move on to it), whose shorter sub-steps resolve the last stretch
+    better, until the contact point is within twice that of the tip or no sub-step gets nearer. The lift-off's place is the tip.
+    Returns the fraction of the step where the run stops."""
+    r = p[0]
+    n, mk = shape_of(z)
+    done, m = 0.0, theta    # (the fraction of the step the state has moved on by)
+    near = 4.0 * BREAK_SPAN * (1.0 + abs(tx) + abs(ty))   # (the tip is found to BREAK_SPAN)
+    for _ in range(TIP_RESTARTS):
+        span = (1.0 - done) * h
+        lo, hi = 0.0, 1.0
+        for _ in range(TIP_HALVINGS):
+            if not lo < m < hi:
+                m = 0.5 * (lo + hi)
+            crossed = search_step(stepping, fn, d, p, W, P, m * span, z, R, K, last, Y, zn, Rn, pn, ints) != 0
+            if not crossed:   # at or past the tip, or the centre jumped (a contact point racing round it)
+                crossed = ((zn[0] - tx) ** 2 + (zn[1] - ty) ** 2 <= near * near
+                           or (zn[0] - tx) * (z[0] - tx) + (zn[1] - ty) * (z[1] - ty) < 0.0
+                           or centre_jolted(r, m * span, z, probe, zn, pn))
+            if crossed:
+                hi = m
+            else:
+                lo = m
+            if not (hi - lo) * span > 4e-16 * (1.0 + abs(t)):
+                break
+            m = 0.5 * (lo + hi)
+        if not lo > 0.0:
+            break
+        search_step(stepping, fn, d, p, W, P, lo * span, z, R, K, last, Y, zn, Rn, pn, ints)   # (the clean one)
+        accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
+        done += lo * (1.0 - done)
+        m = 0.5
+        if (z[0] - tx) ** 2 + (z[1] - ty) ** 2 <= 4.0 * near * near:
+            break
+    info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + done * h, tx, ty, LIFT_TIP
+    kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, 0.0)   # (the state reached: z, R, probe)
+    return done
 
 
 @JIT

@@ -149,6 +149,9 @@ PROBE_SIZE = 14
  I_RETRY, I_TRANSITION) = range(12)
 # F_LIFTOFF first time F.N < 0 (located on the dense output), at (F_LIFT_X, F_LIFT_Y);
 # F_LIFT_KINK 1 where it is a convex kink of the surface rather than F.N crossing 0.
+# Where the ball flies, LIFT_TIP there: the contact point reached a convex tip (a point where the normal
+# turns through a finite angle, the tip of a cone), and the run stopped at the last state before it.
+LIFT_TIP = 2.0
 # F_FOLD: when the last step's ends say the contact point reaches the edge of the no-fit region.
 # F_ERR_OLD: the adaptive step-size control's error of the last accepted step (PI control).
 # F_EVENT_T, F_EVENT_X, F_EVENT_Y: the time and contact point of the transition the run stopped at.
@@ -254,10 +257,14 @@ REASONS = {
             "the ball reaches a point of the surface at {where} where the normal turns by {value:.3g} rad at once "
             "(the tip of a cone, or a like point): a real ball leaves the surface there (the lift-off), and the "
             "model cannot step across it"),
+    "pivot": ("does_not_fit", "the normal force the ball would need there (N)",
+              "the ball reaches a point of the surface at {where} where the normal turns at once (the tip of a "
+              "cone, or a like point) too slowly to leave it: a real ball would roll over it, turning about it "
+              "with F·N = {value:.3g} N, which the model does not follow"),
 }
 R_NONE = 0
 (R_NO_FIT, R_SECANT_NO_FIT, R_START_UNDEFINED, R_START_OVERFLOW, R_UNDEFINED, R_ORIENTATION, R_STEP_UNDERFLOW,
- R_KINK, R_HEIGHT_JUMP, R_NOT_CONVERGED, R_TIP) = range(1, len(REASONS) + 1)
+ R_KINK, R_HEIGHT_JUMP, R_NOT_CONVERGED, R_TIP, R_PIVOT) = range(1, len(REASONS) + 1)
 
 
 def reason_name(code: int) -> str | None:

@@ -8,13 +8,15 @@ import math
 import numpy as np
 
 from .dense import state_at
-from .events import TIP_REACH, contact_watched, fold_search, record_valid, step_events, tip_stop
+from .events import TIP_REACH, contact_watched, fold_search, record_valid, step_events, tip_liftoff, tip_stop
 from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, sliding_step_pair, trial_step_pair
 from .interface import (
-    BATCH_CHUNK, D_SLIP, EXPLICIT, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
+    BATCH_CHUNK, D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED,
+    I_NONFINITE, I_REJECTED,
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
-    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_MU, ROW_CENTER, ROW_ENERGY,
+    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
+    TRANSITION,
     grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import motion_size, shape_of
@@ -108,8 +110,14 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         if bad:
             if bad == STEP_NOT_CONVERGED:
                 # (unless the step would pass a tip of the surface: that is the landscape's)
-                if not tip_stop(fn, d, ints, info, t0, z[0], z[1], reach_of(K, h, z), speed_of(K)):
+                if not tip_stop(fn, d, ints, info, t0, z[0], z[1], reach_of(K, h, z), speed_of(K), p[P_FLY]):
                     _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+                elif ints[I_STATUS] == TRANSITION:   # the ball flies off the tip: from the state there
+                    valid = tip_liftoff(fn, d, p, W, t0, h, 0.5, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, info,
+                                        info[F_EVENT_X], info[F_EVENT_Y], stepping)
+                    record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                                 Rn, pn, Ye, sa, sb, sm, stepping)
+                    return
             else:
                 _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
                       0.0 if mk else 1.0)
@@ -194,7 +202,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             if ints[I_NONFINITE] >= NONFINITE_TRIES:
                 _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
             elif h <= MIN_STEP * max(1.0, abs(t)):
-                if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K)):
+                if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
                     _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
             else:
                 continue
@@ -238,7 +246,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         h = max(h, grown) if land else grown
         retry = False
         if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
-            if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K)):
+            if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
                 _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
             record_last(rows, ints, t, z, R, probe, p)
             break
