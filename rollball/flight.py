@@ -5,8 +5,9 @@ c(t) = c₀ + ċ₀ τ + ½ g τ², ω constant, R(t) = exp(A(ω) τ) R₀ with 
 vector exponential, exact at any angle): no integrator, no step error. The ball lands where the
 centre's distance to the surface first comes down to r. That distance is measured to the centre's
 closest surface point (its foot), found by Newton's method on (c − φ(α)) ∥ N(α); the first root
-in time is never stepped over (each step is bounded by the distance and the speed, ``landing``)
-and is then located by a bracketing root finder to round-off. The impact there is an impulse at
+in time is never stepped over (each step is certified to hold none, from the distance being
+1-Lipschitz in the centre and the empty balls about the ends, ``landing``; provided each look's
+distance is the true one) and is then located by a bracketing root finder to round-off. The impact there is an impulse at
 the contact point (``impact``): the normal velocity turns into −e times itself, the tangential
 impulse is Coulomb's, sticking where μ allows.
 """
@@ -35,8 +36,15 @@ FOOT_ITERATIONS = 50     # Newton's iterations for the closest surface point (co
 GAP_TOLERANCE = 1e-12    # × r: a gap this small is contact (round-off of the distance)
 FIRST_STEP = 1e-9        # s: the first look after a lift-off, then doubling until the ball is clear
 CLEAR_WITHIN = 1e-2      # s: a ball not clear of the surface by then never left it
-MAX_LOOKS = 1_000_000    # steps of the landing search (a grazing flight takes the most)
-GROWTH = 0.5             # while the gap grows, a step may be this share of the time flown so far
+MAX_LOOKS = 1_000_000    # looks of the landing search (far more than it takes: see ``landing``)
+SHRINK = 0.1             # a step not certified to hold no root is tried again at least this share...
+SHRINK_MOST = 0.8        # ...and at most this share as long
+GROW_BY = 2.0            # a step tried is at most this many times the last certified one
+BATCH = 8                # while the gap grows, the landing search looks this many steps ahead at once
+GRAZE = 1e-6             # × r: a gap below this is contact (a graze, or just after a lift-off)
+GRAZE_LOOKS = 8          # certified looks within it while the gap still falls, before it is contact
+CLEAR_MARGIN = 1e-13     # × r: the share of a gap a certified step keeps for round-off
+PATH_ITERATIONS = 8      # Newton's iterations for the time a path length takes
 SAMPLES = 21             # the grid a closest point is looked for on, per side...
 BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
 
@@ -153,24 +161,37 @@ class Surface:
         finds from ``guess`` (the last foot), from the point below the centre and from the
         nearest points of a SAMPLES × SAMPLES grid over the square the closest point must lie
         in (within the distance to the point below, |c_z − f(c_x, c_y)|, of the centre)."""
-        center = np.asarray(center, dtype=float)
-        below = self.evaluate(center[0], center[1])
-        reach = abs(center[2] - below[0])
-        if not math.isfinite(reach):
-            reach = 2.0 * self.reach_default
-        axis = np.linspace(-reach, reach, SAMPLES)
-        gx, gy = np.meshgrid(center[0] + axis, center[1] + axis, indexing="ij")
-        heights = self.evaluate(gx.ravel(), gy.ravel())[0]
-        far = (gx.ravel() - center[0]) ** 2 + (gy.ravel() - center[1]) ** 2 + (heights - center[2]) ** 2
-        nearest = np.argsort(np.where(np.isnan(far), np.inf, far))[:BEST_SAMPLES]
-        starts = [center[:2]] + ([] if guess is None else [guess])
-        starts += [(gx.ravel()[i], gy.ravel()[i]) for i in nearest if np.isfinite(far[i])]
-        alpha, normal, distance = self.feet(np.repeat(center[None, :], len(starts), axis=0), np.array(starts))
-        alpha, normal, distance = self._nearer_tips(center[None, :].repeat(len(starts), 0), alpha, normal, distance)
-        if np.isnan(distance).all():
-            return Foot(math.nan, math.nan, np.full(3, math.nan), math.nan)
-        i = int(np.nanargmin(distance))
-        return Foot(float(alpha[i, 0]), float(alpha[i, 1]), normal[i], float(distance[i]))
+        return self.feet_of(np.asarray(center, dtype=float)[None, :], guess)[0]
+
+    def feet_of(self, centers: np.ndarray, guess=None) -> list[Foot]:
+        """``foot`` for each of the centres (n, 3), all at once."""
+        c = np.asarray(centers, dtype=float).reshape(-1, 3)
+        n = len(c)
+        reach = np.abs(c[:, 2] - self.evaluate(c[:, 0], c[:, 1])[0])
+        reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
+        unit = np.linspace(-1.0, 1.0, SAMPLES)
+        gx, gy = np.broadcast_arrays(c[:, 0, None, None] + reach[:, None, None] * unit[None, :, None],
+                                     c[:, 1, None, None] + reach[:, None, None] * unit[None, None, :])
+        gx, gy = gx.reshape(n, -1), gy.reshape(n, -1)
+        heights = self.evaluate(gx.ravel(), gy.ravel())[0].reshape(n, -1)
+        far = (gx - c[:, :1]) ** 2 + (gy - c[:, 1:2]) ** 2 + (heights - c[:, 2:]) ** 2
+        nearest = np.argsort(np.where(np.isnan(far), np.inf, far), axis=1)[:, :BEST_SAMPLES]
+        rows = np.arange(n)[:, None]
+        starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float), (n, 1, 2))])
+        starts.append(np.stack([gx[rows, nearest], gy[rows, nearest]], axis=2))   # (nan where not finite)
+        starts = np.concatenate(starts, axis=1)
+        k = starts.shape[1]
+        alpha, normal, distance = self.feet(np.repeat(c, k, axis=0), starts.reshape(-1, 2))
+        alpha, normal, distance = self._nearer_tips(np.repeat(c, k, axis=0), alpha, normal, distance)
+        alpha, normal, distance = alpha.reshape(n, k, 2), normal.reshape(n, k, 3), distance.reshape(n, k)
+        found = []
+        for j in range(n):
+            if np.isnan(distance[j]).all():
+                found.append(Foot(math.nan, math.nan, np.full(3, math.nan), math.nan))
+                continue
+            i = int(np.nanargmin(distance[j]))
+            found.append(Foot(float(alpha[j, i, 0]), float(alpha[j, i, 1]), normal[j, i], float(distance[j, i])))
+        return found
 
     def _nearer_tips(self, centers, alpha, normal, distance):
         """The feet (alpha, normal, distance per centre) with a tip put in where it is nearer
@@ -215,31 +236,95 @@ class Flight:
         foot = self.surface.foot(center, guess)
         return foot.distance - self.radius, foot
 
+    def gaps(self, times: np.ndarray, guess=None) -> tuple[np.ndarray, list[Foot]]:
+        """``gap`` at each of the times, all at once."""
+        feet = self.surface.feet_of(self.centers(np.asarray(times, dtype=float))[0], guess)
+        return np.array([foot.distance for foot in feet]) - self.radius, feet
+
+    def path_time(self, t: float, length: float) -> float:
+        """The time Δ after t over which the centre's path is ``length`` long, ∫|ċ| = length (its
+        speed along the parabola is exact: |ċ|² = p² + w², w = ċ·ĝ + g τ along gravity, p the
+        rest, so the path's length is [w √(p² + w²) + p² asinh(w/p)] / 2g between the ends'
+        w); the computed length at the Δ returned is at most ``length``."""
+        if not length > 0.0:
+            return 0.0
+        velocity = self.centers(np.array([t]))[1][0]
+        speed, g = float(np.linalg.norm(velocity)), self.gravity
+        if g == 0.0:
+            return length / speed if speed > 0 else math.inf
+        w0 = -float(velocity[2])            # along gravity (down)
+        p = math.hypot(float(velocity[0]), float(velocity[1]))
+
+        def primitive(w):
+            return 0.5 * (w * math.hypot(p, w) + (p * p * math.asinh(w / p) if p > 0 else 0.0))
+
+        def path(delta):
+            return (primitive(w0 + g * delta) - primitive(w0)) / g
+
+        # |ċ| ≤ speed + g τ, so the path is no longer than speed Δ + ½ g Δ²: a Δ short of the answer
+        delta = 2.0 * length / (speed + math.sqrt(speed * speed + 2.0 * g * length))
+        best = delta if path(delta) <= length else 0.0
+        for _ in range(PATH_ITERATIONS):   # Newton's method on path(Δ) = length, ∂path/∂Δ = |ċ|
+            rate = math.hypot(p, w0 + g * delta)
+            if not rate > 0.0:
+                break
+            delta += (length - path(delta)) / rate
+            if path(delta) <= length:
+                best = max(best, delta)
+        return best
+
+    def clear(self, t: float, s: float, h_t: float, h_s: float) -> bool:
+        """Whether the ball touches nothing between t and s > t, from the gaps h_t, h_s (> 0)
+        at the ends: the open balls of radius r + h about the centres c(t), c(s) hold no surface
+        point (h is the distance to the nearest), and so no ball of radius r + e about a point of
+        their chord is outside both while L²/4 + (r + e)² < (r + h)² (L the chord, h the smaller
+        gap; a point of that ball u along the chord and ρ across it from where x of L is behind:
+        min(|·−c(t)|², |·−c(s)|²) ≤ x(L − x) + (r + e)²). The centre's parabola is within
+        e = g (s − t)²/8 of the chord at every time, so the ball of radius r is inside that
+        ball. CLEAR_MARGIN × r of the gap is kept for round-off."""
+        h = min(h_t, h_s) - CLEAR_MARGIN * self.radius
+        delta = s - t
+        e = self.gravity * delta * delta / 8.0
+        if not h > e:
+            return False
+        a, b = self.centers(np.array([t, s]))[0]
+        chord = float(np.linalg.norm(b - a))
+        return 0.25 * chord * chord < (h - e) * (2.0 * self.radius + h + e)   # (r + h)² − (r + e)²
+
     def landing(self, t_end: float) -> tuple[float, Foot] | None:
         """The first time in (t₀, t_end] the ball touches the surface again, and the contact
         there; None if it is still flying at t_end. ``OffLandscape`` where no surface is found
         below it.
 
-        Steps are bounded so that none passes a root of the gap h = D − r (D the centre's
-        distance to the surface). Two bounds, the larger taken: (1) D changes no faster than
-        the centre moves, so the ball cannot touch before |ċ| Δ + ½ g Δ² = h; (2) near the
-        surface D' = ċ·N at the foot and D'' ≥ −(g + |ċ|² κ/(1 − D κ)) for κ the largest
-        principal curvature towards the ball there: h + D' Δ − ½ A Δ² = 0 with A twice that
-        bound; (3) while the gap grows (D' > 0) the steps may grow geometrically, to half the
-        time flown so far (just after a lift-off gravity and the surface's curvature nearly
-        cancel, so bound (2), which adds them, would take tiny steps for long). No step moves
-        the centre by more than r (so a closest point the grid of ``Surface.foot`` did not see
-        from afar is seen nearer). Just after a lift-off the gap
-        grows from 0 (like τ³): the first looks double from FIRST_STEP until it is clear. A
-        look ahead to where D' predicts the touch (plus a tenth) brackets it sooner; the root
-        is then located by Brent's method to round-off."""
-        tol = GAP_TOLERANCE * self.radius
+        The gap h = D − r (D the centre's distance to the surface, ``Surface.foot``) is looked
+        at from t₀ on. Each step from a look is certified to hold no root of h before the next
+        look is taken as the new start: by (1) D being 1-Lipschitz in the centre, so no root lies
+        within the time the centre's path is h long (``path_time``, the exact length along the
+        parabola), or (2) the gaps at both ends (``clear``). Steps are proposed long (the local
+        model of the gap's fall, while it grows half the time flown, the step (2) would allow
+        if the gap fell at its rate, never moving the centre by more than r so that the foot's
+        grid sees the surface near), and one that is not certified is tried again SHRINK times
+        as long, down to (1). The search ends at a certified look whose gap is at most
+        GAP_TOLERANCE × r (the landing; Brent's method then puts it on the root beside), or
+        at most GRAZE × r while the gap no longer falls (a graze: contact there). Just after a
+        lift-off the gap grows from 0 like τ³, and below GRAZE × r the ball is in contact: the
+        first looks double from FIRST_STEP until it is clear, checking the gap's sign only."""
         r, g = self.radius, self.gravity
+        tol, floor = GAP_TOLERANCE * r, GRAZE * r
         t = self.start.t
         h, foot = self.gap(t)
         if math.isnan(h):
             raise OffLandscape(t, self.start.center)
-        clearing = FIRST_STEP if h <= tol else 0.0   # (just lifted off: not yet clear of the surface)
+        if h <= floor:   # just lifted off: not yet clear of the surface
+            cleared = self._clear_off(t, h, foot, t_end)
+            if len(cleared) == 2:
+                return cleared
+            t, h, foot = cleared
+            if t >= t_end:
+                return None
+        cap = math.inf        # a step not certified: the next one at most this long
+        last = before = math.inf   # the last two certified steps (the next is at most GROW_BY times the last)
+        grazing = 0           # certified looks within the floor in a row
         for _ in range(MAX_LOOKS):
             if t >= t_end:
                 return None
@@ -247,39 +332,109 @@ class Flight:
             velocity = self.centers(np.array([t]))[1][0]
             speed = float(np.linalg.norm(velocity))
             rate = float(np.dot(velocity, foot.normal))
-            reach = min(max(h, 0.0), r)
-            step = 2.0 * reach / (speed + math.sqrt(speed * speed + 2.0 * g * reach)) if speed + g > 0 else math.inf
-            kappa = max(float(fit_ratio(self.surface.evaluate(foot.x, foot.y), 1.0)), 0.0)
-            room = 1.0 - (h + r) * kappa
-            if room > 0 and h > 0:
-                bend = 2.0 * (g + speed * speed * kappa / room)
-                local = (rate + math.sqrt(rate * rate + 2.0 * bend * h)) / bend if bend > 0 else math.inf
-                step = max(step, local)
-            if rate > 0 and not clearing:   # moving away from the surface: steps may grow with the flight
-                step = max(step, GROWTH * (t - self.start.t))
-            step = min(step, r / speed) if speed > 0 else step
-            if clearing:
-                step = max(step, clearing)
-                clearing *= 2.0
-            if rate < 0 and not clearing:
-                ahead = t + 1.1 * h / -rate
-                if t + step < ahead <= t_end and self.gap(ahead, guess)[0] < 0:
-                    return self._locate(t, ahead, guess)
-            t_next = min(t + step, t_end)
-            h_next, foot_next = self.gap(t_next, guess)
-            if math.isnan(h_next):
-                raise OffLandscape(t, self.centers(np.array([t]))[0][0])
-            if h_next < -tol:
-                return self._locate(t, t_next, guess)
-            if clearing:
-                if h_next > tol:
-                    clearing = 0.0
-                elif t_next - self.start.t > CLEAR_WITHIN:
-                    return t_next, foot_next   # it never left the surface
-            elif h_next <= tol:
-                return t_next, foot_next
-            t, h, foot = t_next, h_next, foot_next
+            if h <= tol or (h <= floor and (rate >= 0.0 or grazing >= GRAZE_LOOKS)):
+                return self._touch(t, h, foot, rate, t_end)
+            sure = self.path_time(t, h - CLEAR_MARGIN * r)   # (1): no root before t + sure
+            if t + sure >= t_end:
+                return None
+            step = min(self._proposal(h, foot, speed, rate), GROW_BY * last)
+            step = min(step, r / speed if speed > 0 else step, cap)
+            step = max(step, sure)
+            # while the gap grows, the steps ahead are looked at together, as the last ones grew
+            growth = min(max(last / before, 1.0), GROW_BY) if rate >= 0.0 and last < math.inf else 1.0
+            count = BATCH if growth > 1.0 and cap == math.inf else 1
+            times = t + np.cumsum(step * growth ** np.arange(count))
+            times = np.append(times[times < t_end], t_end)[:count]
+            gaps, feet = self.gaps(times, guess)
+            for s, h_s, foot_s in zip(times, gaps, feet):
+                if math.isnan(h_s):
+                    raise OffLandscape(t, self.centers(np.array([t]))[0][0])
+                if h_s < -tol and s <= t + sure:   # (only where the foot at t was not the nearest point)
+                    return self._locate(t, float(s), guess)
+                if not (h_s > -tol and (s <= t + sure or (h_s > 0.0 and self.clear(t, s, h, h_s)))):
+                    cap = self._retry(t, s, h, h_s, speed)   # not certified: try again shorter
+                    break
+                grazing = grazing + 1 if h_s <= floor else 0
+                t, h, foot, cap, last, before = float(s), float(h_s), foot_s, math.inf, s - t, last
+                if h <= floor or t >= t_end:
+                    break
+                sure = self.path_time(t, h - CLEAR_MARGIN * r)
         raise RuntimeError("the landing search took too many steps")
+
+    def _retry(self, t: float, s: float, h: float, h_s: float, speed: float) -> float:
+        """The step to try after the step from t to s was not certified (gaps h, h_s): where the
+        gap falling as the secant says leaves what ``clear`` needs, else the chord ``clear``
+        allows from the smaller gap; never more than SHRINK_MOST of the step."""
+        r, step = self.radius, s - t
+        if h_s <= 0.0:   # the surface is reached between: aim short of the secant's root
+            return min(self._leaves_clear(h, (h_s - h) / step, 0.0, speed), SHRINK_MOST * step)
+        a, b = self.centers(np.array([t, s]))[0]
+        chord = float(np.linalg.norm(b - a))
+        m = min(h, h_s) - CLEAR_MARGIN * r
+        allowed = 2.0 * math.sqrt(max(m, 0.0) * (2.0 * r + m))
+        return max(min(0.9 * allowed / chord, SHRINK_MOST), SHRINK) * step
+
+    def _leaves_clear(self, h: float, rate: float, bend: float, speed: float) -> float:
+        """The step after which a gap h falling as h + rate Δ − ½ bend Δ² leaves what ``clear``
+        needs for a chord speed Δ ((speed Δ)²/4 ≤ 2 r (gap − e), e = g Δ²/8), with the quadratic
+        terms doubled for safety: close to the surface the gap left is of order h² (the approach
+        converges quadratically)."""
+        r, g = self.radius, self.gravity
+        a = 2.0 * (0.25 * speed * speed + r * bend + 0.25 * r * g)
+        b, c = 2.0 * r * rate, 2.0 * r * h
+        if not a > 0:
+            return h / -rate if rate < 0 else math.inf
+        return 2.0 * c / (math.sqrt(b * b + 4.0 * a * c) - b)   # (the positive root, without cancellation)
+
+    def _proposal(self, h: float, foot: Foot, speed: float, rate: float) -> float:
+        """A step to try from a look with gap h > 0 falling at ``rate`` (``landing``): the one
+        ``clear`` would certify if the gap fell no faster than the local model h + D′Δ − ½ A Δ²,
+        A twice the bound of D″ ≥ −(g + |ċ|² κ/(1 − Dκ)), κ the largest principal curvature
+        towards the ball at the foot."""
+        r, g = self.radius, self.gravity
+        kappa = max(float(fit_ratio(self.surface.evaluate(foot.x, foot.y), 1.0)), 0.0)
+        room = 1.0 - (h + r) * kappa
+        bend = 2.0 * (g + speed * speed * kappa / room) if room > 0 else math.inf
+        return self._leaves_clear(h, rate, bend, speed) if bend < math.inf else 0.0
+
+    def _clear_off(self, t: float, h: float, foot: Foot, t_end: float):
+        """Just after a lift-off: looks FIRST_STEP after it, doubling, until the gap exceeds
+        GRAZE × r (returns that look's t, h, foot), or the landing (t, foot) where one is below
+        the surface, or where the ball is not clear by CLEAR_WITHIN (it never left)."""
+        floor, tol = GRAZE * self.radius, GAP_TOLERANCE * self.radius
+        step = FIRST_STEP
+        while True:
+            if t >= t_end:
+                return t, h, foot
+            guess = np.array([foot.x, foot.y])
+            s = min(t + step, t_end)
+            h_s, foot_s = self.gap(s, guess)
+            if math.isnan(h_s):
+                raise OffLandscape(t, self.centers(np.array([t]))[0][0])
+            if h_s < -tol:
+                return self._locate(t, s, guess)
+            if h_s > floor:
+                return s, h_s, foot_s
+            if s - self.start.t > CLEAR_WITHIN:
+                return s, foot_s   # it never left the surface
+            t, h, foot, step = s, h_s, foot_s, 2.0 * step
+
+    def _touch(self, t: float, h: float, foot: Foot, rate: float, t_end: float) -> tuple[float, Foot] | None:
+        """The landing from a certified look at t whose gap h is within the floor: the root
+        beside it (Brent's method between t and a look below the surface, where the gap falling
+        at its rate would have reached 0, or twice, four or eight times as far), else contact at
+        t (a graze, or the gap at round-off)."""
+        tol = GAP_TOLERANCE * self.radius
+        guess = np.array([foot.x, foot.y])
+        if h > 0.0 and rate < 0.0:
+            for k in (1.1, 2.0, 4.0, 8.0):
+                b = min(t + k * h / -rate, t_end)
+                h_b, foot_b = self.gap(b, guess)
+                if h_b < -tol:
+                    return self._locate(t, b, guess)
+                if b >= t_end:
+                    return None if h_b > tol else (b, foot_b)
+        return t, foot
 
     def _locate(self, a: float, b: float, guess) -> tuple[float, Foot]:
         """The root of the gap in [a, b] (gap(a) ≥ 0 ≥ gap(b)), to round-off."""

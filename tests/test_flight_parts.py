@@ -127,3 +127,31 @@ def test_a_slow_rebound_settles_and_counts_the_energy():
     assert rest.velocity[2] == 0.0 and rest.rebound == 0.0
     assert rest.energy_lost == pytest.approx(hit.energy_lost + 0.5 * M * hit.rebound ** 2, rel=1e-14)
     assert rest_speed(0.1, 9.81) == pytest.approx(math.sqrt(2 * 9.81 * 1e-7))
+
+
+def test_the_tip_of_a_thin_tall_bump_is_hit_where_an_independent_distance_says():
+    """A ball rising off a floor towards a bump 8 cm tall and 1 cm wide meets its tip first. The
+    first contact from an independent distance (the curve z = f(x) sampled densely, the nearest
+    sample refined by scipy's minimize_scalar; the first sign change of the gap on a fine grid in
+    time, then brentq). The landing search used to put it 1.2e-4 s late, inside the bump."""
+    xb, height, width = 0.25, 0.08, 0.01
+    f = flight(f"{height}*exp(-((x-{xb})/{width})^2)", (0.0, 0.0, R + 1e-3), (3.0, 0.0, 1.0))
+    t, foot = f.landing(2.0)
+
+    def curve(x):
+        return height * np.exp(-((x - xb) / width) ** 2)
+
+    def gap(time):
+        cx, cz = 3.0 * time, R + 1e-3 + time - 0.5 * G * time * time
+        xs = np.linspace(cx - 0.3, cx + 0.3, 6001)
+        d2 = (xs - cx) ** 2 + (curve(xs) - cz) ** 2
+        i = int(np.argmin(d2))
+        best = minimize_scalar(lambda x: (x - cx) ** 2 + (curve(x) - cz) ** 2, bounds=(xs[i - 1], xs[i + 1]),
+                               method="bounded", options={"xatol": 1e-13})
+        return math.sqrt(min(best.fun, d2[i])) - R
+
+    grid = np.linspace(1e-3, 0.1, 400)
+    first = int(np.flatnonzero(np.array([gap(time) for time in grid]) < 0)[0])
+    expected = brentq(gap, grid[first - 1], grid[first], xtol=1e-15)
+    assert t == pytest.approx(expected, abs=1e-12)
+    assert abs(foot.x - xb) < 0.01   # on the tip

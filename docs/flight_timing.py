@@ -1,0 +1,64 @@
+"""How long the landing search takes per flight on the examples that fly: each example is run
+(its own method and step) with ``Flight.landing`` and ``Flight.gap`` counted and timed; prints
+flights, gap evaluations per flight and CPU ms per flight (the median of ROUNDS runs).
+
+    python docs/flight_timing.py
+"""
+
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+
+from rollball import flight
+from rollball.examples import example_scenes
+from rollball.simulation import Simulation
+
+EXAMPLES = ("liftoff", "cylinder", "bump", "ridge_jump", "billiard")
+ROUNDS = 5
+
+
+def measure(scene) -> tuple[int, int, float]:
+    """Flights, gap evaluations and CPU seconds spent finding landings in one run of ``scene``."""
+    counts, spent = [0, 0], [0.0]
+    landing, gap = flight.Flight.landing, flight.Flight.gap
+
+    def timed_landing(self, *args, **kwargs):
+        counts[0] += 1
+        start = time.process_time()
+        try:
+            return landing(self, *args, **kwargs)
+        finally:
+            spent[0] += time.process_time() - start
+
+    def counted_gap(self, *args, **kwargs):
+        counts[1] += 1
+        return gap(self, *args, **kwargs)
+
+    flight.Flight.landing, flight.Flight.gap = timed_landing, counted_gap
+    try:
+        run = Simulation(scene)
+        run.judge_energy = False
+        run.advance()
+    finally:
+        flight.Flight.landing, flight.Flight.gap = landing, gap
+    return counts[0], counts[1], spent[0]
+
+
+def main() -> None:
+    scenes = {path.stem: scene for path, scene in example_scenes()}
+    for name in EXAMPLES:
+        measure(scenes[name])   # (compiled, warm)
+        runs = [measure(scenes[name]) for _ in range(ROUNDS)]
+        flights, gaps = runs[0][:2]
+        if not flights:
+            print(f"{name:11s} no flight")
+            continue
+        ms = statistics.median(seconds for _, _, seconds in runs) * 1e3 / flights
+        print(f"{name:11s} {flights:3d} flights  {gaps / flights:6.1f} gap evaluations  {ms:6.2f} ms per flight")
+    sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
