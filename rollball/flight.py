@@ -142,7 +142,7 @@ class Surface:
                 alpha = alpha + step
                 size = np.abs(step).max(axis=1)
                 done |= size <= 4e-16 * (1.0 + np.abs(alpha).max(axis=1))
-                if done.all() or not np.isfinite(alpha).all():
+                if (done | ~np.isfinite(alpha).all(axis=1)).all():   # (each start on its own)
                     break
             d = self.evaluate(alpha[:, 0], alpha[:, 1])
             normal = unit_normal(d).T
