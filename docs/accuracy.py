@@ -11,8 +11,9 @@ is the largest over the rows of the run (every 0.01 s), not only at its end:
 1. how tightly the adaptive pairs hold R: R's error against the contact point's, and against
    rtol, on the hills and the saddle (the ball turns about an axis that swings);
 2. evaluations: dop853 against scipy's DOP853 on the same equations, for the same contact error,
-   on the hills, the saddle and a crater that played no part in choosing the step-size control
-   (``CRATER``, the one of tests/test_step_control.py). Each runs a ladder of tolerances a quarter
+   on the hills, the saddle and a crater that is not an example (``CRATER``, the one of
+   tests/test_step_control.py; held out from choosing the PI control, while the error scale's
+   floors, the ball's own units, were checked on all three). Each runs a ladder of tolerances a quarter
    decade apart; a run's largest contact error does not fall smoothly with its tolerance (the
    hills: 1.7e-8 at rtol 1e-8, 7.9e-9 at 10^-8.25), so each ladder's work-precision front (the
    runs no other run beats in both evaluations and error) is interpolated log-log at contact

@@ -190,7 +190,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         else:
             bad = sliding_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        err = math.inf if bad else error_norm(E, err_kind, K, last, motion, z, zn, hs, rtol, atol)
+        err = math.inf if bad else error_norm(E, err_kind, K, last, motion, z, zn, hs, rtol, atol, p)
         if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
             bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
             err = math.inf if bad else err

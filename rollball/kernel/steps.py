@@ -7,7 +7,8 @@ import math
 
 from .collocation import collocation_step
 from .explicit import trial_step
-from .interface import F_ERR_OLD, IMPLICIT, MOTION_SIZE, PROBE_OMEGA, PROBE_SIZE, P_TURN
+from .interface import (F_ERR_OLD, IMPLICIT, MOTION_SIZE, PROBE_OMEGA, PROBE_SIZE, P_TURN, S_DISSIPATED,
+                        S_OMEGA)
 from .lowlevel import COLD, JIT
 from .physics import motion_size
 
@@ -47,20 +48,40 @@ def search_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
 @JIT
-def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol):
+def natural_size(p, n, q):
+    """The unit of the motion's component q (n = MOTION_SIZE or SLIDING_MOTION_SIZE) in the ball's
+    own scales: length r, time sqrt(r / g0), mass m. alpha: r; rolling v (kg m^2/s):
+    m r sqrt(g0 r); sliding c' (m/s): sqrt(g0 r), omega (rad/s): sqrt(g0 / r), D (J): m g0 r."""
+    r, m, g = p[0], p[1], abs(p[2])
+    if q < 2:
+        return r
+    if n == MOTION_SIZE:
+        return m * r * math.sqrt(g * r)
+    if q < S_OMEGA:
+        return math.sqrt(g * r)
+    if q < S_DISSIPATED:
+        return math.sqrt(g / r)
+    return m * g * r
+
+
+@JIT
+def error_norm(E, kind, K, last, n, z, zn, h, rtol, atol, p):
     """The error of a step in units of the tolerance (the step is accepted when <= 1).
 
     Each estimate is h (E K)_q per component q < n, weighed by scale_q = atol + rtol
-    max(|z_q|, |zn_q|). The pairs pass the motion, alpha and v (n = MOTION_SIZE; sliding alpha,
-    c', omega and D): omega is a function of it or part of it, and R follows omega's dense
-    output held to its own tolerance (``turn``).
+    max(|z_q|, |zn_q|, s_q), s_q the component's unit in the ball's own scales (``natural_size``):
+    a component passing through 0 (alpha where the path crosses an axis, v at rest and wherever
+    it turns) is held relative to the ball's size rather than to atol alone, which cut the steps
+    there for no gain in the contact point. The pairs pass the motion, alpha and v
+    (n = MOTION_SIZE; sliding alpha, c', omega and D): omega is a function of it or part of it,
+    and R follows omega's dense output held to its own tolerance (``turn``).
     kind 0: one estimate (E row 0), RMS over the components (Hairer's DOPRI5). kind 1: two
     estimates of orders 5 and 3 (rows 0 and 1) combined as err5^2 / sqrt(err5^2 + 0.01 err3^2),
     as Hairer's DOP853 does.
     """
     a5, a3 = 0.0, 0.0
     for q in range(n):
-        scale = atol + rtol * max(abs(z[q]), abs(zn[q]))
+        scale = atol + rtol * max(abs(z[q]), abs(zn[q]), natural_size(p, n, q))
         e = 0.0
         for i in range(last + 1):
             e += E[0, i] * K[i, q]
