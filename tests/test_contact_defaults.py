@@ -2,7 +2,9 @@
 enough to roll, "glued" after a lift-off) every method gives the same rows, bit for bit, as the
 kernel before friction and lift-off stops existed (their SHA-256 recorded in
 tests/data/rows_before_contact.json by ``python tests/test_contact_defaults.py --record`` with
-that kernel), and a run whose parameters name the defaults explicitly is the same run."""
+that kernel; the adaptive pairs' four re-recorded once their error scale changed, kernel.steps.error_norm,
+with nothing else in the kernel changed), and a run whose parameters name the defaults explicitly is the
+same run."""
 
 import hashlib
 import json
