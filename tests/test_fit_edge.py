@@ -115,11 +115,13 @@ def test_a_jump_of_the_curvature_where_the_ball_fits_is_crossed(method, toleranc
     np.testing.assert_allclose(traj.contact[-1], alpha[-1], atol=tolerance)
 
 
-@pytest.mark.parametrize("method, tolerance", [("euler", 1e-12), ("dopri5", 5e-8)])
+@pytest.mark.parametrize("method, tolerance", [("euler", 1e-12), ("dopri5", 2e-6)])
 def test_a_jump_of_the_curvature_into_the_no_fit_region_stops_the_ball_there(method, tolerance):
     """Flat for y < 0, 8 y² beyond (r·κ = 2.4 from y = 0 on): the ball rolls straight at 2 m/s
     and stops at y = 0, t = 0.25 s exactly. (No fold leads up to this edge: rk4's inner stages
-    can step over it unseen for a step or two.)"""
+    can step over it unseen for a step or two.) dopri5 at its default rtol 1e-6 of the ball's
+    size: 1.5e-6 s (an error scale relative to |y| alone found this edge to 8e-9 s only because
+    it lies at y = 0, where that scale shrinks to atol; 2 m further out 1.6e-5 s either way)."""
     traj = simulate(make("8*max(y,0)^2", 0.15, method))
     assert traj.status is Status.DOES_NOT_FIT and traj.failure.reason is Reason.NO_FIT
     assert traj.failure.time == pytest.approx(0.25, abs=tolerance)
