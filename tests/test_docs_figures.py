@@ -40,7 +40,7 @@ def same_error(scene):
      0.1),
     ("(at most 0.3 rtol)", lambda: [r["R_over_rtol"] for r in runs("saddle", "dop853")], 0, 0.3, 0.1),
     ("0.62–0.72 times its evaluations on the saddle", lambda: same_error("saddle"), 0.62, 0.72, 0.05),
-    ("0.58–0.72 on a crater that is not an example", lambda: same_error("crater"), 0.58, 0.72, 0.05),
+    ("0.59–0.74 on a crater that is not an example", lambda: same_error("crater"), 0.59, 0.74, 0.05),
     # at most scipy's evaluations at every error measured (the README's "0.79–0.93" within noise, never above 1)
     ("and 0.79–0.93 on the hills;", lambda: same_error("hills"), 0.79, 0.93, 0.05),
     ("and 0.79–0.93 on the hills;", lambda: same_error("hills") + same_error("saddle") + same_error("crater"), 0,
@@ -48,7 +48,7 @@ def same_error(scene):
     ("rk4's R error is 88–110 times", lambda: [r["R_over_contact"] for r in ACCURACY["rk4_orientation"]["runs"]],
      88, 110, 0.1),
     ("dopri5 at rtol 1e-10 within 9e-11 s", lambda: [r["dopri5_rtol_1e-10"] for r in ACCURACY["liftoff"]], 0, 9e-11, 0.1),
-    ("h = 1e-2 within 4e-9 s", lambda: [r["rk4_dt_0.01"] for r in ACCURACY["liftoff"]], 0, 4e-9, 0.1),
+    ("h = 1e-2 within 6e-9 s", lambda: [r["rk4_dt_0.01"] for r in ACCURACY["liftoff"]], 0, 6e-9, 0.1),
     ("2e-10 after 1000 s on the bowl", lambda: [ACCURACY["energy"]["gauss4"]], 1.5e-10, 2.5e-10, 0.1),
     ("RK4's grows to 5e-6", lambda: [ACCURACY["energy"]["rk4"]], 4.5e-6, 5.5e-6, 0.1),
     ("0.3 m amplitude takes 2.306 s (measured", lambda: ACCURACY["bowl_period"]["periods"], 2.3055, 2.3065, 0),
