@@ -212,7 +212,11 @@ compute_clock = time.thread_time if time.get_clock_info("thread_time").resolutio
 def _advance(run: Simulation, cancel: threading.Event | None) -> float:
     """Run to the end in chunks (checking ``cancel`` between them); the compute seconds it
     took: processor time of this thread, which on an idle machine is the wall time and on a
-    shared one leaves out the time other programs held the processor."""
+    shared one leaves out the time other programs held the processor. The run does not judge
+    whose its energy error is: a comparison measures the true error, and that check (taking an
+    interval again at shorter steps, up to a tenth of a second) would be timed as the method's
+    cost and spoil the ladders' estimates of what a finer run costs."""
+    run.judge_energy = False
     seconds = 0.0
     while not run.done:
         start = compute_clock()
