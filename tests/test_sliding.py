@@ -21,7 +21,7 @@ CASES = [(method, step) for method, steps in METHODS for step in steps]
 
 
 def _run(formula, state, method, step, **kw):
-    if method == "dopri5":
+    if method in ("dopri5", "dop853"):
         return segment(formula, state, method=method, rtol=step, atol=step * 1e-3, dt=1e-3, **kw)
     return segment(formula, state, method=method, dt=step, **kw)
 
