@@ -86,12 +86,20 @@ def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
 
 @lru_cache(maxsize=1 << 16)  # batches of a grid share most values: each is checked once per process
 def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
+    varied = _varied(scene, keys, values)
+    return varied if isinstance(varied, str) else None
+
+
+@lru_cache(maxsize=1 << 12)  # (more than a batch's runs: a run's scene made by validate is reused)
+def _varied(scene: Scene, keys: tuple, values: tuple) -> Scene | str:
+    """The scene with these values (``with_values``), or why it is refused. (In a sweep of one
+    key, or of keys checked together, each run's scene is made and checked once.)"""
     try:
         varied = with_values(scene, keys, values)
         step_count(varied.integrator.dt, varied.duration)  # a dt of 1e-300: too many steps
     except (SceneError, ValueError) as e:
         return str(e)
-    return None
+    return varied
 
 
 def _landscape(scene: Scene):
@@ -144,7 +152,8 @@ def run(task: Task) -> Result:
         outcomes = np.full((runs, len(OUTCOMES)), np.nan)
         for i in range(runs):
             if status[i] != INVALID:
-                status[i], outcomes[i] = run_one(with_values(scene, grid.keys, tuple(float(v) for v in values[i])))
+                varied = _varied(scene, grid.keys, tuple(float(v) for v in values[i]))  # (valid: checked above)
+                status[i], outcomes[i] = run_one(varied)
         return Result(task.lo, status.astype(np.int8), outcomes,
                       {task.lo + i: text for i, text in messages.items()})
     c = _columns(scene, grid, values)
