@@ -20,7 +20,7 @@ from ..landscape import landscape_of
 from ..scene import Scene, SceneError
 from ..simulation import Simulation, initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
-from ..trajectory import MODES, ROLLING, Status
+from ..trajectory import MODES, ROLLING, SLIDING, Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
 from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
 
@@ -135,7 +135,9 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
                                       float(np.min(traj.normal_force)), float(np.max(speeds)), path)
         out[O_END_MODE] = MODES.index(str(traj.mode[-1]))
     out[O_LANDINGS] = traj.landings
-    slips = [change.time for change in traj.transitions if change.kind == "slip"]
+    # a ball that slides from its start (a start.omega that does not roll) slips at t = 0
+    slips = [float(traj.t[0])] if len(traj) and str(traj.mode[0]) == MODES[SLIDING] else []
+    slips += [change.time for change in traj.transitions if change.kind == "slip"]
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
     return _CODES[traj.status], out
 
