@@ -22,7 +22,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from . import machine_code
-from .geometry import fit_ratio, unit_normal
+from .geometry import fit_ratio
 from .kernel.interface import ROW_SIZE, ROW_SLICES
 from .trajectory import DISSIPATED, SLIP_SPEED
 
@@ -104,6 +104,7 @@ class Surface:
         self.tips: list[np.ndarray] = []
         self._record = landscape.record(self.values)   # (held while its address is in use)
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
+        self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -128,33 +129,18 @@ class Surface:
         second derivatives of f, d = c − φ). NaN where it does not converge (outside the
         landscape's domain, or beyond a focal point where the nearest point is elsewhere)."""
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
-        alpha = np.array(guesses, dtype=float).reshape(-1, 2)
-        done = np.zeros(len(c), dtype=bool)
-        with np.errstate(all="ignore"):
-            for _ in range(FOOT_ITERATIONS):
-                f, fx, fy, fxx, fxy, fyy = self.evaluate(alpha[:, 0], alpha[:, 1])
-                dx, dy, dz = c[:, 0] - alpha[:, 0], c[:, 1] - alpha[:, 1], c[:, 2] - f
-                b1, b2 = dx + dz * fx, dy + dz * fy
-                h11, h12, h22 = 1.0 + fx * fx - dz * fxx, fx * fy - dz * fxy, 1.0 + fy * fy - dz * fyy
-                det = h11 * h22 - h12 * h12
-                s1, s2 = (h22 * b1 - h12 * b2) / det, (h11 * b2 - h12 * b1) / det
-                step = np.where(done[:, None], 0.0, np.column_stack([s1, s2]))
-                alpha = alpha + step
-                size = np.abs(step).max(axis=1)
-                done |= size <= 4e-16 * (1.0 + np.abs(alpha).max(axis=1))
-                if (done | ~np.isfinite(alpha).all(axis=1)).all():   # (each start on its own)
-                    break
-            d = self.evaluate(alpha[:, 0], alpha[:, 1])
-            normal = unit_normal(d).T
-            gap = c - np.column_stack([alpha, d[0]])
-            distance = np.einsum("ij,ij->i", gap, normal)
-            # a converged foot has c − φ along N; anything else (a saddle of the distance, no
-            # convergence) is not a closest point
-            off = np.linalg.norm(gap - distance[:, None] * normal, axis=1)
-            bad = ~done | ~(off <= 1e-6 * (1.0 + np.abs(distance)))
-        alpha[bad] = np.nan
-        distance = np.where(bad, np.nan, distance)
-        return alpha, normal, distance
+        n = len(c)
+        packed = self._feet_calls.get(n)
+        if packed is None:   # (the iteration runs compiled: kernel.physics.closest_points)
+            arrays = np.empty((n, 3)), np.empty((n, 2)), np.empty((n, 3)), np.empty(n)
+            call = machine_code.Arguments("closest_points", fn=self._record.ctypes.data, centers=arrays[0],
+                                          feet=arrays[1], normals=arrays[2], distances=arrays[3],
+                                          iterations=FOOT_ITERATIONS, d=np.empty(6))
+            packed = self._feet_calls[n] = (call, *arrays)
+        call, at, alpha, normal, distance = packed
+        at[:], alpha[:] = c, np.asarray(guesses, dtype=float).reshape(-1, 2)
+        call()
+        return alpha.copy(), normal.copy(), distance.copy()
 
     def foot(self, center: np.ndarray, guess=None) -> Foot:
         """The closest surface point to ``center``: the nearest of the feet Newton's method

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import decimal
+import functools
 import math
 import numbers
 import operator
@@ -36,6 +37,16 @@ _STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES
 # The mode a kernel run's transition leads to (kernel.interface.TRANSITIONS) as a row mode.
 _NEXT_MODE = {"liftoff": FLYING, "slip": SLIDING, "grip": ROLLING}
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
+
+
+@functools.cache
+def _kernel_arrays(method: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The method's (W, E, P) (``Tableau.kernel_arrays``), made once per process and read-only
+    (made from exact fractions, they cost more than a short run's set-up otherwise)."""
+    arrays = get_method(method).kernel_arrays()
+    for array in arrays:
+        array.setflags(write=False)
+    return arrays
 
 
 def step_count(dt: float, t_end: float) -> int:
@@ -191,7 +202,7 @@ class Simulation:
         self.landscape = landscape_of(scene)
         self._landscape_record = self.landscape.record(scene.parameter_values)   # held while the kernel runs
         self._fn = self._landscape_record.ctypes.data
-        self._W, self._E, self._P = self.tableau.kernel_arrays()
+        self._W, self._E, self._P = _kernel_arrays(self.tableau.name)
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
         # The 2011 model (friction null, glued after a lift-off) is one kernel run, as before scene
         # version 3; any other contact is a sequence of runs, each in one mode (``_advance``).

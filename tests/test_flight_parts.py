@@ -155,3 +155,23 @@ def test_the_tip_of_a_thin_tall_bump_is_hit_where_an_independent_distance_says()
     expected = brentq(gap, grid[first - 1], grid[first], xtol=1e-15)
     assert t == pytest.approx(expected, abs=1e-12)
     assert abs(foot.x - xb) < 0.01   # on the tip
+
+
+def test_the_closest_surface_point_is_the_cylinders_radial_one():
+    """Surface.foot (the grid, the starts and Newton's method, compiled) and Surface.feet (Newton's
+    method from given starts) against the closed form on z = sqrt(4 − x²): the closest point of
+    a centre above is along its radius, (2 c_x, c_y, 2 c_z)/|(c_x, c_z)|, at distance |(c_x, c_z)| − 2.
+    With or without a guess; NaN where no surface point is near (under the cylinder's edge)."""
+    surface = Surface(landscape_for("sqrt(4 - x^2)"))
+    centers = np.array([[0.3, -0.7, 2.4], [-1.1, 0.2, 2.05], [1.9, 3.0, 0.9], [0.0, 0.0, 2.1]])
+    rho = np.hypot(centers[:, 0], centers[:, 2])
+    for guess in (None, (0.0, 0.0)):
+        for c, r in zip(centers, rho):
+            foot = surface.foot(c, guess)
+            assert (foot.x, foot.y, foot.distance) == pytest.approx((2 * c[0] / r, c[1], r - 2), abs=1e-14)
+            assert foot.normal == pytest.approx([c[0] / r, 0.0, c[2] / r], abs=1e-14)
+    alpha, normals, distances = surface.feet(centers, centers[:, :2])
+    assert alpha == pytest.approx(np.column_stack([2 * centers[:, 0] / rho, centers[:, 1]]), abs=1e-14)
+    assert distances == pytest.approx(rho - 2, abs=1e-14)
+    beside = surface.foot(np.array([3.0, 0.0, -1.0]))   # no surface within reach of the point below
+    assert math.isnan(beside.x) and math.isnan(beside.distance) and np.isnan(beside.normal).all()

@@ -254,6 +254,27 @@ def test_a_contact_scenes_runs_report_their_modes():
     assert slipping["first_slip_time"][0] == slip.time and slipping["end_mode"][0] == MODES.index(run.mode[-1])
 
 
+def test_a_billiard_sweep_slips_from_the_start_and_grips_at_the_exact_time():
+    """Struck without spin on the plane with friction μ, every run slides from t = 0 (first slip
+    0, no landing) and grips at t* = 2v₀/(7μg), then rolls at 5v₀/7. The duration falls between
+    the runs' t*: those that grip before it end rolling, the others sliding, each where the
+    closed form puts it (decelerating at μg while it slides)."""
+    scene = dataclasses.replace(Scene.load(EXAMPLES_DIR / "billiard.json"), duration=0.3)
+    v0 = np.array([0.5, 1.25, 2.0, 2.5, 3.5])
+    table = sweep(scene, {"start.vx": v0}, workers=1)
+    mu, g, T = scene.contact.friction, scene.gravity, scene.duration
+    grip = 2 * v0 / (7 * mu * g)
+    rolls = grip < T
+    assert rolls.any() and not rolls.all() and set(table["status"]) == {"ok"}
+    np.testing.assert_array_equal(table["first_slip_time"], 0.0)
+    np.testing.assert_array_equal(table["landings"], 0.0)
+    np.testing.assert_array_equal(table["end_mode"], np.where(rolls, MODES.index("rolling"), MODES.index("sliding")))
+    slid = np.minimum(grip, T)
+    x_end = scene.start.x + v0 * slid - 0.5 * mu * g * slid ** 2 + np.where(rolls, 5 * v0 / 7 * (T - grip), 0.0)
+    np.testing.assert_allclose(table["x_end"], x_end, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(table["max_speed"], v0)
+
+
 def test_the_2011_models_runs_roll_to_the_end():
     table = sweep(Scene.load(EXAMPLES_DIR / "hills.json"), {"start.vx": [0.0, 0.5]}, workers=1)
     assert list(table["end_mode"]) == [0.0, 0.0] and list(table["landings"]) == [0.0, 0.0]

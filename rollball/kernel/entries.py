@@ -6,11 +6,11 @@ compiles nothing."""
 from __future__ import annotations
 
 from .loops import advance, advance_adaptive, advance_batch
-from .physics import evaluate_points
+from .physics import closest_points, evaluate_points
 from .unpacking import ENTRY_SIGNATURE, make_entry
 
 FUNCTIONS = {"advance": advance, "advance_adaptive": advance_adaptive, "advance_batch": advance_batch,
-             "evaluate_points": evaluate_points}
+             "evaluate_points": evaluate_points, "closest_points": closest_points}
 ENTRIES = {name: make_entry(name, function) for name, function in FUNCTIONS.items()}
 
 __all__ = ["ENTRIES", "ENTRY_SIGNATURE", "FUNCTIONS"]

@@ -45,6 +45,8 @@ ENTRIES = {
                       ("DT", VECTOR), ("T_END", VECTOR), ("N_STEPS", INTS), ("status", INTS), ("out", MATRIX),
                       *RUN_ARRAYS, ("acc", VECTOR)),
     "evaluate_points": (("fn", ADDRESS), ("xs", VECTOR), ("ys", VECTOR), ("out", MATRIX), ("d", VECTOR)),
+    "closest_points": (("fn", ADDRESS), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX),
+                       ("distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
 }
 
 

@@ -47,6 +47,9 @@ JIT = njit(cache=False, nogil=True, error_model="numpy", inline="always", fastma
            _nrt=False)
 COLD = njit(cache=False, nogil=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 STEP = njit(cache=False, nogil=True, error_model="numpy", forceinline=True, fastmath={"contract"}, _nrt=False)
+# EXACT: no contraction into fused multiply-adds, so that a function computes what the same
+# formula in numpy computes, bit for bit (the closest surface points of a flight, ``closest_points``).
+EXACT = njit(cache=False, nogil=True, error_model="numpy", _nrt=False)
 
 
 @intrinsic

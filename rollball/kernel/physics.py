@@ -9,7 +9,7 @@ import math
 from .interface import (
     D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_FLY, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
     SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
-from .lowlevel import COLD, JIT, STEP, data_pointer, landscape
+from .lowlevel import COLD, EXACT, JIT, STEP, data_pointer, landscape
 
 
 # What ``dynamics`` computes: the stage derivative alone, or also the probe. Floats, like mk
@@ -326,6 +326,67 @@ def evaluate_points(fn, xs, ys, out, d):
         landscape(fn, xs[i], ys[i], data_pointer(d))
         for k in range(6):
             out[k, i] = d[k]
+
+
+@EXACT
+def closest_points(fn, centers, feet, normals, distances, iterations, d):
+    """The closest surface point (foot) of each centre (n, 3) by Newton's method from the first
+    guesses in feet (n, 2), which are replaced by the feet; normals (n, 3) the unit normals there,
+    distances (n) the centre's signed distance along them; NaN feet and distances where Newton's
+    method does not converge within ``iterations`` or ends where c − φ is not along N
+    (``flight.Surface.feet`` says why the method works). Each point stops when its step is
+    round-off (converged) or its foot is no longer finite (it left the landscape's domain: no
+    foot from that start; the others go on). Without fused multiply-adds (EXACT), the feet and
+    normals are bit for bit those of the same iteration written in numpy; the distance may
+    differ in its last bit (numpy's einsum sums three products in an order that depends on the
+    arrays' shapes). d (6): scratch."""
+    n = centers.shape[0]
+    done = distances   # (whether a point is done, as 1.0, until the distances are written)
+    for i in range(n):
+        done[i] = 0.0
+    for _ in range(iterations):
+        for i in range(n):
+            if done[i] != 0.0:
+                continue
+            ax, ay = feet[i, 0], feet[i, 1]
+            landscape(fn, ax, ay, data_pointer(d))
+            f, fx, fy, fxx, fxy, fyy = d[0], d[1], d[2], d[3], d[4], d[5]
+            dx, dy, dz = centers[i, 0] - ax, centers[i, 1] - ay, centers[i, 2] - f
+            b1, b2 = dx + dz * fx, dy + dz * fy
+            h11, h12, h22 = 1.0 + fx * fx - dz * fxx, fx * fy - dz * fxy, 1.0 + fy * fy - dz * fyy
+            det = h11 * h22 - h12 * h12
+            s1, s2 = (h22 * b1 - h12 * b2) / det, (h11 * b2 - h12 * b1) / det
+            ax, ay = ax + s1, ay + s2
+            feet[i, 0], feet[i, 1] = ax, ay
+            # |step|_max <= 4e-16 (1 + |α|_max), false where anything is NaN
+            scale = 1.0 + (abs(ax) if abs(ax) >= abs(ay) else abs(ay))
+            if math.isnan(ax) or math.isnan(ay):
+                scale = math.nan
+            if abs(s1) <= 4e-16 * scale and abs(s2) <= 4e-16 * scale:
+                done[i] = 1.0
+            elif not (math.isfinite(ax) and math.isfinite(ay)):
+                done[i] = -1.0   # this start left the landscape: it finds no foot, the others go on
+        finished = True
+        for i in range(n):
+            finished = finished and done[i] != 0.0
+        if finished:
+            break
+    for i in range(n):
+        ax, ay = feet[i, 0], feet[i, 1]
+        landscape(fn, ax, ay, data_pointer(d))
+        fx, fy = d[1], d[2]
+        w = math.sqrt(1.0 + fx * fx + fy * fy)
+        n1, n2, n3 = -fx / w, -fy / w, 1.0 / w
+        normals[i, 0], normals[i, 1], normals[i, 2] = n1, n2, n3
+        g1, g2, g3 = centers[i, 0] - ax, centers[i, 1] - ay, centers[i, 2] - d[0]
+        distance = g1 * n1 + g2 * n2 + g3 * n3
+        o1, o2, o3 = g1 - distance * n1, g2 - distance * n2, g3 - distance * n3
+        off = math.sqrt(o1 * o1 + o2 * o2 + o3 * o3)
+        # a converged foot has c − φ along N; anything else (a saddle of the distance, no
+        # convergence) is not a closest point
+        if done[i] != 1.0 or not off <= 1e-6 * (1.0 + abs(distance)):
+            feet[i, 0], feet[i, 1], distance = math.nan, math.nan, math.nan
+        distances[i] = distance
 
 
 @JIT

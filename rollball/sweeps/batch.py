@@ -20,7 +20,7 @@ from ..landscape import landscape_of
 from ..scene import Scene, SceneError
 from ..simulation import Simulation, initial_momentum, step_count
 from ..tableaus import METHODS, MethodKind, get_method
-from ..trajectory import MODES, ROLLING, Status
+from ..trajectory import MODES, ROLLING, SLIDING, Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
 from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
 
@@ -86,12 +86,20 @@ def validate(scene: Scene, grid: Grid, values: np.ndarray) -> dict[int, str]:
 
 @lru_cache(maxsize=1 << 16)  # batches of a grid share most values: each is checked once per process
 def _refusal(scene: Scene, keys: tuple, values: tuple) -> str | None:
+    varied = _varied(scene, keys, values)
+    return varied if isinstance(varied, str) else None
+
+
+@lru_cache(maxsize=1 << 12)  # (more than a batch's runs: a run's scene made by validate is reused)
+def _varied(scene: Scene, keys: tuple, values: tuple) -> Scene | str:
+    """The scene with these values (``with_values``), or why it is refused. (In a sweep of one
+    key, or of keys checked together, each run's scene is made and checked once.)"""
     try:
         varied = with_values(scene, keys, values)
         step_count(varied.integrator.dt, varied.duration)  # a dt of 1e-300: too many steps
     except (SceneError, ValueError) as e:
         return str(e)
-    return None
+    return varied
 
 
 def _landscape(scene: Scene):
@@ -127,7 +135,9 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
                                       float(np.min(traj.normal_force)), float(np.max(speeds)), path)
         out[O_END_MODE] = MODES.index(str(traj.mode[-1]))
     out[O_LANDINGS] = traj.landings
-    slips = [change.time for change in traj.transitions if change.kind == "slip"]
+    # a ball that slides from its start (a start.omega that does not roll) slips at t = 0
+    slips = [float(traj.t[0])] if len(traj) and str(traj.mode[0]) == MODES[SLIDING] else []
+    slips += [change.time for change in traj.transitions if change.kind == "slip"]
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
     return _CODES[traj.status], out
 
@@ -144,7 +154,8 @@ def run(task: Task) -> Result:
         outcomes = np.full((runs, len(OUTCOMES)), np.nan)
         for i in range(runs):
             if status[i] != INVALID:
-                status[i], outcomes[i] = run_one(with_values(scene, grid.keys, tuple(float(v) for v in values[i])))
+                varied = _varied(scene, grid.keys, tuple(float(v) for v in values[i]))  # (valid: checked above)
+                status[i], outcomes[i] = run_one(varied)
         return Result(task.lo, status.astype(np.int8), outcomes,
                       {task.lo + i: text for i, text in messages.items()})
     c = _columns(scene, grid, values)

@@ -159,6 +159,18 @@ def with_value(scene: Scene, key: str, value: float) -> Scene:
 
 
 def with_values(scene: Scene, keys, values) -> Scene:
+    """The scene with the dotted keys set (validated like a scene file: ``SceneError``). Each part
+    (``start``, ``ball``, ...) is made once with all its new values, then the scene once: what
+    a run of a sweep pays for its scene (a check of the whole scene each)."""
+    parts: dict[str, dict] = {}
     for key, value in zip(keys, values):
-        scene = with_value(scene, key, float(value))
-    return scene
+        if key.startswith(PARAMETER_PREFIX):
+            scene = with_value(scene, key, float(value))
+            continue
+        group, _, name = key.rpartition(".")
+        parts.setdefault(group, {})[name] = float(value)
+    if not parts:
+        return scene
+    changes = parts.pop("", {})
+    changes.update({group: dataclasses.replace(getattr(scene, group), **names) for group, names in parts.items()})
+    return dataclasses.replace(scene, **changes)
