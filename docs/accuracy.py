@@ -40,7 +40,7 @@ from rollball import Scene, simulate  # noqa: E402
 from rollball.scene import Ball, Integrator, Start  # noqa: E402
 from rollball.examples import EXAMPLES_DIR  # noqa: E402
 from rollball.landscape import landscape_for  # noqa: E402
-from rollball.reference import reference_rhs, reference_solution  # noqa: E402
+from rollball.reference import normal_force_zeros, reference_rhs, reference_solution  # noqa: E402
 from rollball.simulation import initial_state  # noqa: E402
 
 ROW = 0.01                      # seconds between the rows compared
@@ -162,28 +162,9 @@ def long_energy() -> dict:
 
 
 def reference_liftoff(scene: Scene, t_max: float) -> float:
-    """The first time F·N = 0 by scipy's DOP853 (rtol = atol = 1e-12) with its event location
-    (as tests/test_dense_output.py)."""
-    from scipy.integrate import solve_ivp
-
-    landscape = landscape_for(scene.landscape)
-    r, m, g0 = scene.ball.radius, scene.ball.mass, scene.gravity
-    rhs = reference_rhs(scene)
-
-    def force(t, y):
-        alpha, v = y[:2], y[2:5]
-        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1])
-        n = np.array([-fx, -fy, 1.0])
-        N = n / np.linalg.norm(n)
-        omega = 5 / (7 * m * r * r) * (v + 2.5 * N * (N @ v))
-        dN = (np.eye(3) - np.outer(N, N)) @ np.array([[-fxx, -fxy], [-fxy, -fyy], [0, 0]]) / np.linalg.norm(n)
-        return m * r * np.cross(omega, dN @ rhs(t, y)[:2]) @ N + m * g0 * N[2]
-
-    force.terminal, force.direction = True, -1
-    alpha, v = initial_state(landscape, scene)
-    sol = solve_ivp(rhs, (0.0, t_max), np.concatenate([alpha, v, np.eye(3).ravel()]), method="DOP853",
-                    rtol=1e-12, atol=1e-12, events=force)
-    return float(sol.t_events[0][0])
+    """The first time F·N = 0, by scipy's DOP853 (rtol = atol = 1e-12) with its event location
+    on the independent equations of rollball.reference."""
+    return float(normal_force_zeros(scene, t_max, first=True)[0])
 
 
 def liftoffs() -> list[dict]:

@@ -58,3 +58,38 @@ def reference_solution(scene: Scene, t_eval, rtol: float = 1e-12, atol: float = 
         raise RuntimeError(f"reference solution failed: {sol.message}")
     y = sol.y.T
     return y[:, :2], y[:, 2:5], y[:, 5:].reshape(-1, 3, 3)
+
+
+def reference_normal_force(scene: Scene):
+    """F·N(t, y) of the rolling ball along the state y of ``reference_rhs``: m (c̈ − g)·N with
+    c̈·N from the turning normal, m r (ω × Ṅ)·N (docs/design.md §1). Zero where it lifts off."""
+    landscape = landscape_of(scene)
+    values = scene.parameter_values
+    r, m, g0 = scene.ball.radius, scene.ball.mass, scene.gravity
+    rhs = reference_rhs(scene)
+    eye = np.eye(3)
+
+    def force(t, y):
+        alpha, v = y[:2], y[2:5]
+        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1], values)
+        n = np.array([-fx, -fy, 1.0])
+        N = n / np.linalg.norm(n)
+        omega = 5 / (7 * m * r * r) * (v + 2.5 * N * (N @ v))
+        dN = (eye - np.outer(N, N)) @ np.array([[-fxx, -fxy], [-fxy, -fyy], [0.0, 0.0]]) / np.linalg.norm(n)
+        return m * r * np.cross(omega, dN @ rhs(t, y)[:2]) @ N + m * g0 * N[2]
+
+    return force
+
+
+def normal_force_zeros(scene: Scene, t_max: float, first: bool = False) -> np.ndarray:
+    """The times F·N crosses 0 up to ``t_max`` (only the first falling through 0 if ``first``),
+    by scipy's DOP853 (rtol = atol = 1e-12) with its own event location."""
+    from scipy.integrate import solve_ivp
+
+    force = reference_normal_force(scene)
+    if first:
+        force.terminal, force.direction = True, -1
+    alpha, v = initial_state(landscape_of(scene), scene)
+    sol = solve_ivp(reference_rhs(scene), (0.0, t_max), np.concatenate([alpha, v, np.eye(3).ravel()]),
+                    method="DOP853", rtol=1e-12, atol=1e-12, events=force)
+    return sol.t_events[0]

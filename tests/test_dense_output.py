@@ -10,12 +10,9 @@ import pytest
 from conftest import make_scene, V2_EXAMPLES
 
 from rollball import METHODS, Scene, Status, simulate
-from rollball.examples import EXAMPLES_DIR
 from rollball.kernel import DEXPINV_SERIES, dexpinv
-from rollball.landscape import landscape_for
 from rollball.order_conditions import density, rooted_trees, size
-from rollball.reference import reference_rhs, reference_solution
-from rollball.simulation import initial_state
+from rollball.reference import normal_force_zeros, reference_solution
 from rollball.tableaus import Tableau
 
 # -- dexp^-1 ------------------------------------------------------------------------------------
@@ -131,29 +128,9 @@ def test_interpolated_rows_are_as_accurate_as_the_steps(rtol, bound):
 
 
 def reference_liftoff(scene: Scene, t_max: float) -> float:
-    """The first time F·N = 0, by scipy's DOP853 (rtol = atol = 1e-12) with its event location on
-    the independent equations of rollball.reference."""
-    from scipy.integrate import solve_ivp
-
-    landscape = landscape_for(scene.landscape)
-    r, m, g0 = scene.ball.radius, scene.ball.mass, scene.gravity
-    rhs = reference_rhs(scene)
-
-    def force(t, y):
-        alpha, v = y[:2], y[2:5]
-        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1])
-        n = np.array([-fx, -fy, 1.0])
-        N = n / np.linalg.norm(n)
-        omega = 5 / (7 * m * r * r) * (v + 2.5 * N * (N @ v))
-        dN = (np.eye(3) - np.outer(N, N)) @ np.array([[-fxx, -fxy], [-fxy, -fyy], [0, 0]]) / np.linalg.norm(n)
-        Ndot = dN @ rhs(t, y)[:2]
-        return m * r * np.cross(omega, Ndot) @ N + m * g0 * N[2]
-
-    force.terminal, force.direction = True, -1
-    alpha, v = initial_state(landscape, scene)
-    sol = solve_ivp(rhs, (0.0, t_max), np.concatenate([alpha, v, np.eye(3).ravel()]), method="DOP853",
-                    rtol=1e-12, atol=1e-12, events=force)
-    return float(sol.t_events[0][0])
+    """The first time F·N = 0, by scipy's DOP853 with its event location on the independent
+    equations of rollball.reference."""
+    return float(normal_force_zeros(scene, t_max, first=True)[0])
 
 
 LIFTOFF_SCENES = {

@@ -12,7 +12,7 @@ from scipy.integrate import solve_ivp
 
 from rollball import simulate
 from rollball.landscape import landscape_for
-from rollball.reference import reference_rhs
+from rollball.reference import normal_force_zeros, reference_rhs
 from rollball.scene import Contact
 from rollball.tableaus import get_method
 
@@ -48,27 +48,6 @@ BUMP = make_scene("0.01*exp(-(x/0.1)^2)", x=-0.5, vx=2.47, duration=0.3, contact
 DIP_DT = 0.015   # no multiple of it falls inside the 7 ms the rolling ball's F·N is below 0
 
 
-def normal_force_zeros(scene, t_max):
-    """The times F·N of the rolling ball (the 2011 equations, no lift-off) crosses 0, by scipy's
-    DOP853 (rtol = atol = 1e-12) with its event location."""
-    landscape = landscape_for(scene.landscape)
-    r, m, g0 = scene.ball.radius, scene.ball.mass, scene.gravity
-    rhs = reference_rhs(scene)
-
-    def force(t, y):
-        alpha, v = y[:2], y[2:5]
-        _, fx, fy, fxx, fxy, fyy = landscape.evaluate(alpha[0], alpha[1])
-        n = np.array([-fx, -fy, 1.0])
-        N = n / np.linalg.norm(n)
-        omega = 5 / (7 * m * r * r) * (v + 2.5 * N * (N @ v))
-        dN = (np.eye(3) - np.outer(N, N)) @ np.array([[-fxx, -fxy], [-fxy, -fyy], [0, 0]]) / np.linalg.norm(n)
-        return m * r * np.cross(omega, dN @ rhs(t, y)[:2]) @ N + m * g0 * N[2]   # m (c'' - g).N
-
-    from rollball.simulation import initial_state
-    alpha, v = initial_state(landscape, scene)
-    sol = solve_ivp(rhs, (0.0, t_max), np.concatenate([alpha, v, np.eye(3).ravel()]), method="DOP853",
-                    rtol=1e-12, atol=1e-12, events=force)
-    return sol.t_events[0]
 
 
 @pytest.fixture(scope="module")
