@@ -171,7 +171,9 @@ def test_without_the_shipped_code_numba_compiles_each_kernel_function_once_and_r
     # the right-hand side is compiled once (and inlined by LLVM); the other per-stage helpers are
     # inlined by numba, not compiled alone; few functions in all
     assert "rollball.kernel.physics.dynamics" in compiled and "rollball.kernel.explicit.combine" not in compiled
-    assert len(compiled) <= 34, sorted(compiled)  # (32 with the sliding equations and the mode looks)
+    # (32 with the sliding equations and the mode looks; 37 with a change of mode searched for
+    # inside a step and placed by the method's own step, a tip's approach and the closest points)
+    assert len(compiled) <= 37, sorted(compiled)
     # the same code, compiled either way: the same runs (to round-off where the processor the
     # shipped code was optimised for differs from this one)
     if shipped_cold["source"] != "shipped":

@@ -321,8 +321,10 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
         valid = examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe,
                              sa, sb, sm, fit_end, sharp, jumpy, raced, force_end, jolted, bend, chord2, stepping)
     if turned and valid < 0.0:
+        # (refine as a float: the loops pass segment as a constant, and a constant bool would
+        # compile locate_transition once for each value)
         valid = locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
-                                  pe, sa, sb, dips, stepping, segment)
+                                  pe, sa, sb, dips, stepping, 1.0 if segment else 0.0)
     return valid
 
 
@@ -506,7 +508,7 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
                       dips, stepping, refine):
     """A step whose ends say the contact changes mode (``mode_changes``), or inside which it may
     (``dipping``: dips, whose dense output is searched, ``dip_bracket``): locate the earliest
-    change on the step's dense output to ROOT_TOL of the step, and where ``refine`` (fixed
+    change on the step's dense output to ROOT_TOL of the step, and where ``refine`` (1.0: fixed
     steps) to the method's own accuracy (``refine_transition``); stop the run there (status
     TRANSITION, its kind, time and contact point in ints and info) and return the fraction of
     the step where it happens (``record_valid`` then records the state there, the one zn, Rn,
@@ -559,7 +561,7 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
     if kind == 0:
         return -1.0
     held = False
-    if refine and best > 0.0:
+    if refine != 0.0 and best > 0.0:
         # (a grip's reference slip u0 is s[0:3], set above)
         theta = refine_transition(event, stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints, s, Ye,
                                   Re, pe, best, b_end, g_end)
