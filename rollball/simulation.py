@@ -18,7 +18,7 @@ from .flight import Flight, FreeState, OffLandscape, Surface, impact, rest_speed
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
-from .tableaus import MethodKind, get_method
+from .tableaus import METHODS, MethodKind, get_method
 from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, R, ROLLING, SLIDING, T,
                          VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
@@ -39,11 +39,18 @@ _NEXT_MODE = {"liftoff": FLYING, "slip": SLIDING, "grip": ROLLING}
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
 
 
+def _kernel_arrays(tableau) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The method's (W, E, P) (``Tableau.kernel_arrays``): a registered method's made once per
+    process and read-only (made from exact fractions, they cost more than a short run's set-up
+    otherwise); a tableau passed in itself (not in ``METHODS``) made for its run."""
+    if METHODS.get(tableau.name) is tableau:
+        return _registered_arrays(tableau.name)
+    return tableau.kernel_arrays()
+
+
 @functools.cache
-def _kernel_arrays(method: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The method's (W, E, P) (``Tableau.kernel_arrays``), made once per process and read-only
-    (made from exact fractions, they cost more than a short run's set-up otherwise)."""
-    arrays = get_method(method).kernel_arrays()
+def _registered_arrays(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    arrays = METHODS[name].kernel_arrays()
     for array in arrays:
         array.setflags(write=False)
     return arrays
@@ -202,7 +209,7 @@ class Simulation:
         self.landscape = landscape_of(scene)
         self._landscape_record = self.landscape.record(scene.parameter_values)   # held while the kernel runs
         self._fn = self._landscape_record.ctypes.data
-        self._W, self._E, self._P = _kernel_arrays(self.tableau.name)
+        self._W, self._E, self._P = _kernel_arrays(self.tableau)
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
         # The 2011 model (friction null, glued after a lift-off) is one kernel run, as before scene
         # version 3; any other contact is a sequence of runs, each in one mode (``_advance``).
