@@ -39,6 +39,7 @@ sys.path.insert(0, str(ROOT))
 from rollball import Scene, simulate  # noqa: E402
 from rollball.scene import Ball, Integrator, Start  # noqa: E402
 from rollball.examples import EXAMPLES_DIR  # noqa: E402
+from rollball.files import check_outputs, replace_together  # noqa: E402
 from rollball.landscape import landscape_for  # noqa: E402
 from rollball.reference import normal_force_zeros, reference_rhs, reference_solution  # noqa: E402
 from rollball.simulation import initial_state  # noqa: E402
@@ -243,16 +244,20 @@ def markdown(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+OUTPUTS = ("accuracy.json", "accuracy.md")
+
+
 def main() -> None:
+    out = ROOT / "docs"
+    check_outputs(out, OUTPUTS)   # (before seven minutes of runs: each file can be written)
     start = time.perf_counter()
     results = {"pairs": [pairs("hills", 10.0), pairs("saddle", example("saddle").duration),
                          pairs("crater", CRATER.duration)],
                "rk4_orientation": rk4_orientation("hills", 10.0), "energy": long_energy(),
                "liftoff": liftoffs(), "bowl_period": bowl_period()}
     results["seconds"] = time.perf_counter() - start
-    out = ROOT / "docs"
-    (out / "accuracy.json").write_text(json.dumps(results, indent=1) + "\n")
-    (out / "accuracy.md").write_text(markdown(results), encoding="utf-8")
+    replace_together(out, {"accuracy.json": json.dumps(results, indent=1) + "\n", "accuracy.md": markdown(results)},
+                     kept_name="accuracy-unsaved")
     print(markdown(results))
 
 

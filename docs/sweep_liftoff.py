@@ -16,7 +16,6 @@ wall time and rate.
 from __future__ import annotations
 
 import json
-import shutil
 import sys
 import tempfile
 import time
@@ -29,6 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 from rollball import Scene, sweep  # noqa: E402
 from rollball.examples import scene_path  # noqa: E402
+from rollball.files import check_outputs, replace_together  # noqa: E402
 from rollball.trajectory import MODES  # noqa: E402
 
 VARY = {"start.vx": np.linspace(3.0, 8.0, 400), "start.spin": np.linspace(-4.0, 4.0, 300)}
@@ -77,17 +77,24 @@ def markdown(s: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+OUTPUTS = ("sweep_liftoff.png", "sweep_liftoff.json", "sweep_liftoff.md")
+
+
 def main() -> None:
+    docs = ROOT / "docs"
+    check_outputs(docs, OUTPUTS)   # (before the sweep's forty minutes: each file can be written)
     scene = Scene.load(scene_path("liftoff"))
     started = time.perf_counter()
     table = sweep(scene, VARY)
     print(f"{len(table):,} runs in {time.perf_counter() - started:.1f} s", file=sys.stderr)
+    s = summary(table)
     with tempfile.TemporaryDirectory() as folder:
         table.save(folder)
-        shutil.copyfile(Path(folder) / "sweep.png", ROOT / "docs" / "sweep_liftoff.png")
-        shutil.copyfile(Path(folder) / "sweep.json", ROOT / "docs" / "sweep_liftoff.json")
-    s = summary(table)
-    (ROOT / "docs" / "sweep_liftoff.md").write_text(markdown(s), encoding="utf-8")
+        made = Path(folder)
+        # the three together or none; if that fails, the new ones are kept beside them
+        replace_together(docs, {"sweep_liftoff.png": (made / "sweep.png").read_bytes(),
+                                "sweep_liftoff.json": (made / "sweep.json").read_text(encoding="utf-8"),
+                                "sweep_liftoff.md": markdown(s)}, kept_name="sweep_liftoff-unsaved")
     print(json.dumps(s, indent=1))
     print(markdown(s))
 
