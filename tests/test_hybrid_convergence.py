@@ -1,0 +1,196 @@
+"""Every method converges at its order through slips that begin from rolling, grips, lift-offs
+and landings on 3-D scenes, measured against the independent reference (tests/hybrid_reference.py).
+
+Fixed-step methods: the largest error of the centre and of the contact point at the common
+recorded times (multiples of SPACING), and each transition's time error, fitted against dt over
+four step sizes (three halvings) chosen where the error is well above the reference's (~1e-13)
+and the steps resolve the scene (measured with friction null on the drop, where the run has no
+slip: the fitted orders are the methods'). Expected: euler 1, rk4 4, gauss4 4, lawson5 5, gauss6 6,
+within ORDER_SLACK; the transitions the same kinds in the same order as the reference's (no
+invented slips), at strictly increasing times. Adaptive pairs: the error falls with the tolerance.
+``python tests/test_hybrid_convergence.py`` prints the table."""
+
+import functools
+import math
+import sys
+import time
+from pathlib import Path
+
+if __name__ == "__main__":   # this checkout's rollball, not an installed one
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np
+import pytest
+
+from rollball import Scene, simulate
+from rollball.scene import Contact, Start
+
+from hybrid_reference import reference
+
+SPACING = 0.04      # s: the common recorded times (every dt below divides it)
+POSITION_FLOOR = 1e-12   # m: errors below this are the reference's, not fitted
+TIME_FLOOR = 1e-13       # s: likewise for a transition's time
+ORDER_SLACK = 0.6
+
+# name -> (scene, t_end); the reference's transitions in the comments
+SCENES = {
+    # a steep tilted bowl thrown sideways: slips from rolling at 0.276 s (in 3-D), grips at 0.753 s
+    "bowl": (Scene(landscape="1.5*x^2 + 0.9*y^2 + 0.3*x*y",
+                   start=Start(x=-0.1, y=0.1, vx=1.2, vy=-0.6), contact=Contact(friction=0.2)), 0.9),
+    # a smooth step-down with a sideways tilt and spin: slips from rolling at 0.177 s, lifts off at
+    # 0.207 s, lands at 0.375 s (sliding: no restitution), grips at 0.388 s
+    "drop": (Scene(landscape="-0.2*(1 + tanh(5*x)) + 0.01*y",
+                   start=Start(x=-0.6, y=0.0, vx=2.0, vy=0.1, spin=2.0),
+                   contact=Contact(friction=0.3, restitution=0.0)), 0.5),
+}
+REFERENCE_KINDS = {"bowl": ["slip", "grip"], "drop": ["slip", "liftoff", "landing", "grip"]}
+
+# method -> (order, step sizes)
+FIXED = {
+    "euler": (1, (2e-4, 1e-4, 5e-5, 2.5e-5)),
+    "rk4": (4, (1e-2, 5e-3, 2.5e-3, 1.25e-3)),
+    "gauss4": (4, (1e-2, 5e-3, 2.5e-3, 1.25e-3)),
+    "lawson5": (5, (2e-2, 1e-2, 5e-3, 2.5e-3)),
+    "gauss6": (6, (4e-2, 2e-2, 1e-2, 5e-3)),
+}
+ADAPTIVE = ("dopri5", "dop853")
+TOLERANCES = (1e-6, 1e-8, 1e-10)
+
+
+@functools.lru_cache(maxsize=None)
+def measure(name, method, step):
+    """Run ``method`` on scene ``name`` (``step``: dt, or rtol = atol for the pairs) and measure it
+    against the reference: a dict with the centre and contact errors (m, largest at the common
+    times), the transitions' kinds and times, their time errors (s; None where the kinds differ
+    from the reference's), the run's status and CPU time."""
+    scene, t_end = SCENES[name]
+    t0 = time.process_time()
+    if method in ADAPTIVE:
+        run = simulate(scene, method=method, rtol=step, atol=step, t_end=t_end, record_dt=SPACING)
+    else:
+        run = simulate(scene, method=method, dt=step, t_end=t_end,
+                       record_every=int(round(SPACING / step)))
+    cpu = time.process_time() - t0
+    t = run.t
+    on_grid = np.abs(t - np.round(t / SPACING) * SPACING) < 1e-12
+    ref = reference(scene, t_end, t[on_grid])
+    kinds = [c.kind for c in run.transitions]
+    ref_kinds = [c.kind for c in ref.transitions]
+    times = [c.time for c in run.transitions]
+    time_errors = ([abs(a - b.time) for a, b in zip(times, ref.transitions)]
+                   if kinds == ref_kinds else None)
+    return {
+        "centre": float(np.max(np.linalg.norm(run.center[on_grid] - ref.center, axis=1))),
+        "contact": float(np.max(np.linalg.norm(run.contact[on_grid] - ref.contact, axis=1))),
+        "kinds": kinds, "ref_kinds": ref_kinds, "times": times, "time_errors": time_errors,
+        "status": str(run.status), "message": run.message, "rows": int(on_grid.sum()),
+        "reached": float(t[-1]), "cpu": cpu,
+    }
+
+
+def fitted_order(steps, errors, floor):
+    """The least-squares slope of log(error) against log(step) over the points above ``floor``,
+    and how many there were."""
+    pts = [(math.log(h), math.log(e)) for h, e in zip(steps, errors) if e is not None and e > floor]
+    if len(pts) < 2:
+        return float("nan"), len(pts)
+    x, y = np.array(pts).T
+    return float(np.polyfit(x, y, 1)[0]), len(pts)
+
+
+def position_errors(name, method):
+    steps = FIXED[method][1]
+    return steps, [max(measure(name, method, h)["centre"], measure(name, method, h)["contact"])
+                   for h in steps]
+
+
+def _order_ok(method, p):
+    order = FIXED[method][0]
+    if method == "euler":   # first order: its constant is large and the fit looser
+        return 0.6 <= p <= 1.5
+    return abs(p - order) <= ORDER_SLACK
+
+
+CASES = [(name, method) for name in SCENES for method in FIXED]
+
+
+def test_the_reference_scenes_slip_grip_fly_and_land():
+    for name, (scene, t_end) in SCENES.items():
+        assert [c.kind for c in reference(scene, t_end, [0.0]).transitions] == REFERENCE_KINDS[name]
+
+
+@pytest.mark.parametrize("name, method", CASES)
+def test_fixed_step_transitions_are_the_references(name, method):
+    """Every step size: the run reaches its end, with the reference's transitions (no invented
+    slips, none missing) at strictly increasing times."""
+    for h in FIXED[method][1]:
+        m = measure(name, method, h)
+        assert m["status"] == "ok", f"dt {h}: {m['message']}"
+        assert m["kinds"] == m["ref_kinds"], f"dt {h}: {m['kinds']} (reference {m['ref_kinds']})"
+        assert all(b > a for a, b in zip(m["times"], m["times"][1:])), f"dt {h}: {m['times']}"
+
+
+@pytest.mark.parametrize("name, method", CASES)
+def test_fixed_step_positions_converge_at_the_methods_order(name, method):
+    steps, errors = position_errors(name, method)
+    p, n = fitted_order(steps, errors, POSITION_FLOOR)
+    assert n == len(steps), f"errors {errors}: below the reference's floor"
+    assert _order_ok(method, p), f"fitted order {p:.2f} (expected {FIXED[method][0]}); errors {errors}"
+
+
+@pytest.mark.parametrize("name, method", CASES)
+def test_fixed_step_transition_times_converge_at_the_methods_order(name, method):
+    order, steps = FIXED[method]
+    measured = [measure(name, method, h) for h in steps]
+    for h, m in zip(steps, measured):
+        assert m["time_errors"] is not None, f"dt {h}: {m['kinds']} (reference {m['ref_kinds']})"
+    # the largest of the transitions' time errors, and each transition's where it is measurable
+    largest = [max(m["time_errors"]) for m in measured]
+    p, n = fitted_order(steps, largest, TIME_FLOOR)
+    assert n >= 3 and _order_ok(method, p), f"fitted order {p:.2f} over {n} points; errors {largest}"
+    for i, kind in enumerate(measured[0]["kinds"]):
+        errors = [m["time_errors"][i] for m in measured]
+        p, n = fitted_order(steps, errors, TIME_FLOOR)
+        if n >= 3:
+            low = 0.6 if method == "euler" else order - ORDER_SLACK
+            assert p >= low, f"{kind} {i}: fitted order {p:.2f}; errors {errors}"
+
+
+@pytest.mark.parametrize("name", sorted(SCENES))
+@pytest.mark.parametrize("method", ADAPTIVE)
+def test_adaptive_error_falls_with_the_tolerance(name, method):
+    measured = [measure(name, method, tol) for tol in TOLERANCES]
+    for tol, m in zip(TOLERANCES, measured):
+        assert m["status"] == "ok", f"rtol {tol}: {m['message']}"
+        assert m["kinds"] == m["ref_kinds"], f"rtol {tol}: {m['kinds']} (reference {m['ref_kinds']})"
+    errors = [max(m["centre"], m["contact"]) for m in measured]
+    assert all(b < a / 10.0 for a, b in zip(errors, errors[1:])), errors
+    assert errors[-1] <= 1e-8, errors
+    assert max(measured[-1]["time_errors"]) <= 1e-8, measured[-1]["time_errors"]
+
+
+def _table():
+    lines = []
+    for name in SCENES:
+        ref_kinds = REFERENCE_KINDS[name]
+        lines.append(f"{name}: reference {' '.join(ref_kinds)}")
+        lines.append(f"  {'method':8s} {'step':>8s} {'position':>9s} {'t error':>9s}  status, transitions")
+        for method in list(FIXED) + list(ADAPTIVE):
+            steps = FIXED[method][1] if method in FIXED else TOLERANCES
+            for h in steps:
+                m = measure(name, method, h)
+                err = max(m["centre"], m["contact"])
+                terr = f"{max(m['time_errors']):9.1e}" if m["time_errors"] else "        -"
+                kinds = "same" if m["kinds"] == ref_kinds else " ".join(m["kinds"])
+                lines.append(f"  {method:8s} {h:8.2e} {err:9.1e} {terr}  {m['status']}, {kinds}")
+            if method in FIXED:
+                p, _ = fitted_order(*position_errors(name, method), POSITION_FLOOR)
+                tl = [max(measure(name, method, h)["time_errors"] or [float("nan")]) for h in steps]
+                pt, nt = fitted_order(steps, [None if math.isnan(e) else e for e in tl], TIME_FLOOR)
+                lines.append(f"  {method:8s} fitted order: position {p:.2f}, transition times {pt:.2f} "
+                             f"({nt} points); expected {FIXED[method][0]}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(_table())
