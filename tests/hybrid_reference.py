@@ -15,7 +15,7 @@ is a constraint force:
     sliding: F_t = −μ F_n ŝ,  ŝ = u/|u| (ŝ = B̂ from a slip's onset at u = 0 until |u| = 1e-8 m/s).
 
 The landscape's derivatives come from sympy (the formula with the parameters' values put in),
-not from RollBall's compiler. Every mode is integrated by scipy's DOP853 at rtol = atol = 1e-13;
+not from RollBall's compiler. Every mode is integrated by scipy's DOP853 at rtol 3e-14, atol 1e-14;
 its events (on the dense output) end a mode: a slip where (μ F_n)² = (2/7 m |B|)², a lift-off
 where F_n = 0, a grip where |u| falls to 1e-9 m/s (extrapolated linearly to |u| = 0). A flight
 is closed form (c a parabola, ω constant); the landing is the first root of the gap
@@ -41,7 +41,9 @@ import sympy
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-RTOL = ATOL = 1e-13
+# DOP853's tolerances (scipy takes rtol >= 2.2e-14): the reference's own error is then about
+# 1e-13 m and 1e-13 s (rtol 1e-13 moved positions by up to 5e-13 m, times by 5e-13 s)
+RTOL, ATOL = 3e-14, 1e-14
 ONSET_SPEED = 1e-8     # m/s: after a slip's onset ŝ = B̂ until |u| reaches this (DESIGN §12)
 GRIP_SPEED = 1e-9      # m/s: the grip is located where |u| falls to this, then extrapolated to 0
 ROLLING_TOLERANCE = 1e-9   # a start whose slip speed is below this share of its speeds rolls
