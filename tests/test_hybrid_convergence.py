@@ -3,7 +3,8 @@ and landings on 3-D scenes, measured against the independent reference (tests/hy
 
 Fixed-step methods: the largest error of the centre and of the contact point at the common
 recorded times (multiples of SPACING), and each transition's time error, fitted against dt over
-four step sizes (three halvings) chosen where the error is well above the reference's (~1e-13)
+four step sizes (three halvings; the points above the reference's floor, at least three) chosen
+where the error is well above the reference's (~1e-13)
 and the steps resolve the scene (measured with friction null on the drop, where the run has no
 slip: the fitted orders are the methods'). Expected: euler 1, rk4 4, gauss4 4, lawson5 5, gauss6 6,
 within ORDER_SLACK; the transitions the same kinds in the same order as the reference's (no
@@ -27,7 +28,7 @@ from rollball.scene import Contact, Start
 
 from hybrid_reference import reference
 
-SPACING = 0.04      # s: the common recorded times (every dt below divides it)
+SPACING = 0.04      # s: the common recorded times (multiples of the longest step where that is longer)
 POSITION_FLOOR = 2e-12   # m: errors below this may be the reference's (its own about 1e-13 m); not fitted
 TIME_FLOOR = 5e-13       # s: likewise for a transition's time (the reference's about 1e-13 s)
 ORDER_SLACK = 0.6
@@ -43,15 +44,20 @@ SCENES = {
                    start=Start(x=-0.6, y=0.0, vx=2.0, vy=0.1, spin=2.0),
                    contact=Contact(friction=0.3, restitution=0.0)), 0.5),
 }
-# The drop with friction null (it only rolls, flies and lands): the same fits pass there on the
-# code of 2026-11-28, so they measure each method's order where its contact modes are right.
+# Both with friction null (the bowl only rolls; the drop rolls, flies and lands): the same fits,
+# with the same steps, pass there on the code of 2026-11-28, so they measure each method's order
+# where its contact modes are right.
+SCENES["bowl_rolls"] = (Scene(landscape="1.5*x^2 + 0.9*y^2 + 0.3*x*y",
+                              start=Start(x=-0.1, y=0.1, vx=1.2, vy=-0.6),
+                              contact=Contact(friction=None)), 0.9)
 SCENES["drop_rolls"] = (Scene(landscape="-0.2*(1 + tanh(5*x)) + 0.01*y",
                               start=Start(x=-0.6, y=0.0, vx=2.0, vy=0.1, spin=2.0),
                               contact=Contact(friction=None, restitution=0.0)), 0.5)
 REFERENCE_KINDS = {"bowl": ["slip", "grip"], "drop": ["slip", "liftoff", "landing", "grip"],
-                   "drop_rolls": ["liftoff", "landing"]}
+                   "bowl_rolls": [], "drop_rolls": ["liftoff", "landing"]}
 
-# method -> (order, step sizes)
+# method -> (order, step sizes); the bowl's motion is slower and smoother than the drop's, so
+# its steps are twice as long (gauss6: 1.5 times) to keep its errors above the floors
 FIXED = {
     "euler": (1, (2e-4, 1e-4, 5e-5, 2.5e-5)),
     "rk4": (4, (1e-2, 5e-3, 2.5e-3, 1.25e-3)),
@@ -59,6 +65,15 @@ FIXED = {
     "lawson5": (5, (2e-2, 1e-2, 5e-3, 2.5e-3)),
     "gauss6": (6, (4e-2, 2e-2, 1e-2, 5e-3)),
 }
+LONGER = {"bowl": {"rk4": 2, "gauss4": 2, "lawson5": 2, "gauss6": 1.5}}
+LONGER["bowl_rolls"] = LONGER["bowl"]
+
+
+def steps_of(name, method):
+    k = LONGER.get(name, {}).get(method, 1)
+    return tuple(k * h for h in FIXED[method][1])
+
+
 ADAPTIVE = ("dopri5", "dop853")
 TOLERANCES = (1e-6, 1e-8, 1e-10)
 
@@ -70,15 +85,16 @@ def measure(name, method, step):
     times), the transitions' kinds and times, their time errors (s; None where the kinds differ
     from the reference's), the run's status and CPU time."""
     scene, t_end = SCENES[name]
+    spacing = SPACING if method in ADAPTIVE else max(SPACING, steps_of(name, method)[0])
     t0 = time.process_time()
     if method in ADAPTIVE:
-        run = simulate(scene, method=method, rtol=step, atol=step, t_end=t_end, record_dt=SPACING)
+        run = simulate(scene, method=method, rtol=step, atol=step, t_end=t_end, record_dt=spacing)
     else:
         run = simulate(scene, method=method, dt=step, t_end=t_end,
-                       record_every=int(round(SPACING / step)))
+                       record_every=int(round(spacing / step)))
     cpu = time.process_time() - t0
     t = run.t
-    on_grid = np.abs(t - np.round(t / SPACING) * SPACING) < 1e-12
+    on_grid = np.abs(t - np.round(t / spacing) * spacing) < 1e-12
     ref = reference(scene, t_end, t[on_grid])
     kinds = [c.kind for c in run.transitions]
     ref_kinds = [c.kind for c in ref.transitions]
@@ -105,7 +121,7 @@ def fitted_order(steps, errors, floor):
 
 
 def position_errors(name, method):
-    steps = FIXED[method][1]
+    steps = steps_of(name, method)
     return steps, [max(measure(name, method, h)["centre"], measure(name, method, h)["contact"])
                    for h in steps]
 
@@ -118,6 +134,7 @@ def _order_ok(method, p):
 
 
 CASES = [(name, method) for name in SCENES for method in FIXED]
+WITH_TRANSITIONS = [(name, method) for name, method in CASES if REFERENCE_KINDS[name]]
 
 
 def test_the_reference_scenes_slip_grip_fly_and_land():
@@ -129,7 +146,7 @@ def test_the_reference_scenes_slip_grip_fly_and_land():
 def test_fixed_step_transitions_are_the_references(name, method):
     """Every step size: the run reaches its end, with the reference's transitions (no invented
     slips, none missing) at strictly increasing times."""
-    for h in FIXED[method][1]:
+    for h in steps_of(name, method):
         m = measure(name, method, h)
         assert m["status"] == "ok", f"dt {h}: {m['message']}"
         assert m["kinds"] == m["ref_kinds"], f"dt {h}: {m['kinds']} (reference {m['ref_kinds']})"
@@ -140,13 +157,13 @@ def test_fixed_step_transitions_are_the_references(name, method):
 def test_fixed_step_positions_converge_at_the_methods_order(name, method):
     steps, errors = position_errors(name, method)
     p, n = fitted_order(steps, errors, POSITION_FLOOR)
-    assert n == len(steps), f"errors {errors}: below the reference's floor"
+    assert n >= 3, f"errors {errors}: below the reference's floor"
     assert _order_ok(method, p), f"fitted order {p:.2f} (expected {FIXED[method][0]}); errors {errors}"
 
 
-@pytest.mark.parametrize("name, method", CASES)
+@pytest.mark.parametrize("name, method", WITH_TRANSITIONS)
 def test_fixed_step_transition_times_converge_at_the_methods_order(name, method):
-    order, steps = FIXED[method]
+    order, steps = FIXED[method][0], steps_of(name, method)
     measured = [measure(name, method, h) for h in steps]
     for h, m in zip(steps, measured):
         assert m["time_errors"] is not None, f"dt {h}: {m['kinds']} (reference {m['ref_kinds']})"
@@ -178,7 +195,7 @@ def test_adaptive_error_falls_with_the_tolerance(name, method):
     errors = [max(m["centre"], m["contact"]) for m in measured]
     assert all(b < a / 10.0 for a, b in zip(errors, errors[1:])), errors
     assert errors[-1] <= 1e-8, errors
-    assert max(measured[-1]["time_errors"]) <= 1e-8, measured[-1]["time_errors"]
+    assert max(measured[-1]["time_errors"], default=0.0) <= 1e-8, measured[-1]["time_errors"]
 
 
 def _table():
@@ -188,7 +205,7 @@ def _table():
         lines.append(f"{name}: reference {' '.join(ref_kinds)}")
         lines.append(f"  {'method':8s} {'step':>8s} {'position':>9s} {'t error':>9s}  status, transitions")
         for method in list(FIXED) + list(ADAPTIVE):
-            steps = FIXED[method][1] if method in FIXED else TOLERANCES
+            steps = steps_of(name, method) if method in FIXED else TOLERANCES
             for h in steps:
                 m = measure(name, method, h)
                 err = max(m["centre"], m["contact"])
