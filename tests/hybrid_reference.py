@@ -309,11 +309,29 @@ def _flight(sol: _Solution, t0, s0, t_end):
             landed = brentq(gap, t, t + dt, xtol=1e-16, rtol=1e-15, maxiter=200)
             break
         t, h = t + dt, h1
+    if landed is not None:
+        _check_landing(model, centre(landed), last[0])
     t1 = landed if landed is not None else t_end
     dense = _FlightDense(model, t0, c0, v0, w0, (s0[9], s0[10]))
     sol.segments.append((t0, t1, FLYING, dense))
     s1 = state(t1)
     return t1, s1, landed is not None
+
+
+def _check_landing(model, c, foot):
+    """At a landing the centre is r from the surface, and no surface point is nearer: no point
+    of a 41 x 41 grid of surface points around the foot (±2r) is inside the ball."""
+    r = model.r
+    x, y, D = model.foot(c, [foot, (c[0], c[1])])
+    if abs(D - r) > 1e-12 * r:
+        raise RuntimeError(f"landing at {c}: the centre is {D} from the surface, not r = {r}")
+    grid = np.linspace(-2.0 * r, 2.0 * r, 41)
+    for gx in grid:
+        for gy in grid:
+            px, py = x + gx, y + gy
+            d = math.dist(c, (px, py, model.land.f(px, py)))
+            if d < r - 1e-9:
+                raise RuntimeError(f"landing at {c}: the surface at ({px}, {py}) is nearer ({d}) than r")
 
 
 class _FlightDense:
@@ -435,7 +453,11 @@ def reference(scene, t_end: float, times) -> HybridReference:
     """The reference motion of ``scene`` (a rollball Scene or its JSON) until ``t_end``, at
     ``times`` (s, within [0, t_end]). At a transition's own time the state before it is given."""
     text = scene if isinstance(scene, str) else scene.dumps()
-    sol = _solved(text, float(t_end))
+    return evaluate(_solved(text, float(t_end)), t_end, times)
+
+
+def evaluate(sol: _Solution, t_end, times) -> HybridReference:
+    """A solution (``solve``'s, uncached) at ``times``."""
     times = np.asarray(times, dtype=float)
     rows = np.empty((len(times), 11))
     modes = []

@@ -17,6 +17,7 @@ from scipy.integrate import quad
 from rollball import Scene, simulate
 from rollball.scene import Contact, Start
 
+import hybrid_reference
 from hybrid_reference import reference
 
 G = 9.81
@@ -152,6 +153,31 @@ def test_reference_scenes_do_what_they_are_for(name):
     assert [t.kind for t in ref.transitions] == EXPECTED_KINDS[name]
 
 
+def threshold_changes(name, onset=1e-9, grip=1e-10):
+    """How far the reference moves when the slip speed up to which a slip's onset holds ŝ = B̂
+    (1e-8 m/s) and the one where a grip is located (1e-9 m/s) are 10 times smaller: the largest
+    change of the centre at the recorded times (m) and of a transition's time (s)."""
+    scene, t_end = SCENES[name]
+    times = _grid(t_end)
+    base = reference(scene, t_end, times)
+    saved = hybrid_reference.ONSET_SPEED, hybrid_reference.GRIP_SPEED
+    try:
+        hybrid_reference.ONSET_SPEED, hybrid_reference.GRIP_SPEED = onset, grip
+        other = hybrid_reference.evaluate(hybrid_reference.solve(scene.dumps(), t_end), t_end, times)
+    finally:
+        hybrid_reference.ONSET_SPEED, hybrid_reference.GRIP_SPEED = saved
+    assert [t.kind for t in other.transitions] == [t.kind for t in base.transitions]
+    return (float(np.max(np.linalg.norm(other.center - base.center, axis=1))),
+            max(abs(a.time - b.time) for a, b in zip(other.transitions, base.transitions)))
+
+
+@pytest.mark.parametrize("name", ["bowl", "hills"])
+def test_reference_does_not_depend_on_its_speed_thresholds(name):
+    """DESIGN §12: holding ŝ = B̂ until |u| = 1e-8 m/s is as good as the exact onset."""
+    centre, when = threshold_changes(name)
+    assert centre < 1e-12 and when < 1e-12
+
+
 # -- RollBall against the reference -----------------------------------------------------------
 
 def compare(run, ref_scene, t_end, spacing=RECORD_DT):
@@ -178,7 +204,9 @@ def compare(run, ref_scene, t_end, spacing=RECORD_DT):
 
 def dopri5_errors(name, rtol=1e-12):
     scene, t_end = SCENES[name]
+    t0 = time.process_time()
     run = simulate(scene, method="dopri5", rtol=rtol, atol=rtol, t_end=t_end, record_dt=RECORD_DT)
+    run.provenance["cpu"] = time.process_time() - t0
     return run, compare(run, scene, t_end)
 
 
@@ -205,15 +233,19 @@ if __name__ == "__main__":
               f"mode {sorted(set(modes))}")
     dt, dx, dv, kinds = cylinder_errors()
     print(f"  cylinder: lift-off time {dt:+.1e} s, x {dx:+.1e} m, speed {dv:+.1e} m/s")
+    for name in ("bowl", "hills"):
+        centre, when = threshold_changes(name)
+        print(f"  {name}: onset and grip speeds 10 times smaller move the centre {centre:.1e} m, "
+              f"transitions {when:.1e} s")
     print()
     print(f"{'scene':8s} {'ref CPU':>8s} {'rb CPU':>7s} {'centre':>8s} {'contact':>8s} "
           f"{'t err':>8s} {'x err':>8s}  transitions")
     for name, (scene, t_end) in SCENES.items():
         t0 = time.process_time()
-        ref = reference(scene, t_end, [0.0])
+        hybrid_reference.solve(scene.dumps(), t_end)   # uncached: its CPU time
         t1 = time.process_time()
         run, (centre, contact, when, where, kinds, ref_kinds) = dopri5_errors(name)
-        t2 = time.process_time()
+        t2 = t1 + run.provenance["cpu"]
         same = "same" if kinds == ref_kinds else f"DIFFER: {kinds} vs {ref_kinds}"
         fmt = (lambda v: f"{v:8.1e}" if v is not None else "       -")
         print(f"{name:8s} {t1 - t0:8.2f} {t2 - t1:7.2f} {centre:8.1e} {contact:8.1e} {fmt(when)} "
