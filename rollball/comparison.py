@@ -15,6 +15,8 @@ a run is the maximum over those times, not only at the end.
 from __future__ import annotations
 
 import math
+import os
+import platform
 import threading
 import time
 from dataclasses import dataclass, field, replace
@@ -526,8 +528,8 @@ def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Ord
 
 @dataclass
 class Comparison:
-    """What ``compare`` measured; ``to_dict`` is docs/design.md §6's compare.json, ``save`` writes it
-    with the report (compare.md) and the figure (compare.png)."""
+    """What ``compare`` measured; ``to_dict`` is docs/design.md §6's compare.json
+    (``comparison_report.save`` writes it with the report, compare.md, and the figure, compare.png)."""
 
     scene: Scene
     t_end: float
@@ -584,14 +586,6 @@ class Comparison:
             "best": best,   # index into runs of the fastest run reaching each error, or null
         })
 
-    def save(self, directory: str | Path, keep=()) -> list[Path]:
-        """compare.json, compare.md and compare.png in ``directory`` (made if missing),
-        replaced together or not at all (``files.NotReplaced``, whose message says where the
-        new files were kept); ``keep``: paths not to overwrite (the scene)."""
-        from . import comparison_report
-
-        return comparison_report.save(self, Path(directory), keep)
-
 
 def strict_json(doc: dict) -> dict:
     """``doc`` with every number JSON cannot hold (NaN, ±inf) replaced by null, each listed
@@ -614,6 +608,19 @@ def strict_json(doc: dict) -> dict:
     return out
 
 
+def machine() -> str:
+    """The processor (from /proc/cpuinfo where there is one), core count, system and Python."""
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores, {platform.system()}, Python {platform.python_version()}"
+
+
 def setting_text(run: RunResult) -> str:
     return f"{run.spec} dt {run.dt:.3g}" if run.dt is not None else f"{run.spec} rtol {run.rtol:.0e}"
 
@@ -633,8 +640,6 @@ def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_e
     If the reference itself stops early (the ball does not fit, the landscape cannot be
     evaluated), everything is compared up to the last common time before that.
     """
-    from .comparison_report import machine
-
     specs = _specs(runs)
     t_end = scene.duration if t_end is None else t_end
     if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (0 < t_end < math.inf):

@@ -1,18 +1,18 @@
 """A comparison's files: compare.json (docs/design.md §6), compare.md (the readable report) and
-compare.png (error against wall time, and against step size with the fitted slopes)."""
+compare.png (error against wall time, and against step size with the fitted slopes).
+
+This module reads what rollball.comparison measured; that module imports nothing from here."""
 
 from __future__ import annotations
 
 import io
 import json
-import os
-import platform
 from pathlib import Path
 
 import warnings
 
 from .comparison import (ERROR_UNITS, ERRORS, FITTED, FLOOR_FACTOR, SPREAD, TARGETS, Comparison, RunResult,
-                         RunSpec, setting_text)
+                         RunSpec, machine, setting_text)  # noqa: F401 - machine: bench and sweeps read it here
 from .files import check_outputs, replace_together
 
 FILES = ("compare.json", "compare.md", "compare.png")
@@ -23,19 +23,6 @@ def literal(text: str) -> str:
     """User text as it can go into a UTF-8 file or a figure: a lone surrogate (which no
     encoding writes) becomes U+FFFD."""
     return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in str(text))
-
-
-def machine() -> str:
-    """The processor (from /proc/cpuinfo where there is one), core count, system and Python."""
-    model = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{model}, {os.cpu_count()} cores, {platform.system()}, Python {platform.python_version()}"
 
 
 def _number(value: float | None, fmt: str = ".2e") -> str:
@@ -224,12 +211,13 @@ def check(directory: Path, keep=()) -> None:
     check_outputs(directory, FILES, keep)
 
 
-def save(cmp: Comparison, directory: Path, keep=()) -> list[Path]:
-    """Render the three files, then replace them together (files.replace_together): all or
+def save(cmp: Comparison, directory: str | Path, keep=()) -> list[Path]:
+    """compare.json, compare.md and compare.png in ``directory`` (made if missing); ``keep``:
+    paths not to overwrite (the scene). Render the three files, then replace them together (files.replace_together): all or
     none. ``NotReplaced`` when none was; the new files are then kept in a folder of their own
     (its name in the message). Returns the files written."""
     files, notes = render(cmp)
-    written = replace_together(directory, files, keep=keep, kept_name=KEPT_NAME)
+    written = replace_together(Path(directory), files, keep=keep, kept_name=KEPT_NAME)
     if notes:
         warnings.warn("; ".join(notes), stacklevel=2)
     return written

@@ -11,7 +11,7 @@ import pytest
 from conftest import make_scene
 
 import rollball
-from rollball import METHODS, RunSpec, Scene, compare, parse_runs, simulate
+from rollball import METHODS, RunSpec, Scene, compare, comparison_report, parse_runs, simulate
 from rollball.cli import main
 from rollball.comparison import Cancelled, error_series, reference_run
 from rollball.examples import EXAMPLES_DIR
@@ -212,7 +212,7 @@ def test_a_scene_that_stops_is_compared_up_to_where_it_stops(tmp_path):
     cmp = compare(scene, runs="rk4,dopri5", quick=True)
     assert cmp.reference.status != "ok" and 0 < cmp.t_end < scene.duration
     assert cmp.runs and all(r.ok for r in cmp.runs)  # each run to the last common time before
-    cmp.save(tmp_path)
+    comparison_report.save(cmp, tmp_path)
     doc = json.loads((tmp_path / "compare.json").read_text())
     check_compare_json(doc)
     assert doc["reference"]["status"] != "ok" and doc["t_end"] == cmp.t_end

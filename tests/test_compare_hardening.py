@@ -217,3 +217,16 @@ def test_formulas_with_huge_folded_constants_run_in_compare_and_sweep(formula, t
     assert main(["sweep", scene, "--vary", "start.vx=0:1:2", "--workers", "1", "--out", str(tmp_path / "s")]) == 0
     err = capsys.readouterr().err
     assert "Traceback" not in err and "error" not in err
+
+
+def test_comparison_imports_nothing_from_its_report():
+    """One direction: the report's module reads the comparison's; the comparison names no report."""
+    import ast
+
+    import rollball.comparison as comparison
+
+    tree = ast.parse(open(comparison.__file__, encoding="utf-8").read())
+    imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                for alias in node.names} | {node.module or "" for node in ast.walk(tree)
+                                             if isinstance(node, ast.ImportFrom)}
+    assert not any("comparison_report" in name for name in imported), imported
