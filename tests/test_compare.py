@@ -85,6 +85,8 @@ def check_compare_json(doc: dict) -> None:
     assert _number(doc["t_end"]) and doc["t_end"] > 0 and isinstance(doc["machine"], str)
     ref = doc["reference"]
     assert ref["method"] in METHODS and _number(ref["rtol"]) and _number(ref["error_estimate"])
+    assert isinstance(ref["checked"], bool) and isinstance(ref["problems"], list) and len(ref["checks"]) == 2
+    assert ref["checked"] == (not ref["problems"])
     assert isinstance(doc["runs"], list) and doc["runs"]
     for run in doc["runs"]:
         method = METHODS[run["method"]]
@@ -99,8 +101,10 @@ def check_compare_json(doc: dict) -> None:
         assert run["evaluations"] >= run["steps"] > 0
         assert _number(run["seconds"]) and run["seconds"] > 0
         assert set(run["error"]) == ERROR_KEYS
-        for value in run["error"].values():
-            assert (_number(value) and value >= 0) or (value is None and run["status"] != "ok")
+        assert set(run["below_reference_accuracy"]) <= ERROR_KEYS
+        for key, value in run["error"].items():  # an error below the reference's accuracy is never a number
+            assert ((_number(value) and value >= 0 and key not in run["below_reference_accuracy"])
+                    or (value is None and (run["status"] != "ok" or key in run["below_reference_accuracy"])))
         assert isinstance(run["below_reference_floor"], bool)
     for order in doc["orders"]:
         assert METHODS[order["method"]].fixed_step and isinstance(order["munthe_kaas"], bool)
