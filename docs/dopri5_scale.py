@@ -6,7 +6,8 @@ Run from the repository's root (a few minutes on 2 shared cores):
     git worktree add /tmp/before e5e8090^      # the code before the change (its kernel compiles afresh)
     .venv/bin/python docs/dopri5_scale.py --before /tmp/before
 
-Without ``--before`` it prints this tree's figures alone. Each tree is measured in a process of
+Without ``--before`` it prints this tree's figures alone; ``--now /tmp/scale`` (``git worktree add
+/tmp/scale e5e8090``) sets the change alone against its parent. Each tree is measured in a process of
 its own (its own ``rollball``), on the examples hills and saddle, the crater of docs/accuracy.py (not an
 example) and ``valleys``: the example ripples at wavenumber k = 2 (its default k = 1 is the hills),
 a ball at rest finding its way among many valleys: dopri5 and dop853 at rtol 1e-6, 1e-8, 1e-10 (atol = 1e-3 rtol,
@@ -42,6 +43,14 @@ ROW = 0.01
 REFERENCE = 1e-13
 
 
+def code(root: Path) -> str:
+    """The checkout's rollball/ as git names it (its tree's hash; "+changes" when its files differ)."""
+    tree = subprocess.run(["git", "rev-parse", "--short", "HEAD:rollball"], cwd=root, capture_output=True, text=True)
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", "rollball"], cwd=root,
+                           capture_output=True, text=True)
+    return tree.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
+
+
 def measure(root: Path) -> dict:
     """This tree's figures (run in a process whose ``rollball`` is root's)."""
     sys.path.insert(0, str(root))
@@ -65,7 +74,7 @@ def measure(root: Path) -> dict:
     def run(scene, method, rtol, **options):
         return simulate(scene, method=method, rtol=rtol, atol=rtol * ATOL_PER_RTOL, **options)
 
-    out = {"root": str(root), "scenes": [], "liftoffs": []}
+    out = {"rollball_tree": code(root), "scenes": [], "liftoffs": []}
     for name in SCENES:
         scene = scene_of(name)
         ref = run(scene, "dop853", REFERENCE, record_dt=ROW)
@@ -124,6 +133,38 @@ def at_evaluations(runs: list[dict], method: str, evaluations: float) -> float:
     return float(np.exp(e[i - 1] + slope * (np.log(evaluations) - n[i - 1])))
 
 
+ROLLING = ("hills", "saddle", "crater")   # the README's first figures; the many valleys apart
+
+
+def trade(now: dict, before: dict, method: str, scenes: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+    """Over these scenes and the three tolerances, the (smallest, largest) ratio now / before of
+    the error at the same rtol ("error"), of the evaluations ("evaluations") and of the error
+    against before's at as many evaluations ("same_cost"): what README.md quotes."""
+    out = {"error": [], "evaluations": [], "same_cost": []}
+    for entry, old in zip(now["scenes"], before["scenes"]):
+        if entry["scene"] not in scenes:
+            continue
+        for run, was in zip(entry["runs"], old["runs"]):
+            if run["method"] != method:
+                continue
+            out["error"].append(run["contact"] / was["contact"])
+            out["evaluations"].append(run["evaluations"] / was["evaluations"])
+            out["same_cost"].append(run["contact"] / at_evaluations(old["runs"], method, run["evaluations"]))
+    return {key: (min(values), max(values)) for key, values in out.items()}
+
+
+def trade_lines(now: dict, before: dict) -> list[str]:
+    lines = ["", "Now / before, over rtol 1e-6, 1e-8, 1e-10 (smallest-largest)", "",
+             "| method | scenes | error at the same rtol | evaluations | error for as many evaluations |",
+             "|---|---|---:|---:|---:|"]
+    for method in METHODS:
+        for scenes in (ROLLING, ("valleys",)):
+            t = trade(now, before, method, scenes)
+            lines.append(f"| {method} | {', '.join(scenes)} | " + " | ".join(
+                f"{t[key][0]:.2f}-{t[key][1]:.2f}" for key in ("error", "evaluations", "same_cost")) + " |")
+    return lines
+
+
 def table(now: dict, before: dict | None) -> list[str]:
     lines = []
     for i, entry in enumerate(now["scenes"]):
@@ -165,6 +206,8 @@ def table(now: dict, before: dict | None) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", type=Path, help="a checkout of the code before the change (e5e8090^)")
+    parser.add_argument("--now", type=Path, default=ROOT,
+                        help="the checkout to set against it (default: this one; e5e8090 for the change alone)")
     parser.add_argument("--measure", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     args = parser.parse_args()
@@ -172,13 +215,13 @@ def main() -> None:
         print(json.dumps(measure(args.measure)))
         return
     before = measured(args.before.resolve()) if args.before else None
-    now = measured(ROOT)
+    now = measured(args.now.resolve())
     truth = liftoff_times()
     for doc in (now, before) if before else (now,):
         for lift in doc["liftoffs"]:
             lift["reference"] = truth[lift["scene"]]
             lift["error"] = abs(lift["time"] - lift["reference"])
-    print("\n".join(table(now, before)).lstrip("\n"))
+    print("\n".join(table(now, before) + (trade_lines(now, before) if before else [])).lstrip("\n"))
     if args.json:
         args.json.write_text(json.dumps({"before": before, "now": now}, indent=1) + "\n")
 
