@@ -297,7 +297,7 @@ class Reference:
         return {"method": self.method, "rtol": self.rtol, "error_estimate": _finite_or_none(self.error_estimate),
                 "atol": self.atol,
                 "error_estimates": {k: _finite_or_none(v) for k, v in self.error_estimates.items()},
-                "floors": {k: _finite_or_none(self.floor(k)) for k in ERRORS},
+                "floors": {k: _finite_or_none(self.floor(k)) for k in ERRORS if k in self.error_estimates},
                 "checks": [c.to_dict() for c in self.checks], "accuracy_required": REFERENCE_ACCURACY,
                 "checked": self.checked, "problems": self.problems,
                 "status": str(self.status), "message": self.message, "steps": self.steps, "seconds": self.seconds}

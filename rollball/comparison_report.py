@@ -67,7 +67,7 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
              f"{ref.method} at rtol = {ref.rtol:.0e}, atol = {ref.atol:.0e} ({ref.steps} steps, "
              f"{ref.seconds * 1e3:.3g} ms). Its own error is estimated as the larger difference from two checks, "
              f"the same method a decade looser and another method at its tolerance ({checks}): "
-             + ", ".join(f"{k} {_number(ref.error_estimates[k], '.1e')}" for k in ERRORS) + ". "
+             + ", ".join(f"{k} {_number(ref.error_estimates.get(k), '.1e')}" for k in ERRORS) + ". "
              f"Errors below the floor, the larger of {FLOOR_FACTOR:g}× the first difference (the looser run's error, of the "
              f"reference's order), the second (both runs' errors together) and round-off (100 ε times the quantity's "
              f"size), are not measured: "
