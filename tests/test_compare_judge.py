@@ -99,7 +99,7 @@ def test_a_tolerance_ladder_whose_error_stops_shrinking_is_named():
 
 # -- the reference's own error ------------------------------------------------------------------
 
-@pytest.mark.parametrize("name", ["billiard", "bump", "liftoff", "ridge_jump"])
+@pytest.mark.parametrize("name", ["billiard", "bump", "liftoff", "cylinder", "ridge_jump"])
 def test_the_reference_is_checked_to_1e_10_on_the_hybrid_examples(name):
     """Sliding, flying and landing: the reference's estimate is its difference from dop853 a
     decade looser and from dopri5 at its tolerance, and it is at most 1e-10. It is true: on the
@@ -208,3 +208,25 @@ def test_a_checked_reference_says_so(tmp_path):
     assert cmp.reference.checked and "not checked" not in cmp.summary()
     assert "The reference is checked" in comparison_report.markdown(cmp)
     assert math.isfinite(cmp.reference.error_estimate)
+
+
+def test_a_ball_that_slips_and_grips_again_is_judged_by_what_the_reference_resolves():
+    """Sliding on a curved surface, slipping and gripping in turn (the bowl with friction 0.1, a
+    start at 3 m/s and spin): today the reference differs from its checks by about 2e-8 m there
+    (slip and grip are located alike by both dop853 runs but not by dopri5). Whatever it
+    resolves, compare says whether it is checked and quotes no error below its floor."""
+    doc = json.loads((EXAMPLES_DIR / "bowl.json").read_text())
+    doc.update(version=3, contact={"friction": 0.1, "restitution": 0.0, "after_liftoff": "fly"})
+    doc["start"].update(vx=3.0, spin=5.0)
+    cmp = compare(Scene.from_dict(doc), runs="rk4,dopri5", t_end=3.0, quick=True)
+    ref = cmp.reference
+    assert ref.checked == (ref.error_estimates["contact"] <= REFERENCE_ACCURACY
+                           and ref.error_estimates["orientation"] <= REFERENCE_ACCURACY)
+    assert ("not checked to 1e-10" in cmp.summary()) == (not ref.checked)
+    for run in cmp.runs:
+        data = run.to_dict()
+        for key in ("contact", "orientation"):
+            assert data["error"][key] is None or data["error"][key] >= ref.floor(key)
+    for target in (1e-6, 1e-10):
+        best = cmp.best(target)
+        assert best is None or target >= max(ref.floor("contact"), ref.floor("orientation"))
