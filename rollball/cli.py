@@ -354,7 +354,7 @@ def _compare(args) -> int:
     print(f"{shown(args.scene)}: {len(result.runs)} runs to t = {result.t_end:g} s{note}; {result.summary()}",
           flush=True)
     try:
-        written = result.save(args.out, keep)
+        written = comparison_report.save(result, args.out, keep)
     except NotReplaced as e:
         return _fail(f"cannot write {shown(e.filename or args.out)}: {e.strerror or e}")
     except OSError as e:

@@ -15,6 +15,8 @@ a run is the maximum over those times, not only at the end.
 from __future__ import annotations
 
 import math
+import os
+import platform
 import threading
 import time
 from dataclasses import dataclass, field, replace
@@ -34,12 +36,15 @@ FITTED = ("contact", "orientation")   # the errors whose log-log slope against d
 ERROR_UNITS = {"contact": "m", "velocity": "m/s", "omega": "rad/s", "orientation": "‖R − R_ref‖_F",
                "energy": "relative"}
 
-REFERENCE_RTOL = 1e-13     # the reference run, and its check one decade tighter
+REFERENCE_RTOL = 1e-13     # the reference run
+CHECK_METHOD = "dopri5"    # its checks: itself a decade looser, and another method at its tolerance
+REFERENCE_ACCURACY = 1e-10   # the reference is checked when its own error (m; ‖ΔR‖_F) is at most this
 ATOL_PER_RTOL = 1e-3       # atol = 1e-3 rtol for every adaptive run
-FLOOR_FACTOR = 10.0        # errors below 10x the reference's own error are flagged, not fitted
+FLOOR_FACTOR = 10.0        # errors below 10x the reference's difference from itself a decade looser: not measured
 ROUNDOFF = 100 * np.finfo(float).eps   # nor are errors below this times the quantity's size
 CEILING = 1e-2             # fixed-step ladders start at about this contact error
 SPREAD = 0.4               # orders are fitted where the local slopes agree to within this (asymptotic range)
+PLATEAU_SLOPE = 0.5        # a pair of steps whose error shrinks slower than dt^0.5: not converging there
 TARGETS = (1e-6, 1e-10)    # the summary names the cheapest run reaching each
 ROWS_PER_SECOND = 20       # the common times: at least 50 and at most 1000 of them
 MIN_ROWS, MAX_ROWS = 50, 1000
@@ -228,23 +233,74 @@ def _advance(run: Simulation, cancel: threading.Event | None) -> float:
 
 
 @dataclass(frozen=True)
+class Check:
+    """A run the reference is checked against, and the largest difference from it per error key."""
+
+    method: str
+    rtol: float
+    status: Status
+    difference: dict[str, float]
+
+    def to_dict(self) -> dict:
+        return {"method": self.method, "rtol": self.rtol, "status": str(self.status),
+                "difference": {k: _finite_or_none(v) for k, v in self.difference.items()}}
+
+
+@dataclass(frozen=True)
 class Reference:
-    """The run every other one is measured against, and its own error."""
+    """The run every other one is measured against, and its own error: the larger difference
+    from its two checks (``checks``), the same method a decade looser (whose difference is
+    about the looser run's own error, larger than the reference's) and another method at the
+    same tolerance (another step sequence: an error both runs of the one method share shows
+    there). The reference is ``checked`` when that estimate is at most ``REFERENCE_ACCURACY``
+    in the contact point (m) and the orientation, and every check ended as it did."""
 
     method: str
     rtol: float
     atol: float
     error_estimate: float                 # the largest of error_estimates but energy
-    error_estimates: dict[str, float]     # against a run with a 10x tighter tolerance
+    error_estimates: dict[str, float]     # key -> the larger difference from the checks
     status: Status
     message: str
     steps: int
     seconds: float
     scales: dict = field(default_factory=dict)   # key -> size of the quantity (round-off is relative to it)
+    checks: tuple[Check, ...] = ()
 
     def floor(self, key: str) -> float:
-        """Errors below this are the reference's own, or round-off, not the run's."""
-        return max(FLOOR_FACTOR * self.error_estimates[key], ROUNDOFF * self.scales.get(key, 0.0))
+        """Errors below this may be the reference's, not the run's: not measured. The same
+        method a decade looser differs from it by about its own error, of the reference's
+        order: FLOOR_FACTOR times that; another method's difference bounds both runs' errors
+        together: that as it is; and round-off: ROUNDOFF times the quantity's size."""
+        bounds = [(FLOOR_FACTOR if check.method == self.method else 1.0) * check.difference[key]
+                  for check in self.checks] or [FLOOR_FACTOR * self.error_estimates[key]]
+        bounds = [b if not math.isnan(b) else math.inf for b in bounds]
+        return max(*bounds, ROUNDOFF * self.scales.get(key, 0.0))
+
+    @property
+    def checked(self) -> bool:
+        return not self.problems
+
+    @property
+    def problems(self) -> list[str]:
+        """Why the reference is not good to REFERENCE_ACCURACY (empty when it is)."""
+        out = [f"{check.method} at rtol {check.rtol:.0e} ended {check.status}, the reference {self.status}"
+               for check in self.checks if check.status != self.status]
+        for key in FITTED:
+            estimate = self.error_estimates[key]
+            if not estimate <= REFERENCE_ACCURACY:
+                out.append(f"its own {key} error is {estimate:.1e} {ERROR_UNITS[key]}, "
+                           f"above {REFERENCE_ACCURACY:.0e}")
+        return out
+
+    def to_dict(self) -> dict:
+        return {"method": self.method, "rtol": self.rtol, "error_estimate": _finite_or_none(self.error_estimate),
+                "atol": self.atol,
+                "error_estimates": {k: _finite_or_none(v) for k, v in self.error_estimates.items()},
+                "floors": {k: _finite_or_none(self.floor(k)) for k in ERRORS if k in self.error_estimates},
+                "checks": [c.to_dict() for c in self.checks], "accuracy_required": REFERENCE_ACCURACY,
+                "checked": self.checked, "problems": self.problems,
+                "status": str(self.status), "message": self.message, "steps": self.steps, "seconds": self.seconds}
 
 
 def reference_method() -> str:
@@ -255,21 +311,26 @@ def reference_method() -> str:
 
 def _reference(scene: Scene, t_end: float, record_dt: float, cancel=None) -> tuple[Trajectory, Reference]:
     method = reference_method()
-    _advance(Simulation(scene, method=method, t_end=record_dt, record_dt=record_dt), cancel)  # compiled
+    settings = [(method, REFERENCE_RTOL), (method, REFERENCE_RTOL * 10)]
+    if CHECK_METHOD != method:
+        settings.append((CHECK_METHOD, REFERENCE_RTOL))
     runs = []
-    for rtol in (REFERENCE_RTOL, REFERENCE_RTOL / 10):
-        run = Simulation(scene, method=method, t_end=t_end, rtol=rtol, atol=rtol * ATOL_PER_RTOL,
-                         record_dt=record_dt)
+    for name, rtol in settings:
+        _advance(Simulation(scene, method=name, t_end=record_dt, record_dt=record_dt), cancel)  # compiled
+        run = Simulation(scene, method=name, t_end=t_end, rtol=rtol, atol=rtol * ATOL_PER_RTOL, record_dt=record_dt)
         seconds = _advance(run, cancel)
         runs.append((run.trajectory(), seconds))
-    (traj, seconds), (tighter, _) = runs
-    estimates = _max_errors(traj, tighter)
+    (traj, seconds), others = runs[0], runs[1:]
+    checks = tuple(Check(name, rtol, other.status, _max_errors(other, traj))
+                   for (name, rtol), (other, _) in zip(settings[1:], others))
+    with np.errstate(invalid="ignore"):
+        estimates = {key: float(np.nanmax([c.difference[key] for c in checks])) for key in ERRORS}
     estimate = max(v for k, v in estimates.items() if k != "energy")
     with np.errstate(all="ignore"):
         scales = {"contact": float(np.nanmax(np.linalg.norm(traj.contact, axis=1), initial=0.0)),
                   "orientation": 1.0}   # ‖R‖_F = √3 for a rotation; its entries are at most 1
     return traj, Reference(method, REFERENCE_RTOL, REFERENCE_RTOL * ATOL_PER_RTOL, estimate, estimates,
-                           traj.status, traj.message, traj.steps, seconds, scales)
+                           traj.status, traj.message, traj.steps, seconds, scales, checks)
 
 
 def record_step(t_end: float) -> float:
@@ -280,8 +341,8 @@ def record_step(t_end: float) -> float:
 def reference_run(scene: Scene, t_end: float | None = None, record_dt: float | None = None,
                   cancel: threading.Event | None = None) -> tuple[Trajectory, float]:
     """The reference trajectory (rows at multiples of ``record_dt`` and at t_end) and an
-    estimate of its own error (the largest difference, in m, m/s, rad/s or ‖ΔR‖_F, from a
-    run with a 10x tighter tolerance). Setting ``cancel`` raises ``Cancelled`` within one
+    estimate of its own error (the largest difference, in m, m/s, rad/s or ‖ΔR‖_F, from its
+    checks: ``Reference``). Setting ``cancel`` raises ``Cancelled`` within one
     chunk of steps."""
     t_end = scene.duration if t_end is None else t_end
     traj, ref = _reference(scene, t_end, record_step(t_end) if record_dt is None else record_dt, cancel)
@@ -305,6 +366,7 @@ class RunResult:
     below_reference_floor: bool   # some fitted error (contact, orientation) is below the reference's floor
     message: str = ""
     at_floor: bool = False     # every fitted error is: a finer step or tighter tolerance tells nothing more
+    below: tuple[str, ...] = ()   # the error keys below the reference's accuracy: not measured, never quoted
 
     @property
     def ok(self) -> bool:
@@ -319,7 +381,8 @@ class RunResult:
         return {"method": self.spec.method, "munthe_kaas": self.spec.munthe_kaas, "dt": self.dt,
                 "rtol": self.rtol, "atol": self.atol, "status": str(self.status), "steps": self.steps,
                 "rejected": self.rejected, "evaluations": self.evaluations, "seconds": self.seconds,
-                "error": {k: _finite_or_none(v) for k, v in self.error.items()},
+                "error": {k: None if k in self.below else _finite_or_none(v) for k, v in self.error.items()},
+                "below_reference_accuracy": list(self.below),
                 "below_reference_floor": self.below_reference_floor, "at_reference_floor": self.at_floor,
                 "message": self.message}
 
@@ -335,11 +398,14 @@ class Order:
     expected: int
     reasons: dict = field(default_factory=dict)   # key -> why that order is None
     ranges: dict = field(default_factory=dict)    # key -> (largest dt, smallest dt) fitted
+    not_converging: dict = field(default_factory=dict)   # key -> where the error stops shrinking, in words
+    notes: dict = field(default_factory=dict)     # key -> a fitted order's caveat (fitted over one pair only)
 
     def to_dict(self) -> dict:
         return {"method": self.spec.method, "munthe_kaas": self.spec.munthe_kaas,
                 "contact": self.contact, "orientation": self.orientation, "expected": self.expected,
-                "reasons": dict(self.reasons), "fitted_dt": {k: list(v) for k, v in self.ranges.items()}}
+                "reasons": dict(self.reasons), "fitted_dt": {k: list(v) for k, v in self.ranges.items()},
+                "not_converging": dict(self.not_converging), "notes": dict(self.notes)}
 
 
 def _finite_or_none(value: float) -> float | None:
@@ -401,10 +467,11 @@ class _Runner:
                 times.append(_advance(again, self.cancel))
             seconds = float(np.median(times))
         error = _max_errors(traj, self.ref_traj)
-        below = [error[key] < self.reference.floor(key) for key in FITTED]
+        below = tuple(key for key in ERRORS if error[key] < self.reference.floor(key))
+        fitted = [key in below for key in FITTED]
         return RunResult(spec, options.get("dt"), options.get("rtol"), options.get("atol"), traj.status,
-                         traj.steps, traj.rejected, traj.evaluations, seconds, error, any(below),
-                         traj.message, all(below))
+                         traj.steps, traj.rejected, traj.evaluations, seconds, error, any(fitted),
+                         traj.message, all(fitted), below)
 
 
 Report = Callable[[str, int], None]   # (what runs next, ladder points so far)
@@ -463,42 +530,81 @@ def _slope(dts: list[float], errors: list[float]) -> float:
     return float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
 
 
-def asymptotic_range(dts: list[float], errors: list[float], expected: float,
-                     spread: float = SPREAD) -> tuple[int, int]:
-    """The points (lo .. hi-1 of dts from coarse to fine) where the error goes as dt^q for one
-    q: past the smallest error the error grows as the step shrinks (round-off adds up), so the
-    points after it are left out; of the rest, the longest run of neighbouring points whose
-    local slopes (log error ratio over log step ratio, pair by pair) are positive and agree to
-    within ``spread``. Coarse steps before that range have not settled yet. Only between runs
-    of equal length does the expected order choose: the one whose slopes are nearest to it."""
-    last = int(np.argmin(errors)) + 1
-    dts, errors = dts[:last], errors[:last]
-    local = [math.log(errors[i] / errors[i + 1]) / math.log(dts[i] / dts[i + 1]) for i in range(len(dts) - 1)]
-    best, best_key = (0, min(1, len(dts))), None
-    for lo in range(len(local)):
-        hi = lo
-        while hi < len(local) and local[hi] > 0 and max(local[lo:hi + 1]) - min(local[lo:hi + 1]) <= spread:
-            hi += 1
-        if hi == lo:
+def _local_slopes(steps: list[float], errors: list[float]) -> list[float]:
+    """log error ratio over log step ratio, pair by pair (steps from coarse to fine)."""
+    return [math.log(errors[i] / errors[i + 1]) / math.log(steps[i] / steps[i + 1]) for i in range(len(steps) - 1)]
+
+
+def stall(steps: list[float], errors: list[float]) -> int | None:
+    """Where the error stops shrinking as the step (or tolerance) shrinks: the index of the
+    point below whose step every finer pair's local slope is under PLATEAU_SLOPE (the error
+    flat or growing), or None when the finest pair still shrinks it."""
+    local = _local_slopes(steps, errors)
+    k = len(steps) - 1
+    while k >= 1 and local[k - 1] < PLATEAU_SLOPE:
+        k -= 1
+    return None if k == len(steps) - 1 else k
+
+
+def fit_range(dts: list[float], errors: list[float], spread: float = SPREAD) -> tuple[int, int, int | None]:
+    """The points (lo .. hi-1 of dts from coarse to fine) to fit an order over, and ``stall``'s
+    index (None when the error shrinks to the finest step). Only the points up to the stall
+    count; of those, the finest run of neighbouring pairs, at least two, whose local slopes
+    are at least PLATEAU_SLOPE and agree to within ``spread`` (extended coarser while they
+    still agree): the asymptotic range, where the error goes as dt^q for one q. Coarse steps
+    have not settled yet; a lone pair whose slope agrees with no neighbour (an error falling by
+    chance) is no range. Without such a run, the finest pair that shrinks the error (hi - lo
+    = 2); without that, hi - lo < 2."""
+    stalls = stall(dts, errors)
+    last = len(dts) if stalls is None else stalls + 1
+    local = _local_slopes(dts[:last], errors[:last])
+    good = [q >= PLATEAU_SLOPE for q in local]
+    for end in range(len(local) - 1, 0, -1):          # the window's finest pair
+        if not (good[end] and good[end - 1] and abs(local[end] - local[end - 1]) <= spread):
             continue
-        key = (hi - lo, -abs(float(np.mean(local[lo:hi])) - expected))
-        if best_key is None or key > best_key:
-            best, best_key = (lo, hi + 1), key
-    return best
+        lo = end - 1
+        while lo > 0 and good[lo - 1] and max(local[lo - 1:end + 1]) - min(local[lo - 1:end + 1]) <= spread:
+            lo -= 1
+        return lo, end + 2, stalls
+    for i in range(len(local) - 1, -1, -1):
+        if good[i]:
+            return i, i + 2, stalls
+    return 0, min(1, len(dts)), stalls
+
+
+def asymptotic_range(dts: list[float], errors: list[float], spread: float = SPREAD) -> tuple[int, int]:
+    """``fit_range``'s points alone."""
+    lo, hi, _ = fit_range(dts, errors, spread)
+    return lo, hi
+
+
+def stall_text(key: str, steps: list[float], errors: list[float], index: int, name: str = "dt") -> str:
+    """In words: the error stops shrinking below steps[index], not converging."""
+    unit = " m" if ERROR_UNITS[key] == "m" else ""
+    return (f"the {key} error stops shrinking below {name} = {steps[index]:.3g} ({errors[index]:.1e}{unit} there, "
+            f"{errors[-1]:.1e} at {name} = {steps[-1]:.3g}): not converging")
+
+
+def _measured(runs: list[RunResult], key: str, reference: Reference, setting) -> list[RunResult]:
+    """The runs that ended ok with this error measured (above the reference's floor), one per
+    setting, from the coarsest setting to the finest."""
+    used = [r for r in runs if math.isfinite(r.error[key]) and r.error[key] > 0
+            and r.error[key] >= reference.floor(key)]
+    return [r for i, r in enumerate(used) if i == 0 or setting(r) < setting(used[i - 1])]
 
 
 def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Order:
     """The least-squares slope of log error against log dt, in the contact point and the
     orientation, over this spec's runs that ended ok with errors above the reference's floor,
-    and of those over the asymptotic range only (``asymptotic_range``: away from the coarse
-    steps, where the error does not yet go as dt^order, and from round-off at the finest).
-    None, with the reason, where fewer than two such runs are."""
+    and of those over the asymptotic range only (``fit_range``: the finest neighbouring steps
+    whose slopes agree, away from the coarse steps, where the error does not yet go as
+    dt^order). None, with the reason, where fewer than two such runs are, and where the error
+    stops shrinking as the step does (``stall``): then no range is asymptotic, and the
+    reason, also under ``not_converging``, names the step."""
     mine = sorted((r for r in runs if r.spec == spec and r.ok and r.dt is not None), key=lambda r: -r.dt)
-    slopes, reasons, ranges = {}, {}, {}
+    slopes, reasons, ranges, stalled, notes = {}, {}, {}, {}, {}
     for key in FITTED:
-        used = [r for r in mine if math.isfinite(r.error[key]) and r.error[key] > 0
-                and r.error[key] >= reference.floor(key)]
-        used = [r for i, r in enumerate(used) if i == 0 or r.dt < used[i - 1].dt]  # distinct steps
+        used = _measured(mine, key, reference, lambda r: r.dt)
         if len(used) < 2:
             slopes[key] = None
             reasons[key] = (f"{len(used)} run{'s' if len(used) != 1 else ''} ended ok with a {key} error "
@@ -506,28 +612,50 @@ def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Ord
                             + (" (the error is at the floor already at the coarsest step)" if mine and not used else ""))
             continue
         dts, errors = [r.dt for r in used], [r.error[key] for r in used]
-        lo, hi = asymptotic_range(dts, errors, METHODS[spec.method].order)
+        lo, hi, stalls = fit_range(dts, errors)
+        if stalls is not None:
+            slopes[key] = None
+            reasons[key] = stalled[key] = stall_text(key, dts, errors, stalls)
+            continue
         if hi - lo < 2:
             slopes[key] = None
-            reasons[key] = (f"no two neighbouring steps where the {key} error shrinks with the step "
-                            f"(above the floor it is round-off, growing as the step shrinks)")
+            reasons[key] = f"no two neighbouring steps where the {key} error shrinks with the step"
             continue
         slope = _slope(dts[lo:hi], errors[lo:hi])
         if math.isfinite(slope):
             slopes[key] = slope
             ranges[key] = (dts[lo], dts[hi - 1])
+            if hi - lo == 2 and len(dts) > 2:
+                local = ", ".join(f"{q:.2f}" for q in _local_slopes(dts, errors))
+                notes[key] = (f"over one pair of steps only: no three neighbouring steps' slopes agree to within "
+                              f"{SPREAD:g} (pairwise slopes from coarse to fine: {local})")
         else:
             slopes[key] = None
             reasons[key] = "the fit of the measured errors is not a finite number"
-    return Order(spec, slopes["contact"], slopes["orientation"], METHODS[spec.method].order, reasons, ranges)
+    return Order(spec, slopes["contact"], slopes["orientation"], METHODS[spec.method].order, reasons, ranges,
+                 stalled, notes)
+
+
+def tolerance_stalls(spec: RunSpec, runs: list[RunResult], reference: Reference) -> dict[str, str]:
+    """For an adaptive spec: key -> in words, where its error stops shrinking as rtol does."""
+    mine = sorted((r for r in runs if r.spec == spec and r.ok and r.rtol is not None), key=lambda r: -r.rtol)
+    out = {}
+    for key in FITTED:
+        used = _measured(mine, key, reference, lambda r: r.rtol)
+        if len(used) >= 2:
+            rtols, errors = [r.rtol for r in used], [r.error[key] for r in used]
+            index = stall(rtols, errors)
+            if index is not None:
+                out[key] = stall_text(key, rtols, errors, index, "rtol")
+    return out
 
 
 # -- the comparison --------------------------------------------------------------------------
 
 @dataclass
 class Comparison:
-    """What ``compare`` measured; ``to_dict`` is docs/design.md §6's compare.json, ``save`` writes it
-    with the report (compare.md) and the figure (compare.png)."""
+    """What ``compare`` measured; ``to_dict`` is docs/design.md §6's compare.json
+    (``comparison_report.save`` writes it with the report, compare.md, and the figure, compare.png)."""
 
     scene: Scene
     t_end: float
@@ -538,13 +666,24 @@ class Comparison:
     runs: list[RunResult] = field(default_factory=list)
     orders: list[Order] = field(default_factory=list)
     reference_trajectory: Trajectory | None = field(default=None, repr=False)  # rows at the common times
+    tolerance_stalls: dict = field(default_factory=dict)   # adaptive spec -> {key: where its error stops shrinking}
+
+    @property
+    def not_converging(self) -> list[tuple[RunSpec, str, str]]:
+        """(spec, error key, in words) for every spec whose error stops shrinking as its step
+        or tolerance does, above the reference's floor."""
+        out = [(o.spec, key, text) for o in self.orders for key, text in o.not_converging.items()]
+        return out + [(spec, key, text) for spec, stalls in self.tolerance_stalls.items() for key, text in stalls.items()]
 
     @property
     def specs(self) -> list[RunSpec]:
         return list(dict.fromkeys(r.spec for r in self.runs))
 
     def best(self, target: float) -> RunResult | None:
-        """The fastest run that ended ok with contact and orientation errors at most ``target``."""
+        """The fastest run that ended ok with contact and orientation errors at most ``target``;
+        None for a target below the reference's accuracy (no error there is measured)."""
+        if target < max(self.reference.floor(key) for key in FITTED):
+            return None
         good = [r for r in self.runs if r.ok and r.worst <= target]
         return min(good, key=lambda r: r.seconds, default=None)
 
@@ -561,7 +700,23 @@ class Comparison:
             else:
                 parts.append(f"for {target:.0e}: {setting_text(run)} "
                              f"({_seconds_text(run.seconds)}, {run.steps} steps)")
-        return "fastest " + "; ".join(parts)
+        text = "fastest " + "; ".join(parts)
+        stalled = list(dict.fromkeys(str(spec) for spec, _, _ in self.not_converging))
+        if stalled:
+            text += f"; not converging (the error stops shrinking): {', '.join(stalled)}"
+        if not self.reference.checked:
+            text = f"{self.reference_warning()}; {text}"
+        return text
+
+    def reference_warning(self) -> str:
+        """One sentence when the reference is not checked to REFERENCE_ACCURACY, else empty."""
+        ref = self.reference
+        if ref.checked:
+            return ""
+        floor = max(ref.floor(key) for key in FITTED)
+        return (f"the reference ({ref.method} at rtol {ref.rtol:.0e}) is not checked to {REFERENCE_ACCURACY:.0e}: "
+                f"{'; '.join(ref.problems)}; errors below {floor:.1e} are below the reference's accuracy, "
+                f"not measured")
 
     def to_dict(self) -> dict:
         ref = self.reference
@@ -572,25 +727,14 @@ class Comparison:
         return strict_json({
             "format": "rollball-compare", "version": 1, "program": f"rollball {__version__}",
             "scene": self.scene.to_dict(), "t_end": self.t_end, "machine": self.machine,
-            "reference": {"method": ref.method, "rtol": ref.rtol, "error_estimate": _finite_or_none(ref.error_estimate),
-                          "atol": ref.atol,
-                          "error_estimates": {k: _finite_or_none(v) for k, v in ref.error_estimates.items()},
-                          "floors": {k: ref.floor(k) for k in FITTED},
-                          "status": str(ref.status), "message": ref.message, "steps": ref.steps,
-                          "seconds": ref.seconds},
+            "reference": ref.to_dict(),
             "runs": [r.to_dict() for r in self.runs],
             "orders": [o.to_dict() for o in self.orders],
+            "not_converging": [{"method": spec.method, "munthe_kaas": spec.munthe_kaas, "error": key, "text": text}
+                               for spec, key, text in self.not_converging],
             "record_dt": self.record_dt, "quick": self.quick,
             "best": best,   # index into runs of the fastest run reaching each error, or null
         })
-
-    def save(self, directory: str | Path, keep=()) -> list[Path]:
-        """compare.json, compare.md and compare.png in ``directory`` (made if missing),
-        replaced together or not at all (``files.NotReplaced``, whose message says where the
-        new files were kept); ``keep``: paths not to overwrite (the scene)."""
-        from . import comparison_report
-
-        return comparison_report.save(self, Path(directory), keep)
 
 
 def strict_json(doc: dict) -> dict:
@@ -614,6 +758,19 @@ def strict_json(doc: dict) -> dict:
     return out
 
 
+def machine() -> str:
+    """The processor (from /proc/cpuinfo where there is one), core count, system and Python."""
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores, {platform.system()}, Python {platform.python_version()}"
+
+
 def setting_text(run: RunResult) -> str:
     return f"{run.spec} dt {run.dt:.3g}" if run.dt is not None else f"{run.spec} rtol {run.rtol:.0e}"
 
@@ -633,8 +790,6 @@ def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_e
     If the reference itself stops early (the ball does not fit, the landscape cannot be
     evaluated), everything is compared up to the last common time before that.
     """
-    from .comparison_report import machine
-
     specs = _specs(runs)
     t_end = scene.duration if t_end is None else t_end
     if isinstance(t_end, bool) or not isinstance(t_end, (int, float)) or not (0 < t_end < math.inf):
@@ -664,4 +819,6 @@ def compare(scene: Scene, runs: Iterable[RunSpec | str] | str | None = None, t_e
         results += ladder(runner, spec, lambda text, n: report(first + min(n, effort.max_points - 1), text))
     report(total, "done")
     orders = [fit_order(spec, results, reference) for spec in specs if spec.fixed_step]
-    return Comparison(scene, float(t_end), record_dt, bool(quick), machine(), reference, results, orders, ref_traj)
+    stalls = {spec: tolerance_stalls(spec, results, reference) for spec in specs if not spec.fixed_step}
+    return Comparison(scene, float(t_end), record_dt, bool(quick), machine(), reference, results, orders, ref_traj,
+                      {spec: found for spec, found in stalls.items() if found})

@@ -1,41 +1,29 @@
 """A comparison's files: compare.json (docs/design.md §6), compare.md (the readable report) and
-compare.png (error against wall time, and against step size with the fitted slopes)."""
+compare.png (error against wall time, and against step size with the fitted slopes).
+
+This module reads what rollball.comparison measured; that module imports nothing from here."""
 
 from __future__ import annotations
 
 import io
 import json
-import os
-import platform
 from pathlib import Path
 
 import warnings
 
-from .comparison import (ERROR_UNITS, ERRORS, FITTED, FLOOR_FACTOR, SPREAD, TARGETS, Comparison, RunResult,
-                         RunSpec, setting_text)
+from .comparison import (ERROR_UNITS, ERRORS, FITTED, FLOOR_FACTOR, PLATEAU_SLOPE, REFERENCE_ACCURACY, SPREAD, TARGETS,
+                         Comparison, RunResult, RunSpec, machine, setting_text)  # noqa: F401 - machine: bench and sweeps read it here
 from .files import check_outputs, replace_together
 
 FILES = ("compare.json", "compare.md", "compare.png")
 KEPT_NAME = "compare-unsaved"   # where a report that could not replace the old one is kept
+BELOW = "below the reference's accuracy"   # an error under the reference's floor: never quoted as a number
 
 
 def literal(text: str) -> str:
     """User text as it can go into a UTF-8 file or a figure: a lone surrogate (which no
     encoding writes) becomes U+FFFD."""
     return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in str(text))
-
-
-def machine() -> str:
-    """The processor (from /proc/cpuinfo where there is one), core count, system and Python."""
-    model = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{model}, {os.cpu_count()} cores, {platform.system()}, Python {platform.python_version()}"
 
 
 def _number(value: float | None, fmt: str = ".2e") -> str:
@@ -62,7 +50,8 @@ def _table(cmp: Comparison, spec: RunSpec) -> list[str]:
         setting = f"{run.dt:.3g}" if fixed else f"{run.rtol:.0e}"
         mark = " *" if run.below_reference_floor else ""
         lines.append(f"| {setting}{mark} | {run.status} | {run.steps} | {run.rejected} | {run.evaluations} | "
-                     f"{run.seconds * 1e3:.3g} | " + " | ".join(_number(run.error[k]) for k in ERRORS) + " |")
+                     f"{run.seconds * 1e3:.3g} | "
+                     + " | ".join(BELOW if k in run.below else _number(run.error[k]) for k in ERRORS) + " |")
     stopped = [r for r in cmp.runs if r.spec == spec and not r.ok]
     if stopped:
         lines += ["", f"Stopped early: {stopped[-1].message}."]
@@ -72,13 +61,22 @@ def _table(cmp: Comparison, spec: RunSpec) -> list[str]:
 def findings(cmp: Comparison, heading: str = "##") -> list[str]:
     """The reference, the fastest runs and the fitted orders, as Markdown lines."""
     ref = cmp.reference
+    checks = "; ".join(f"{c.method} at rtol {c.rtol:.0e}: " + ", ".join(f"{k} {_number(c.difference[k], '.1e')}"
+                                                                       for k in ERRORS) for c in ref.checks)
     lines = [f"{heading} Reference", "",
              f"{ref.method} at rtol = {ref.rtol:.0e}, atol = {ref.atol:.0e} ({ref.steps} steps, "
-             f"{ref.seconds * 1e3:.3g} ms). Its own error, against a run at a 10× tighter tolerance: "
-             + ", ".join(f"{k} {_number(ref.error_estimates[k], '.1e')}" for k in ERRORS) + ". "
-             f"Errors below {FLOOR_FACTOR:g}× that, or below round-off (100 ε times the quantity's size), "
-             f"are marked * and left out of the fitted orders: floors "
-             + ", ".join(f"{k} {ref.floor(k):.1e}" for k in FITTED) + "."]
+             f"{ref.seconds * 1e3:.3g} ms). Its own error is estimated as the larger difference from two checks, "
+             f"the same method a decade looser and another method at its tolerance ({checks}): "
+             + ", ".join(f"{k} {_number(ref.error_estimates.get(k), '.1e')}" for k in ERRORS) + ". "
+             f"Errors below the floor, the larger of {FLOOR_FACTOR:g}× the first difference (the looser run's error, of the "
+             f"reference's order), the second (both runs' errors together) and round-off (100 ε times the quantity's "
+             f"size), are not measured: "
+             f"they read \"{BELOW}\", the run's setting is marked *, and they are left out of the fitted "
+             f"orders: floors " + ", ".join(f"{k} {ref.floor(k):.1e}" for k in FITTED) + "."]
+    lines += ["", f"**The reference is not checked to {REFERENCE_ACCURACY:.0e}**: {'; '.join(ref.problems)}. "
+                  f"No error below its floor is quoted." if not ref.checked else
+              f"The reference is checked: its own error is at most {REFERENCE_ACCURACY:.0e} in the contact point "
+              f"(m) and the orientation."]
     if ref.status != "ok":
         lines += ["", f"The reference stopped early ({ref.message}): every run is compared up to "
                       f"t = {cmp.t_end:g} s."]
@@ -95,15 +93,21 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
     if cmp.orders:
         lines += ["", f"{heading} Orders", "",
                   f"Least-squares slope of log error against log dt over the runs that ended ok above the "
-                  f"reference's floor, and of those over the asymptotic range: the longest run of "
-                  f"neighbouring steps whose pairwise slopes agree to within {SPREAD:g}, up to the smallest error (coarse steps whose "
-                  f"error does not yet go as dt^order, and the round-off beyond the smallest error, are left out).",
+                  f"reference's floor, and of those over the asymptotic range: the finest neighbouring steps "
+                  f"(at least three) whose pairwise slopes agree to within {SPREAD:g} (coarse steps whose "
+                  f"error does not yet go as dt^order are left out). Where the error stops shrinking as the step "
+                  f"does (pairwise slopes below {PLATEAU_SLOPE:g} at the finest steps), no order is fitted: "
+                  f"the run is not converging there.",
                   "", "| run | contact point | orientation | expected |", "|---|---:|---:|---:|"]
         lines += [f"| {o.spec.label} | {_number(o.contact, '.2f')} | {_number(o.orientation, '.2f')} | "
                   f"{o.expected} |" for o in cmp.orders]
         notes = [f"- {o.spec.label}, {key}: not fitted: {reason}." for o in cmp.orders
                  for key, reason in o.reasons.items()]
+        notes += [f"- {o.spec.label}, {key}: fitted {note}." for o in cmp.orders for key, note in o.notes.items()]
         lines += ["", *notes] if notes else []
+    stalled = [f"- {spec.label}: {text}." for spec, _, text in cmp.not_converging if not spec.fixed_step]
+    if stalled:
+        lines += ["", f"{heading} Not converging", "", *stalled]
     return lines
 
 
@@ -151,26 +155,43 @@ def png(fig) -> bytes:
     return out.getvalue()
 
 
+def _measured(runs: list[RunResult], key: str, floor: float, x) -> tuple[list, list, list, list]:
+    """The points (x, error) of runs whose error is measured, and of those below the floor
+    drawn on it (open triangles: below the reference's accuracy, not a measured value)."""
+    above = [r for r in runs if r.error[key] >= floor and r.error[key] > 0]
+    below = [r for r in runs if not r.error[key] >= floor]
+    return [x(r) for r in above], [r.error[key] for r in above], [x(r) for r in below], [floor] * len(below)
+
+
 def draw_work_precision(ax, cmp: Comparison, colors: dict) -> None:
-    """Contact-point error against compute time, a line per run spec, the floor dashed."""
+    """Contact-point error against compute time, a line per run spec, the floor dashed; runs
+    below the floor as open triangles on it."""
+    floor = cmp.reference.floor("contact")
     for spec in cmp.specs:
-        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["contact"] > 0]
-        ax.loglog([r.seconds for r in runs], [r.error["contact"] for r in runs], label=spec.label,
-                  markersize=4, **style(spec, colors))
-    ax.axhline(cmp.reference.floor("contact"), color="0.6", linewidth=0.8, linestyle="--")
+        runs = [r for r in cmp.runs if r.spec == spec and r.ok]
+        x, y, xb, yb = _measured(runs, "contact", floor, lambda r: r.seconds)
+        line = style(spec, colors)
+        ax.loglog(x, y, label=spec.label, markersize=4, **line)
+        if xb:
+            ax.loglog(xb, yb, linestyle="none", marker="v", markersize=5, markerfacecolor="none", color=line["color"])
+    ax.axhline(floor, color="0.6", linewidth=0.8, linestyle="--")
     ax.set(xlabel="compute time (s)", ylabel="contact-point error, max over the run (m)")
     ax.grid(True, which="major", alpha=0.3)
 
 
 def draw_orders(ax, cmp: Comparison, colors: dict) -> None:
     """Orientation error against step size for the fixed-step specs, with the fitted slopes."""
+    floor = cmp.reference.floor("orientation")
     for spec in (s for s in cmp.specs if s.fixed_step):
-        runs = [r for r in cmp.runs if r.spec == spec and r.ok and r.error["orientation"] > 0]
+        runs = [r for r in cmp.runs if r.spec == spec and r.ok]
+        x, y, xb, yb = _measured(runs, "orientation", floor, lambda r: r.dt)
         line = style(spec, colors)
-        ax.loglog([r.dt for r in runs], [r.error["orientation"] for r in runs], markersize=4, **line)
-        _slope_label(ax, cmp, spec, runs, line["color"])
+        ax.loglog(x, y, markersize=4, **line)
+        if xb:
+            ax.loglog(xb, yb, linestyle="none", marker="v", markersize=5, markerfacecolor="none", color=line["color"])
+        _slope_label(ax, cmp, spec, [r for r in runs if r.error["orientation"] >= floor], line["color"])
     ax.set_ylim(top=10.0)  # a classic R far off SO(3) would squash the rest (‖R − R_ref‖_F ≤ 2√2 on it)
-    ax.axhline(cmp.reference.floor("orientation"), color="0.6", linewidth=0.8, linestyle="--")
+    ax.axhline(floor, color="0.6", linewidth=0.8, linestyle="--")
     ax.set(xlabel="step size dt (s)", ylabel="orientation error ‖R − R_ref‖_F, max over the run")
     ax.grid(True, which="major", alpha=0.3)
 
@@ -187,9 +208,12 @@ def figure(cmp: Comparison) -> bytes:
     right.set_title("error against step size (fitted slopes)")
     legend_below(fig, left)
     # the description is the user's text: drawn as written ($ is not mathtext, no TeX)
+    ref = cmp.reference
+    warning = "" if ref.checked else (f"\nREFERENCE NOT CHECKED to {REFERENCE_ACCURACY:.0e}: "
+                                      f"{'; '.join(ref.problems)}; nothing below the dashed line is measured")
     fig.suptitle(f"{literal(cmp.scene.description or cmp.scene.landscape)} — to t = {cmp.t_end:g} s; dashed "
-                 f"grey: {FLOOR_FACTOR:g}× the reference's own error\n{literal(cmp.machine)}", fontsize=8,
-                 parse_math=False, usetex=False)
+                 f"grey: the floor of the reference's own error (open triangles on it: {BELOW}){warning}\n{literal(cmp.machine)}",
+                 fontsize=8, parse_math=False, usetex=False, color="black" if ref.checked else "firebrick")
     with warnings.catch_warnings():  # a glyph the font lacks is drawn as a box, not reported
         warnings.simplefilter("ignore")
         return png(fig)
@@ -197,6 +221,11 @@ def figure(cmp: Comparison) -> bytes:
 
 def _slope_label(ax, cmp: Comparison, spec: RunSpec, runs: list[RunResult], color: str) -> None:
     order = next((o for o in cmp.orders if o.spec == spec), None)
+    if order is not None and "orientation" in order.not_converging and runs:
+        last = runs[-1]
+        ax.annotate("not converging", (last.dt, last.error["orientation"]), color=color, fontsize=7,
+                    xytext=(4, 4), textcoords="offset points")
+        return
     if order is None or order.orientation is None or not runs:
         return
     middle = runs[len(runs) // 2]
@@ -224,12 +253,13 @@ def check(directory: Path, keep=()) -> None:
     check_outputs(directory, FILES, keep)
 
 
-def save(cmp: Comparison, directory: Path, keep=()) -> list[Path]:
-    """Render the three files, then replace them together (files.replace_together): all or
+def save(cmp: Comparison, directory: str | Path, keep=()) -> list[Path]:
+    """compare.json, compare.md and compare.png in ``directory`` (made if missing); ``keep``:
+    paths not to overwrite (the scene). Render the three files, then replace them together (files.replace_together): all or
     none. ``NotReplaced`` when none was; the new files are then kept in a folder of their own
     (its name in the message). Returns the files written."""
     files, notes = render(cmp)
-    written = replace_together(directory, files, keep=keep, kept_name=KEPT_NAME)
+    written = replace_together(Path(directory), files, keep=keep, kept_name=KEPT_NAME)
     if notes:
         warnings.warn("; ".join(notes), stacklevel=2)
     return written

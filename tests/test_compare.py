@@ -11,7 +11,7 @@ import pytest
 from conftest import make_scene
 
 import rollball
-from rollball import METHODS, RunSpec, Scene, compare, parse_runs, simulate
+from rollball import METHODS, RunSpec, Scene, compare, comparison_report, parse_runs, simulate
 from rollball.cli import main
 from rollball.comparison import Cancelled, error_series, reference_run
 from rollball.examples import EXAMPLES_DIR
@@ -85,6 +85,8 @@ def check_compare_json(doc: dict) -> None:
     assert _number(doc["t_end"]) and doc["t_end"] > 0 and isinstance(doc["machine"], str)
     ref = doc["reference"]
     assert ref["method"] in METHODS and _number(ref["rtol"]) and _number(ref["error_estimate"])
+    assert isinstance(ref["checked"], bool) and isinstance(ref["problems"], list) and len(ref["checks"]) == 2
+    assert ref["checked"] == (not ref["problems"])
     assert isinstance(doc["runs"], list) and doc["runs"]
     for run in doc["runs"]:
         method = METHODS[run["method"]]
@@ -99,8 +101,10 @@ def check_compare_json(doc: dict) -> None:
         assert run["evaluations"] >= run["steps"] > 0
         assert _number(run["seconds"]) and run["seconds"] > 0
         assert set(run["error"]) == ERROR_KEYS
-        for value in run["error"].values():
-            assert (_number(value) and value >= 0) or (value is None and run["status"] != "ok")
+        assert set(run["below_reference_accuracy"]) <= ERROR_KEYS
+        for key, value in run["error"].items():  # an error below the reference's accuracy is never a number
+            assert ((_number(value) and value >= 0 and key not in run["below_reference_accuracy"])
+                    or (value is None and (run["status"] != "ok" or key in run["below_reference_accuracy"])))
         assert isinstance(run["below_reference_floor"], bool)
     for order in doc["orders"]:
         assert METHODS[order["method"]].fixed_step and isinstance(order["munthe_kaas"], bool)
@@ -212,7 +216,7 @@ def test_a_scene_that_stops_is_compared_up_to_where_it_stops(tmp_path):
     cmp = compare(scene, runs="rk4,dopri5", quick=True)
     assert cmp.reference.status != "ok" and 0 < cmp.t_end < scene.duration
     assert cmp.runs and all(r.ok for r in cmp.runs)  # each run to the last common time before
-    cmp.save(tmp_path)
+    comparison_report.save(cmp, tmp_path)
     doc = json.loads((tmp_path / "compare.json").read_text())
     check_compare_json(doc)
     assert doc["reference"]["status"] != "ok" and doc["t_end"] == cmp.t_end

@@ -204,7 +204,7 @@ def test_asymptotic_range_leaves_out_coarse_steps_and_round_off():
     dts = [0.4, 0.2, 0.1, 0.05, 0.025, 0.0125, 0.00625]
     # coarse: not yet dt^5; then dt^5; then round-off growing as the step shrinks
     errors = [3e-2, 4e-3, 2e-4, 2e-4 / 32, 2e-4 / 32**2, 1e-11, 3e-11]
-    lo, hi = asymptotic_range(dts, errors, expected=5)
+    lo, hi = asymptotic_range(dts, errors)
     assert (lo, hi) == (2, 5)
     slope = np.polyfit(np.log(dts[lo:hi]), np.log(errors[lo:hi]), 1)[0]
     assert slope == pytest.approx(5, abs=1e-9)
@@ -217,3 +217,16 @@ def test_formulas_with_huge_folded_constants_run_in_compare_and_sweep(formula, t
     assert main(["sweep", scene, "--vary", "start.vx=0:1:2", "--workers", "1", "--out", str(tmp_path / "s")]) == 0
     err = capsys.readouterr().err
     assert "Traceback" not in err and "error" not in err
+
+
+def test_comparison_imports_nothing_from_its_report():
+    """One direction: the report's module reads the comparison's; the comparison names no report."""
+    import ast
+
+    import rollball.comparison as comparison
+
+    tree = ast.parse(open(comparison.__file__, encoding="utf-8").read())
+    imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                for alias in node.names} | {node.module or "" for node in ast.walk(tree)
+                                             if isinstance(node, ast.ImportFrom)}
+    assert not any("comparison_report" in name for name in imported), imported

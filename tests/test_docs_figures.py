@@ -81,3 +81,45 @@ def test_the_evaluations_for_an_error_are_read_off_each_ladders_front():
     assert on_front(points, 1e-8) == pytest.approx(140)
     assert on_front(points, math.sqrt(1e-9 * 1e-8)) == pytest.approx(math.sqrt(300 * 140))  # log-log
     assert on_front(points, 1e-10) is None and on_front(points, 1e-6) is None
+
+
+def test_readme_figures_on_the_error_scale_are_docs_dopri5_scale():
+    """The ranges README.md and design.md quote are docs/dopri5_scale.py's, read from the figures
+    it wrote (docs/dopri5_scale.json: the code before the scale and this one)."""
+    import sys
+    sys.path.insert(0, str(ROOT / "docs"))
+    from dopri5_scale import ROLLING, trade
+
+    doc = json.loads((ROOT / "docs" / "dopri5_scale.json").read_text())
+    design = " ".join((ROOT / "docs" / "design.md").read_text().split())
+    readme = " ".join(README.split())
+
+    def span(pair):
+        return f"{pair[0]:.2f}–{pair[1]:.2f}"
+
+    def sci(value):
+        return f"{value:.1e}".replace("e-0", "e-")
+
+    dopri5 = trade(doc["now"], doc["before"], "dopri5", ROLLING)
+    dop853 = trade(doc["now"], doc["before"], "dop853", ROLLING)
+    valleys = trade(doc["now"], doc["before"], "dopri5", ("valleys",))
+    for text in (f"{span(dopri5['evaluations'])} times the evaluations it took and its error is "
+                 f"{span(dopri5['error'])} times what it was", f"its error is {span(dopri5['same_cost'])} times",
+                 f"the error is {span(valleys['error'])} times, with {span(valleys['evaluations'])} times",
+                 f"is at {span(dop853['error'])} times its error with {span(dop853['evaluations'])} times",
+                 f"({span(dop853['same_cost'])} times for as many evaluations)"):
+        assert text in readme, text
+    for text in (f"dopri5 {span(dopri5['evaluations'])} times the evaluations, {span(dopri5['error'])} times",
+                 f"{span(dopri5['same_cost'])} times the error the scale before", f"dop853 {span(dop853['evaluations'])}",
+                 f"{span(dop853['error'])} times the error", f"{span(dop853['same_cost'])} times for as many"):
+        assert text in design, text
+    lift = {(b["scene"], b["rtol"]): (b["error"], n["error"], b["evaluations"], n["evaluations"])
+            for b, n in zip(doc["before"]["liftoffs"], doc["now"]["liftoffs"])}
+    was, now, evaluations, _ = lift[("liftoff", 1e-8)]
+    assert sci(now) == sci(was) and f"within {sci(now)} s" in readme and f"same {evaluations} evaluations" in readme
+    was, now, _, _ = lift[("cylinder", 1e-8)]
+    assert f"within {sci(now)} s (was {sci(was)}) at rtol 1e-8" in readme
+    was, now, _, _ = lift[("cylinder", 1e-10)]
+    assert f"{sci(now)} s (was {sci(was)}) at 1e-10" in readme
+    worst = dopri5["error"][1]
+    assert f"about {worst:.1f} times tighter" in readme
