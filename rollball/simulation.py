@@ -19,8 +19,8 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
-from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, R, ROLLING, SLIDING, T,
-                         VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
+from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLIGHT_REASONS, FLYING, OMEGA, R, ROLLING,
+                         SLIDING, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
 # kernel.ROW_SIZE (25) doubles a row: 1.0 GB at the limit, handed to the trajectory without a
 # copy. A run recording every adaptive step grows its buffer by doubling up to the limit,
@@ -580,8 +580,8 @@ class Simulation:
             self._append(flight.rows(np.append(self._record_times(flight.start.t, off.time), off.time)
                                      if off.time > flight.start.t else np.empty(0), dissipated))
             self._flight = None
-            self._off = Failure(Reason.UNDEFINED, off.time, float(off.center[0]), float(off.center[1]), math.nan)
-            self.status = Status.NONFINITE
+            self._off = Failure(Reason(off.reason), off.time, *off.point, off.value)
+            self.status = Status(FLIGHT_REASONS[off.reason][0]) if off.reason in FLIGHT_REASONS else Status.NONFINITE
             return
         if landing is None:
             times = np.append(self._record_times(flight.start.t, self.t_end), self.t_end)
@@ -866,8 +866,13 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
 
 
 def describe(failure: Failure, radius: float) -> str:
-    """The sentence for a failure, made from its fields (``kernel.interface.REASONS``)."""
-    return kernel.sentence(str(failure.reason), failure.value, failure.time, failure.x, failure.y, radius)
+    """The sentence for a failure, made from its fields (``kernel.interface.REASONS``, or a flight's
+    ``trajectory.FLIGHT_REASONS``)."""
+    reason = str(failure.reason)
+    if reason in FLIGHT_REASONS:
+        where = f"t = {failure.time:.6g} s, (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
+        return FLIGHT_REASONS[reason][2].format(where=where, value=failure.value, radius=radius)
+    return kernel.sentence(reason, failure.value, failure.time, failure.x, failure.y, radius)
 
 
 def simulate(scene: Scene | str | os.PathLike, *, method: str | None = None, munthe_kaas: bool | None = None,
