@@ -164,3 +164,29 @@ def test_a_ball_off_a_smooth_drop_flies_and_lands_where_brentq_says(height, rate
     curve = lambda x: -height * (1 + np.tanh(rate * np.asarray(x)))   # noqa: E731
     expected = first_contact(curve, center, velocity, 1e-4, landing.time - t0 + 0.05, count=800)
     assert landing.time == pytest.approx(t0 + expected, abs=1e-9)
+
+
+# -- the roof --------------------------------------------------------------------------------------
+
+def test_the_flight_off_a_roofs_ridge_starts_at_the_ridge_and_lands_on_the_far_plane():
+    """min(0.25 x, −0.15 x): the ball rolls up the plane 0.25 x, leaves at the ridge (a kink) and
+    flies a parabola onto the plane −0.15 x, where the centre's signed distance to it,
+    (c_z + 0.15 c_x)/√1.0225, comes down to r (a quadratic in time). The run's last state before the
+    ridge is ~2·10⁻⁶ s before it: the flight used to start there and dip below the plane it was
+    still on, a landing 1.7·10⁻⁶ s before the lift-off it followed, and a second lift-off."""
+    traj = simulate(scene("min(0.25*x, -0.15*x)", x=-0.8, y=0.1, vx=2.5))
+    assert traj.status is Status.OK
+    assert [change.kind for change in traj.transitions] == ["liftoff", "landing"]
+    liftoff, landing = traj.transitions
+    assert abs(liftoff.x) < 1e-12 and landing.time - liftoff.time > 0.1
+    assert np.all(np.diff(traj.t) > 0)
+    t0, c, v = flying_start(traj)
+    a, b = -0.5 * G, v[2] + 0.15 * v[0]
+    k = c[2] + 0.15 * c[0] - R * math.sqrt(1.0225)
+    tau = (-b - math.sqrt(b * b - 4 * a * k)) / (2 * a)
+    assert landing.time == pytest.approx(t0 + tau, abs=1e-12)
+    assert landing.x == pytest.approx(c[0] + v[0] * tau - 0.15 * R / math.sqrt(1.0225), abs=1e-12)
+    # the flight starts at the ridge with the speed rolling up to it gives: |ċ|² = |ċ₀|² − (10/7) g Δz
+    i = int(np.flatnonzero(traj.modes == FLYING)[0])
+    speed2 = float(np.sum(traj.velocity[i] ** 2)) + 2 * G * (traj.center[i, 2] - (R / math.sqrt(1.0625)))
+    assert speed2 == pytest.approx(2.5 ** 2 * 1.0625 - 10 / 7 * G * 0.2, rel=1e-9)
