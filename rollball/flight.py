@@ -59,7 +59,7 @@ MAX_HINTS = 8            # surface points the search was shown it missed, before
 
 
 class OffLandscape(Exception):
-    """The landing search cannot go on: ``reason`` "undefined" where the landscape cannot be
+    """The landing search cannot go on: ``reason`` "off_domain" where the landscape cannot be
     evaluated below the flying ball (outside its domain: there is nothing to land on),
     "no_foot" where its nearest surface point is not found (Newton's method converges to no
     point as near as the nearest sample of the surface), "narrow_feature" where a surface point
@@ -67,9 +67,9 @@ class OffLandscape(Exception):
     step clear (``Flight.track``). ``time`` is the last time a closest point was found,
     ``center`` the centre then, ``point`` (x, y) where it happened (the centre's, or the feature's)."""
 
-    def __init__(self, time: float, center: np.ndarray, reason: str = "undefined", point=None,
+    def __init__(self, time: float, center: np.ndarray, reason: str = "off_domain", point=None,
                  value: float = math.nan):
-        super().__init__(f"no surface below the ball after t = {time:.6g} s" if reason == "undefined" else
+        super().__init__(f"no surface below the ball after t = {time:.6g} s" if reason == "off_domain" else
                          f"the landing search stops at t = {time:.6g} s ({reason})")
         self.time, self.center, self.reason, self.value = time, center, reason, value
         self.point = (float(center[0]), float(center[1])) if point is None else (float(point[0]), float(point[1]))
@@ -478,7 +478,7 @@ class Flight:
         - the centre at the landing is r from the contact's surface point (within 2 GRAZE × r)
           and that point is the nearest a search of its own finds; else ``OffLandscape``
           "false_landing".
-        ``OffLandscape`` also where no surface is found below the ball ("undefined") or its
+        ``OffLandscape`` also where no surface is found below the ball ("off_domain") or its
         nearest point is not found ("no_foot")."""
         r = self.radius
         for _ in range(MAX_HINTS + 1):
@@ -534,7 +534,7 @@ class Flight:
     def _off(self, t: float, foot: Foot) -> OffLandscape:
         """Why the search cannot go on from t where a look found no foot."""
         center = self.centers(np.array([t]))[0][0]
-        return OffLandscape(t, center, "no_foot" if foot.lost else "undefined")
+        return OffLandscape(t, center, "no_foot" if foot.lost else "off_domain")
 
     def _search(self, t_end: float) -> tuple[float, Foot] | None:
         """The first time in (t₀, t_end] the ball touches the surface again, and the contact
@@ -704,8 +704,12 @@ class Flight:
         centers, velocities = self.centers(times)
         start = np.repeat(np.asarray(guess if guess is not None else self.start.center[:2], float)[None, :], n, 0)
         alpha, normals, distance = self.surface.feet(centers, start)
-        alpha, normals, _ = self.surface._nearer_tips(centers, alpha, normals, distance)
-        for i in np.flatnonzero(np.isnan(alpha[:, 0])):   # the full search where that does not converge
+        alpha, normals, distance = self.surface._nearer_tips(centers, alpha, normals, distance)
+        below = self.surface.evaluate(centers[:, 0], centers[:, 1])[0]
+        # the full search where that does not converge, or converges to a point that cannot be the nearest
+        # (farther than the point below the centre, or on the far side of the surface)
+        plausible = self.surface._plausible(centers, below, distance, np.abs(centers[:, 2] - below))
+        for i in np.flatnonzero(np.isnan(alpha[:, 0]) | ~plausible):
             foot = self.surface.foot(centers[i])
             alpha[i], normals[i] = (foot.x, foot.y), foot.normal
         s = self.start

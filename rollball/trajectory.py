@@ -59,6 +59,9 @@ Status = _Named("Status", [(name.upper(), name) for name in STATUSES if name != 
 # Why a flight's landing search stopped a run (set in Python, not by the kernel): like REASONS,
 # each with the status it gives, what ``Failure.value`` holds and its sentence.
 FLIGHT_REASONS = {
+    "off_domain": ("nonfinite", "nothing",
+                   "the flying ball leaves the landscape's domain after {where} (the landscape cannot be evaluated "
+                   "below it): there is no surface to land on, so the run stops"),
     "no_foot": ("does_not_fit", "nothing",
                 "the flying ball's nearest surface point cannot be found at {where} (Newton's method reaches no "
                 "point as near as the surface's own samples there), so the landing search cannot go on and the "

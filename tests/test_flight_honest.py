@@ -190,3 +190,13 @@ def test_the_flight_off_a_roofs_ridge_starts_at_the_ridge_and_lands_on_the_far_p
     i = int(np.flatnonzero(traj.modes == FLYING)[0])
     speed2 = float(np.sum(traj.velocity[i] ** 2)) + 2 * G * (traj.center[i, 2] - (R / math.sqrt(1.0625)))
     assert speed2 == pytest.approx(2.5 ** 2 * 1.0625 - 10 / 7 * G * 0.2, rel=1e-9)
+
+
+def test_a_ball_flying_off_the_landscapes_domain_is_told_so():
+    """Off the top of the half cylinder z = √(1 − x²) at 4 m/s the ball flies beyond |x| = 1, where
+    there is no surface: the run stops saying so, never lands."""
+    traj = simulate(scene("sqrt(1-x^2)", duration=2.0, x=0.0, vx=4.0))
+    assert traj.status is Status.NONFINITE and traj.failure.reason is Reason.OFF_DOMAIN
+    assert "leaves the landscape's domain" in traj.message
+    assert [change.kind for change in traj.transitions] == ["liftoff"]
+    assert traj.center[-1, 0] > 1.0 + R
