@@ -200,3 +200,13 @@ def test_a_ball_flying_off_the_landscapes_domain_is_told_so():
     assert "leaves the landscape's domain" in traj.message
     assert [change.kind for change in traj.transitions] == ["liftoff"]
     assert traj.center[-1, 0] > 1.0 + R
+
+
+def test_compares_reference_for_the_run_off_the_top_flies_and_agrees_with_itself():
+    """``rollball compare`` measures every run against a reference (dop853, two tolerances): the
+    false landing made the reference disagree with itself by 2 m (and "fastest" unresolvable)."""
+    from rollball.comparison import reference_run
+    traj, own_error = reference_run(scene("-10*x^2", duration=2.0, friction=0.5, x=0.0, vx=5.0))
+    assert traj.status is Status.OK and [change.kind for change in traj.transitions] == ["liftoff"]
+    assert own_error <= 1e-12
+    assert traj.center[-1] == pytest.approx([10.0, 0.0, R - 0.5 * G * 4.0], abs=1e-12)
