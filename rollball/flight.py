@@ -222,7 +222,7 @@ class Surface:
                 shown = np.broadcast_to(hints[None, :, :2], (len(bad), len(hints), 2))
                 points = np.concatenate([points, shown], axis=1)
                 spacing = np.concatenate([spacing, np.broadcast_to(hints[None, :, 2], (len(bad), len(hints)))], axis=1)
-            points, zoomed = self._zoom(c[bad], points, spacing)
+            points, zoomed, finest = self._zoom(c[bad], points, spacing)
             sampled[bad] = np.minimum(sampled[bad], zoomed)
             a2, n2, d2 = self._from_starts(c[bad], points)
             redo = np.isnan(d2)   # (Newton's method at round-off, its step not below the compiled test's)
@@ -234,6 +234,22 @@ class Surface:
             take = bad[nearer]
             alpha[take], normal[take], distance[take] = a2[nearer], n2[nearer], d2[nearer]
             ok[bad] = self._plausible(c[bad], below[bad], distance[bad], sampled[bad])
+            # no foot where the nearest sample converged to a point: a kink or a like point, where
+            # no Newton's root is (the distance is not smooth there), nearest to round-off: the foot
+            # is that point, its distance less the most the spacing it was last sampled at can hide
+            # (|φ_α| ≤ √(1 + |∇f|²) per unit of α), its normal the direction from it to the centre
+            kinked = ~ok[bad] & (finest <= 1e-12 * (1.0 + np.abs(points[:, 0]).max(axis=1)))
+            for i in np.flatnonzero(kinked):
+                j, point = bad[i], points[i, 0]
+                d = self.evaluate(point[0], point[1])
+                arm = c[j] - np.array([point[0], point[1], d[0]])
+                far = float(np.linalg.norm(arm))
+                if not (far > 0.0 and np.isfinite([far, below[j], *d[:3]]).all()):
+                    continue   # (over no landscape, or at the edge of its domain: nothing found)
+                side = 1.0 if c[j, 2] >= below[j] else -1.0
+                alpha[j], normal[j] = point, side * arm / far
+                distance[j] = side * max(far - 2.0 * finest[i] * math.sqrt(1.0 + d[1] ** 2 + d[2] ** 2), 0.0)
+                ok[j] = True
         found = []
         for j in range(n):
             if not ok[j]:
@@ -334,13 +350,14 @@ class Surface:
         sample that is its grid's own point with the spacing shrunk 4 times, one that moved with
         its grid's spacing (so a point follows a flank as far as it leads, and several go on where
         a ridge parts two flanks), until every spacing is at round-off or after ZOOM_ROUNDS
-        rounds. The last points (n, ZOOM_BEAM, 2) and each centre's nearest sampled distance (n,)."""
+        rounds. The last points (n, ZOOM_BEAM, 2), nearest first, each centre's nearest sampled
+        distance (n,) and the spacing its nearest point was last sampled at (n,)."""
         n = points.shape[0]
         unit = np.linspace(-1.0, 1.0, ZOOM_SAMPLES)
         ux, uy = (u.ravel() for u in np.meshgrid(unit, unit, indexing="ij"))
         middle = (ZOOM_SAMPLES * ZOOM_SAMPLES) // 2
         ends = np.full((n, ZOOM_BEAM, 2), np.nan)
-        best = np.full(n, np.inf)
+        best, finest = np.full(n, np.inf), np.full(n, np.inf)
         for j in range(n):
             p, h = points[j][np.isfinite(points[j]).all(axis=1)], spacing[j][np.isfinite(points[j]).all(axis=1)]
             for _ in range(ZOOM_ROUNDS):
@@ -366,7 +383,9 @@ class Surface:
                 if not (h > 1e-13 * (1.0 + np.abs(p).max(axis=1))).any():
                     break
             ends[j, : len(p)] = p
-        return ends, best
+            if len(p):
+                finest[j] = h[0]
+        return ends, best, finest
 
     def _nearer_tips(self, centers, alpha, normal, distance):
         """The feet (alpha, normal, distance per centre) with a tip put in where it is nearer

@@ -210,3 +210,27 @@ def test_compares_reference_for_the_run_off_the_top_flies_and_agrees_with_itself
     assert traj.status is Status.OK and [change.kind for change in traj.transitions] == ["liftoff"]
     assert own_error <= 1e-12
     assert traj.center[-1] == pytest.approx([10.0, 0.0, R - 0.5 * G * 4.0], abs=1e-12)
+
+
+def test_a_ball_falling_past_a_ridges_kink_lands_where_the_closed_form_distance_says():
+    """Over z = −|x| the nearest surface point of a centre above the ridge is the kink itself, where
+    Newton's method has no root: the beam search of the samples converges to it. The distance to the
+    two half-planes and the kink is closed form; brentq on it. (It used to stop: no surface below.)"""
+    start = FreeState(0.0, np.array([-0.5, 0.0, 0.6]), np.array([1.2, 0.0, 0.0]), np.zeros(3), np.eye(3))
+    flight = Flight(Surface(landscape_for("-abs(x)")), start, radius=R, mass=1.0, gravity=G)
+    t, foot = flight.landing(2.0)
+
+    def distance(cx, cz):
+        left = abs(cz - cx) / math.sqrt(2) if cx + cz <= 0 else math.hypot(cx, cz)    # z = x, x ≤ 0
+        right = abs(cz + cx) / math.sqrt(2) if cx - cz >= 0 else math.hypot(cx, cz)   # z = −x, x ≥ 0
+        return min(left, right)
+
+    def gap(time):
+        return distance(-0.5 + 1.2 * time, 0.6 - 0.5 * G * time * time) - R
+
+    grid = np.linspace(0.0, 1.0, 2001)
+    k = int(np.flatnonzero(np.array([gap(time) for time in grid]) < 0)[0])
+    assert t == pytest.approx(brentq(gap, grid[k - 1], grid[k], xtol=1e-15), abs=1e-12)
+    # the centre passed over the kink, nearest to it, before it came down on the plane z = x
+    c = flight.centers(np.array([0.2]))[0][0]   # (its projections on both lines are off their half-planes)
+    assert flight.surface.foot(c).distance == pytest.approx(math.hypot(c[0], c[2]), rel=1e-12)
