@@ -234,3 +234,20 @@ def test_a_ball_falling_past_a_ridges_kink_lands_where_the_closed_form_distance_
     # the centre passed over the kink, nearest to it, before it came down on the plane z = x
     c = flight.centers(np.array([0.2]))[0][0]   # (its projections on both lines are off their half-planes)
     assert flight.surface.foot(c).distance == pytest.approx(math.hypot(c[0], c[2]), rel=1e-12)
+
+
+def test_a_landing_not_r_from_its_foot_stops_the_run(monkeypatch):
+    """Every landing is checked when it is made: a search that returned the old false landing off
+    the top of -10*x^2 (t = 1.3973 s, foot x = 0.98891 with the centre 6 m away) stops the run."""
+    from rollball import flight as module
+    surface = Surface(landscape_for("-10*x^2"))
+    false = surface.foot(np.array([6.98629368, 0.0, -9.47618835]))
+
+    def search(self, t_end):
+        return 1.3972587365513256, false
+
+    monkeypatch.setattr(module.Flight, "_search", search)
+    traj = simulate(scene("-10*x^2", duration=2.0, friction=0.5, x=0.0, vx=5.0))
+    assert traj.status is Status.DOES_NOT_FIT and traj.failure.reason is Reason.FALSE_LANDING
+    assert traj.failure.value == pytest.approx(6.005, abs=1e-3) and "not where the ball touches" in traj.message
+    assert [change.kind for change in traj.transitions] == ["liftoff"]
