@@ -177,9 +177,11 @@ class Surface:
         may be any point where c − φ is along N: a farther foot, on the far side of a fold, has
         a signed distance of either sign). It is accepted only where it is no farther than the
         nearest surface point sampled (the grid, the point below the centre, the ``hints``) and
-        on the centre's side of the surface (above it where c_z > f(c_x, c_y)); elsewhere
-        Newton's method starts again from the nearest points of finer grids about the nearest
-        samples (``_zoom``), and where that finds none either the foot is NaN and ``lost``."""
+        on the centre's side of the surface (above it where c_z > f(c_x, c_y)); elsewhere a damped
+        Newton's method starts again from the same points (``_polish``), then both from the
+        points a beam search of the samples ends at (``_zoom``); where that search converged to a
+        point with no root near (a kink), that point is the foot; where none passes even then the
+        foot is NaN, and ``lost`` where the centre is over the landscape."""
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
         n = len(c)
         below = self.evaluate(c[:, 0], c[:, 1])[0]
@@ -214,7 +216,7 @@ class Surface:
             take = bad[nearer]
             alpha[take], normal[take], distance[take] = a2[nearer], n2[nearer], d2[nearer]
             ok[bad] = self._plausible(c[bad], below[bad], distance[bad], sampled[bad])
-        if not ok.all():   # the foot was not found from these starts: finer grids about the nearest samples
+        if not ok.all():   # the foot was not found from these starts: a search of the samples for starts
             bad = np.flatnonzero(~ok)
             spacing = np.full((len(bad), BEST_SAMPLES), 1.0) * (2.0 * reach[bad, None] / (SAMPLES - 1))
             points = np.stack([gx[bad[:, None], nearest[bad]], gy[bad[:, None], nearest[bad]]], axis=2)
