@@ -47,16 +47,32 @@ CLEAR_MARGIN = 1e-13     # × r: the share of a gap a certified step keeps for r
 PATH_ITERATIONS = 8      # Newton's iterations for the time a path length takes
 SAMPLES = 21             # the grid a closest point is looked for on, per side...
 BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
+ZOOM_SAMPLES = 9         # where no foot found is as near as the nearest sample: finer grids, per side...
+ZOOM_ROUNDS = 200        # ...at most this many, each over ± a spacing about the last nearest points...
+ZOOM_BEAM = 24           # ...this many of them
+POLISH_STEP = 1e-9       # Newton's last step (× (1 + |α|)) below which ``_polish`` takes a foot as found
+SAMPLE_SLACK = 1e-9      # a foot may be this share farther than the nearest surface sample (round-off)
+TRACK = 1e-3             # × r: the spacing of the surface samples under the centre's path (``Flight.track``)
+TRACK_MOST = 100_000     # (the samples taken at once)
+TRACK_SLACK = 1e-9       # × r: a sample this much nearer than r is inside the ball (round-off)
+MAX_HINTS = 8            # surface points the search was shown it missed, before a run stops
 
 
 class OffLandscape(Exception):
-    """The flying ball is where the landscape cannot be evaluated below it (outside its domain,
-    or no closest surface point is found): there is nothing to land on. ``time`` is the last
-    time a closest point was found, ``center`` the centre then."""
+    """The landing search cannot go on: ``reason`` "off_domain" where the landscape cannot be
+    evaluated below the flying ball (outside its domain: there is nothing to land on),
+    "no_foot" where its nearest surface point is not found (Newton's method converges to no
+    point as near as the nearest sample of the surface), "narrow_feature" where a surface point
+    under the centre's path is within r of it although the search, blind to it, certified the
+    step clear (``Flight.track``). ``time`` is the last time a closest point was found,
+    ``center`` the centre then, ``point`` (x, y) where it happened (the centre's, or the feature's)."""
 
-    def __init__(self, time: float, center: np.ndarray):
-        super().__init__(f"no surface below the ball after t = {time:.6g} s")
-        self.time, self.center = time, center
+    def __init__(self, time: float, center: np.ndarray, reason: str = "off_domain", point=None,
+                 value: float = math.nan):
+        super().__init__(f"no surface below the ball after t = {time:.6g} s" if reason == "off_domain" else
+                         f"the landing search stops at t = {time:.6g} s ({reason})")
+        self.time, self.center, self.reason, self.value = time, center, reason, value
+        self.point = (float(center[0]), float(center[1])) if point is None else (float(point[0]), float(point[1]))
 
 
 def rest_speed(radius: float, gravity: float) -> float:
@@ -91,6 +107,7 @@ class Foot:
     y: float
     normal: np.ndarray
     distance: float
+    lost: bool = False   # NaN because no foot is as near as the nearest surface sample (not off the domain)
 
 
 class Surface:
@@ -102,6 +119,10 @@ class Surface:
         # surface points (x, y, f) flights left from, measured directly (a closest point at the tip
         # of a cone is no root of Newton's method; elsewhere the feet Newton finds are as near)
         self.tips: list[np.ndarray] = []
+        # surface points (x, y, the spacing they were sampled at) a flight found under its centre's
+        # path nearer than the feet it was given (a feature narrower than the grid): every foot
+        # search samples them and starts there
+        self.hints: list[np.ndarray] = []
         self._record = landscape.record(self.values)   # (held while its address is in use)
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
@@ -150,34 +171,223 @@ class Surface:
         return self.feet_of(np.asarray(center, dtype=float)[None, :], guess)[0]
 
     def feet_of(self, centers: np.ndarray, guess=None) -> list[Foot]:
-        """``foot`` for each of the centres (n, 3), all at once."""
+        """``foot`` for each of the centres (n, 3), all at once.
+
+        The foot is the nearest (smallest |D|) of the points Newton's method converges to (which
+        may be any point where c − φ is along N: a farther foot, on the far side of a fold, has
+        a signed distance of either sign). It is accepted only where it is no farther than the
+        nearest surface point sampled (the grid, the point below the centre, the ``hints``) and
+        on the centre's side of the surface (above it where c_z > f(c_x, c_y)); elsewhere a damped
+        Newton's method starts again from the same points (``_polish``), then both from the
+        points a beam search of the samples ends at (``_zoom``); where that search converged to a
+        point with no root near (a kink), that point is the foot; where none passes even then the
+        foot is NaN, and ``lost`` where the centre is over the landscape."""
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
         n = len(c)
-        reach = np.abs(c[:, 2] - self.evaluate(c[:, 0], c[:, 1])[0])
+        below = self.evaluate(c[:, 0], c[:, 1])[0]
+        reach = np.abs(c[:, 2] - below)
         reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
         unit = np.linspace(-1.0, 1.0, SAMPLES)
         gx, gy = np.broadcast_arrays(c[:, 0, None, None] + reach[:, None, None] * unit[None, :, None],
                                      c[:, 1, None, None] + reach[:, None, None] * unit[None, None, :])
         gx, gy = gx.reshape(n, -1), gy.reshape(n, -1)
+        hints = np.array(self.hints).reshape(-1, 3)   # (x, y, the spacing it was found at)
+        if len(hints):
+            gx = np.concatenate([gx, np.broadcast_to(hints[:, 0], (n, len(hints)))], axis=1)
+            gy = np.concatenate([gy, np.broadcast_to(hints[:, 1], (n, len(hints)))], axis=1)
         heights = self.evaluate(gx.ravel(), gy.ravel())[0].reshape(n, -1)
         far = (gx - c[:, :1]) ** 2 + (gy - c[:, 1:2]) ** 2 + (heights - c[:, 2:]) ** 2
-        nearest = np.argsort(np.where(np.isnan(far), np.inf, far), axis=1)[:, :BEST_SAMPLES]
+        far = np.where(np.isnan(far), np.inf, far)
+        nearest = np.argsort(far, axis=1)[:, :BEST_SAMPLES]
         rows = np.arange(n)[:, None]
         starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float), (n, 1, 2))])
         starts.append(np.stack([gx[rows, nearest], gy[rows, nearest]], axis=2))   # (nan where not finite)
+        if len(hints):
+            starts.append(np.broadcast_to(hints[None, :, :2], (n, len(hints), 2)))
         starts = np.concatenate(starts, axis=1)
-        k = starts.shape[1]
-        alpha, normal, distance = self.feet(np.repeat(c, k, axis=0), starts.reshape(-1, 2))
-        alpha, normal, distance = self._nearer_tips(np.repeat(c, k, axis=0), alpha, normal, distance)
-        alpha, normal, distance = alpha.reshape(n, k, 2), normal.reshape(n, k, 3), distance.reshape(n, k)
+        alpha, normal, distance = self._from_starts(c, starts)
+        sampled = np.sqrt(far.min(axis=1))   # a surface point this far: the nearest is no farther
+        ok = self._plausible(c, below, distance, sampled)
+        if not ok.all():   # Newton's method at round-off, its step not below the compiled test's?
+            bad = np.flatnonzero(~ok)
+            alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
+            a2, n2, d2 = self._polish(c[bad], starts[bad])
+            nearer = np.isnan(distance[bad]) | (np.abs(d2) < np.abs(distance[bad]))
+            take = bad[nearer]
+            alpha[take], normal[take], distance[take] = a2[nearer], n2[nearer], d2[nearer]
+            ok[bad] = self._plausible(c[bad], below[bad], distance[bad], sampled[bad])
+        if not ok.all():   # the foot was not found from these starts: a search of the samples for starts
+            bad = np.flatnonzero(~ok)
+            spacing = np.full((len(bad), BEST_SAMPLES), 1.0) * (2.0 * reach[bad, None] / (SAMPLES - 1))
+            points = np.stack([gx[bad[:, None], nearest[bad]], gy[bad[:, None], nearest[bad]]], axis=2)
+            if len(hints):
+                shown = np.broadcast_to(hints[None, :, :2], (len(bad), len(hints), 2))
+                points = np.concatenate([points, shown], axis=1)
+                spacing = np.concatenate([spacing, np.broadcast_to(hints[None, :, 2], (len(bad), len(hints)))], axis=1)
+            points, zoomed, finest = self._zoom(c[bad], points, spacing)
+            sampled[bad] = np.minimum(sampled[bad], zoomed)
+            a2, n2, d2 = self._from_starts(c[bad], points)
+            redo = np.isnan(d2)   # (Newton's method at round-off, its step not below the compiled test's)
+            if redo.any():
+                a3, n3, d3 = self._polish(c[bad][redo], points[redo])
+                a2[redo], n2[redo], d2[redo] = a3, n3, d3
+            alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
+            nearer = np.isnan(distance[bad]) | (np.abs(d2) < np.abs(distance[bad]))
+            take = bad[nearer]
+            alpha[take], normal[take], distance[take] = a2[nearer], n2[nearer], d2[nearer]
+            ok[bad] = self._plausible(c[bad], below[bad], distance[bad], sampled[bad])
+            # no foot where the nearest sample converged to a point: a kink or a like point, where
+            # no Newton's root is (the distance is not smooth there), nearest to round-off: the foot
+            # is that point, its distance less the most the spacing it was last sampled at can hide
+            # (|φ_α| ≤ √(1 + |∇f|²) per unit of α), its normal the direction from it to the centre
+            kinked = ~ok[bad] & (finest <= 1e-12 * (1.0 + np.abs(points[:, 0]).max(axis=1)))
+            for i in np.flatnonzero(kinked):
+                j, point = bad[i], points[i, 0]
+                d = self.evaluate(point[0], point[1])
+                arm = c[j] - np.array([point[0], point[1], d[0]])
+                far = float(np.linalg.norm(arm))
+                if not (far > 0.0 and np.isfinite([far, below[j], *d[:3]]).all()):
+                    continue   # (over no landscape, or at the edge of its domain: nothing found)
+                side = 1.0 if c[j, 2] >= below[j] else -1.0
+                alpha[j], normal[j] = point, side * arm / far
+                distance[j] = side * max(far - 2.0 * finest[i] * math.sqrt(1.0 + d[1] ** 2 + d[2] ** 2), 0.0)
+                ok[j] = True
         found = []
         for j in range(n):
-            if np.isnan(distance[j]).all():
-                found.append(Foot(math.nan, math.nan, np.full(3, math.nan), math.nan))
+            if not ok[j]:
+                lost = bool(np.isfinite(sampled[j]) and np.isfinite(below[j]))
+                found.append(Foot(math.nan, math.nan, np.full(3, math.nan), math.nan, lost))
                 continue
-            i = int(np.nanargmin(distance[j]))
-            found.append(Foot(float(alpha[j, i, 0]), float(alpha[j, i, 1]), normal[j, i], float(distance[j, i])))
+            found.append(Foot(float(alpha[j, 0]), float(alpha[j, 1]), normal[j], float(distance[j])))
         return found
+
+    def _from_starts(self, c, starts):
+        """Newton's feet from starts (n, k, 2) for the centres c (n, 3), the tips put in, and
+        each centre's nearest (smallest |D|) first: (alpha (n, 2), normal (n, 3), distance (n,))
+        of the nearest, NaN where none converged."""
+        n, k = starts.shape[:2]
+        alpha, normal, distance = self.feet(np.repeat(c, k, axis=0), np.ascontiguousarray(starts).reshape(-1, 2))
+        alpha, normal, distance = self._nearer_tips(np.repeat(c, k, axis=0), alpha, normal, distance)
+        alpha, normal, distance = alpha.reshape(n, k, 2), normal.reshape(n, k, 3), distance.reshape(n, k)
+        size = np.where(np.isnan(distance), np.inf, np.abs(distance))
+        i = np.argmin(size, axis=1)
+        rows = np.arange(n)
+        return alpha[rows, i], normal[rows, i], distance[rows, i]
+
+    def _polish(self, c, starts):
+        """Newton's method (as ``feet``) in numpy from starts (n, k, 2) for centres (n, 3), damped:
+        a step that does not bring the surface point nearer is halved (up to 40 times), and where
+        the Hessian G − d_z H is not positive definite the step is along the gradient (scaled by
+        1/(1 + |∇f|²)), so that each iterate is nearer than the last and the iteration cannot
+        cycle (undamped, it does about a fold of a steep landscape). A foot is taken as found
+        where the last step is below POLISH_STEP (1 + |α|) and c − φ is along N (on a steep
+        landscape the gradient's round-off keeps the step above the compiled test's
+        4·10⁻¹⁶ (1 + |α|): at round-off it jumps back and forth). The nearest per centre, as
+        ``_from_starts``."""
+        n, k = starts.shape[:2]
+        centers = np.repeat(c, k, axis=0)
+        alpha = np.ascontiguousarray(starts, dtype=float).reshape(-1, 2).copy()
+        step = np.full(len(alpha), np.inf)
+
+        def far(points):
+            f = self.evaluate(points[:, 0], points[:, 1])
+            return f, ((centers[:, 0] - points[:, 0]) ** 2 + (centers[:, 1] - points[:, 1]) ** 2
+                       + (centers[:, 2] - f[0]) ** 2)
+
+        with np.errstate(all="ignore"):
+            d, now = far(alpha)
+            for _ in range(FOOT_ITERATIONS):
+                f, fx, fy, fxx, fxy, fyy = d
+                dx, dy, dz = centers[:, 0] - alpha[:, 0], centers[:, 1] - alpha[:, 1], centers[:, 2] - f
+                b1, b2 = dx + dz * fx, dy + dz * fy
+                h11, h12, h22 = 1.0 + fx * fx - dz * fxx, fx * fy - dz * fxy, 1.0 + fy * fy - dz * fyy
+                det = h11 * h22 - h12 * h12
+                definite = (h11 > 0.0) & (det > 0.0)
+                scale = 1.0 + fx * fx + fy * fy
+                s1 = np.where(definite, (h22 * b1 - h12 * b2) / det, b1 / scale)
+                s2 = np.where(definite, (h11 * b2 - h12 * b1) / det, b2 / scale)
+                moving = np.isfinite(s1) & np.isfinite(s2)
+                s1, s2 = np.where(moving, s1, 0.0), np.where(moving, s2, 0.0)
+                trial = alpha + np.column_stack([s1, s2])
+                d_t, after = far(trial)
+                for _ in range(40):   # halve the steps that do not come nearer (round-off aside)
+                    worse = ~(after <= now * (1.0 + 1e-15) + 1e-300) & moving
+                    if not worse.any():
+                        break
+                    s1, s2 = np.where(worse, 0.5 * s1, s1), np.where(worse, 0.5 * s2, s2)
+                    trial = alpha + np.column_stack([s1, s2])
+                    d_w, after_w = far(trial)
+                    d_t[:, worse], after[worse] = d_w[:, worse], after_w[worse]
+                alpha, d, now = trial, d_t, after
+                step = np.maximum(np.abs(s1), np.abs(s2)) / (1.0 + np.abs(alpha).max(axis=1))
+                if not (step > 4e-16).any():
+                    break
+            f, fx, fy = self.evaluate(alpha[:, 0], alpha[:, 1])[:3]
+            w = np.sqrt(1.0 + fx * fx + fy * fy)
+            normal = np.column_stack([-fx / w, -fy / w, 1.0 / w])
+            g = centers - np.column_stack([alpha, f])
+            distance = np.einsum("ij,ij->i", g, normal)
+            off = np.linalg.norm(g - distance[:, None] * normal, axis=1)
+            good = (step <= POLISH_STEP) & (off <= 1e-6 * (1.0 + np.abs(distance))) & np.isfinite(distance)
+        alpha[~good], distance[~good] = np.nan, np.nan
+        alpha, normal, distance = self._nearer_tips(centers, alpha, normal, distance)
+        alpha, normal, distance = alpha.reshape(n, k, 2), normal.reshape(n, k, 3), distance.reshape(n, k)
+        i = np.argmin(np.where(np.isnan(distance), np.inf, np.abs(distance)), axis=1)
+        rows = np.arange(n)
+        return alpha[rows, i], normal[rows, i], distance[rows, i]
+
+    @staticmethod
+    def _plausible(c, below, distance, sampled):
+        """Whether each foot's signed distance can be the nearest surface point's: found, no
+        farther than a sampled surface point, and on the centre's side of the surface."""
+        with np.errstate(invalid="ignore"):
+            near = np.abs(distance) <= sampled * (1.0 + SAMPLE_SLACK)
+            side = ~(((distance > 0.0) & (c[:, 2] < below)) | ((distance < 0.0) & (c[:, 2] > below)))
+        return np.isfinite(distance) & near & side
+
+    def _zoom(self, c, points, spacing):
+        """A search of the surface's samples for the points nearest each centre, from points
+        (n, k, 2) with spacings (n, k): each round samples a ZOOM_SAMPLES × ZOOM_SAMPLES grid over
+        ± its spacing about each point and keeps the ZOOM_BEAM nearest samples of them all, a
+        sample that is its grid's own point with the spacing shrunk 4 times, one that moved with
+        its grid's spacing (so a point follows a flank as far as it leads, and several go on where
+        a ridge parts two flanks), until every spacing is at round-off or after ZOOM_ROUNDS
+        rounds. The last points (n, ZOOM_BEAM, 2), nearest first, each centre's nearest sampled
+        distance (n,) and the spacing its nearest point was last sampled at (n,)."""
+        n = points.shape[0]
+        unit = np.linspace(-1.0, 1.0, ZOOM_SAMPLES)
+        ux, uy = (u.ravel() for u in np.meshgrid(unit, unit, indexing="ij"))
+        middle = (ZOOM_SAMPLES * ZOOM_SAMPLES) // 2
+        ends = np.full((n, ZOOM_BEAM, 2), np.nan)
+        best, finest = np.full(n, np.inf), np.full(n, np.inf)
+        for j in range(n):
+            p, h = points[j][np.isfinite(points[j]).all(axis=1)], spacing[j][np.isfinite(points[j]).all(axis=1)]
+            for _ in range(ZOOM_ROUNDS):
+                if not len(p):
+                    break
+                gx = p[:, 0, None] + h[:, None] * ux
+                gy = p[:, 1, None] + h[:, None] * uy
+                gx[:, middle], gy[:, middle] = p[:, 0], p[:, 1]
+                heights = self.evaluate(gx.ravel(), gy.ravel())[0].reshape(gx.shape)
+                far = (gx - c[j, 0]) ** 2 + (gy - c[j, 1]) ** 2 + (heights - c[j, 2]) ** 2
+                far = np.where(np.isnan(far), np.inf, far)
+                child = np.where(np.arange(gx.shape[1]) == middle, 2.0 / (ZOOM_SAMPLES - 1), 1.0)[None, :] * h[:, None]
+                order = np.lexsort((child.ravel(), far.ravel()))   # (the nearest, the finer first among equals)
+                xy = np.column_stack([gx.ravel()[order], gy.ravel()[order]])
+                size = child.ravel()[order]
+                with np.errstate(all="ignore"):   # (points within a spacing of a nearer one are the same)
+                    cells = np.column_stack([np.round(xy / (4.0 * size[:, None])), np.log2(size)])
+                _, first = np.unique(np.where(np.isfinite(cells), cells, 0.0), axis=0, return_index=True)
+                keep = np.sort(first)[:ZOOM_BEAM]
+                keep = keep[np.isfinite(far.ravel()[order][keep])]
+                best[j] = min(best[j], float(np.sqrt(far.min())))
+                p, h = xy[keep], size[keep]
+                if not (h > 1e-13 * (1.0 + np.abs(p).max(axis=1))).any():
+                    break
+            ends[j, : len(p)] = p
+            if len(p):
+                finest[j] = h[0]
+        return ends, best, finest
 
     def _nearer_tips(self, centers, alpha, normal, distance):
         """The feet (alpha, normal, distance per centre) with a tip put in where it is nearer
@@ -185,7 +395,7 @@ class Surface:
         for tip in self.tips:
             arm = centers - tip
             far = np.linalg.norm(arm, axis=1)
-            nearer = ~(distance <= far) & (far > 0)
+            nearer = ~(np.abs(distance) <= far) & (far > 0)
             if nearer.any():
                 alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
                 alpha[nearer] = tip[:2]
@@ -279,6 +489,76 @@ class Flight:
 
     def landing(self, t_end: float) -> tuple[float, Foot] | None:
         """The first time in (t₀, t_end] the ball touches the surface again, and the contact
+        there; None if it is still flying at t_end (``_search``), checked:
+
+        - the surface under the centre's path up to there is sampled every TRACK × r of the path
+          (``track``): where a surface point below the centre is nearer than r before the landing
+          found, the search was blind to it (a feature narrower than its grid) and runs again with
+          that point among every foot search's samples and starts (``Surface.hints``); where it
+          is still blind, ``OffLandscape`` "narrow_feature";
+        - the centre at the landing is r from the contact's surface point (within 2 GRAZE × r)
+          and that point is the nearest a search of its own finds; else ``OffLandscape``
+          "false_landing".
+        ``OffLandscape`` also where no surface is found below the ball ("off_domain") or its
+        nearest point is not found ("no_foot")."""
+        r = self.radius
+        for _ in range(MAX_HINTS + 1):
+            found = self._search(t_end)
+            end = t_end if found is None else found[0]
+            touch = self.track(self.start.t, end)
+            if touch is None:
+                break
+            tau, x, y, height = touch
+            spacing = TRACK * r
+            if (len(self.surface.hints) >= MAX_HINTS
+                    or any(math.hypot(x - hx, y - hy) <= 4.0 * spacing for hx, hy, _ in self.surface.hints)):
+                raise OffLandscape(tau, self.centers(np.array([tau]))[0][0], "narrow_feature", (x, y), height)
+            self.surface.hints.append(np.array([x, y, spacing]))
+        if found is not None:
+            self._verify(*found)
+        return found
+
+    def track(self, t: float, s: float):
+        """The first of the surface samples under the centre's path between t and s (every TRACK
+        × r of its length, at most TRACK_MOST × ⌈(s − t)/…⌉ in all) whose height is within r of
+        the centre below it, as (time, x, y, c_z − f), or None. Such a surface point is inside the
+        ball: the ball touched the surface by then (the vertical distance bounds the distance)."""
+        if not s > t:
+            return None
+        r = self.radius
+        speeds = np.linalg.norm(self.centers(np.array([t, s]))[1], axis=1)
+        length = float(speeds.max()) * (s - t)   # (the speed along a parabola is largest at an end)
+        count = int(min(math.ceil(length / (TRACK * r)), 100 * TRACK_MOST)) + 1
+        for first in range(1, count + 1, TRACK_MOST):
+            k = np.arange(first, min(first + TRACK_MOST, count + 1))
+            times = t + (s - t) * (k / count)
+            centers = self.centers(times)[0]
+            height = centers[:, 2] - self.surface.evaluate(centers[:, 0], centers[:, 1])[0]
+            with np.errstate(invalid="ignore"):
+                inside = np.flatnonzero(height < r * (1.0 - TRACK_SLACK))
+            if len(inside):
+                i = int(inside[0])
+                return float(times[i]), float(centers[i, 0]), float(centers[i, 1]), float(height[i])
+        return None
+
+    def _verify(self, t: float, foot: Foot) -> None:
+        """``OffLandscape`` "false_landing" unless the centre at t is r from the foot's surface
+        point (within 2 GRAZE × r) and a search of its own (no guess) finds no nearer one."""
+        r = self.radius
+        center = self.centers(np.array([t]))[0][0]
+        point = np.array([foot.x, foot.y, float(self.surface.evaluate(foot.x, foot.y)[0])])
+        far = float(np.linalg.norm(center - point))
+        own = self.surface.foot(center)
+        if not (abs(far - r) <= 2.0 * GRAZE * r and own.distance >= far - 2.0 * GRAZE * r):
+            raise OffLandscape(t, center, "false_landing", (foot.x, foot.y), far)
+
+    def _off(self, t: float, foot: Foot) -> OffLandscape:
+        """Why the search cannot go on from t where a look found no foot."""
+        center = self.centers(np.array([t]))[0][0]
+        return OffLandscape(t, center, "no_foot" if foot.lost else "off_domain")
+
+    def _search(self, t_end: float) -> tuple[float, Foot] | None:
+        """The first time in (t₀, t_end] the ball touches the surface again, and the contact
         there; None if it is still flying at t_end. ``OffLandscape`` where no surface is found
         below it.
 
@@ -300,7 +580,7 @@ class Flight:
         t = self.start.t
         h, foot = self.gap(t)
         if math.isnan(h):
-            raise OffLandscape(t, self.start.center)
+            raise self._off(t, foot)
         if h <= floor:   # just lifted off: not yet clear of the surface
             cleared = self._clear_off(t, h, foot, t_end)
             if len(cleared) == 2:
@@ -334,7 +614,7 @@ class Flight:
             gaps, feet = self.gaps(times, guess)
             for s, h_s, foot_s in zip(times, gaps, feet):
                 if math.isnan(h_s):
-                    raise OffLandscape(t, self.centers(np.array([t]))[0][0])
+                    raise self._off(t, foot_s)
                 if h_s < -tol and s <= t + sure:   # (only where the foot at t was not the nearest point)
                     return self._locate(t, float(s), guess)
                 if not (h_s > -tol and (s <= t + sure or (h_s > 0.0 and self.clear(t, s, h, h_s)))):
@@ -396,7 +676,7 @@ class Flight:
             s = min(t + step, t_end)
             h_s, foot_s = self.gap(s, guess)
             if math.isnan(h_s):
-                raise OffLandscape(t, self.centers(np.array([t]))[0][0])
+                raise self._off(t, foot_s)
             if h_s < -tol:
                 return self._locate(t, s, guess)
             if h_s > floor:
@@ -445,8 +725,12 @@ class Flight:
         centers, velocities = self.centers(times)
         start = np.repeat(np.asarray(guess if guess is not None else self.start.center[:2], float)[None, :], n, 0)
         alpha, normals, distance = self.surface.feet(centers, start)
-        alpha, normals, _ = self.surface._nearer_tips(centers, alpha, normals, distance)
-        for i in np.flatnonzero(np.isnan(alpha[:, 0])):   # the full search where that does not converge
+        alpha, normals, distance = self.surface._nearer_tips(centers, alpha, normals, distance)
+        below = self.surface.evaluate(centers[:, 0], centers[:, 1])[0]
+        # the full search where that does not converge, or converges to a point that cannot be the nearest
+        # (farther than the point below the centre, or on the far side of the surface)
+        plausible = self.surface._plausible(centers, below, distance, np.abs(centers[:, 2] - below))
+        for i in np.flatnonzero(np.isnan(alpha[:, 0]) | ~plausible):
             foot = self.surface.foot(centers[i])
             alpha[i], normals[i] = (foot.x, foot.y), foot.normal
         s = self.start

@@ -12,6 +12,7 @@ import dataclasses
 import threading
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from . import __version__, kernel, machine_code, sliding
 from .flight import Flight, FreeState, OffLandscape, Surface, impact, rest_speed, settle
@@ -19,8 +20,8 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
-from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, R, ROLLING, SLIDING, T,
-                         VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
+from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLIGHT_REASONS, FLYING, OMEGA, R, ROLLING,
+                         SLIDING, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
 # kernel.ROW_SIZE (25) doubles a row: 1.0 GB at the limit, handed to the trajectory without a
 # copy. A run recording every adaptive step grows its buffer by doubling up to the limit,
@@ -36,6 +37,11 @@ _STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES
            if code not in (kernel.RUNNING, kernel.TRANSITION)}
 # The mode a kernel run's transition leads to (kernel.interface.TRANSITIONS) as a row mode.
 _NEXT_MODE = {"liftoff": FLYING, "slip": SLIDING, "grip": ROLLING}
+# A friction coefficient above this acts as this one (``_parameters``): "always enough friction"
+# as far as a double can tell (μ F_n stays finite for F_n up to 10²⁰⁸ N; a slide on a plane grips
+# after 2 v₀/(7 μ g), 10⁻¹⁰⁰ s here), where μ F_n itself overflowed to inf and inf − inf, 0 · inf
+# made the friction bound NaN.
+FRICTION_CAP = 1e100
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
 
 
@@ -258,7 +264,8 @@ class Simulation:
         if not self.segmented:
             return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn)
         contact = scene.contact
-        return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn, friction=contact.friction,
+        friction = None if contact.friction is None else min(contact.friction, FRICTION_CAP)
+        return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn, friction=friction,
                                  fly=contact.after_liftoff == "fly", dissipated=dissipated)
 
     def _arm(self, arrays: dict, t_start: float) -> None:
@@ -498,13 +505,48 @@ class Simulation:
                 self._surface.tips.append(point)
             normal = self._probe_normal()
             velocity = start.velocity - float(np.dot(start.velocity, normal)) * normal
-            self._flight = self._new_flight(dataclasses.replace(start, velocity=velocity))
+            start = dataclasses.replace(start, velocity=velocity)
+            if info[kernel.F_LIFT_KINK] == 1.0 and t > start.t:
+                # a ridge's kink: the run's last state is the last one before it (the kink is located
+                # between it and the step's end); the ball is on the surface up to the kink, so it
+                # rolls (slides) there along the tangent plane and the flight starts at the kink
+                start = self._to_kink(start, t, normal)
+            self._flight = self._new_flight(start)
             return
         normal = self._probe_normal()
         state = sliding.stopped_state(self._z, self._R, self._p, normal)
         self._mode = _NEXT_MODE[kind]
         self._dissipated_now = state.dissipated
         self._start_kernel_run(state, t, slides=kind == "slip", repeat=True)
+
+    def _to_kink(self, start: FreeState, t: float, normal: np.ndarray) -> FreeState:
+        """The state at the kink's time t from ``start`` (the last state before it, τ = t − t₀ earlier),
+        moving in the tangent plane of ``normal`` as on that plane: rolling with acceleration
+        (5/7) g_t and ω = N × ċ/r plus its spin about N (this keeps E exactly), sliding with
+        g_t − μ g₀ N_z û (u the slip velocity) and the torque of that friction. Over the short
+        τ the surface's bending moves the centre off the plane by about κ|ċ|²τ²/2."""
+        tau = t - start.t
+        r, g0 = self.scene.ball.radius, self.scene.gravity
+        gravity = np.array([0.0, 0.0, -g0])
+        tangential = gravity - float(np.dot(gravity, normal)) * normal
+        omega = start.omega
+        if self._mode == SLIDING and self.scene.contact.friction is not None:
+            slip = start.velocity + np.cross(omega, -r * normal)
+            slip -= float(np.dot(slip, normal)) * normal
+            speed = float(np.linalg.norm(slip))
+            mu = min(self.scene.contact.friction, FRICTION_CAP)
+            friction = -mu * g0 * float(normal[2]) * slip / speed if speed > 0.0 else np.zeros(3)
+            acceleration = tangential + friction
+            omega = omega - (5.0 / (2.0 * r)) * np.cross(normal, friction) * tau
+            self._dissipated_now += self.scene.ball.mass * mu * g0 * float(normal[2]) * speed * tau
+        else:
+            acceleration = (5.0 / 7.0) * tangential
+        velocity = start.velocity + acceleration * tau
+        if self._mode != SLIDING or self.scene.contact.friction is None:
+            omega = np.cross(normal, velocity) / r + float(np.dot(start.omega, normal)) * normal
+        center = start.center + start.velocity * tau + 0.5 * acceleration * tau * tau
+        R = Rotation.from_rotvec(0.5 * (start.omega + omega) * tau).as_matrix() @ start.R
+        return FreeState(t, center, velocity, omega, R)
 
     def _at_tip(self, x: float, y: float) -> bool:
         """Whether (x, y) is (within 10⁻⁶ of) a point where the normal turns through a finite angle:
@@ -580,8 +622,8 @@ class Simulation:
             self._append(flight.rows(np.append(self._record_times(flight.start.t, off.time), off.time)
                                      if off.time > flight.start.t else np.empty(0), dissipated))
             self._flight = None
-            self._off = Failure(Reason.UNDEFINED, off.time, float(off.center[0]), float(off.center[1]), math.nan)
-            self.status = Status.NONFINITE
+            self._off = Failure(Reason(off.reason), off.time, *off.point, off.value)
+            self.status = Status(FLIGHT_REASONS[off.reason][0]) if off.reason in FLIGHT_REASONS else Status.NONFINITE
             return
         if landing is None:
             times = np.append(self._record_times(flight.start.t, self.t_end), self.t_end)
@@ -866,8 +908,13 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
 
 
 def describe(failure: Failure, radius: float) -> str:
-    """The sentence for a failure, made from its fields (``kernel.interface.REASONS``)."""
-    return kernel.sentence(str(failure.reason), failure.value, failure.time, failure.x, failure.y, radius)
+    """The sentence for a failure, made from its fields (``kernel.interface.REASONS``, or a flight's
+    ``trajectory.FLIGHT_REASONS``)."""
+    reason = str(failure.reason)
+    if reason in FLIGHT_REASONS:
+        where = f"t = {failure.time:.6g} s, (x, y) = ({failure.x:.6g}, {failure.y:.6g})"
+        return FLIGHT_REASONS[reason][2].format(where=where, value=failure.value, radius=radius)
+    return kernel.sentence(reason, failure.value, failure.time, failure.x, failure.y, radius)
 
 
 def simulate(scene: Scene | str | os.PathLike, *, method: str | None = None, munthe_kaas: bool | None = None,

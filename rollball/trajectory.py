@@ -56,7 +56,26 @@ class _Named(str, enum.Enum):
 # the physics stopped a run (``Failure.reason``; ``Failure.value`` says how far): members named
 # from the kernel interface's tables (STATUSES, REASONS), which say what each means.
 Status = _Named("Status", [(name.upper(), name) for name in STATUSES if name != "running"], module=__name__)
-Reason = _Named("Reason", [(name.upper(), name) for name in REASONS], module=__name__)
+# Why a flight's landing search stopped a run (set in Python, not by the kernel): like REASONS,
+# each with the status it gives, what ``Failure.value`` holds and its sentence.
+FLIGHT_REASONS = {
+    "off_domain": ("nonfinite", "nothing",
+                   "the flying ball leaves the landscape's domain after {where} (the landscape cannot be evaluated "
+                   "below it): there is no surface to land on, so the run stops"),
+    "no_foot": ("does_not_fit", "nothing",
+                "the flying ball's nearest surface point cannot be found at {where} (Newton's method reaches no "
+                "point as near as the surface's own samples there), so the landing search cannot go on and the "
+                "run stops rather than risk a wrong landing"),
+    "narrow_feature": ("does_not_fit", "the centre's height above the surface there (m)",
+                       "the flying ball meets a feature of the surface at {where} narrower than the landing search "
+                       "can follow (the centre is {value:.3g} m above the surface there, less than the ball's radius "
+                       "r = {radius:g} m): the run stops rather than fly through it"),
+    "false_landing": ("does_not_fit", "the centre's distance to the contact point found (m)",
+                      "a landing found at {where} is not where the ball touches the surface (the centre is "
+                      "{value:.6g} m from that surface point, not r = {radius:g} m): the run stops rather than "
+                      "land there"),
+}
+Reason = _Named("Reason", [(name.upper(), name) for name in (*REASONS, *FLIGHT_REASONS)], module=__name__)
 
 
 @dataclass(frozen=True)

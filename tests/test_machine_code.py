@@ -105,7 +105,9 @@ def test_row_columns_reasons_and_statuses_come_from_the_interface():
     assert trajectory.R == slice(12, 21) and trajectory.CENTER == slice(3, 6) and trajectory.NORMAL_FORCE == 22
     assert trajectory.SLIP_SPEED == kernel.ROW_SLIP == 23 and trajectory.DISSIPATED == kernel.ROW_DISSIPATED == 24
     assert [str(s) for s in trajectory.Status] == [s for s in interface.STATUSES if s != "running"]
-    assert [str(r) for r in trajectory.Reason] == list(interface.REASONS)
+    # (then the reasons a flight's landing search stops a run for, set in Python)
+    assert [str(r) for r in trajectory.Reason] == list(interface.REASONS) + list(trajectory.FLIGHT_REASONS)
+    assert {status for status, _, _ in trajectory.FLIGHT_REASONS.values()} <= {"does_not_fit", "nonfinite"}
     assert interface.reason_name(kernel.R_KINK) == "kink" and interface.reason_name(0) is None
     assert {status for status, _, _ in interface.REASONS.values()} == {"does_not_fit", "nonfinite"}
     failure = trajectory.Failure(trajectory.Reason.ORIENTATION_OVERFLOW, 1.0, 0.5, 0.25, 1.0)
