@@ -246,6 +246,7 @@ class Simulation:
         self._count = 0            # rows in _out
         self._mode = SLIDING if slips else ROLLING
         self._mode_starts = [(0, self._mode)]   # (first row, mode) where the mode changes
+        self._changes: list[Transition] = []   # every change the kernel runs stopped at
         self.transitions: list[Transition] = []
         self._flight: Flight | None = None
         self._surface = Surface(self.landscape, scene.parameter_values)
@@ -471,9 +472,14 @@ class Simulation:
         kind = kernel.transition_name(int(self._ints[kernel.I_TRANSITION]))
         t = float(info[kernel.F_EVENT_T])
         x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
-        self.transitions.append(Transition(t, kind, x, y))
+        change = Transition(t, kind, x, y)
+        self._changes.append(change)
+        if not (kind == "slip" and self._mode == SLIDING):
+            # (a slip whose speed fell to zero where rolling needs more friction than μ F·N turns
+            # about and goes on: the same slip, no new transition)
+            self.transitions.append(change)
         self._finish_kernel_run()
-        at_once = self.transitions[-MAX_AT_ONCE:]
+        at_once = self._changes[-MAX_AT_ONCE:]
         if len(at_once) == MAX_AT_ONCE and all(change.time == t for change in at_once):
             self._stall = (f"the contact changes mode {MAX_AT_ONCE} times at t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g}) "
                            f"({', '.join(sorted({change.kind for change in at_once}))}) without the time moving on: "

@@ -288,7 +288,7 @@ def sentence(reason: str, value: float, time: float, x: float, y: float, radius:
 SURFACE_SIZE = 8   # x, y, f, N (3), r * largest and smallest principal curvature
 # The scratch array's parts, in order (``loops.scratch`` views them): landscape values d (then,
 # from D_SLIP, the slip velocity at the step's start, which a sliding ball's friction keeps its side
-# of through the step, and at D_SLIP + 3 whether its direction is held through the step,
+# of through the step, and at D_SLIP + 3 the slip speed below which its direction is stiff,
 # ``sliding_dynamics``), stage state Y, trial state zn, probe pn and
 # orientation Rn, and for the dense output a state Ye, orientation Re, probe pe and three surface
 # points. "n": the state's size; (3, 3) a matrix.

@@ -42,16 +42,30 @@ def reach_of(K, h, z):
 
 
 @JIT
-def slip_reference(d, probe, p, h):
+def slip_reference(d, probe, p, h, cap):
     """The slip velocity at the step's start, which a sliding ball's friction keeps its side of
-    through the step (``sliding_dynamics``), into d[D_SLIP:D_SLIP + 3] (rolling: 0, never read);
-    d[D_SLIP + 3] 1 where friction would stop that slip within the step (|u| < 7/2 mu F_n h / m):
-    the slip's direction is then held through the step (a slip starting or ending, where its
-    direction's own dynamics is stiff, ~ mu g / |u|)."""
+    through the step (``sliding_dynamics``), into d[D_SLIP:D_SLIP + 3] (rolling: 0, never read),
+    and into d[D_SLIP + 3] the slip speed below which the step takes the slip's direction as
+    the slow motion's (``sliding_dynamics``): where the slip starts or ends its direction's own
+    dynamics is stiff (a rate |B| / |u|). Fixed steps (``cap`` inf): the whole step (inf) where
+    friction would stop the slip at the step's start within the step (|u| < 7/2 mu F_n h / m),
+    else none (0); the adaptive pairs: below ``cap`` (``slow_slip``) at every stage, so that the
+    rest of the stiff stretch is the exact equations, which their error control resolves."""
     u1, u2, u3 = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
     d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = u1, u2, u3
-    held = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3) * p[1] < 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) * h
-    d[D_SLIP + 3] = 1.0 if held else 0.0
+    if cap < math.inf:
+        d[D_SLIP + 3] = cap
+    else:
+        us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
+        d[D_SLIP + 3] = math.inf if us * p[1] < 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) * h else 0.0
+
+
+@JIT
+def slow_slip(p, rtol):
+    """The slip speed below which an adaptive pair takes a slip's direction as the slow
+    motion's: sqrt(rtol) sqrt(g r), where that direction's error (of order |u| times its turning
+    rate over |B|) costs of order rtol in the speeds."""
+    return math.sqrt(rtol * p[2] * p[0])
 
 
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
@@ -98,7 +112,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         h = t_end - t0 if final else dt if k > 1 else g * dt - t0
         t = t_end if final else g * dt
         if watch:
-            slip_reference(d, probe, p, h)
+            slip_reference(d, probe, p, h, math.inf)
         bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
             valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
@@ -176,6 +190,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         if ints[I_STATUS] != RUNNING:
             return
     watch = contact_watched(p, n)
+    cap = slow_slip(p, rtol)
     skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
     t, h = info[F_TIME], info[F_H]
     retry = ints[I_RETRY] == 1  # right after a rejection the step may shrink but not grow (Hairer's rule)
@@ -185,7 +200,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
         if watch:
-            slip_reference(d, probe, p, hs)
+            slip_reference(d, probe, p, hs, cap)
         if n == MK_SIZE:
             bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         else:

@@ -209,28 +209,42 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     zero = not us * us > SLIP_ZERO * SLIP_ZERO * speeds
     if zero:
         u1, u2, u3, us = 0.0, 0.0, 0.0, 0.0
+    # where the ball flies the run stops where F_n reaches 0: mu F_n, smooth through that zero, keeps
+    # the stages of the step across it (and its dense output, on which the lift-off is located)
+    # those of a smooth motion; glued, a pulling F_n < 0 rubs too
+    f = mu * (fn_ if p[P_FLY] != 0.0 else abs(fn_))
+    # B, the slip's acceleration with friction off: c'' - r omega x N' alpha' in the tangent plane
+    b1 = -r * (o2 * d3 - o3 * d2)
+    b2 = -r * (o3 * d1 - o1 * d3)
+    b3 = -g0 - r * (o1 * d2 - o2 * d1)
+    bn = b1 * n1 + b2 * n2 + b3 * n3
+    b1, b2, b3 = b1 - bn * n1, b2 - bn * n2, b3 - bn * n3
+    bs = math.sqrt(b1 * b1 + b2 * b2 + b3 * b3)
+    slow = d[D_SLIP + 3]   # below this slip speed the slip's direction is stiff (``slip_reference``)
     r1, r2, r3 = d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2]
     rn = r1 * n1 + r2 * n2 + r3 * n3   # (held in the tangent plane here, which turns within the step)
     r1, r2, r3 = r1 - rn * n1, r2 - rn * n2, r3 - rn * n3
     rn = math.sqrt(r1 * r1 + r2 * r2 + r3 * r3)
-    if d[D_SLIP + 3] != 0.0 and rn > 0.0:   # the direction held through the step (``slip_reference``)
+    if (zero or (us < slow and (rn == 0.0 or bs * m > 3.5 * f))) and bs > 0.0:
+        # a slip starting (zero at the step's start, or growing while its direction is stiff):
+        # its direction relaxes towards B's at the rate |B| / |u| and then turns with it; taken as
+        # B's direction at this state (the slow motion the exact one follows), smooth through the
+        # step (docs/design.md §1, "Sliding")
+        s1, s2, s3 = b1 / bs, b2 / bs, b3 / bs
+        us = u1 * s1 + u2 * s2 + u3 * s3
+    elif slow == math.inf and rn > 0.0:
+        # a slip ending that fixed steps cannot follow (friction stops it within the step): its
+        # direction at the step's start, held through the step
         s1, s2, s3 = r1 / rn, r2 / rn, r3 / rn
         us = u1 * s1 + u2 * s2 + u3 * s3
-    elif not zero and d[D_SLIP + 3] == 0.0:
+    elif not zero:
         side = us
         if u1 * r1 + u2 * r2 + u3 * r3 < 0.0:
             side = -us   # past the slip's zero: the friction keeps its side (above)
         s1, s2, s3 = u1 / side, u2 / side, u3 / side
         us = side
-    else:  # the slip starts (or is held at its start) against the friction rolling needs
-        t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
-        tn = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
-        s1, s2, s3 = (-t1 / tn, -t2 / tn, -t3 / tn) if tn > 0.0 else (0.0, 0.0, 0.0)
-        us = u1 * s1 + u2 * s2 + u3 * s3
-    # where the ball flies the run stops where F_n reaches 0: mu F_n, smooth through that zero, keeps
-    # the stages of the step across it (and its dense output, on which the lift-off is located)
-    # those of a smooth motion; glued, a pulling F_n < 0 rubs too
-    f = mu * (fn_ if p[P_FLY] != 0.0 else abs(fn_))
+    else:   # (no slip and no pull: nothing for friction to act along)
+        s1, s2, s3, us = 0.0, 0.0, 0.0, 0.0
     K[row, 0] = a1
     K[row, 1] = a2
     K[row, 2] = (fn_ * n1 - f * s1) / m
