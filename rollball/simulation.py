@@ -19,6 +19,7 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
+from .transition_check import TransitionCheck, check_transitions
 from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLYING, OMEGA, R, ROLLING, SLIDING, T,
                          VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
@@ -250,7 +251,8 @@ class Simulation:
         self._stall: str | None = None     # why the contact's modes could not go on
         self.status: Status | None = None
         self._energy_check: EnergyCheck | None = None
-        self.judge_energy = True  # whether the finished run looks at whose its energy error is
+        self._transition_check: TransitionCheck | None = None
+        self.judge_energy = True  # whether the finished run looks at whose its energy error is (and its transitions)
 
     def _parameters(self, dissipated: float) -> np.ndarray:
         scene = self.scene
@@ -416,6 +418,7 @@ class Simulation:
         if self.judge_energy and self.status in (Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
             # (here, where the run runs: never in the thread that reads the trajectory)
             self._energy_check = energy_check(self)
+            self._transition_check = check_transitions(self)
         return self.rows[first:].copy()
 
     # -- the runs after the first, where the contact changes mode (docs/design.md §1) ----------
@@ -619,6 +622,11 @@ class Simulation:
             self.status = Status.ABORTED
 
     @property
+    def transition_check(self) -> TransitionCheck | None:
+        """Whether the finished run's transitions are converged (``transition_check``; None before)."""
+        return self._transition_check
+
+    @property
     def liftoff_time(self) -> float | None:
         liftoff = self.liftoff
         return None if liftoff is None else liftoff.time
@@ -679,7 +687,7 @@ class Simulation:
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance,
                           energy_check=self._energy_check, modes=self.modes if self.segmented else None,
-                          transitions=tuple(self.transitions))
+                          transitions=tuple(self.transitions), transition_check=self._transition_check)
 
 
 SHORTER = 4            # energy_check takes the interval again with steps 4, 16, 64, 256 times shorter...
