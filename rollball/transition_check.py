@@ -11,6 +11,7 @@ change the steps invent), the run still ends ok: this check is what says so, as 
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,10 +23,11 @@ MAX_CHECKED = 8        # the first this many of them are checked (the rest are c
 HALVINGS = 2           # fixed steps: taken again with the run's dt, dt/2 and dt/4 (phase-aligned: on its grid)
 SLACK = 1.5            # a halving must shrink the move at least 2^(p - SLACK)-fold (rk4: 5.7; 16 expected)
 TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 times tighter...
-ADAPTIVE_SHRINK = 10.0  # ...and the move must shrink at least this much per 100 times (about 100 expected)
+ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least this much (3.2) per 100 times (40 to 100 expected)
 MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
 MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step)
-LEAD_STEPS = 2         # a retake starts at least this many of the run's steps (its average step, adaptive) before the change...
+LEAD_STEPS = 16        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
+                       # where its segment starts if that is later...
 MARGIN_STEPS = 2       # ...and goes on this many past it (a change that moves further is not there)
 MAX_STRETCH_STEPS = 4096  # a change whose last row lies more steps before it than this is not taken again
 TURNED = 1e-3          # a slip turning about must have stopped: its slip speed there at most this share of its largest
@@ -248,9 +250,12 @@ def check_transitions(run) -> TransitionCheck | None:
         if len(retakes) >= MAX_CHECKED:
             unchecked += 1
             continue
+        previous = run.transitions[index - 1].time if index else -math.inf
         before = np.flatnonzero(usable & (t < change.time))
-        lead = before[t[before] <= change.time - LEAD_STEPS * average]
-        i = int(lead[-1]) if len(lead) else int(before[0]) if len(before) else -1   # (else its earliest row)
+        segment = before[t[before] >= previous]   # (a landing's row is the state after it)
+        lead = segment[t[segment] <= change.time - LEAD_STEPS * average]
+        i = (int(lead[-1]) if len(lead) else int(segment[0]) if len(segment) else
+             int(before[-1]) if len(before) else -1)   # (else from its segment's first row, or the last before it)
         if i < 0 or modes[i] == FLYING or (change.time - t[i]) > MAX_STRETCH_STEPS * average:
             unchecked += 1
             continue
