@@ -28,8 +28,8 @@ MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
 MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step)
 LEAD_STEPS = 16        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
                        # where its segment starts if that is later...
-MARGIN_STEPS = 2       # ...and goes on this many past it (a change that moves further is not there)
-MAX_STRETCH_STEPS = 4096  # a change whose last row lies more steps before it than this is not taken again
+MARGIN_STEPS = 2       # ...and goes on to this many past it, or until it has the change (one that moves further is not there)
+MAX_STRETCH_STEPS = 4096  # a change whose row to start from lies more steps before it than this is not taken again
 TURNED = 1e-3          # a slip turning about must have stopped: its slip speed there at most this share of its largest
 
 CONVERGED, ROUND_OFF, PLATEAU, GROWS, CHANGED = "converged", "round-off", "plateau", "grows", "changed"
@@ -70,10 +70,11 @@ class Retake:
 class TransitionCheck:
     """The check of a finished run's transitions (``check_transitions``): the ``method``, its
     ``order`` and whether it is ``adaptive``; the transitions taken again (``retakes``, at most
-    MAX_CHECKED), how many kernel-located ones were not (``unchecked``: beyond the cap, at the
-    run's start, or too far after their last row) and ``invented``: sentences on transitions
-    the sequence itself shows the motion does not have (two at one instant or out of order; a
-    slip turning about where the slip had not stopped)."""
+    MAX_CHECKED), how many kernel-located ones were not: ``unchecked`` beyond the cap, ``skipped``
+    with no row to start from (a change at the run's start, or one too far after its row) or
+    whose retake failed; and ``invented``: sentences on transitions the sequence itself shows the
+    motion does not have (two at one instant or out of order; a slip turning about where the
+    slip had not stopped)."""
 
     method: str
     order: int
@@ -81,6 +82,7 @@ class TransitionCheck:
     retakes: tuple[Retake, ...] = ()
     unchecked: int = 0
     invented: tuple[str, ...] = ()
+    skipped: int = 0
 
     @property
     def converged(self) -> bool:
@@ -108,7 +110,8 @@ class TransitionCheck:
                          + (f" ({more} more like it)" if more else ""))
         advice = "try tighter tolerances" if self.adaptive else "try a smaller step or dopri5"
         if self.unchecked:
-            advice += f" (the first {len(self.retakes)} transitions were taken again)"
+            n = len(self.retakes)
+            advice += f" (only the first {n} transition{' was' if n == 1 else 's were'} taken again)"
         return "; ".join(parts + [advice])
 
 
@@ -226,12 +229,15 @@ def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
 def check_transitions(run) -> TransitionCheck | None:
     """The check of a finished run whose contact changed mode (None where it did not, or where the
     run is the 2011 model's). Each of the first MAX_CHECKED slips, grips and lift-offs is taken
-    again from the last row before it that is not itself at such a change (its state by
-    ``simulation._state_of``, in that row's mode) to MARGIN_STEPS steps past it, and its time read
-    in each retake: fixed steps with the run's dt, dt/2 and dt/4, their steps on the run's grid,
-    the moves to shrink 2^(p − SLACK)-fold per halving at least; adaptive with the run's
-    tolerances (its own time) and tolerances TIGHTER and TIGHTER² times tighter, ADAPTIVE_SHRINK-fold.
-    A retake whose transitions up to it are of other kinds, or that has none there, changed it."""
+    again from a recorded row before it that is not itself at such a change: the last at least
+    LEAD_STEPS of the run's steps before it, or its segment's first where that is later (its
+    state by ``simulation._state_of``, in that row's mode), until the retake has it or is
+    MARGIN_STEPS steps past it, and its time read in each retake: fixed steps with the run's dt,
+    dt/2 and dt/4, their steps on the run's grid, the moves to shrink 2^(p − SLACK)-fold per
+    halving at least; adaptive with the run's tolerances (its own time) and tolerances TIGHTER
+    and TIGHTER² times tighter, ADAPTIVE_SHRINK-fold. A retake whose transitions up to it are of
+    other kinds, or that has none there, changed it. The run's errors before the retaken stretch
+    are not seen: they are carried into every retake alike."""
     if not run.segmented or not run.transitions:
         return None
     tableau = run.tableau
@@ -243,7 +249,7 @@ def check_transitions(run) -> TransitionCheck | None:
     usable = ~np.isin(t, list(located))
     end = float(t[-1])
     average = (end / run.steps) if run.adaptive and run.steps else run.dt
-    retakes, unchecked = [], 0
+    retakes, unchecked, skipped = [], 0, 0
     for index, change in enumerate(run.transitions):
         if change.kind not in RETAKEN:
             continue
@@ -257,7 +263,7 @@ def check_transitions(run) -> TransitionCheck | None:
         i = (int(lead[-1]) if len(lead) else int(segment[0]) if len(segment) else
              int(before[-1]) if len(before) else -1)   # (else from its segment's first row, or the last before it)
         if i < 0 or modes[i] == FLYING or (change.time - t[i]) > MAX_STRETCH_STEPS * average:
-            unchecked += 1
+            skipped += 1
             continue
         t_row = float(t[i])
         # the run's changes after the row up to this one (a landing, or one at the same instant, may come first)
@@ -280,7 +286,7 @@ def check_transitions(run) -> TransitionCheck | None:
                                munthe_kaas=run.munthe_kaas, dt=h, record_every=2 ** 40) for h in steps]
             shrink = 2.0 ** (tableau.order - SLACK)
         if any(result is None for result in results):   # a retake that failed says nothing
-            unchecked += 1
+            skipped += 1
             continue
         times, found = [], []
         for result in results:
@@ -291,4 +297,4 @@ def check_transitions(run) -> TransitionCheck | None:
         retakes.append(Retake(index, change.kind, change.time, t_row, steps, tuple(times), tuple(found),
                               verdict(times, shrink=shrink)))
     return TransitionCheck(tableau.name, tableau.order, run.adaptive, tuple(retakes), unchecked,
-                           tuple(_invented(run, rows, modes)))
+                           tuple(_invented(run, rows, modes)), skipped)
