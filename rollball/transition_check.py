@@ -275,14 +275,14 @@ def check_transitions(run) -> TransitionCheck | None:
         if run.adaptive:
             steps = tuple(max(run.rtol / TIGHTER ** level, MIN_TOLERANCE) for level in range(3))
             results = [list(run.transitions)] + [
-                _retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau.name, dt=run.dt,
+                _retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau, dt=run.dt,
                         rtol=rtol, atol=max(run.atol / TIGHTER ** level, MIN_TOLERANCE * 1e-3), record_dt=t_stop - t_row)
                 for level, rtol in enumerate(steps[1:], start=1)]
             results[0] = [c for c in results[0] if c.time > t_row]
             shrink = ADAPTIVE_SHRINK
         else:
             steps = tuple(run.dt / 2 ** level for level in range(HALVINGS + 1))
-            results = [_retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau.name,
+            results = [_retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau,
                                munthe_kaas=run.munthe_kaas, dt=h, record_every=2 ** 40) for h in steps]
             shrink = 2.0 ** (tableau.order - SLACK)
         if any(result is None for result in results):   # a retake that failed says nothing

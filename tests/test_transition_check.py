@@ -16,6 +16,7 @@ from rollball.cli import main
 from rollball.examples import EXAMPLES_DIR
 from rollball.scene import Ball, Contact, Integrator, Scene, Start
 from rollball.simulation import Simulation
+from rollball.tableaus import get_method
 from rollball.trajectory import ROLLING, SLIDING, SLIP_SPEED, T, Transition
 from rollball.transition_check import (CHANGED, CONVERGED, GROWS, PLATEAU, ROUND_OFF, Retake, TransitionCheck,
                                        verdict)
@@ -64,6 +65,15 @@ def test_a_billiard_shot_grips_where_it_should_and_the_check_agrees(method):
     if method != "dopri5":   # the run's dt, halved, halved again
         assert retake.steps == (0.01, 0.005, 0.0025)
     assert traj.warnings() == []
+
+
+def test_a_method_passed_in_itself_is_taken_again_with_itself():
+    """A tableau that is not a registered method (dopri5's main weights as fixed steps, order 5)."""
+    method = get_method("dopri5").weights()
+    traj = simulate(_scene("0*x", mu=0.2, dt=0.01, vx=2.0, omega=(0.0, 0.0, 0.0), duration=0.5), method=method)
+    check = traj.transition_check
+    assert check.method == "dopri5-main" and check.order == 5 and check.skipped == 0
+    assert [r.verdict for r in check.retakes] == [ROUND_OFF] and traj.warnings() == []
 
 
 @pytest.mark.parametrize("method", ["rk4", "dopri5"])
