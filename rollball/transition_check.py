@@ -26,7 +26,7 @@ TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 time
 ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least this much (3.2) per 100 times (40 to 100 expected)
 MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
 MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step)
-LEAD_STEPS = 16        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
+LEAD_STEPS = 64        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
                        # where its segment starts if that is later...
 MARGIN_STEPS = 2       # ...and goes on to this many past it, or until it has the change (one that moves further is not there)
 MAX_STRETCH_STEPS = 4096  # a change whose row to start from lies more steps before it than this is not taken again

@@ -25,9 +25,9 @@ G = 9.81
 THETA = math.radians(30.0)
 INCLINE = f"{math.tan(THETA)!r}*x"
 # f'' jumps from 0 to -4 at x = 0: the ball rolls along the flat at 1.5 m/s, reaches the bend at
-# t = 0.2 s (a step's end at dt 0.004) and slips 8.4 ms later, where F·N has fallen. An explicit
-# step across a jump of the curvature errs along the flow by O(h) (docs/design.md §1, the energy
-# check), so the slip's time moves about as much as the step: first order, not rk4's fourth.
+# t = 0.2 s and slips 8.4 ms later, where F·N has fallen. An explicit step across a jump of the
+# curvature errs along the flow by O(h) (docs/design.md §1, the energy check), so the slip's time
+# moves with the step and with where the jump falls in it: not at rk4's fourth order.
 BEND = "-2*max(x,0)^2"
 STEP_DOWN = "-0.2*(1 + tanh(5*x)) + 0.01*y"
 
@@ -127,9 +127,9 @@ def test_a_slip_just_past_a_jump_of_the_curvature_is_not_converged_with_rk4():
     assert [c.kind for c in traj.transitions][:2] == ["slip", "liftoff"]
     check = traj.transition_check
     slip = check.retakes[0]
-    assert slip.kind == "slip" and slip.verdict == PLATEAU and slip.start <= 0.2 < slip.time
+    assert slip.kind == "slip" and slip.verdict in (PLATEAU, GROWS) and slip.start <= 0.2 < slip.time
     first, second = slip.moves
-    assert first > 1e-8 and 1.0 < first / second < 2 ** 2.5   # it shrinks, but nowhere near 16-fold
+    assert max(first, second) > 1e-6 and first < 2 ** 2.5 * second   # nowhere near 16-fold less each time
     assert check.retakes[1].kind == "liftoff" and check.retakes[1].converged   # (smooth before it)
     (note,) = traj.warnings()
     assert note.startswith(f"the slip at {slip.time:.6g} s moved by {first:.2g} s when the step was halved and by "
