@@ -25,14 +25,15 @@ SLACK = 1.5            # a halving must shrink the move at least 2^(p - SLACK)-f
 TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 times tighter...
 ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least this much (3.2) per 100 times (40 to 100 expected)
 MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
-MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step)
+MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step); adaptive,
+                       # also below rtol·√(r/g), what the tolerance allows (the error control's time unit)
 LEAD_STEPS = 64        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
                        # where its segment starts if that is later...
 MARGIN_STEPS = 2       # ...and goes on to this many past it, or until it has the change (one that moves further is not there)
 MAX_STRETCH_STEPS = 4096  # a change whose row to start from lies more steps before it than this is not taken again
 TURNED = 1e-3          # a slip turning about must have stopped: its slip speed there at most this share of its largest
 
-CONVERGED, ROUND_OFF, PLATEAU, GROWS, CHANGED = "converged", "round-off", "plateau", "grows", "changed"
+CONVERGED, NEGLIGIBLE, PLATEAU, GROWS, CHANGED = "converged", "negligible", "plateau", "grows", "changed"
 
 
 @dataclass(frozen=True)
@@ -41,9 +42,10 @@ class Retake:
     position ``index`` in ``Trajectory.transitions``), from the row at ``start`` (s), with each
     of ``steps`` (fixed: dt, dt/2, dt/4; adaptive: the run's own rtol, then 100 and 10^4 times
     tighter), the transition's time in each (``times``; None where that retake had no such
-    transition there: ``found`` says what it had instead) and the ``verdict`` (CONVERGED,
-    ROUND_OFF: every move below MOVE_FLOOR, PLATEAU: the moves shrink more slowly than the
-    method's order says, GROWS: a finer retake moves it more, CHANGED: the kinds differ)."""
+    transition there: ``found`` says what it had instead) and the ``verdict`` (CONVERGED;
+    NEGLIGIBLE: every move below the floor, MOVE_FLOOR or, adaptive, what the tolerance allows;
+    PLATEAU: the moves shrink more slowly than the method's order says; GROWS: a finer retake
+    moves it more; CHANGED: the kinds differ)."""
 
     index: int
     kind: str
@@ -56,7 +58,7 @@ class Retake:
 
     @property
     def converged(self) -> bool:
-        return self.verdict in (CONVERGED, ROUND_OFF)
+        return self.verdict in (CONVERGED, NEGLIGIBLE)
 
     @property
     def moves(self) -> tuple[float, ...]:
@@ -136,14 +138,14 @@ def _sentence(retake: Retake, check: TransitionCheck) -> str:
 def verdict(times, *, shrink: float, floor: float = MOVE_FLOOR) -> str:
     """How a ladder of a transition's times (coarse to fine, each level ``shrink`` times finer in
     what the method's accuracy promises: 2^p per halving for order p, less a slack) converges: None
-    in ``times`` (a retake without it) is CHANGED; moves all below ``floor`` ROUND_OFF; a finest
+    in ``times`` (a retake without it) is CHANGED; moves all below ``floor`` NEGLIGIBLE; a finest
     move below ``floor`` or each move at least ``shrink`` times the next CONVERGED; a move larger
     than the one before GROWS; else PLATEAU."""
     if any(t is None for t in times):
         return CHANGED
     moves = [abs(b - a) for a, b in zip(times, times[1:])]
     if all(move <= floor for move in moves):
-        return ROUND_OFF
+        return NEGLIGIBLE
     if moves[-1] <= floor:
         return CONVERGED
     if any(b > a for a, b in zip(moves, moves[1:])):
@@ -280,11 +282,12 @@ def check_transitions(run) -> TransitionCheck | None:
                 for level, rtol in enumerate(steps[1:], start=1)]
             results[0] = [c for c in results[0] if c.time > t_row]
             shrink = ADAPTIVE_SHRINK
+            floor = max(MOVE_FLOOR, run.rtol * math.sqrt(run.scene.ball.radius / run.scene.gravity))
         else:
             steps = tuple(run.dt / 2 ** level for level in range(HALVINGS + 1))
             results = [_retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau,
                                munthe_kaas=run.munthe_kaas, dt=h, record_every=2 ** 40) for h in steps]
-            shrink = 2.0 ** (tableau.order - SLACK)
+            shrink, floor = 2.0 ** (tableau.order - SLACK), MOVE_FLOOR
         if any(result is None for result in results):   # a retake that failed says nothing
             skipped += 1
             continue
@@ -295,6 +298,6 @@ def check_transitions(run) -> TransitionCheck | None:
                          f"no change of mode by {t_stop:.6g} s")
             times.append(result[k - 1].time if kinds == sequence else None)
         retakes.append(Retake(index, change.kind, change.time, t_row, steps, tuple(times), tuple(found),
-                              verdict(times, shrink=shrink)))
+                              verdict(times, shrink=shrink, floor=floor)))
     return TransitionCheck(tableau.name, tableau.order, run.adaptive, tuple(retakes), unchecked,
                            tuple(_invented(run, rows, modes)), skipped)

@@ -18,7 +18,7 @@ from rollball.scene import Ball, Contact, Integrator, Scene, Start
 from rollball.simulation import Simulation
 from rollball.tableaus import get_method
 from rollball.trajectory import ROLLING, SLIDING, SLIP_SPEED, T, Transition
-from rollball.transition_check import (CHANGED, CONVERGED, GROWS, PLATEAU, ROUND_OFF, Retake, TransitionCheck,
+from rollball.transition_check import (CHANGED, CONVERGED, GROWS, PLATEAU, NEGLIGIBLE, Retake, TransitionCheck,
                                        verdict)
 
 G = 9.81
@@ -59,7 +59,7 @@ def test_a_billiard_shot_grips_where_it_should_and_the_check_agrees(method):
     check = traj.transition_check
     assert check is not None and check.converged and check.warning() is None
     (retake,) = check.retakes
-    assert retake.kind == "grip" and retake.verdict == ROUND_OFF
+    assert retake.kind == "grip" and retake.verdict == NEGLIGIBLE
     assert all(t == pytest.approx(t_star, abs=1e-11) for t in retake.times)
     assert retake.start < t_star and len(retake.steps) == 3
     if method != "dopri5":   # the run's dt, halved, halved again
@@ -73,7 +73,7 @@ def test_a_method_passed_in_itself_is_taken_again_with_itself():
     traj = simulate(_scene("0*x", mu=0.2, dt=0.01, vx=2.0, omega=(0.0, 0.0, 0.0), duration=0.5), method=method)
     check = traj.transition_check
     assert check.method == "dopri5-main" and check.order == 5 and check.skipped == 0
-    assert [r.verdict for r in check.retakes] == [ROUND_OFF] and traj.warnings() == []
+    assert [r.verdict for r in check.retakes] == [NEGLIGIBLE] and traj.warnings() == []
 
 
 @pytest.mark.parametrize("method", ["rk4", "dopri5"])
@@ -88,7 +88,7 @@ def test_a_slip_that_turns_about_on_an_incline_is_converged_and_not_invented(met
     assert [c.kind for c in traj.transitions] == ["slip"]
     assert traj.transitions[0].time == pytest.approx(t_turn, abs=1e-10)
     check = traj.transition_check
-    assert check.converged and check.invented == () and [r.verdict for r in check.retakes] == [ROUND_OFF]
+    assert check.converged and check.invented == () and [r.verdict for r in check.retakes] == [NEGLIGIBLE]
     assert traj.warnings() == []
 
 
@@ -176,7 +176,7 @@ RK4 = 2 ** (4 - transition_check.SLACK)
     ((0.5, 0.5 + 1e-13, 0.5 + 2e-8), GROWS),                        # from round-off to a move
     ((0.5, None, None), CHANGED),
     ((0.5, 0.50001, None), CHANGED),
-    ((0.5, 0.5 + 3e-11, 0.5 + 5e-11), ROUND_OFF),                   # every move below MOVE_FLOOR
+    ((0.5, 0.5 + 3e-11, 0.5 + 5e-11), NEGLIGIBLE),                   # every move below MOVE_FLOOR
     ((0.5, 0.5 + 1e-6, 0.5 + 1e-6 + 5e-11), CONVERGED),             # the finest move is round-off
 ])
 def test_the_verdict_on_a_ladder(times, expected):
@@ -190,6 +190,10 @@ def test_the_verdict_follows_the_order_and_the_adaptive_shrink():
     tight = (1.0, 1.0 + 1e-6, 1.0 + 1e-6 + 1e-8)     # 100-fold per tolerances 100 times tighter
     assert verdict(tight, shrink=transition_check.ADAPTIVE_SHRINK) == CONVERGED
     assert verdict((1.0, 1.0 + 1e-6, 1.0 + 1e-6 + 0.5e-6), shrink=transition_check.ADAPTIVE_SHRINK) == PLATEAU
+    # adaptive: moves below what the tolerance allows (rtol·√(r/g), 1e-7 s at rtol 1e-6) say nothing
+    noise = (1.0, 1.0 + 1e-9, 1.0 + 1e-9 + 1.8e-9)
+    assert verdict(noise, shrink=transition_check.ADAPTIVE_SHRINK) == GROWS
+    assert verdict(noise, shrink=transition_check.ADAPTIVE_SHRINK, floor=1e-7) == NEGLIGIBLE
 
 
 def test_the_warning_names_the_transition_its_moves_and_the_steps():
