@@ -103,7 +103,7 @@ class TransitionCheck:
         parts = []
         failed = self.failed
         if failed:
-            others = " and ".join(f"the {r.kind} at {r.time:.6g} s" for r in failed[1:])
+            others = " and ".join(f"the {_NAMES.get(r.kind, r.kind)} at {r.time:.6g} s" for r in failed[1:])
             nor = f" (nor {'are' if len(failed) > 2 else 'is'} {others})" if others else ""
             parts.append(_sentence(failed[0], self) + ": not converged" + nor)
         if self.invented:
@@ -117,8 +117,11 @@ class TransitionCheck:
         return "; ".join(parts + [advice])
 
 
+_NAMES = {"liftoff": "lift-off"}   # (as ``Transition.sentence`` writes it)
+
+
 def _sentence(retake: Retake, check: TransitionCheck) -> str:
-    what = f"the {retake.kind} at {retake.time:.6g} s"
+    what = f"the {_NAMES.get(retake.kind, retake.kind)} at {retake.time:.6g} s"
     if check.adaptive:
         levels = ["with its tolerances", f"with tolerances {TIGHTER:g} times tighter",
                   f"with tolerances {TIGHTER ** 2:g} times tighter"]
@@ -161,7 +164,7 @@ def _retake_class():
     segment, is not looked at). Made at first use: ``simulation`` imports this module."""
     from .simulation import Simulation
 
-    class Retake(Simulation):
+    class Retaking(Simulation):
         wanted = 1
 
         def _transition(self) -> None:
@@ -175,7 +178,7 @@ def _retake_class():
                 return
             super()._start_kernel_run(state, t, slides=slides, repeat=repeat)
 
-    return Retake
+    return Retaking
 
 
 def _retake(run, row: np.ndarray, t_row: float, mode: int, t_stop: float, wanted: int,
@@ -294,7 +297,7 @@ def check_transitions(run) -> TransitionCheck | None:
         times, found = [], []
         for result in results:
             kinds = [c.kind for c in result[:k]]
-            found.append(", ".join(f"{c.kind} at {c.time:.6g} s" for c in result[:k]) or
+            found.append(", ".join(f"{_NAMES.get(c.kind, c.kind)} at {c.time:.6g} s" for c in result[:k]) or
                          f"no change of mode by {t_stop:.6g} s")
             times.append(result[k - 1].time if kinds == sequence else None)
         retakes.append(Retake(index, change.kind, change.time, t_row, steps, tuple(times), tuple(found),
