@@ -225,7 +225,7 @@ def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
             speed = float(rows[at[-1], SLIP_SPEED])
             if speed > TURNED * largest:
                 share = "its largest" if speed == largest else f"{speed / largest:.2g} of its largest"
-                notes.append(f"the slip at {change.time:.6g} s turns the slip about where its speed is "
+                notes.append(f"the slip at {change.time:.6g} s, a turn of the slip, comes where the slip speed is "
                              f"{speed:.2g} m/s, not 0 ({share} since t = {begun:.6g} s)")
         begun = change.time
     return notes

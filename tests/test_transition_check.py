@@ -227,7 +227,7 @@ def test_a_slip_turning_about_where_the_slip_had_not_stopped_is_invented():
     rows, modes = _rows([0.0, 0.1, 0.2, 0.3, 0.4], [ROLLING, ROLLING, SLIDING, SLIDING, SLIDING],
                         [0.0, 0.0, 1e-3, 2e-3, 1e-3])
     (note,) = transition_check._invented(run, rows, modes)
-    assert note.startswith("the slip at 0.3 s turns the slip about where its speed is 0.002 m/s, not 0")
+    assert note.startswith("the slip at 0.3 s, a turn of the slip, comes where the slip speed is 0.002 m/s, not 0")
     rows[3, SLIP_SPEED] = 1e-12   # it stopped: a real turn about
     assert transition_check._invented(run, rows, modes) == []
 
