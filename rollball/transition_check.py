@@ -23,13 +23,13 @@ MAX_CHECKED = 8        # the first this many of them are checked (the rest are c
 HALVINGS = 2           # fixed steps: taken again with the run's dt, dt/2 and dt/4 (phase-aligned: on its grid)
 SLACK = 1.5            # a halving must shrink the move at least 2^(p - SLACK)-fold (rk4: 5.7; 16 expected)
 TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 times tighter...
-ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least this much (3.2) per 100 times (40 to 100 expected)
+ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least 3.2-fold per 100 times (40 to 100 expected)
 MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
 MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step); adaptive,
                        # also below rtol·√(r/g), what the tolerance allows (the error control's time unit)
 LEAD_STEPS = 64        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
                        # where its segment starts if that is later...
-MARGIN_STEPS = 2       # ...and goes on to this many past it, or until it has the change (one that moves further is not there)
+MARGIN_STEPS = 2       # ...and goes on until it has the change or is this many past it (one moved further is not there)
 MAX_STRETCH_STEPS = 4096  # a change whose row to start from lies more steps before it than this is not taken again
 TURNED = 1e-3          # a slip turning about must have stopped: its slip speed there at most this share of its largest
 
@@ -211,8 +211,9 @@ def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
     t = rows[:, T]
     for before, change in zip(changes, changes[1:]):
         if before.kind != "landing" and change.time <= before.time:
-            notes.append(f"the {change.kind} at {change.time:.6g} s comes {'at the instant of' if change.time == before.time else 'before'} "
-                         f"the {before.kind} before it")
+            when = "at the instant of" if change.time == before.time else "before"
+            notes.append(f"the {_NAMES.get(change.kind, change.kind)} at {change.time:.6g} s comes {when} "
+                         f"the {_NAMES.get(before.kind, before.kind)} before it")
     begun = 0.0
     for change in changes:
         if change.kind != "slip":
@@ -281,7 +282,8 @@ def check_transitions(run) -> TransitionCheck | None:
             steps = tuple(max(run.rtol / TIGHTER ** level, MIN_TOLERANCE) for level in range(3))
             results = [list(run.transitions)] + [
                 _retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau, dt=run.dt,
-                        rtol=rtol, atol=max(run.atol / TIGHTER ** level, MIN_TOLERANCE * 1e-3), record_dt=t_stop - t_row)
+                        rtol=rtol, atol=max(run.atol / TIGHTER ** level, MIN_TOLERANCE * 1e-3),
+                        record_dt=t_stop - t_row)
                 for level, rtol in enumerate(steps[1:], start=1)]
             results[0] = [c for c in results[0] if c.time > t_row]
             shrink = ADAPTIVE_SHRINK

@@ -55,7 +55,8 @@ def test_a_billiard_shot_grips_where_it_should_and_the_check_agrees(method):
     traj = simulate(_scene("0*x", mu=0.2, method=method, dt=0.01, vx=2.0, omega=(0.0, 0.0, 0.0), duration=0.5),
                     **_options(method))
     t_star = 4.0 / (7 * 0.2 * G)
-    assert [c.kind for c in traj.transitions] == ["grip"] and traj.transitions[0].time == pytest.approx(t_star, abs=1e-11)
+    assert [c.kind for c in traj.transitions] == ["grip"]
+    assert traj.transitions[0].time == pytest.approx(t_star, abs=1e-11)
     check = traj.transition_check
     assert check is not None and check.converged and check.warning() is None
     (retake,) = check.retakes
@@ -197,8 +198,8 @@ def test_the_verdict_follows_the_order_and_the_adaptive_shrink():
 
 
 def test_the_warning_names_the_transition_its_moves_and_the_steps():
-    grip = Retake(1, "grip", 0.74655, 0.72, (0.00125, 0.000625, 0.0003125), (0.74655, 0.74655 + 3.4e-5, 0.74655 + 3.4e-5 + 2e-5),
-                  ("grip at 0.74655 s",) * 3, PLATEAU)
+    grip = Retake(1, "grip", 0.74655, 0.72, (0.00125, 0.000625, 0.0003125),
+                  (0.74655, 0.74655 + 3.4e-5, 0.74655 + 3.4e-5 + 2e-5), ("grip at 0.74655 s",) * 3, PLATEAU)
     slip = Retake(0, "slip", 0.5448, 0.5412, grip.steps, (0.5448, None, None),
                   ("slip at 0.5448 s", "no change of mode by 0.55 s", "no change of mode by 0.55 s"), CHANGED)
     note = TransitionCheck("rk4", 4, False, (grip,)).warning()
