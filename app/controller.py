@@ -66,10 +66,12 @@ class Run:
         return self.simulation.scene.contact.after_liftoff == "glued"
 
     def trajectory(self) -> Trajectory:
-        """The rows received so far as a trajectory (no copy)."""
+        """The rows received so far as a trajectory (no copy), with the finished run's check of
+        its transitions (what ``warnings`` says of them)."""
         scene = self.simulation.scene
         return Trajectory(self.buffer.rows, mass=scene.ball.mass, radius=scene.ball.radius,
-                          gravity=scene.gravity, modes=self.buffer.mode, transitions=tuple(self.transitions))
+                          gravity=scene.gravity, modes=self.buffer.mode, transitions=tuple(self.transitions),
+                          transition_check=getattr(self.simulation, "transition_check", None))
 
 
 class RunController(QtCore.QObject):

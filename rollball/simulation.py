@@ -20,6 +20,7 @@ from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
+from .transition_check import TransitionCheck, check_transitions
 from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLIGHT_REASONS, FLYING, OMEGA, R, ROLLING,
                          SLIDING, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
 
@@ -246,7 +247,7 @@ class Simulation:
         self._count = 0            # rows in _out
         self._mode = SLIDING if slips else ROLLING
         self._mode_starts = [(0, self._mode)]   # (first row, mode) where the mode changes
-        self._changes: list[Transition] = []   # every change the kernel runs stopped at
+        self.changes: list[Transition] = []   # every change the kernel runs stopped at
         self.transitions: list[Transition] = []
         self._flight: Flight | None = None
         self._surface = Surface(self.landscape, scene.parameter_values)
@@ -257,7 +258,8 @@ class Simulation:
         self._stall: str | None = None     # why the contact's modes could not go on
         self.status: Status | None = None
         self._energy_check: EnergyCheck | None = None
-        self.judge_energy = True  # whether the finished run looks at whose its energy error is
+        self._transition_check: TransitionCheck | None = None
+        self.judge_energy = True  # whether the finished run looks at whose its energy error is (and its transitions)
 
     def _parameters(self, dissipated: float) -> np.ndarray:
         scene = self.scene
@@ -424,6 +426,7 @@ class Simulation:
         if self.judge_energy and self.status in (Status.OK, Status.DOES_NOT_FIT, Status.NONFINITE):
             # (here, where the run runs: never in the thread that reads the trajectory)
             self._energy_check = energy_check(self)
+            self._transition_check = check_transitions(self)
         return self.rows[first:].copy()
 
     # -- the runs after the first, where the contact changes mode (docs/design.md §1) ----------
@@ -473,13 +476,13 @@ class Simulation:
         t = float(info[kernel.F_EVENT_T])
         x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
         change = Transition(t, kind, x, y)
-        self._changes.append(change)
+        self.changes.append(change)
         if not (kind == "slip" and self._mode == SLIDING):
             # (a slip whose speed fell to zero where rolling needs more friction than μ F·N turns
             # about and goes on: the same slip, no new transition)
             self.transitions.append(change)
         self._finish_kernel_run()
-        at_once = self._changes[-MAX_AT_ONCE:]
+        at_once = self.changes[-MAX_AT_ONCE:]
         if len(at_once) == MAX_AT_ONCE and all(change.time == t for change in at_once):
             self._stall = (f"the contact changes mode {MAX_AT_ONCE} times at t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g}) "
                            f"({', '.join(sorted({change.kind for change in at_once}))}) without the time moving on: "
@@ -667,6 +670,11 @@ class Simulation:
             self.status = Status.ABORTED
 
     @property
+    def transition_check(self) -> TransitionCheck | None:
+        """Whether the finished run's transitions are converged (``transition_check``; None before)."""
+        return self._transition_check
+
+    @property
     def liftoff_time(self) -> float | None:
         liftoff = self.liftoff
         return None if liftoff is None else liftoff.time
@@ -727,7 +735,7 @@ class Simulation:
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance,
                           energy_check=self._energy_check, modes=self.modes if self.segmented else None,
-                          transitions=tuple(self.transitions))
+                          transitions=tuple(self.transitions), transition_check=self._transition_check)
 
 
 SHORTER = 4            # energy_check takes the interval again with steps 4, 16, 64, 256 times shorter...

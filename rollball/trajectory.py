@@ -6,11 +6,15 @@ import enum
 import io
 import os
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .files import atomic_write
 from .kernel.interface import REASONS, ROW_ENERGY, ROW_FORCE, ROW_SLICES, ROW_T, STATUSES
+
+if TYPE_CHECKING:
+    from .transition_check import TransitionCheck
 
 COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
@@ -162,6 +166,7 @@ class Trajectory:
     energy_check: EnergyCheck | None = None  # set by the run where one interval's jump dominates
     modes: np.ndarray | None = None  # the mode of each row (positions in MODES); None: every row rolls
     transitions: tuple[Transition, ...] = ()   # the changes of mode, in time order
+    transition_check: TransitionCheck | None = None   # set by the run: whether they are converged
 
     @property
     def mode(self) -> np.ndarray:
@@ -258,7 +263,8 @@ class Trajectory:
 
     def warnings(self) -> list[str]:
         """What the run's own numbers say about its method and step: the energy error at its
-        largest and ||R^T R - I|| at the end (empty when both are small)."""
+        largest, ||R^T R - I|| at the end and transitions taken again that did not converge
+        (``transition_check``; empty when all is well)."""
         notes = []
         drift = self.energy_drift
         if drift > ENERGY_WARNING:
@@ -267,6 +273,9 @@ class Trajectory:
         if orth > ORTHOGONALITY_WARNING:
             notes.append(f"‖RᵀR − I‖ = {orth:.2g}: R is no longer a rotation (classic update; "
                          f"Munthe-Kaas keeps it one)")
+        transitions = self.transition_check.warning() if self.transition_check is not None else None
+        if transitions:
+            notes.append(transitions)
         return notes
 
     def _energy_note(self, drift: float) -> str:

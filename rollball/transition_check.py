@@ -1,0 +1,308 @@
+"""Whether a finished run's changes of contact mode are converged: each slip, grip and lift-off the
+kernel located is taken again from the last recorded row before it with shorter steps (tighter
+tolerances, adaptive), the way the energy check takes an interval again, and its time must move
+as the method's order says (docs/design.md §1, "Are the transitions converged?").
+
+A run whose contact changes mode is a sequence of segments; each change's time is located by the
+kernel on the method's own step. Where that placement is wrong (a condition that is not smooth, a
+change the steps invent), the run still ends ok: this check is what says so, as data
+(``TransitionCheck``, ``Trajectory.transition_check``) and as one of ``Trajectory.warnings()``."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .trajectory import FLYING, SLIDING, SLIP_SPEED, T, Status, Transition
+
+RETAKEN = ("slip", "grip", "liftoff")   # the kernel's changes; a landing is a flight's root (exact) and not retaken
+MAX_CHECKED = 8        # the first this many of them are checked (the rest are counted)
+HALVINGS = 2           # fixed steps: taken again with the run's dt, dt/2 and dt/4 (phase-aligned: on its grid)
+SLACK = 1.5            # a halving must shrink the move at least 2^(p - SLACK)-fold (rk4: 5.7; 16 expected)
+TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 times tighter...
+ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least 3.2-fold per 100 times (40 to 100 expected)
+MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
+MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step); adaptive,
+                       # also below rtol·√(r/g), what the tolerance allows (the error control's time unit)
+LEAD_STEPS = 64        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
+                       # where its segment starts if that is later...
+MARGIN_STEPS = 2       # ...and goes on until it has the change or is this many past it (one moved further is not there)
+MAX_STRETCH_STEPS = 4096  # a change whose row to start from lies more steps before it than this is not taken again
+TURNED = 1e-3          # a slip turning about must have stopped: its slip speed there at most this share of its largest
+
+CONVERGED, NEGLIGIBLE, PLATEAU, GROWS, CHANGED = "converged", "negligible", "plateau", "grows", "changed"
+
+
+@dataclass(frozen=True)
+class Retake:
+    """One transition of the run taken again: its ``kind`` and ``time`` (s) in the run (its
+    position ``index`` in ``Trajectory.transitions``), from the row at ``start`` (s), with each
+    of ``steps`` (fixed: dt, dt/2, dt/4; adaptive: the run's own rtol, then 100 and 10^4 times
+    tighter), the transition's time in each (``times``; None where that retake had no such
+    transition there: ``found`` says what it had instead) and the ``verdict`` (CONVERGED;
+    NEGLIGIBLE: every move below the floor, MOVE_FLOOR or, adaptive, what the tolerance allows;
+    PLATEAU: the moves shrink more slowly than the method's order says; GROWS: a finer retake
+    moves it more; CHANGED: the kinds differ)."""
+
+    index: int
+    kind: str
+    time: float
+    start: float
+    steps: tuple[float, ...]
+    times: tuple[float | None, ...]
+    found: tuple[str, ...]
+    verdict: str
+
+    @property
+    def converged(self) -> bool:
+        return self.verdict in (CONVERGED, NEGLIGIBLE)
+
+    @property
+    def moves(self) -> tuple[float, ...]:
+        """|t_{k+1} − t_k| between successive retakes (empty where one lacks the transition)."""
+        if None in self.times:
+            return ()
+        return tuple(abs(b - a) for a, b in zip(self.times, self.times[1:]))
+
+
+@dataclass(frozen=True)
+class TransitionCheck:
+    """The check of a finished run's transitions (``check_transitions``): the ``method``, its
+    ``order`` and whether it is ``adaptive``; the transitions taken again (``retakes``, at most
+    MAX_CHECKED), how many kernel-located ones were not: ``unchecked`` beyond the cap, ``skipped``
+    with no row to start from (a change at the run's start, or one too far after its row) or
+    whose retake failed; and ``invented``: sentences on transitions the sequence itself shows the
+    motion does not have (two at one instant or out of order; a slip turning about where the
+    slip had not stopped)."""
+
+    method: str
+    order: int
+    adaptive: bool
+    retakes: tuple[Retake, ...] = ()
+    unchecked: int = 0
+    invented: tuple[str, ...] = ()
+    skipped: int = 0
+
+    @property
+    def converged(self) -> bool:
+        return not self.invented and all(retake.converged for retake in self.retakes)
+
+    @property
+    def failed(self) -> tuple[Retake, ...]:
+        return tuple(retake for retake in self.retakes if not retake.converged)
+
+    def warning(self) -> str | None:
+        """The sentence ``Trajectory.warnings()`` shows (None where every transition converged): the
+        first transition that did not (and which others did not), the first invented one (and how
+        many more), and what to do."""
+        if self.converged:
+            return None
+        parts = []
+        failed = self.failed
+        if failed:
+            others = " and ".join(f"the {_NAMES.get(r.kind, r.kind)} at {r.time:.6g} s" for r in failed[1:])
+            nor = f" (nor {'are' if len(failed) > 2 else 'is'} {others})" if others else ""
+            parts.append(_sentence(failed[0], self) + ": not converged" + nor)
+        if self.invented:
+            more = len(self.invented) - 1
+            parts.append(self.invented[0] + ": a change the motion does not have"
+                         + (f" ({more} more like it)" if more else ""))
+        advice = "try tighter tolerances" if self.adaptive else "try a smaller step or dopri5"
+        if self.unchecked:
+            n = len(self.retakes)
+            advice += f" (only the first {n} transition{' was' if n == 1 else 's were'} taken again)"
+        return "; ".join(parts + [advice])
+
+
+_NAMES = {"liftoff": "lift-off"}   # (as ``Transition.sentence`` writes it)
+
+
+def _sentence(retake: Retake, check: TransitionCheck) -> str:
+    what = f"the {_NAMES.get(retake.kind, retake.kind)} at {retake.time:.6g} s"
+    if check.adaptive:
+        levels = ["with its tolerances", f"with tolerances {TIGHTER:g} times tighter",
+                  f"with tolerances {TIGHTER ** 2:g} times tighter"]
+        expected = f"{check.method} should move it by about 1/{TIGHTER:g} as much each time"
+    else:
+        levels = [f"at dt {retake.steps[0]:g}", "when the step was halved", "when it was halved again"]
+        expected = f"{check.method} should move it by about 1/{2 ** check.order} as much each time"
+    if retake.verdict == CHANGED:
+        k = next(i for i, t in enumerate(retake.times) if t is None)
+        return (f"{what} is not there {levels[k]} (taken again from t = {retake.start:.6g} s: "
+                f"{retake.found[k]})")
+    moves = retake.moves
+    return (f"{what} moved by {moves[0]:.2g} s {levels[1]} and by {moves[1]:.2g} s {levels[2]} "
+            f"({expected})")
+
+
+def verdict(times, *, shrink: float, floor: float = MOVE_FLOOR) -> str:
+    """How a ladder of a transition's times (coarse to fine, each level ``shrink`` times finer in
+    what the method's accuracy promises: 2^p per halving for order p, less a slack) converges: None
+    in ``times`` (a retake without it) is CHANGED; moves all below ``floor`` NEGLIGIBLE; a finest
+    move below ``floor`` or each move at least ``shrink`` times the next CONVERGED; a move larger
+    than the one before GROWS; else PLATEAU."""
+    if any(t is None for t in times):
+        return CHANGED
+    moves = [abs(b - a) for a, b in zip(times, times[1:])]
+    if all(move <= floor for move in moves):
+        return NEGLIGIBLE
+    if moves[-1] <= floor:
+        return CONVERGED
+    if any(b > a for a, b in zip(moves, moves[1:])):
+        return GROWS
+    if all(a >= shrink * b for a, b in zip(moves, moves[1:])):
+        return CONVERGED
+    return PLATEAU
+
+
+@functools.cache
+def _retake_class():
+    """``Simulation`` that stops at its ``wanted``-th transition (what comes after, a flight, the next
+    segment, is not looked at). Made at first use: ``simulation`` imports this module."""
+    from .simulation import Simulation
+
+    class Retaking(Simulation):
+        wanted = 1
+
+        def _transition(self) -> None:
+            super()._transition()
+            if self.status is None and len(self.transitions) >= self.wanted:
+                self._flight, self.status = None, Status.OK
+
+        def _start_kernel_run(self, state, t: float, *, slides: bool, repeat: bool) -> None:
+            if len(self.transitions) >= self.wanted:   # (not the next segment's arrays either)
+                self.status = Status.OK
+                return
+            super()._start_kernel_run(state, t, slides=slides, repeat=repeat)
+
+    return Retaking
+
+
+def _retake(run, row: np.ndarray, t_row: float, mode: int, t_stop: float, wanted: int,
+            **options) -> list[Transition] | None:
+    """The transitions of the run taken again from ``row`` (at t_row, in ``mode``) on the run's
+    clock, so that fixed steps dt / 2^k fall on its grid (``kernel.grid_steps_before``), with
+    ``options`` (Simulation's), until it has ``wanted`` of them or reaches t_stop; None where the
+    retake cannot be made, or stops short (not ok) before it had ``wanted`` transitions."""
+    from .simulation import _state_of
+    try:
+        redo = _retake_class()(run.scene, t_end=t_stop, **options)
+    except ValueError:
+        return None
+    redo.judge_energy = False   # (the check's own runs are not checked)
+    redo.wanted = wanted
+    redo._mode, redo._mode_starts = mode, [(0, mode)]
+    redo._start_kernel_run(_state_of(run, row), t_row, slides=mode == SLIDING, repeat=False)
+    redo.advance()
+    changes = list(redo.transitions)
+    return changes if redo.status is Status.OK or len(changes) >= wanted else None
+
+
+def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
+    """Transitions the run's own sequence shows the motion does not have: one at the instant of the
+    one before or earlier (a landing may be followed at once: the impact stuck where rolling needs
+    more friction than there is), and a slip that turns about (sliding on, no grip between) where
+    the slip had not stopped: its slip speed there above TURNED of its largest since it began."""
+    notes = []
+    changes = run.transitions
+    t = rows[:, T]
+    for before, change in zip(changes, changes[1:]):
+        if before.kind != "landing" and change.time <= before.time:
+            when = "at the instant of" if change.time == before.time else "before"
+            notes.append(f"the {_NAMES.get(change.kind, change.kind)} at {change.time:.6g} s comes {when} "
+                         f"the {_NAMES.get(before.kind, before.kind)} before it")
+    begun = 0.0
+    for change in getattr(run, "changes", changes):   # (turns of a slip too, which are no transitions)
+        if change.kind != "slip":
+            begun = change.time
+            continue
+        at = np.flatnonzero((t == change.time) & (modes == SLIDING))
+        if len(at):   # a slip out of sliding: the slip turns about
+            stretch = (t >= begun) & (t <= change.time) & (modes == SLIDING)
+            largest = float(np.max(rows[stretch, SLIP_SPEED]))
+            speed = float(rows[at[-1], SLIP_SPEED])
+            if speed > TURNED * largest:
+                share = "its largest" if speed == largest else f"{speed / largest:.2g} of its largest"
+                notes.append(f"the slip at {change.time:.6g} s, a turn of the slip, comes where the slip speed is "
+                             f"{speed:.2g} m/s, not 0 ({share} since t = {begun:.6g} s)")
+        begun = change.time
+    return notes
+
+
+def check_transitions(run) -> TransitionCheck | None:
+    """The check of a finished run whose contact changed mode (None where it did not, or where the
+    run is the 2011 model's). Each of the first MAX_CHECKED slips, grips and lift-offs is taken
+    again from a recorded row before it that is not itself at such a change: the last at least
+    LEAD_STEPS of the run's steps before it, or its segment's first where that is later (its
+    state by ``simulation._state_of``, in that row's mode), until the retake has it or is
+    MARGIN_STEPS steps past it, and its time read in each retake: fixed steps with the run's dt,
+    dt/2 and dt/4, their steps on the run's grid, the moves to shrink 2^(p − SLACK)-fold per
+    halving at least; adaptive with the run's tolerances (its own time) and tolerances TIGHTER
+    and TIGHTER² times tighter, ADAPTIVE_SHRINK-fold. A retake whose transitions up to it are of
+    other kinds, or that has none there, changed it. The run's errors before the retaken stretch
+    are not seen: they are carried into every retake alike."""
+    if not run.segmented or not run.transitions:
+        return None
+    tableau = run.tableau
+    rows, modes = run.rows, run.modes
+    if not len(rows):
+        return None
+    t = rows[:, T]
+    located = {change.time for change in run.transitions if change.kind in RETAKEN}
+    usable = ~np.isin(t, list(located))
+    end = float(t[-1])
+    average = (end / run.steps) if run.adaptive and run.steps else run.dt
+    retakes, unchecked, skipped = [], 0, 0
+    for index, change in enumerate(run.transitions):
+        if change.kind not in RETAKEN:
+            continue
+        if len(retakes) >= MAX_CHECKED:
+            unchecked += 1
+            continue
+        previous = run.transitions[index - 1].time if index else -math.inf
+        before = np.flatnonzero(usable & (t < change.time))
+        segment = before[t[before] >= previous]   # (a landing's row is the state after it)
+        lead = segment[t[segment] <= change.time - LEAD_STEPS * average]
+        i = (int(lead[-1]) if len(lead) else int(segment[0]) if len(segment) else
+             int(before[-1]) if len(before) else -1)   # (else from its segment's first row, or the last before it)
+        if i < 0 or modes[i] == FLYING or (change.time - t[i]) > MAX_STRETCH_STEPS * average:
+            skipped += 1
+            continue
+        t_row = float(t[i])
+        # the run's changes after the row up to this one (a landing, or one at the same instant, may come first)
+        sequence = [c.kind for c in run.transitions[: index + 1] if c.time > t_row]
+        k = len(sequence)
+        t_stop = min(change.time + MARGIN_STEPS * average, end)
+        if t_stop <= change.time:
+            t_stop = end
+        if run.adaptive:
+            steps = tuple(max(run.rtol / TIGHTER ** level, MIN_TOLERANCE) for level in range(3))
+            results = [list(run.transitions)] + [
+                _retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau, dt=run.dt,
+                        rtol=rtol, atol=max(run.atol / TIGHTER ** level, MIN_TOLERANCE * 1e-3),
+                        record_dt=t_stop - t_row)
+                for level, rtol in enumerate(steps[1:], start=1)]
+            results[0] = [c for c in results[0] if c.time > t_row]
+            shrink = ADAPTIVE_SHRINK
+            floor = max(MOVE_FLOOR, run.rtol * math.sqrt(run.scene.ball.radius / run.scene.gravity))
+        else:
+            steps = tuple(run.dt / 2 ** level for level in range(HALVINGS + 1))
+            results = [_retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau,
+                               munthe_kaas=run.munthe_kaas, dt=h, record_every=2 ** 40) for h in steps]
+            shrink, floor = 2.0 ** (tableau.order - SLACK), MOVE_FLOOR
+        if any(result is None for result in results):   # a retake that failed says nothing
+            skipped += 1
+            continue
+        times, found = [], []
+        for result in results:
+            kinds = [c.kind for c in result[:k]]
+            found.append(", ".join(f"{_NAMES.get(c.kind, c.kind)} at {c.time:.6g} s" for c in result[:k]) or
+                         f"no change of mode by {t_stop:.6g} s")
+            times.append(result[k - 1].time if kinds == sequence else None)
+        retakes.append(Retake(index, change.kind, change.time, t_row, steps, tuple(times), tuple(found),
+                              verdict(times, shrink=shrink, floor=floor)))
+    return TransitionCheck(tableau.name, tableau.order, run.adaptive, tuple(retakes), unchecked,
+                           tuple(_invented(run, rows, modes)), skipped)
