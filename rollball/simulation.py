@@ -21,8 +21,9 @@ from .landscape import Landscape, landscape_of
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
 from .transition_check import TransitionCheck, check_transitions
-from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLIGHT_REASONS, FLYING, OMEGA, R, ROLLING,
-                         SLIDING, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition)
+from .trajectory import (CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, FLIGHT_REASONS, FLYING, NORMAL_FORCE, OMEGA, R,
+                         ROLLING, SLIDING, SLIP_SPEED, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status,
+                         Trajectory, Transition)
 
 # kernel.ROW_SIZE (25) doubles a row: 1.0 GB at the limit, handed to the trajectory without a
 # copy. A run recording every adaptive step grows its buffer by doubling up to the limit,
@@ -44,6 +45,13 @@ _NEXT_MODE = {"liftoff": FLYING, "slip": SLIDING, "grip": ROLLING}
 # made the friction bound NaN.
 FRICTION_CAP = 1e100
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
+# A fixed-step run takes the stretch where a slip's direction is stiff (kernel.T_STIFF: friction
+# would stop the slip within a step, at its start or its end) with this adaptive pair at this
+# tolerance, far below the fixed steps' own error, to the first step on its grid where it can go
+# on (docs/design.md §8); STIFF_WINDOW steps of the grid at a time, twice as many while it cannot.
+STIFF_METHOD = "dop853"
+STIFF_TOLERANCE = 1e-12
+STIFF_WINDOW = 16
 
 
 def _kernel_arrays(tableau) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -472,6 +480,10 @@ class Simulation:
     def _transition(self) -> None:
         """The kernel run stopped where the contact changes mode: go on in the new one."""
         info = self._info
+        if int(self._ints[kernel.I_TRANSITION]) == kernel.T_STIFF:
+            self._finish_kernel_run()
+            self._stiff_stretch()
+            return
         kind = kernel.transition_name(int(self._ints[kernel.I_TRANSITION]))
         t = float(info[kernel.F_EVENT_T])
         x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
@@ -556,6 +568,88 @@ class Simulation:
         center = start.center + start.velocity * tau + 0.5 * acceleration * tau * tau
         R = Rotation.from_rotvec(0.5 * (start.omega + omega) * tau).as_matrix() @ start.R
         return FreeState(t, center, velocity, omega, R)
+
+    def _stiff_stretch(self) -> None:
+        """The fixed-step kernel run stopped before a step where the slip's direction is stiff
+        (kernel.T_STIFF): its direction relaxes at the rate |B| / |u| and turns with B, which no
+        fixed step can follow at its order. That stretch is taken by STIFF_METHOD at
+        STIFF_TOLERANCE (every transition in it too), recording every step of the run's grid; the
+        fixed steps go on from the first grid time where the ball no longer slides, or its slip
+        is no longer stiff: its rows and transitions up to there are the run's."""
+        t = float(self._info[kernel.F_EVENT_T])
+        state = sliding.stopped_state(self._z, self._R, self._p, self._probe_normal())
+        mode, window = SLIDING, STIFF_WINDOW
+        while True:
+            t1 = (kernel.grid_steps_before(t, self.dt) + window) * self.dt
+            if not self.t_end - t1 > kernel.GRID_SLIVER * self.dt:
+                t1 = self.t_end
+            run = self._stretch_run(state, t, t1, mode)
+            rows, modes = run.rows, run.modes
+            if run.status is not Status.OK:   # (its rows and transitions so far are the run's)
+                self._adopt(run, len(rows) - 1)
+                self.status, self._off = run.status, run.failure
+                return
+            on_grid = np.abs(rows[:, T] / self.dt - np.round(rows[:, T] / self.dt)) < 1e-9
+            free = [i for i in range(1, len(rows))
+                    if on_grid[i] and (modes[i] != SLIDING or not self._stiff(rows[i]))]
+            end = free[0] if free else len(rows) - 1
+            self._adopt(run, end)
+            row, mode, t = rows[end], int(modes[end]), float(rows[end, T])
+            if not self.t_end - t > 1e-12 * self.t_end:
+                self.status = Status.OK
+                return
+            self._mode, self._dissipated_now = mode, float(row[DISSIPATED])
+            if free and mode == FLYING:
+                self._flight = self._new_flight(FreeState.from_row(row))
+                return
+            if free:
+                self._start_kernel_run(_state_of(self, row), t, slides=mode == SLIDING, repeat=True)
+                return
+            state, window = _state_of(self, row), 2 * window   # still stiff: on from there
+
+    def _stiff(self, row: np.ndarray) -> bool:
+        """Whether a sliding row's slip is stiff for the fixed steps: friction would stop it within
+        a step (the kernel's ``slip_reference``)."""
+        ball = self.scene.ball
+        return (row[SLIP_SPEED] * ball.mass
+                < 3.5 * float(self._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) * self.dt)
+
+    def _stretch_run(self, state, t0: float, t1: float, mode: int) -> "Simulation":
+        """STIFF_METHOD's run from ``state`` in ``mode`` at t0 to t1, a row at every step of the grid."""
+        run = Simulation(dataclasses.replace(self.scene, duration=t1), method=STIFF_METHOD, rtol=STIFF_TOLERANCE,
+                         atol=STIFF_TOLERANCE, record_dt=self.dt)
+        run.judge_energy = False
+        run._mode, run._mode_starts = mode, [(0, mode)]
+        run._start_kernel_run(state, t0, slides=mode == SLIDING, repeat=False)
+        run.advance()
+        return run
+
+    def _adopt(self, run: "Simulation", end: int) -> None:
+        """A stretch's rows 1 to ``end`` (those at the run's recording times, at its transitions or
+        at the end of the run), its transitions up to there and its counts, as the run's own."""
+        rows, modes = run.rows[: end + 1], run.modes[: end + 1]
+        t_end = float(rows[-1, T])
+        transitions, changes = {id(c) for c in run.transitions}, {id(c) for c in run.changes}
+        merged = sorted({id(c): c for c in [*run.changes, *run.transitions] if c.time <= t_end}.values(),
+                        key=lambda c: (c.time, c.kind != "landing"))
+        at = {change.time for change in merged}
+        k = np.round(rows[:, T] / self.dt)
+        kept = [i for i in range(1, len(rows))
+                if rows[i, T] in at or rows[i, T] >= self.t_end
+                or (abs(rows[i, T] / self.dt - k[i]) < 1e-9 and k[i] % self.record_every == 0)]
+        for i in kept:
+            self._mode = int(modes[i])
+            self._append(rows[i: i + 1].copy())
+        for change in merged:
+            if id(change) in changes:
+                self.changes.append(change)
+            if id(change) in transitions:
+                self.transitions.append(change)
+        self._finished[0] += run.steps
+        self._finished[1] += run.rejected
+        self._finished[2] += run.evaluations
+        if self._first_liftoff is None and run.liftoff is not None and run.liftoff.time <= t_end:
+            self._first_liftoff = run.liftoff
 
     def _at_tip(self, x: float, y: float) -> bool:
         """Whether (x, y) is (within 10⁻⁶ of) a point where the normal turns through a finite angle:

@@ -208,6 +208,10 @@ TRANSITIONS = {
 }
 T_NONE = 0
 T_LIFTOFF, T_SLIP, T_GRIP = range(1, len(TRANSITIONS) + 1)
+# Not a change of mode: a fixed-step sliding run stops before a step that starts where the slip's
+# direction is stiff (friction would stop the slip within the step, ``loops.slip_reference``); the
+# run in Python takes that stretch with an adaptive pair (``simulation``, docs/design.md §8).
+T_STIFF = len(TRANSITIONS) + 1
 
 
 def transition_name(code: int) -> str | None:

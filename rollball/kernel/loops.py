@@ -16,10 +16,10 @@ from .interface import (
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
-    TRANSITION,
+    TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION,
     grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import motion_size, shape_of
+from .physics import motion_size, shape_of, sliding_size
 from .recording import _fail, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -45,12 +45,13 @@ def reach_of(K, h, z):
 def slip_reference(d, probe, p, h, cap):
     """The slip velocity at the step's start, which a sliding ball's friction keeps its side of
     through the step (``sliding_dynamics``), into d[D_SLIP:D_SLIP + 3] (rolling: 0, never read),
-    and into d[D_SLIP + 3] the slip speed below which the step takes the slip's direction as
-    the slow motion's (``sliding_dynamics``): where the slip starts or ends its direction's own
-    dynamics is stiff (a rate |B| / |u|). Fixed steps (``cap`` inf): the whole step (inf) where
-    friction would stop the slip at the step's start within the step (|u| < 7/2 mu F_n h / m),
-    else none (0); the adaptive pairs: below ``cap`` (``slow_slip``) at every stage, so that the
-    rest of the stiff stretch is the exact equations, which their error control resolves."""
+    and into d[D_SLIP + 3] the slip speed below which the slip's direction is stiff (a rate
+    |B| / |u|). Fixed steps (``cap`` inf): inf where friction would stop the slip at the step's
+    start within the step (|u| < 7/2 mu F_n h / m), and ``advance`` stops there (T_STIFF: the run
+    in Python takes that stretch with an adaptive pair), else 0; the adaptive pairs: ``cap``
+    (``slow_slip``), below which a growing slip's direction is the slow motion's
+    (``sliding_dynamics``), above which the exact equations hold and their error control resolves
+    them."""
     u1, u2, u3 = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
     d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2] = u1, u2, u3
     if cap < math.inf:
@@ -113,6 +114,10 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         t = t_end if final else g * dt
         if watch:
             slip_reference(d, probe, p, h, math.inf)
+            if d[D_SLIP + 3] == math.inf and sliding_size(n):   # (the stretch is Python's: T_STIFF)
+                ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
+                info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
+                return
         bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
         if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
             valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,

@@ -170,9 +170,10 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     keeps contact, F_n from the constraint N.c'' = -(N' alpha').c', kinetic friction -mu F_n s
     along the unit slip velocity s of the material point at the contact (docs/design.md §11):
     alpha' = E^-1 C'^T c', m c'' = m g + F_n N - mu |F_n| s, (2/5) m r² omega' = (-r N) x F,
-    D' = mu |F_n| |u_slip|. Where the slip is zero (SLIP_ZERO: a slip starting), s is the
-    direction the slip starts in, against the friction rolling would need, and the probe's slip
-    velocity is exactly 0.
+    D' = mu |F_n| |u_slip|. Where the slip is zero (SLIP_ZERO: a slip starting), or grows while
+    its direction is stiff (below d[D_SLIP + 3], ``loops.slip_reference``), s is the direction of B,
+    the slip's acceleration with friction off, at this state; where it is exactly zero the probe's
+    slip velocity is 0.
 
     Inside a step the friction stays on its side of the slip velocity at the step's start,
     d[D_SLIP:D_SLIP + 3] (s = -u/|u| where u points against it, and D' < 0): the equations go on
@@ -226,16 +227,11 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     r1, r2, r3 = r1 - rn * n1, r2 - rn * n2, r3 - rn * n3
     rn = math.sqrt(r1 * r1 + r2 * r2 + r3 * r3)
     if (zero or (us < slow and (rn == 0.0 or bs * m > 3.5 * f))) and bs > 0.0:
-        # a slip starting (zero at the step's start, or growing while its direction is stiff):
-        # its direction relaxes towards B's at the rate |B| / |u| and then turns with it; taken as
-        # B's direction at this state (the slow motion the exact one follows), smooth through the
-        # step (docs/design.md §1, "Sliding")
+        # a slip starting (zero at the step's start, or growing while its direction is stiff, the
+        # adaptive pairs): its direction relaxes towards B's at the rate |B| / |u| and then turns
+        # with it; taken as B's direction at this state (the slow motion the exact one follows),
+        # smooth through the step (docs/design.md §8, "the slip's direction where it is stiff")
         s1, s2, s3 = b1 / bs, b2 / bs, b3 / bs
-        us = u1 * s1 + u2 * s2 + u3 * s3
-    elif slow == math.inf and rn > 0.0:
-        # a slip ending that fixed steps cannot follow (friction stops it within the step): its
-        # direction at the step's start, held through the step
-        s1, s2, s3 = r1 / rn, r2 / rn, r3 / rn
         us = u1 * s1 + u2 * s2 + u3 * s3
     elif not zero:
         side = us
