@@ -308,10 +308,10 @@ class _Parser:
             # refuse an overflowing constant here, before an enclosing call makes sympy
             # evaluate it to unbounded precision (exp(exp(exp(100))))
             try:
-                value = complex(result)
+                size = abs(complex(result))   # (the modulus of two finite parts can overflow too)
             except (TypeError, ValueError, OverflowError):
-                value = complex(math.inf)
-            if not math.isfinite(abs(value)) or abs(value) > LARGEST_CONSTANT:
+                size = math.inf
+            if not math.isfinite(size) or size > LARGEST_CONSTANT:
                 raise FormulaError(f"constant value of {tok.text} is too large", tok.position)
         return result
 
