@@ -277,7 +277,7 @@ class Simulation:
         contact = scene.contact
         friction = None if contact.friction is None else min(contact.friction, FRICTION_CAP)
         return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn, friction=friction,
-                                 fly=contact.after_liftoff == "fly", dissipated=dissipated)
+                                 fly=contact.after_liftoff == "fly", dissipated=dissipated, stiff=True)
 
     def _arm(self, arrays: dict, t_start: float) -> None:
         """Make ``arrays`` the current kernel run, from t_start to t_end on the run's one clock (its

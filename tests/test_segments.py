@@ -77,7 +77,7 @@ def test_a_flight_beyond_the_landscape_ends_the_run():
                              "start": {"x": 0.5, "y": 0.0, "vx": -3.0}, "duration": 1.0})
     traj = simulate(scene)
     assert [c.kind for c in traj.transitions] == ["liftoff"]
-    assert traj.status == "nonfinite" and traj.failure.reason == "undefined"
+    assert traj.status == "nonfinite" and traj.failure.reason == "off_domain"
     assert traj.t[-1] == traj.failure.time < 1.0 and traj.mode[-1] == "flying"
     assert np.isfinite(traj.data).all()
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from .dense import interpolate, state_at, turn
+from .dense import interpolate, state_at
 from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,

@@ -108,23 +108,26 @@ P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this
 P_MU = 8    # the friction coefficient mu; inf: always enough friction to roll (the 2011 model)
 P_FLY = 9   # 1: the run stops at a lift-off (the ball flies); 0: it goes on glued to the surface
 P_DISSIPATED = 10  # the energy dissipated before this run (J): what rolling rows record
-P_SIZE = 11
+P_STIFF = 11  # 1: a fixed-step sliding run stops before a step whose slip is stiff (T_STIFF); 0: it steps on
+P_SIZE = 12
 
 
 def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, friction: float | None = None,
-               fly: bool = False, dissipated: float = 0.0) -> np.ndarray:
+               fly: bool = False, dissipated: float = 0.0, stiff: bool = False) -> np.ndarray:
     """The ball and gravity as the kernel reads them, with the constants it would otherwise
     recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0; then ``turn``:
     0 for the Munthe-Kaas increment u in the state, else the tolerance (rad) for the
     orientation's sub-steps when omega is carried instead (``turn``: the adaptive pairs);
     then the contact: ``friction`` mu (None: always enough to roll, the 2011 model: no slip is
-    ever looked for), ``fly`` (stop the run at a lift-off instead of going on glued) and the
-    energy ``dissipated`` before this run (J, carried into its rows)."""
+    ever looked for), ``fly`` (stop the run at a lift-off instead of going on glued), the
+    energy ``dissipated`` before this run (J, carried into its rows) and ``stiff`` (a fixed-step
+    sliding run stops before a step whose slip is stiff, T_STIFF, for the caller to take that
+    stretch; without it the run steps on with the slip's own direction)."""
     r, m, g0 = radius, mass, gravity
     zero = 0.0 * r   # (+ 0 r: a column like the others where r is an array, sweeps)
     mu = np.inf if friction is None else friction
     return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + zero, mu + zero,
-                     (1.0 if fly else 0.0) + zero, dissipated + zero])
+                     (1.0 if fly else 0.0) + zero, dissipated + zero, (1.0 if stiff else 0.0) + zero])
 
 
 # How a method steps (``take_step``). Floats: numba compiles a function anew for every

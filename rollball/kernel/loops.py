@@ -16,7 +16,7 @@ from .interface import (
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
-    TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION,
+    TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF,
     grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import motion_size, shape_of, sliding_size
@@ -114,7 +114,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         t = t_end if final else g * dt
         if watch:
             slip_reference(d, probe, p, h, math.inf)
-            if d[D_SLIP + 3] == math.inf and sliding_size(n):   # (the stretch is Python's: T_STIFF)
+            if d[D_SLIP + 3] == math.inf and p[P_STIFF] != 0.0 and sliding_size(n):   # (Python's: T_STIFF)
                 ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
                 info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
                 return

@@ -168,7 +168,7 @@ SLIP_ZERO = 1e-12
 def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     """``dynamics`` of a sliding ball, z = (x, y, c' (3), omega (3), D, orientation): the ball
     keeps contact, F_n from the constraint N.c'' = -(N' alpha').c', kinetic friction -mu F_n s
-    along the unit slip velocity s of the material point at the contact (docs/design.md §11):
+    along the unit slip velocity s of the material point at the contact (docs/design.md §1, "Sliding"):
     alpha' = E^-1 C'^T c', m c'' = m g + F_n N - mu |F_n| s, (2/5) m r² omega' = (-r N) x F,
     D' = mu |F_n| |u_slip|. Where the slip is zero (SLIP_ZERO: a slip starting), or grows while
     its direction is stiff (below d[D_SLIP + 3], ``loops.slip_reference``), s is the direction of B,
