@@ -386,10 +386,6 @@ def _examples() -> int:
 
 
 def _bench(args) -> int:
-    try:
-        import scipy  # noqa: F401
-    except ImportError:
-        return _fail("the benchmark needs scipy: pip install 'rollball[bench]'")
     from . import bench
 
     log = lambda text: print(text, file=sys.stderr)  # noqa: E731
