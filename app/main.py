@@ -6,7 +6,9 @@ Headless (docs/design.md §7): with ``--screenshot PNG`` the app opens the scene
 ``--record VIDEO`` it records the playback. Exit 0, or 2 with a one-line message on stderr:
 every refusal comes before a window opens (bad options, a scene that cannot be read, an
 output that cannot be written or would replace the scene), and a problem met on the way is
-said in that one line too, never in a dialog. SIGTERM, SIGINT or SIGHUP during a headless run
+said in that one line too, never in a dialog. Bad options are refused before the core or Qt is
+loaded (``formats`` holds what they are checked against), and a missing package of the app's
+(PySide6, pyqtgraph, PyOpenGL) is said in that one line with what to install. SIGTERM, SIGINT or SIGHUP during a headless run
 ends it cleanly: nothing half-written stays behind, and the exit code is 128 + the signal.
 
 Shutting down: the window and every Qt object in it are deleted while Python is whole
