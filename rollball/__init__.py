@@ -11,6 +11,8 @@ from .cache import guard_numba_cache  # noqa: E402
 
 guard_numba_cache()   # before numba is imported: its cache folder must be ours alone too
 
+from .lazy import lazy_names  # noqa: E402
+
 # Each public name and the module (below this package) that defines it.
 _LAZY = {
     "FormulaError": "formula", "parse_formula": "formula",
@@ -26,18 +28,4 @@ _LAZY = {
 }
 
 __all__ = sorted(_LAZY)
-
-
-def __getattr__(name: str):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from importlib import import_module
-
-    value = getattr(import_module(f".{module}", __name__), name)
-    globals()[name] = value   # looked up once
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)
