@@ -18,9 +18,8 @@ import numpy as np
 
 from rollball.files import atomic_write
 
-FORMATS = {".mp4": "MP4 video", ".gif": "GIF animation"}
-DEFAULT_FPS = 30
-MAX_FPS = 120
+from .formats import MAX_FPS, format_of
+
 GIF_COLORS = 256
 SHADES = (0.35, 0.55, 0.75, 0.9, 1.0)   # shaded surfaces show an accent colour at these brightnesses
 
@@ -50,13 +49,6 @@ def gif_palette(first, accents: np.ndarray):
     palette = Image.new("P", (1, 1))
     palette.putpalette(base.getpalette()[: 3 * (GIF_COLORS - len(extra))] + extra.ravel().tolist())
     return palette
-
-
-def format_of(path: str | os.PathLike) -> str:
-    suffix = Path(path).suffix.lower()
-    if suffix not in FORMATS:
-        raise ValueError(f"{Path(path).name}: an animation is .mp4 or .gif")
-    return suffix
 
 
 class AnimationWriter:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from PySide6 import QtWidgets
 
-from .animation import DEFAULT_FPS, FORMATS, MAX_FPS
+from .formats import DEFAULT_FPS, FORMATS, MAX_FPS
 
 IMAGE_SCALES = (("1× (as on screen)", 1), ("2×", 2), ("4× (print)", 4))
 ANIMATION_FILTER = ";;".join(f"{words} (*{suffix})" for suffix, words in FORMATS.items())

@@ -16,9 +16,10 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from rollball.files import atomic_write_bytes, write_target
 from rollball.trajectory import CENTER
 
-from .animation import DEFAULT_FPS, frame_times, record
+from .animation import frame_times, record
 from .controller import RUNNING, STOPPED
 from .dialogs import AnimationDialog, ImageDialog
+from .formats import DEFAULT_FPS
 from .picture import ACCENTS, caption_height, caption_text, compose, rgb_array
 
 CSV_FILTER = "CSV files (*.csv);;All files (*)"

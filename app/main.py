@@ -6,7 +6,9 @@ Headless (docs/design.md §7): with ``--screenshot PNG`` the app opens the scene
 ``--record VIDEO`` it records the playback. Exit 0, or 2 with a one-line message on stderr:
 every refusal comes before a window opens (bad options, a scene that cannot be read, an
 output that cannot be written or would replace the scene), and a problem met on the way is
-said in that one line too, never in a dialog. SIGTERM, SIGINT or SIGHUP during a headless run
+said in that one line too, never in a dialog. Bad options are refused before the core or Qt is
+loaded (``formats`` holds what they are checked against), and a missing package of the app's
+(PySide6, pyqtgraph, PyOpenGL) is said in that one line with what to install. SIGTERM, SIGINT or SIGHUP during a headless run
 ends it cleanly: nothing half-written stays behind, and the exit code is 128 + the signal.
 
 Shutting down: the window and every Qt object in it are deleted while Python is whole
@@ -27,11 +29,14 @@ import tempfile
 import time
 from pathlib import Path
 
+from .formats import DEFAULT_FPS, MAX_FPS, MIN_FPS, format_of
+
 RUN_TIMEOUT = 600.0   # seconds a --run-to may compute before the screenshot gives up
-MIN_FPS = 1           # --fps bounds (the largest: animation.MAX_FPS)
 MIN_SIZE, MAX_SIZE = (320, 240), (7680, 4320)   # --size bounds, width × height
 DEFAULT_SIZE = (1280, 860)                      # the window's size for --screenshot
 STOPPING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGINT", "SIGHUP") if hasattr(signal, name))
+# The modules of the app's own packages (pip install 'rollball[app]') that the window needs at once.
+APP_PACKAGES = ("PySide6", "pyqtgraph", "OpenGL")
 
 
 def prepare_qt() -> None:
@@ -67,8 +72,6 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .animation import MAX_FPS
-
     parser = _Parser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
     parser.add_argument("--compare", metavar="SPECS",
@@ -99,8 +102,6 @@ def main(argv: list[str] | None = None) -> int:
     if args.run_to is not None and not headless:
         fail("--run-to needs --screenshot or --record")
     if args.record is not None:
-        from .animation import DEFAULT_FPS, MAX_FPS, format_of
-
         try:
             format_of(args.record)
         except ValueError as error:
@@ -110,6 +111,9 @@ def main(argv: list[str] | None = None) -> int:
             fail(f"--fps: from {MIN_FPS} to {MAX_FPS} frames per simulated second, not {args.fps:g}")
     elif args.fps is not None:
         fail("--fps needs --record")
+    missing = missing_package()
+    if missing:
+        fail(f"the app needs {missing}, which is not installed: pip install 'rollball[app]'")
     specs = None
     if args.compare is not None:
         from rollball import parse_runs
@@ -177,6 +181,20 @@ def main(argv: list[str] | None = None) -> int:
     code = app.exec()
     close_down(app, window)
     return code
+
+
+def missing_package() -> str | None:
+    """The first of ``APP_PACKAGES`` that cannot be imported, found without importing it (Qt is
+    set up by ``prepare_qt`` first), or None."""
+    from importlib.util import find_spec
+
+    for name in APP_PACKAGES:
+        try:
+            if find_spec(name) is None:
+                return name
+        except (ImportError, ValueError):   # ValueError: a module without a spec in sys.modules
+            return name
+    return None
 
 
 def _reason(error: Exception) -> str:

@@ -50,10 +50,6 @@ class RunBuffer:
         return self._data[: self.n, T]
 
     @property
-    def contact_height(self) -> np.ndarray:
-        return self._data[: self.n, HEIGHT]
-
-    @property
     def energy_error(self) -> np.ndarray:
         return self._data[: self.n, ENERGY_ERROR]
 

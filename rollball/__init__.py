@@ -1,4 +1,9 @@
-"""RollBall: a solid ball rolling without slipping over a landscape z = f(x, y)."""
+"""RollBall: a solid ball rolling without slipping over a landscape z = f(x, y).
+
+The public names below are imported when first used (PEP 562), not with the package: ``import
+rollball.cli`` stays cheap, so ``rollball --help`` and a refused argument answer at once, and
+sympy, numba and scipy are loaded only by the commands that run something.
+"""
 
 __version__ = "0.2.0"
 
@@ -6,15 +11,21 @@ from .cache import guard_numba_cache  # noqa: E402
 
 guard_numba_cache()   # before numba is imported: its cache folder must be ours alone too
 
-from .formula import FormulaError, parse_formula  # noqa: E402
-from .landscape import Landscape  # noqa: E402
-from .scene import Scene, SceneError  # noqa: E402
-from .simulation import Simulation, simulate  # noqa: E402
-from .sweeps import SweepTable, sweep  # noqa: E402
-from .tableaus import METHODS, TABLEAUS, Method, MethodKind, Tableau, get_method  # noqa: E402
-from .trajectory import COLUMNS, Failure, Reason, Status, Trajectory, read_csv  # noqa: E402
-from .comparison import Comparison, RunSpec, compare, parse_runs  # noqa: E402
+from .lazy import lazy_names  # noqa: E402
 
-__all__ = ["COLUMNS", "Comparison", "Failure", "FormulaError", "Landscape", "METHODS", "Method", "MethodKind",
-           "Reason", "RunSpec", "Scene", "SceneError", "Simulation", "Status", "SweepTable", "TABLEAUS", "Tableau",
-           "Trajectory", "compare", "get_method", "parse_formula", "parse_runs", "read_csv", "simulate", "sweep"]
+# Each public name and the module (below this package) that defines it.
+_LAZY = {
+    "FormulaError": "formula", "parse_formula": "formula",
+    "Landscape": "landscape",
+    "Scene": "scene", "SceneError": "scene",
+    "Simulation": "simulation", "simulate": "simulation",
+    "SweepTable": "sweeps", "sweep": "sweeps",
+    "METHODS": "tableaus", "TABLEAUS": "tableaus", "Method": "tableaus", "MethodKind": "tableaus",
+    "Tableau": "tableaus", "get_method": "tableaus",
+    "COLUMNS": "trajectory", "Failure": "trajectory", "Reason": "trajectory", "Status": "trajectory",
+    "Trajectory": "trajectory", "read_csv": "trajectory",
+    "Comparison": "comparison", "RunSpec": "comparison", "compare": "comparison", "parse_runs": "comparison",
+}
+
+__all__ = sorted(_LAZY)
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)

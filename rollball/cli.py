@@ -15,14 +15,15 @@ import sys
 import warnings
 from pathlib import Path
 
+# Only what the parser needs, none of it numerical: the help and a refused argument answer at
+# once; each command imports the simulation, sympy, numba or scipy it runs on (a test holds this).
 from . import __version__
 from .examples import EXAMPLES_DIR, example_scenes, scene_path
 from .files import write_target
-from .scene import SceneError
-from .sweeps.grid import KEYS as SWEEP_KEYS
-from .sweeps.runner import CONNECT_TIMEOUT as SWEEP_CONNECT_TIMEOUT
-from .sweeps.runner import WORKER_TIMEOUT as SWEEP_WORKER_TIMEOUT
-from .tableaus import METHODS, MethodKind, get_method
+from .kinds import KINDS, MethodKind, method_name
+from .sweeps.options import CONNECT_TIMEOUT as SWEEP_CONNECT_TIMEOUT
+from .sweeps.options import KEYS as SWEEP_KEYS
+from .sweeps.options import WORKER_TIMEOUT as SWEEP_WORKER_TIMEOUT
 from .text import shown
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT, EXIT_BROKEN_PIPE = 0, 1, 2, 141
@@ -64,7 +65,7 @@ def _output_file(text: str) -> str:
 
 def _method(text: str) -> str:
     try:
-        return get_method(text).name
+        return method_name(text)
     except ValueError as e:
         raise argparse.ArgumentTypeError(str(e)) from None
 
@@ -83,8 +84,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run a scene file (JSON) and print a one-line summary: steps, status, "
                     "relative energy drift and the first lift-off time. Options override the scene.")
     sim.add_argument("scene", metavar="SCENE", help="scene file to run, or an example's name (rollball examples)")
-    adaptive = ", ".join(m.name for m in METHODS.values() if m.kind is MethodKind.ADAPTIVE)
-    sim.add_argument("--method", type=_method, metavar="{" + ",".join(METHODS) + "}",
+    adaptive = ", ".join(name for name, kind in KINDS.items() if kind is MethodKind.ADAPTIVE)
+    sim.add_argument("--method", type=_method, metavar="{" + ",".join(KINDS) + "}",
                      help=f"Runge-Kutta method; adaptive ones ({adaptive}) choose their steps to keep "
                           "to --rtol/--atol, always Munthe-Kaas")
     mk = sim.add_mutually_exclusive_group()
@@ -166,7 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _load_scene(name: str):
     """The scene of a file or an example's name, or (after a one-line message) exit status 2."""
-    from .scene import Scene
+    from .scene import Scene, SceneError
 
     try:
         return Scene.load(scene_path(name))
@@ -385,10 +386,6 @@ def _examples() -> int:
 
 
 def _bench(args) -> int:
-    try:
-        import scipy  # noqa: F401
-    except ImportError:
-        return _fail("the benchmark needs scipy: pip install 'rollball[bench]'")
     from . import bench
 
     log = lambda text: print(text, file=sys.stderr)  # noqa: E731

@@ -5,9 +5,12 @@ installed wheel). A scene can be named by its file or, for an example, by its na
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import resources
-from .scene import Scene
+
+if TYPE_CHECKING:   # the scene (sympy, numba) is loaded only to read one: naming a scene is instant
+    from .scene import Scene
 
 EXAMPLES_DIR: Path = resources.path("examples")
 DEFAULT_EXAMPLE = EXAMPLES_DIR / "hills.json"
@@ -20,6 +23,8 @@ def example_names() -> list[str]:
 
 def example_scenes() -> list[tuple[Path, Scene]]:
     """Every example scene, sorted by file name."""
+    from .scene import Scene
+
     return [(EXAMPLES_DIR / f"{name}.json", Scene.load(EXAMPLES_DIR / f"{name}.json"))
             for name in example_names()]
 

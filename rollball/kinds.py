@@ -16,6 +16,30 @@ class MethodKind(str, enum.Enum):
         return self.value
 
 
+# Every method's name and kind, in the order they are listed. The registry (``tableaus.METHODS``)
+# holds exactly these, checked when it is built; the command line reads the names here, without
+# building a tableau (numpy, exact order conditions), so that its help and its refusals are instant.
+KINDS: dict[str, MethodKind] = {
+    "euler": MethodKind.FIXED, "rk4": MethodKind.FIXED, "lawson5": MethodKind.FIXED,
+    "gauss4": MethodKind.IMPLICIT, "gauss6": MethodKind.IMPLICIT,
+    "dopri5": MethodKind.ADAPTIVE, "dop853": MethodKind.ADAPTIVE,
+}
+# Older names still read (scene files of version 1, the command line, the API).
+ALIASES: dict[str, str] = {"adaptive": "dopri5"}
+
+
+def method_name(name) -> str:
+    """The registry's name for ``name`` (one of ``KINDS`` or an alias); a ``ValueError`` listing
+    the valid names for anything else."""
+    try:
+        found = ALIASES.get(name, name)
+        if found in KINDS:
+            return found
+    except TypeError:   # unhashable
+        pass
+    raise ValueError(f"unknown method {name!r}; valid methods: {', '.join(KINDS)}")
+
+
 class MethodInfo:
     """The properties every registry entry derives from its ``kind`` (a base of each entry's
     class: ``Tableau``, ``implicit.Collocation``, ``dop853.DensePair``)."""

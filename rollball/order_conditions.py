@@ -83,8 +83,3 @@ def residuals(A, b, order: int, phi: ElementaryWeights | None = None, power: int
             weights, gamma = phi(tree), density(tree)
             total = sum(bi * weights[i] for i, bi in enumerate(b) if bi)
             yield tree, (total * gamma - target) / gamma
-
-
-def worst_residual(A, b, order: int) -> float:
-    """The largest |b . Phi(t) - 1/gamma(t)| over the trees with at most ``order`` nodes."""
-    return max(abs(float(r)) for _, r in residuals(A, b, order))

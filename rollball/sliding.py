@@ -1,5 +1,5 @@
 """Changing the contact's mode between kernel runs: the ball's state where a run stopped, and the
-kernel state a run in the next mode starts from (docs/design.md §11).
+kernel state a run in the next mode starts from (docs/design.md §1, "A run whose contact changes mode").
 
 A run of the kernel follows one mode: rolling (the 2011 model's state: contact point and angular
 momentum about it) or sliding (contact point, centre velocity, angular velocity and the energy

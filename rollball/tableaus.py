@@ -17,7 +17,7 @@ import numpy as np
 
 from .dop853 import DOP853, DensePair
 from .implicit import GAUSS4, GAUSS6, Collocation
-from .kinds import MethodInfo, MethodKind, cubic_hermite
+from .kinds import ALIASES, KINDS, MethodInfo, MethodKind, cubic_hermite, method_name  # noqa: F401 (ALIASES)
 
 
 def _fractions(values) -> tuple[Fraction, ...]:
@@ -223,19 +223,14 @@ Method = Tableau | Collocation | DensePair
 # Every method by the name scene files, the command line and the app use, in the order
 # they are listed.
 METHODS: dict[str, Method] = {t.name: t for t in (EULER, RK4, LAWSON5, GAUSS4, GAUSS6, DOPRI5, DOP853)}
+if [(name, m.kind) for name, m in METHODS.items()] != list(KINDS.items()):
+    raise RuntimeError("kinds.KINDS must list the methods of METHODS, in its order and with their kinds")
 # The explicit fixed-step ones (each also runs classic or Munthe-Kaas).
 TABLEAUS: dict[str, Tableau] = {name: t for name, t in METHODS.items() if t.classic_allowed}
-# Older names still read (scene files of version 1, the command line, the API).
-ALIASES: dict[str, str] = {"adaptive": "dopri5"}
 
 
 def get_method(name) -> Method:
     """The method of a name in ``METHODS`` or ``ALIASES`` (a method itself is passed through)."""
     if isinstance(name, MethodInfo):
         return name
-    try:
-        return METHODS[ALIASES.get(name, name)]
-    except (KeyError, TypeError):
-        valid = ", ".join(METHODS)
-        raise ValueError(f"unknown method {name!r}; valid methods: {valid}") from None
-
+    return METHODS[method_name(name)]

@@ -136,10 +136,16 @@ def test_an_empty_file_name_is_refused():
         write_target("")
 
 
-# A child that starts replacing a file, says so, then writes slowly until a signal arrives.
+# A child that starts replacing a file, says so, then writes slowly until a signal arrives. It
+# sets the dispositions the test relies on itself: started under nohup or trap '' INT HUP, it
+# would inherit SIGHUP and SIGINT ignored (and Python installs no KeyboardInterrupt then).
 SLOW_WRITER = textwrap.dedent("""
-    import sys, time
+    import signal, sys, time
     from rollball.files import atomic_write
+
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def write(stream):
         stream.write("new " * 1000)

@@ -1,4 +1,4 @@
-"""Huge friction coefficients act as "always enough friction" (closed forms, docs/design.md §11):
+"""Huge friction coefficients act as "always enough friction" (closed forms, docs/design.md §1, "Huge friction"):
 a ball that rolls stays rolling (on an incline, a = (5/7) g sin θ), one sliding from its start grips
 at once (t* = 2 v₀/(7 μ g) → 0) with 5/7 of its speed and 2/7 of its kinetic energy dissipated.
 μ = 1e308 made μ F·N overflow to inf (a slip at 5.7e-17 s, then "the initial state overflows"),

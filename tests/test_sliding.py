@@ -1,4 +1,4 @@
-"""A ball that slips with Coulomb friction, against exact answers (docs/design.md §8, DESIGN §11):
+"""A ball that slips with Coulomb friction, against exact answers (docs/design.md §1, "Sliding", and §8):
 each for a fixed-step method, an adaptive pair and a Gauss method, at two step sizes (the pairs:
 two tolerances). ``python tests/test_sliding.py`` prints the errors measured."""
 

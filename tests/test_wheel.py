@@ -1,6 +1,6 @@
 """The installed package carries its data: a wheel built from the sources holds the example
 scenes, the app's icon and help pages (the top-level resources/ folder, installed as
-rollball.resources) and the benchmark's C source, installs the app (the top-level app/ folder)
+rollball.resources), the benchmark's C source and the licence, installs the app (the top-level app/ folder)
 as rollball_app and no top-level app, and lists the examples from any folder."""
 
 import shutil
@@ -19,7 +19,7 @@ ROOT = __import__("pathlib").Path(__file__).resolve().parent.parent
 def wheel(tmp_path_factory):
     pytest.importorskip("setuptools", minversion="77")
     source = tmp_path_factory.mktemp("source")
-    for name in ("pyproject.toml", "README.md"):
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
         shutil.copy(ROOT / name, source)
     for package in ("rollball", "app", "resources"):
         shutil.copytree(ROOT / package, source / package,
@@ -43,6 +43,7 @@ def test_wheel_holds_examples_icon_help_c_source_and_the_kernels_code(wheel):
             "rollball/kernel/interface.py", "rollball/kernel/loops.py",
             "rollball/kernel.json", "rollball_app/__init__.py", "rollball_app/__main__.py",
             "rollball_app/window.py"} <= names
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
     entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
     text = zipfile.ZipFile(wheel).read(entry_points).decode()
     assert "rollball = rollball.cli:main" in text and "rollball-app = rollball_app:main" in text

@@ -106,9 +106,8 @@ def new_formula_latency(count: int) -> tuple[float, float]:
 _COLD = """
 import time
 start = time.perf_counter()
-import rollball
+from rollball import Scene, simulate   # the package loads the simulation's modules when they are used
 imported = time.perf_counter()
-from rollball import Scene, simulate
 simulate(Scene.load({hills!r}), t_end=0.01)
 simulated = time.perf_counter()
 simulate(Scene(landscape="0.3*cos(x)*sin(2*y) + 0.01*x^3"), t_end=0.01)
@@ -147,7 +146,7 @@ def _python(code: str, env: dict | None = None) -> tuple[list[float], float]:
 def cold_start(quick: bool = False) -> dict:
     """A fresh process: with empty numba and landscape caches, then again with them filled;
     every method compiled in one process, and (not ``quick``, a minute or more) the same where
-    the shipped kernel code does not fit and numba compiles kernel.py."""
+    the shipped kernel code does not fit and numba compiles the kernel's sources (rollball/kernel/)."""
     with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
         env = {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours}
         code = _COLD.format(hills=str(HILLS))
@@ -164,7 +163,7 @@ def all_methods_cold(source: str = "shipped") -> float:
     """CPU seconds to compile every method (and the sweeps' batch loop), ``warm_up``, in one fresh
     process with empty numba and landscape caches: what ``scripts/setup`` waits for once. The
     kernel from ``source``: "shipped" (its LLVM code made into machine code) or "numba"
-    (compiled from kernel.py, as where the shipped code does not fit: machine_code.py)."""
+    (compiled from rollball/kernel/, as where the shipped code does not fit: machine_code.py)."""
     with tempfile.TemporaryDirectory() as numba_cache, tempfile.TemporaryDirectory() as ours:
         (seconds,), _ = _python(_WARM_UP, {"NUMBA_CACHE_DIR": numba_cache, "ROLLBALL_CACHE_DIR": ours,
                                            "ROLLBALL_MACHINE_CODE": source})
@@ -214,7 +213,3 @@ def measure(quick: bool) -> dict:
         "memory": peak_memory(10_000_000),
         "app": app_responsiveness(),
     }
-
-
-def to_json(results: dict) -> str:
-    return json.dumps(results, indent=2)

@@ -9,20 +9,7 @@ import numpy as np
 
 from ..formula import parameter_problem
 from ..scene import Parameter, Scene
-
-# The scene keys a sweep may vary (dotted, as in scene files), with their units.
-KEYS: dict[str, str] = {
-    "start.x": "m",
-    "start.y": "m",
-    "start.vx": "m/s",
-    "start.vy": "m/s",
-    "start.spin": "rad/s",
-    "ball.radius": "m",
-    "ball.mass": "kg",
-    "gravity": "m/s²",
-    "integrator.dt": "s",
-    "duration": "s",
-}
+from .options import KEYS
 
 MAX_RUNS = 10_000_000  # a larger grid is refused (its outcomes alone would fill gigabytes)
 

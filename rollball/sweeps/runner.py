@@ -23,14 +23,13 @@ from ..scene import Scene
 from ..simulation import MAX_STEPS, step_count
 from . import batch
 from .grid import Grid, check_keys
+from .options import CONNECT_TIMEOUT, WORKER_TIMEOUT
 from .outcomes import NOT_RUN, OUTCOMES
 from .table import SweepTable
 
 # Landscape evaluations per batch: about 0.2 s on a 2020s core for a small formula.
 BATCH_EVALUATIONS = 3_000_000
 BATCHES_PER_WORKER = 4
-CONNECT_TIMEOUT = 10.0   # seconds to reach a Dask scheduler and hear it answer
-WORKER_TIMEOUT = 60.0    # seconds to wait for a first worker (and for one to come back)
 POLL = 0.2               # seconds between looks at the cancel event while waiting on a cluster
 SCHEMES = ("tcp",)       # the Dask transports a sweep connects by (inproc too, in-process)
 

@@ -1,0 +1,20 @@
+"""What the command line's help says of a sweep: the scene keys it varies and how long it waits
+for a cluster. Plain values, in a module that imports nothing, so ``rollball sweep --help``
+answers without loading the simulation."""
+
+# The scene keys a sweep may vary (dotted, as in scene files), with their units.
+KEYS: dict[str, str] = {
+    "start.x": "m",
+    "start.y": "m",
+    "start.vx": "m/s",
+    "start.vy": "m/s",
+    "start.spin": "rad/s",
+    "ball.radius": "m",
+    "ball.mass": "kg",
+    "gravity": "m/s²",
+    "integrator.dt": "s",
+    "duration": "s",
+}
+
+CONNECT_TIMEOUT = 10.0   # seconds to reach a Dask scheduler and hear it answer
+WORKER_TIMEOUT = 60.0    # seconds to wait for a first worker (and for one to come back)

@@ -1,0 +1,104 @@
+"""The front door answers at once: ``rollball --help``, a command's help and a refused argument
+load none of the numerical modules (sympy, numba, scipy, ...) that a run needs, and neither does
+``rollball-app`` refusing its arguments, which also loads no Qt. CPU time is measured (not wall
+time, which a busy machine stretches); the bounds are many times what they take."""
+
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+HEAVY = {"numpy", "sympy", "numba", "llvmlite", "scipy", "matplotlib", "tqdm"}
+QT = {"PySide6", "pyqtgraph", "OpenGL"}
+CPU_BOUND = 1.0   # seconds; about 0.06 s on a 2020s core (a run's imports take 1 to 4 s)
+
+
+def _run(args: list[str], **kwargs) -> tuple[subprocess.CompletedProcess, float]:
+    """The finished process and the CPU time (user + system) it used."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    result = subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=120, cwd=ROOT,
+                            **kwargs)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return result, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def _imported(args: list[str]) -> tuple[set[str], list[str]]:
+    """The top-level modules ``python -X importtime ARGS`` imports, and the other lines of its stderr."""
+    result, _ = _run(["-X", "importtime", *args])
+    modules, lines = set(), []
+    for line in result.stderr.splitlines():
+        if line.startswith("import time:"):
+            modules.add(line.rpartition("|")[2].strip().split(".")[0])
+        else:
+            lines.append(line)
+    return modules, lines
+
+
+def test_the_command_line_module_loads_nothing_numerical():
+    modules, _ = _imported(["-c", "import rollball.cli"])
+    assert "rollball" in modules and modules & (HEAVY | QT) == set()
+
+
+@pytest.mark.parametrize("args, code", [
+    (["--help"], 0),
+    (["simulate", "--help"], 0),
+    (["sweep", "--help"], 0),
+    (["simulate", "hills", "--dt", "-1"], 2),
+    (["simulate", "hills", "--method", "rk45"], 2),
+    (["simulate"], 2),
+    (["no-such-command"], 2),
+])
+def test_help_and_refused_arguments_answer_at_once(args, code):
+    result, cpu = _run(["-m", "rollball", *args])
+    assert result.returncode == code, result.stderr
+    if code:
+        assert len(result.stderr.splitlines()) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert cpu < CPU_BOUND
+    modules, _ = _imported(["-m", "rollball", *args])
+    assert modules & (HEAVY | QT) == set()
+
+
+@pytest.mark.parametrize("args", [
+    ["--bad"],
+    ["hills", "--run-to", "1"],
+    ["--record", "out.avi"],
+    ["--record", "out.mp4", "--fps", "500"],
+    ["--screenshot", "out.png", "--size", "10x10"],
+    ["--fps", "10"],
+])
+def test_the_app_refuses_bad_arguments_in_a_line_before_loading_qt_or_the_core(args):
+    result, cpu = _run(["-m", "rollball_app", *args])
+    assert result.returncode == 2 and result.stdout == ""
+    assert len(result.stderr.splitlines()) == 1 and result.stderr.startswith("rollball-app: error: "), result.stderr
+    assert cpu < CPU_BOUND
+    modules, lines = _imported(["-m", "rollball_app", *args])
+    assert modules & (HEAVY | QT) == set() and lines == result.stderr.splitlines()
+
+
+# Runs the app as ``rollball-app ARGS`` where the module PACKAGE cannot be imported.
+WITHOUT = """
+import runpy, sys
+
+BLOCKED = sys.argv[1]
+
+
+class Missing:
+    def find_spec(self, name, path=None, target=None):
+        if name.partition(".")[0] == BLOCKED:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
+sys.meta_path.insert(0, Missing())
+sys.argv = ["rollball-app", *sys.argv[2:]]
+runpy.run_module("rollball_app", run_name="__main__", alter_sys=True)
+"""
+
+
+@pytest.mark.parametrize("package", ["PySide6", "pyqtgraph"])
+def test_the_app_without_its_packages_says_what_to_install(package, tmp_path):
+    result, _ = _run(["-c", WITHOUT, package, "hills", "--screenshot", str(tmp_path / "out.png")])
+    assert result.returncode == 2 and not (tmp_path / "out.png").exists()
+    assert result.stderr.splitlines() == [
+        f"rollball-app: error: the app needs {package}, which is not installed: pip install 'rollball[app]'"]
