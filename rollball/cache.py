@@ -267,6 +267,29 @@ def write(path: str | os.PathLike, data: bytes) -> str | None:
     return None
 
 
+def unwritable(path: str | os.PathLike) -> str | None:
+    """Why ``write`` could not keep a file at ``path``, known before anything is made, or None:
+    a read-only folder, or a read-only file of ours where it would replace one (the mode bits
+    decide, as for every file RollBall writes: root too respects them; rollball.files)."""
+    if _IN_MEMORY:
+        return None
+    folder = os.path.dirname(os.fspath(path)) or "."
+    try:
+        mode = os.stat(folder).st_mode
+        if not mode & 0o222 or not os.access(folder, os.W_OK | os.X_OK):
+            return "its folder is read-only"
+        try:
+            info = os.lstat(path)
+        except FileNotFoundError:
+            return None
+    except OSError as error:
+        return error.strerror or str(error)
+    replaced = stat.S_ISREG(info.st_mode) and not (_POSIX and info.st_uid != os.geteuid())
+    if replaced and (not info.st_mode & 0o222 or not os.access(path, os.W_OK)):
+        return "a read-only file"
+    return None
+
+
 # -- the private folder ------------------------------------------------------------------
 
 def _private_folder() -> Path:
