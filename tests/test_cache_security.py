@@ -350,3 +350,18 @@ def test_numbas_cache_folder_inside_a_group_writable_one_is_not_used(tmp_path):
     assert result.stdout.strip() == str(tmp_path / "ours" / "numba")
     (line,) = warnings_in(result.stderr)
     assert "which its group can write to" in line
+
+
+def test_where_no_folder_may_be_trusted_nothing_is_kept_on_disk(tmp_path):
+    # the cache folder inside a group-writable one, and so is the temporary folder: the code is
+    # compiled in memory, and nothing is read from or written to either
+    above = parent(tmp_path, 0o775)
+    temporary = tmp_path / "temporary"
+    temporary.mkdir(mode=0o777)
+    temporary.chmod(0o777)
+    out, err, _ = run(above / "cache", tmp_path, TMPDIR=str(temporary))
+    assert out["value"] == pytest.approx(0.7) and out["status"] == "ok"
+    (line,) = warnings_in(err)
+    assert f"the cache folder {above / 'cache'} is not used (inside {above}, which its group can write to)" in line
+    assert "which anyone can write to" in line and line.endswith("compiled code is kept in memory only")
+    assert list((above / "cache").iterdir()) == [] and os.listdir(temporary) == []
