@@ -14,6 +14,7 @@ again with the new names (a formula still using a removed name is refused, its t
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 from PySide6 import QtCore, QtWidgets
@@ -55,26 +56,39 @@ def valued(scene: Scene) -> Valued:
 
 
 def slider_range(value: float, low: float | None, high: float | None) -> tuple[float, float]:
-    """The range a slider offers: the parameter's own, or ``value ± max(1, |value|)``."""
+    """The range a slider offers: the parameter's own, or ``value ± max(1, |value|)`` (within
+    the finite floats: the range of a value near the largest float ends there)."""
     if low is not None and high is not None:
         return low, high
     half = max(1.0, abs(value))
-    return value - half, value + half
+    return max(value - half, -sys.float_info.max), min(value + half, sys.float_info.max)
 
 
 def slider_value(position: int, low: float, high: float) -> float:
     """The value at a slider position, rounded to the slider's resolution (a thousandth of the
-    range, to one more digit): what a drag gives reads as a plain number."""
-    step = (high - low) / SLIDER_STEPS
-    value = low + position * step
-    digits = max(0, 1 - math.floor(math.log10(step))) if step > 0 else 6
-    return float(round(value, digits))
+    range, to one more digit): what a drag gives reads as a plain number. Finite for any finite
+    range, even one whose width is not a finite float (the ends are weighed, not subtracted)."""
+    t = min(max(position / SLIDER_STEPS, 0.0), 1.0)
+    value = low * (1.0 - t) + high * t if t < 1.0 else high
+    step = high / SLIDER_STEPS - low / SLIDER_STEPS
+    if not (step > 0 and math.isfinite(step) and math.isfinite(value)):
+        return float(value) if math.isfinite(value) else float(low)
+    digits = 1 - math.floor(math.log10(step))
+    try:
+        rounded = round(value, max(0, digits))
+    except OverflowError:   # (rounding at the largest floats may leave them)
+        return float(value)
+    return float(rounded) if math.isfinite(rounded) else float(value)
 
 
 def slider_position(value: float, low: float, high: float) -> int:
-    if not high > low:
+    if not high > low or math.isnan(value) or value <= low:
         return 0
-    return int(round(min(max((value - low) / (high - low), 0.0), 1.0) * SLIDER_STEPS))
+    if value >= high:
+        return SLIDER_STEPS
+    width = high / 2 - low / 2     # halves: finite even where high - low is not
+    share = (value / 2 - low / 2) / width if width > 0 else 0.5
+    return int(round(min(max(share, 0.0), 1.0) * SLIDER_STEPS))
 
 
 def format_number(value: float) -> str:

@@ -5,11 +5,14 @@ What is kept there is code that runs inside RollBall, so the folder and every fi
 are checked (docs/design.md §8):
 
 - The folder ($ROLLBALL_CACHE_DIR, else $XDG_CACHE_HOME/rollball, else ~/.cache/rollball; made
-  with mode 0700 when missing) is used only when, with symbolic links resolved, it is a folder
-  owned by this user that neither its group nor others may write, inside folders that others
-  may not write either (unless sticky, as /tmp). Otherwise one warning line on stderr, and a
-  private folder (``tempfile.mkdtemp``, mode 0700) for this process only, removed when it ends
-  (at exit, and on SIGTERM where no other handler is installed).
+  with mode 0700 when missing) is used only when it is a folder owned by this user that neither
+  its group nor others may write, and every folder on the way to it from the root (symbolic
+  links followed one at a time, each of them this user's or root's) is this user's or root's
+  and writable by no one else, unless sticky, as /tmp (``trusted``). Otherwise one warning line
+  on stderr naming the folder and why, and a private folder (``tempfile.mkdtemp``, mode 0700)
+  for this process only, removed when it ends (at exit, and on SIGTERM where no other handler
+  is installed); where even that one fails the same check, nothing is kept on disk: code is
+  compiled in memory.
 - A file is read only when, opened without following a link and without blocking, it is a
   regular file owned by this user and at most ``limit`` bytes long (``read``). Anything else
   is ignored with one warning line (and rebuilt by the caller); ``write`` replaces it.
@@ -32,6 +35,7 @@ from .files import atomic_write_bytes
 from .text import shown
 
 _CACHE_DIR: Path | None = None
+_IN_MEMORY = False   # no folder may be trusted: nothing is read from or written to disk
 _LOCK = threading.Lock()
 # Ownership and mode bits say who may write only on POSIX systems (Windows has ACLs instead, and
 # no geteuid): there the checks below that need them are skipped.
@@ -47,51 +51,126 @@ def configured() -> str:
 def cache_dir() -> Path:
     """The cache folder this process uses: the configured one where it is safe (see above), else
     a private folder removed when the process ends. Decided once per process."""
-    global _CACHE_DIR
+    global _CACHE_DIR, _IN_MEMORY
     if _CACHE_DIR is None:
         with _LOCK:
             if _CACHE_DIR is None:
                 base = configured()
-                reason = unsafe(base)
+                real, reason = trusted(base)
                 if reason is None:
-                    _CACHE_DIR = Path(os.path.realpath(base))
+                    _CACHE_DIR = Path(real)
                 else:
                     _CACHE_DIR = _private_folder()
-                    warn(f"the cache folder {shown(base)} is not used ({reason}); compiled code is kept "
-                         f"in {shown(str(_CACHE_DIR))} until this process ends")
+                    private, problem = trusted(_CACHE_DIR, make=False)
+                    if problem is None:
+                        _CACHE_DIR = Path(private)
+                        warn(f"the cache folder {shown(base)} is not used ({reason}); compiled code is kept "
+                             f"in {shown(str(_CACHE_DIR))} until this process ends")
+                    else:
+                        _IN_MEMORY = True
+                        warn(f"the cache folder {shown(base)} is not used ({reason}), nor a temporary one "
+                             f"({shown(str(_CACHE_DIR))}: {problem}); compiled code is kept in memory only")
     return _CACHE_DIR
 
 
 def unsafe(folder: str | os.PathLike, make: bool = True) -> str | None:
     """Why ``folder`` must not hold code RollBall runs, or None when it may (made, mode 0700,
-    when missing and ``make``)."""
-    try:
-        if make:
-            os.makedirs(folder, mode=0o700, exist_ok=True)
-        real = os.path.realpath(folder)
-        info = os.lstat(real)
-    except OSError as error:
-        return error.strerror or str(error)
-    if not stat.S_ISDIR(info.st_mode):
-        return "not a folder"
+    when missing and ``make``). See ``trusted``."""
+    return trusted(folder, make)[1]
+
+
+def trusted(folder: str | os.PathLike, make: bool = True) -> tuple[str | None, str | None]:
+    """(the real path of ``folder``, None) when it may hold code RollBall runs, else (None, why).
+
+    Every folder from the root to it must be owned by this user or root and writable by no one
+    else (its group and others may not write to it), except a sticky folder such as /tmp, where
+    others cannot rename or remove what is not theirs (as ssh's StrictModes); the folder itself
+    must be this user's, writable by no one else. The path is followed one name at a time, with
+    ``os.lstat``: a symbolic link on the way must be this user's or root's (only they may then
+    replace it), and the folders it leads to are checked in turn. Otherwise whoever may write to
+    one of them could put a folder of theirs (or a link to one) in its place after the check.
+    Missing folders are made (mode 0700) when ``make``, each inside one already checked."""
+    path = os.fsdecode(os.fspath(folder))
     if not _POSIX:
-        return None if os.access(real, os.W_OK) else "cannot be written"
-    if info.st_uid != os.geteuid():
-        return "owned by another user"
-    if info.st_mode & 0o022:
-        return (f"mode {stat.S_IMODE(info.st_mode):04o}: its group or others can write to it; "
-                f"'chmod go-w' makes it usable")
-    above = real
-    while os.path.dirname(above) != above:
-        above = os.path.dirname(above)
         try:
-            mode = os.stat(above).st_mode
+            if make:
+                os.makedirs(path, mode=0o700, exist_ok=True)
+            real = os.path.realpath(path)
+            if not os.path.isdir(real):
+                return None, "not a folder"
         except OSError as error:
-            return error.strerror or str(error)
-        if mode & 0o002 and not mode & stat.S_ISVTX:
-            return f"inside {shown(above)}, which anyone can write to"
-    if not os.access(real, os.W_OK | os.X_OK):
-        return "cannot be written"
+            return None, error.strerror or str(error)
+        return (real, None) if os.access(real, os.W_OK) else (None, "cannot be written")
+    if not path:
+        return None, "no folder named"
+    try:
+        if not os.path.isabs(path):
+            path = os.path.join(os.getcwd(), path)
+        me = os.geteuid()
+        pending = [name for name in path.split(os.sep) if name not in ("", ".")]
+        current, links = os.sep, 0
+        problem = _shared(current, os.lstat(current), me)
+        if problem:
+            return None, problem
+        while pending:
+            name = pending.pop(0)
+            if name == "..":
+                current = os.path.dirname(current)   # a folder already checked
+                continue
+            candidate = os.path.join(current, name)
+            try:
+                info = os.lstat(candidate)
+            except FileNotFoundError:
+                if not make:
+                    raise
+                try:
+                    os.mkdir(candidate, 0o700)
+                except FileExistsError:
+                    pass
+                info = os.lstat(candidate)
+            if stat.S_ISLNK(info.st_mode):
+                links += 1
+                if links > 40:
+                    return None, f"{shown(candidate)}: too many symbolic links"
+                if info.st_uid not in (me, 0):
+                    return None, f"{shown(candidate)} is a symbolic link owned by another user"
+                target = os.readlink(candidate)
+                if os.path.isabs(target):
+                    current = os.sep
+                pending[:0] = [part for part in target.split(os.sep) if part not in ("", ".")]
+                continue
+            if not stat.S_ISDIR(info.st_mode):
+                return None, ("not a folder" if not pending else f"{shown(candidate)} is not a folder")
+            if pending:
+                problem = _shared(candidate, info, me)
+                if problem:
+                    return None, problem
+            current = candidate
+        info = os.lstat(current)
+    except OSError as error:
+        return None, error.strerror or str(error)
+    if info.st_uid != me:
+        return None, "owned by another user"
+    if info.st_mode & 0o022:
+        return None, (f"mode {stat.S_IMODE(info.st_mode):04o}: its group or others can write to it; "
+                      f"'chmod go-w' makes it usable")
+    if not os.access(current, os.W_OK | os.X_OK):
+        return None, "cannot be written"
+    return current, None
+
+
+def _shared(path: str, info: os.stat_result, me: int) -> str | None:
+    """Why someone else could replace what is inside the folder ``path`` (``info``: its
+    lstat), or None: it is this user's or root's, and neither its group nor others may write
+    to it unless it is sticky."""
+    if info.st_uid not in (me, 0):
+        return f"inside {shown(path)}, which another user owns"
+    if info.st_mode & stat.S_ISVTX:
+        return None
+    if info.st_mode & 0o002:
+        return f"inside {shown(path)}, which anyone can write to"
+    if info.st_mode & 0o020:
+        return f"inside {shown(path)}, which its group can write to"
     return None
 
 
@@ -125,7 +204,10 @@ def warn(message: str) -> None:
 def read(path: str | os.PathLike, limit: int, what: str) -> bytes | None:
     """The bytes of the cached file ``path``, or None when it is missing or must not be trusted:
     not a regular file (a FIFO, a device, a folder, a symbolic link), owned by someone else, or
-    longer than ``limit`` bytes (``what`` names it in the one-line warning)."""
+    longer than ``limit`` bytes (``what`` names it in the one-line warning). None too when no
+    folder may be trusted (``cache_dir``)."""
+    if _IN_MEMORY:
+        return None
     flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
         fd = os.open(path, flags)
@@ -166,7 +248,10 @@ def write(path: str | os.PathLike, data: bytes) -> str | None:
     """Keep ``data`` at ``path`` for later processes, replacing whatever is there (a file that
     ``read`` refused included). None when written, else why not (that costs only time).
     Not forced to disk (no fsync, 5-20 ms on a busy disk): every entry begins with the SHA-256
-    of the rest, checked by its reader, so one torn by a crash is rebuilt, never used."""
+    of the rest, checked by its reader, so one torn by a crash is rebuilt, never used.
+    Nothing is written when no folder may be trusted (``cache_dir``)."""
+    if _IN_MEMORY:
+        return None
     try:
         info = os.lstat(path)
         if not stat.S_ISREG(info.st_mode) or _POSIX and info.st_uid != os.geteuid():
@@ -179,6 +264,29 @@ def write(path: str | os.PathLike, data: bytes) -> str | None:
         atomic_write_bytes(path, data, durable=False)
     except OSError as error:
         return error.strerror or str(error)
+    return None
+
+
+def unwritable(path: str | os.PathLike) -> str | None:
+    """Why ``write`` could not keep a file at ``path``, known before anything is made, or None:
+    a read-only folder, or a read-only file of ours where it would replace one (the mode bits
+    decide, as for every file RollBall writes: root too respects them; rollball.files)."""
+    if _IN_MEMORY:
+        return None
+    folder = os.path.dirname(os.fspath(path)) or "."
+    try:
+        mode = os.stat(folder).st_mode
+        if not mode & 0o222 or not os.access(folder, os.W_OK | os.X_OK):
+            return "its folder is read-only"
+        try:
+            info = os.lstat(path)
+        except FileNotFoundError:
+            return None
+    except OSError as error:
+        return error.strerror or str(error)
+    replaced = stat.S_ISREG(info.st_mode) and not (_POSIX and info.st_uid != os.geteuid())
+    if replaced and (not info.st_mode & 0o222 or not os.access(path, os.W_OK)):
+        return "a read-only file"
     return None
 
 

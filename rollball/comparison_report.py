@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 from pathlib import Path
 
 import warnings
@@ -163,17 +164,36 @@ def _measured(runs: list[RunResult], key: str, floor: float, x) -> tuple[list, l
     return [x(r) for r in above], [r.error[key] for r in above], [x(r) for r in below], [floor] * len(below)
 
 
+def spread_limits(ax, xs, ys) -> None:
+    """Limits for a log-log panel whose points (``xs``, ``ys``: every one drawn) share one x or
+    one y, or have none (a run too short to tell its settings apart, or an error at its floor
+    everywhere): a decade either side, where matplotlib would widen them itself with a warning
+    ("identical low and high xlims"). Other panels keep matplotlib's own limits."""
+    for values, autoscale, limit in ((xs, ax.set_autoscalex_on, ax.set_xlim), (ys, ax.set_autoscaley_on, ax.set_ylim)):
+        drawn = [v for v in values if v is not None and 0 < v < math.inf]
+        if not drawn:
+            continue
+        low, high = min(drawn), max(drawn)
+        if high <= low * (1 + 1e-9):
+            autoscale(False)   # (first: setting a limit reads the other, autoscaled, which warns)
+            limit(low / 10, high * 10)
+
+
 def draw_work_precision(ax, cmp: Comparison, colors: dict) -> None:
     """Contact-point error against compute time, a line per run spec, the floor dashed; runs
     below the floor as open triangles on it."""
     floor = cmp.reference.floor("contact")
+    xs, ys = [], [floor]
     for spec in cmp.specs:
         runs = [r for r in cmp.runs if r.spec == spec and r.ok]
         x, y, xb, yb = _measured(runs, "contact", floor, lambda r: r.seconds)
+        xs += x + xb
+        ys += y + yb
         line = style(spec, colors)
         ax.loglog(x, y, label=spec.label, markersize=4, **line)
         if xb:
             ax.loglog(xb, yb, linestyle="none", marker="v", markersize=5, markerfacecolor="none", color=line["color"])
+    spread_limits(ax, xs, ys)
     ax.axhline(floor, color="0.6", linewidth=0.8, linestyle="--")
     ax.set(xlabel="compute time (s)", ylabel="contact-point error, max over the run (m)")
     ax.grid(True, which="major", alpha=0.3)
@@ -182,14 +202,18 @@ def draw_work_precision(ax, cmp: Comparison, colors: dict) -> None:
 def draw_orders(ax, cmp: Comparison, colors: dict) -> None:
     """Orientation error against step size for the fixed-step specs, with the fitted slopes."""
     floor = cmp.reference.floor("orientation")
+    xs, ys = [], [floor]
     for spec in (s for s in cmp.specs if s.fixed_step):
         runs = [r for r in cmp.runs if r.spec == spec and r.ok]
         x, y, xb, yb = _measured(runs, "orientation", floor, lambda r: r.dt)
+        xs += x + xb
+        ys += y + yb
         line = style(spec, colors)
         ax.loglog(x, y, markersize=4, **line)
         if xb:
             ax.loglog(xb, yb, linestyle="none", marker="v", markersize=5, markerfacecolor="none", color=line["color"])
         _slope_label(ax, cmp, spec, [r for r in runs if r.error["orientation"] >= floor], line["color"])
+    spread_limits(ax, xs, ys)
     ax.set_ylim(top=10.0)  # a classic R far off SO(3) would squash the rest (‖R − R_ref‖_F ≤ 2√2 on it)
     ax.axhline(floor, color="0.6", linewidth=0.8, linestyle="--")
     ax.set(xlabel="step size dt (s)", ylabel="orientation error ‖R − R_ref‖_F, max over the run")

@@ -36,6 +36,7 @@ from . import kernel
 from . import cache
 from .cache import cache_dir
 from .kernel import interface
+from .text import shown
 
 SHIPPED, STAMP = "kernel.bc", "kernel.json"
 FORMAT = "rollball-machine-code"
@@ -298,13 +299,23 @@ def _machine_code(what: str, make) -> dict[str, int]:
                                         llvm.get_host_cpu_features().flatten(),
                                         ".".join(map(str, llvm.llvm_version_info))]).encode()).hexdigest()[:32]
         path = _object_path(key)
-        kept = _unpack(_read(path))
+        data = cache.read(path, OBJECT_LIMIT, "machine code of the kernel")
+        kept = _unpack(_checked(data))
         if kept is None:
-            for listener in list(listeners):
-                listener()
+            blocked = cache.unwritable(path)
+            if blocked is None:   # made now and kept: the first run only
+                for listener in list(listeners):
+                    listener()
+            elif data is not None:
+                cache.warn(f"the cached machine code of the kernel {shown(str(path))} is corrupt and cannot be "
+                           f"replaced ({blocked}); it is made again in memory, for this process only")
+            else:
+                cache.warn(f"the machine code of the kernel cannot be kept as {shown(str(path))} ({blocked}); "
+                           f"it is made in memory, for this process only")
             bitcode, symbols, needed = make()
             code = machine.emit_object(llvm.parse_bitcode(bitcode))
-            _write(path, _pack(symbols, needed, code))
+            if blocked is None:
+                _write(path, _pack(symbols, needed, code))
         else:
             symbols, needed, code = kept
         missing = [name for name in needed if not llvm.address_of_symbol(name)]
@@ -351,7 +362,11 @@ def _read(path) -> bytes | None:
     """Machine code kept by an earlier process, if it is there whole (its SHA-256 first) and
     sound: a regular file of ours of plausible size (cache.read; else one warning, and it is
     made again)."""
-    data = cache.read(path, OBJECT_LIMIT, "machine code of the kernel")
+    return _checked(cache.read(path, OBJECT_LIMIT, "machine code of the kernel"))
+
+
+def _checked(data: bytes | None) -> bytes | None:
+    """The machine code in a cached file's bytes, or None unless it is whole (its SHA-256 first)."""
     if data is None:
         return None
     digest, code = data[:32], data[32:]

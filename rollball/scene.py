@@ -336,7 +336,8 @@ def _number(key: str, value) -> float:
 
 def _parameters(given) -> tuple[Parameter, ...]:
     """``parameters`` as a file holds it (name -> number or {"value", "min", "max"}) or as
-    ``Parameter``s, checked: names as formula.check_parameter_names, finite numbers, min < max."""
+    ``Parameter``s, checked: names as formula.check_parameter_names, finite numbers, min < max
+    with max − min finite."""
     objects = set()   # names given as {"value", ...}: their value's key is NAME.value
     if isinstance(given, dict):
         items = []
@@ -358,6 +359,9 @@ def _parameters(given) -> tuple[Parameter, ...]:
         items = list(given)
     else:
         raise SceneError("parameters", f"must be an object (name: number), not {_kind(given)}")
+    for p in items:
+        if isinstance(p.name, str):
+            _encodable(f"parameters.{p.name}", p.name)
     try:
         check_parameter_names([p.name for p in items])
     except FormulaError as e:
@@ -372,8 +376,21 @@ def _parameters(given) -> tuple[Parameter, ...]:
             low, high = _number(f"{key}.min", p.min), _number(f"{key}.max", p.max)
             if not low < high:
                 raise SceneError(f"{key}.min", f"must be less than max (got {low!r} and {high!r})")
+            if not math.isfinite(high - low):   # a slider's steps are a thousandth of the width
+                raise SceneError(f"{key}.max", f"the range is too wide: max − min overflows (got {low!r} "
+                                               f"and {high!r})")
         checked.append(Parameter(p.name, value, low, high))
     return tuple(checked)
+
+
+def _encodable(key: str, text: str) -> None:
+    """Refuse text that UTF-8 cannot hold: a lone surrogate (JSON's "\\ud800" reads as one),
+    which a scene could not be saved with."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as e:
+        raise SceneError(key, f"holds a lone surrogate ({text[e.start]!r} at character {e.start + 1}), "
+                              "which no UTF-8 text can hold") from None
 
 
 def _kind(value) -> str:
@@ -444,6 +461,8 @@ def _check(obj, prefix: str) -> None:
             raise SceneError(key, f"must be true or false, not {_kind(value)}")
         elif kind is str and type(value) is not str:
             raise SceneError(key, f"must be text, not {_kind(value)}")
+        if kind is str:
+            _encodable(key, value)
         if key == "landscape":   # with the names of the scene's parameters
             problem = _formula(value, tuple(p.name for p in getattr(obj, "parameters", ())))
         else:

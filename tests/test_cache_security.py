@@ -253,3 +253,115 @@ def test_numbas_cache_folder_is_ours_alone_too(tmp_path):
         assert result.returncode == 0, result.stderr
         assert result.stdout.strip() == str(used)
         assert len(warnings_in(result.stderr)) == (1 if mode == 0o777 else 0)
+
+
+# -- every folder on the way ----------------------------------------------------------------
+
+def parent(tmp_path, mode=0o755, owner=None):
+    """A folder holding a cache folder of ours (mode 0700): the parent's ``mode`` and owner."""
+    above = tmp_path / "above"
+    above.mkdir()
+    (above / "cache").mkdir(mode=0o700)
+    above.chmod(mode)
+    if owner is not None:
+        os.chown(above, owner, owner)
+    return above
+
+
+@pytest.mark.parametrize("mode, owner, why", [
+    (0o755, NOBODY, "which another user owns"),          # another user's home folder, say
+    (0o775, None, "which its group can write to"),
+    (0o777, None, "which anyone can write to"),
+    (0o770, NOBODY, "which another user owns"),
+])
+def test_a_folder_inside_one_another_user_may_change_is_not_used(tmp_path, mode, owner, why):
+    # whoever may rename what is in the parent may put a folder of theirs (or a link) in place
+    # of ours after the check: the folder is ours, but it is not trusted
+    above = parent(tmp_path, mode, owner)
+    reason = cache.unsafe(above / "cache")
+    assert reason == f"inside {above}, which {why.split('which ')[1]}"
+    assert cache.unsafe(above / "new", make=True) is not None and not (above / "new").exists()   # nothing made there
+
+
+@pytest.mark.parametrize("mode", [0o1777, 0o1770, 0o1775])
+def test_a_folder_inside_a_sticky_one_is_used(tmp_path, mode):
+    # as /tmp: others may write there, but not rename or remove what is ours
+    above = parent(tmp_path, mode)
+    assert cache.trusted(above / "cache") == (str(above / "cache"), None)
+    assert cache.unsafe(above / "new") is None and stat.S_IMODE((above / "new").stat().st_mode) == 0o700
+
+
+def test_each_folder_up_to_the_root_is_checked(tmp_path):
+    above = parent(tmp_path)
+    (above / "cache" / "deeper" / "still").mkdir(parents=True, mode=0o700)
+    assert cache.unsafe(above / "cache" / "deeper" / "still") is None
+    tmp_path.chmod(0o777)
+    try:
+        assert cache.unsafe(above / "cache" / "deeper" / "still") == f"inside {tmp_path}, which anyone can write to"
+    finally:
+        tmp_path.chmod(0o700)
+
+
+def test_a_symbolic_link_on_the_way_is_followed_with_care(tmp_path):
+    above = parent(tmp_path)
+    link = tmp_path / "link"
+    link.symlink_to(above)
+    assert cache.trusted(link / "cache") == (str(above / "cache"), None)   # ours, to a safe place: its real path
+    relative = tmp_path / "relative"
+    relative.symlink_to("above/./../above")
+    assert cache.trusted(relative / "cache") == (str(above / "cache"), None)
+    # a link another user owns may be replaced by them (in a sticky folder, say)
+    os.chown(link, NOBODY, NOBODY, follow_symlinks=False)
+    assert cache.unsafe(link / "cache") == f"{link} is a symbolic link owned by another user"
+    # a link of ours to a place another user may change: the place is checked
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    (shared / "cache").mkdir(mode=0o700)
+    shared.chmod(0o775)
+    ours = tmp_path / "ours"
+    ours.symlink_to(shared / "cache")
+    assert cache.unsafe(ours) == f"inside {shared}, which its group can write to"
+    loop = tmp_path / "loop"
+    loop.symlink_to(loop)
+    assert "too many symbolic links" in cache.unsafe(loop / "cache")
+
+
+def test_a_cache_folder_in_another_users_home_is_not_used_and_one_line_says_why(ours, tmp_path):
+    home = tmp_path / "home"
+    home.mkdir()
+    folder = home / "cache"
+    shutil.move(ours, folder)
+    os.chown(home, NOBODY, NOBODY)     # nobody's, who may rename our folder and put theirs
+    out, err, left = run(folder, tmp_path)
+    assert out["value"] == pytest.approx(0.7) and out["status"] == "ok"
+    assert out["folder"] != str(folder)
+    (line,) = warnings_in(err)
+    assert f"the cache folder {folder} is not used (inside {home}, which another user owns)" in line
+    assert left == []
+
+
+def test_numbas_cache_folder_inside_a_group_writable_one_is_not_used(tmp_path):
+    above = parent(tmp_path, 0o775)
+    code = "import rollball; from numba.core import config; print(config.CACHE_DIR)"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT,
+                            env={**os.environ, "NUMBA_CACHE_DIR": str(above / "cache"),
+                                 "ROLLBALL_CACHE_DIR": str(tmp_path / "ours")})
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == str(tmp_path / "ours" / "numba")
+    (line,) = warnings_in(result.stderr)
+    assert "which its group can write to" in line
+
+
+def test_where_no_folder_may_be_trusted_nothing_is_kept_on_disk(tmp_path):
+    # the cache folder inside a group-writable one, and so is the temporary folder: the code is
+    # compiled in memory, and nothing is read from or written to either
+    above = parent(tmp_path, 0o775)
+    temporary = tmp_path / "temporary"
+    temporary.mkdir(mode=0o777)
+    temporary.chmod(0o777)
+    out, err, _ = run(above / "cache", tmp_path, TMPDIR=str(temporary))
+    assert out["value"] == pytest.approx(0.7) and out["status"] == "ok"
+    (line,) = warnings_in(err)
+    assert f"the cache folder {above / 'cache'} is not used (inside {above}, which its group can write to)" in line
+    assert "which anyone can write to" in line and line.endswith("compiled code is kept in memory only")
+    assert list((above / "cache").iterdir()) == [] and os.listdir(temporary) == []

@@ -76,15 +76,25 @@ def test_an_unwritable_report_file_is_refused_before_any_run(make, tmp_path, no_
 # -- writing ----------------------------------------------------------------------------------
 
 def test_hostile_description_is_drawn_literally(tmp_path, capsys):
-    scene = write_scene(tmp_path / "s.json", description="a $\\frac{$ b \ud800 c $x^2$")
+    scene = write_scene(tmp_path / "s.json", description="a $\\frac{$ b \u202e c $x^2$")
     out = tmp_path / "out"
     assert main(["compare", scene, "--runs", "rk4", "--quick", "--out", str(out)]) == 0
     assert sorted(os.listdir(out)) == FILES
-    assert "a $\\frac{$ b \ufffd c $x^2$" in (out / "compare.md").read_text(encoding="utf-8")
+    assert "a $\\frac{$ b \u202e c $x^2$" in (out / "compare.md").read_text(encoding="utf-8")
     assert (out / "compare.png").read_bytes()[:4] == b"\x89PNG"
     doc = strict((out / "compare.json").read_text())
-    assert doc["scene"]["description"] == "a $\\frac{$ b \ud800 c $x^2$"  # the JSON keeps it exactly
+    assert doc["scene"]["description"] == "a $\\frac{$ b \u202e c $x^2$"  # the JSON keeps it exactly
     assert "warning" not in capsys.readouterr().err
+
+
+def test_a_description_holding_a_lone_surrogate_is_refused_before_any_run(tmp_path, capsys):
+    # (no file could hold it: the scene could not be saved, nor the report written as UTF-8)
+    scene = write_scene(tmp_path / "s.json", description="b \ud800 c")
+    out = tmp_path / "out"
+    assert main(["compare", scene, "--runs", "rk4", "--quick", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "description: holds a lone surrogate" in err and "Traceback" not in err
+    assert not out.exists() or os.listdir(out) == []
 
 
 def test_values_that_cannot_be_computed_are_null_with_a_reason(tmp_path, capsys):

@@ -263,3 +263,63 @@ def test_the_kernel_package_is_layered_without_import_circles():
         tree = ast.parse(folder.joinpath(f"{name}.py").read_text())
         imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.level == 1}
         assert imported <= set(layers[:i]), (name, imported - set(layers[:i]))
+
+
+@pytest.mark.parametrize("blocked", ["file", "folder"])
+def test_a_corrupt_kernel_file_that_cannot_be_replaced_is_said_once_a_run_not_first_run_only(
+        blocked, monkeypatch, tmp_path, capsys):
+    # A corrupt file the cache cannot replace (read-only, or in a read-only folder: the mode
+    # bits decide, root too) made every run compile again, each saying "first run only"
+    _shipped_or_skip()
+    folder = tmp_path / "cache"
+    folder.mkdir()
+    monkeypatch.setattr(machine_code, "_object_path", lambda key: folder / f"kernel-{key}.o")
+    monkeypatch.setattr(machine_code, "source", machine_code.source)
+    monkeypatch.setattr(machine_code, "refused", machine_code.refused)
+    said = []
+    monkeypatch.setattr(machine_code, "listeners", [lambda: said.append("first run only")])
+    machine_code._addresses()
+    (path,) = folder.glob("kernel-*.o")
+    assert said == ["first run only"]
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+    capsys.readouterr()
+    (path if blocked == "file" else folder).chmod(0o444 if blocked == "file" else 0o555)
+    try:
+        for _ in range(2):   # two runs: each says it once, neither that it is the first
+            said.clear()
+            addresses = machine_code._addresses()
+            assert set(addresses) == set(kernel.ENTRIES) and all(addresses.values())
+            lines = capsys.readouterr().err.splitlines()
+            assert said == [] and len(lines) == 1, lines
+            assert lines[0].startswith(f"rollball: warning: the cached machine code of the kernel {path} is corrupt "
+                                       f"and cannot be replaced ({'a read-only file' if blocked == 'file' else 'its folder is read-only'})")
+            assert path.read_bytes() == bytes(data) and "first run only" not in lines[0]
+    finally:
+        folder.chmod(0o700)
+        path.chmod(0o644)
+    said.clear()
+    machine_code._addresses()     # replaceable again: made, kept, and said as the first run
+    assert said == ["first run only"] and path.read_bytes() != bytes(data)
+    said.clear()
+    machine_code._addresses()
+    assert said == [] and capsys.readouterr().err == ""
+
+
+def test_kernel_machine_code_that_cannot_be_kept_says_so_not_first_run_only(monkeypatch, tmp_path, capsys):
+    _shipped_or_skip()
+    folder = tmp_path / "cache"
+    folder.mkdir(mode=0o555)
+    monkeypatch.setattr(machine_code, "_object_path", lambda key: folder / f"kernel-{key}.o")
+    monkeypatch.setattr(machine_code, "source", machine_code.source)
+    monkeypatch.setattr(machine_code, "refused", machine_code.refused)
+    said = []
+    monkeypatch.setattr(machine_code, "listeners", [lambda: said.append("first run only")])
+    try:
+        machine_code._addresses()
+    finally:
+        folder.chmod(0o700)
+    (line,) = capsys.readouterr().err.splitlines()
+    assert said == [] and "cannot be kept" in line and "its folder is read-only" in line and str(folder) in line
+    assert list(folder.iterdir()) == []

@@ -93,3 +93,50 @@ def test_the_alias_is_read_in_version_2_too():
     assert scene.integrator.method == "dopri5"
     with pytest.raises(SceneError, match="^integrator.munthe_kaas: dopri5 always uses Munthe-Kaas"):
         Scene.from_dict({**MINIMAL, "integrator": {"method": "dopri5", "munthe_kaas": False}})
+
+
+def _scene_text(**body) -> str:
+    return json.dumps({"format": "rollball-scene", "version": 3, "landscape": "0.1*x", **body})
+
+
+@pytest.mark.parametrize("low, high", [(-1.7e308, 1.7e308), (-1e308, 1e308), (-1e308, 8e307)])
+def test_a_parameter_range_whose_width_overflows_is_refused_in_one_line_naming_it(low, high):
+    text = _scene_text(landscape="k*x", parameters={"k": {"value": 0.0, "min": low, "max": high}})
+    with pytest.raises(SceneError) as refused:
+        Scene.loads(text)
+    assert refused.value.key == "parameters.k.max"
+    assert "overflows" in str(refused.value) and "\n" not in str(refused.value)
+    # the widest range that is not too wide is a scene's like any other
+    scene = Scene.loads(_scene_text(landscape="k*x", parameters={"k": {"value": 0.0, "min": -8e307, "max": 8e307}}))
+    assert scene.parameters[0].max == 8e307
+
+
+@pytest.mark.parametrize("where, key", [
+    ({"description": "a \ud800 b"}, "description"),
+    ({"description": "\udfff"}, "description"),
+    ({"landscape": "0.1*x + \udc00"}, "landscape"),
+    ({"integrator": {"method": "rk4\ud800"}}, "integrator.method"),
+    ({"contact": {"after_liftoff": "\ud83d"}}, "contact.after_liftoff"),
+    ({"parameters": {"a\ud800": 1.0}}, "parameters.a\ud800"),
+])
+def test_a_lone_surrogate_in_any_text_is_refused_on_load_naming_the_key(where, key, tmp_path):
+    # JSON may spell a lone surrogate ("\ud800"), which UTF-8 cannot hold: such a scene could
+    # be loaded but not saved
+    text = _scene_text(**where)
+    assert "\\ud8" in text or "\\udc" in text or "\\udf" in text
+    with pytest.raises(SceneError) as refused:
+        Scene.loads(text)
+    assert refused.value.key == key and "lone surrogate" in str(refused.value)
+    assert "\n" not in str(refused.value) and str(refused.value).isprintable()
+    path = tmp_path / "scene.json"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SceneError):
+        Scene.load(path)
+    with pytest.raises(SceneError, match="description: holds a lone surrogate"):
+        Scene(landscape="0.1*x", description="\ud800")
+    # a pair of surrogates is one character, and a scene like any other
+    scene = Scene.loads(_scene_text(description="ball \U0001f3b1"))
+    assert "\\ud83c\\udfb1" in _scene_text(description="ball \U0001f3b1")
+    assert scene.description == "ball \U0001f3b1"
+    scene.save(path)
+    assert Scene.load(path) == scene

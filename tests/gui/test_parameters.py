@@ -2,6 +2,7 @@
 a slider per parameter that reshapes the landscape without compiling anything."""
 
 import json
+import math
 import time
 
 import numpy as np
@@ -12,7 +13,8 @@ from rollball import Scene
 from rollball.scene import Parameter
 from rollball import landscape as core_landscape
 from rollball.examples import EXAMPLES_DIR
-from rollball_app.parameters import SLIDER_STEPS, slider_range, slider_value
+from rollball_app.parameters import (SLIDER_STEPS, ParameterRows, slider_position, slider_range,
+                                     slider_value)
 
 from .guitools import apply_fields, run_to_end, set_field
 
@@ -321,3 +323,49 @@ def test_a_slider_keeps_the_camera_and_the_height_axis_follows(qtbot, ripples):
     window.panel.parameter_rows.rows["a"].slider.setValue(SLIDER_STEPS)   # a = 1: twice as high
     assert (view.opts["distance"], view.opts["elevation"], view.opts["azimuth"]) == camera
     assert top() > low + 0.1   # (the surface is cut at the height the ball can reach)
+
+
+BIGGEST = 1.7976931348623157e308
+
+
+@pytest.mark.parametrize("value, low, high", [
+    (0.0, -1.7e308, 1.7e308),            # a width that is not a finite float
+    (BIGGEST, -BIGGEST, BIGGEST),
+    (1.5e308, 1e308, BIGGEST),
+    (0.0, 0.0, 5e-324),                  # a width below the smallest step
+    (0.0, -1e-300, 1e-300),
+    (1.7e308, None, None),               # no range: one around the value, within the floats
+    (-BIGGEST, None, None),
+    (1e300, None, None),
+])
+def test_a_slider_over_any_finite_range_never_raises_and_gives_values_within_it(qtbot, value, low, high):
+    rows = ParameterRows()
+    qtbot.addWidget(rows)
+    dragged = []
+    rows.dragged.connect(dragged.append)
+    rows.add("k", value, low, high)
+    row = rows.rows["k"]
+    assert math.isfinite(row.low) and math.isfinite(row.high) and row.low < row.high
+    assert 0 <= row.slider.value() <= SLIDER_STEPS
+    for position in (0, 1, 2, SLIDER_STEPS // 2, SLIDER_STEPS - 1, SLIDER_STEPS, 0):
+        row.slider.setValue(position)     # as a drag or a key would (an error here fails the test)
+        shown = float(row.edit.text())
+        assert math.isfinite(shown) and row.low <= shown <= row.high
+        if row.high / SLIDER_STEPS - row.low / SLIDER_STEPS > 1e-300:   # (not 1000 values apart below)
+            assert slider_position(shown, row.low, row.high) == pytest.approx(position, abs=1)
+    assert dragged and set(dragged) == {"k"}
+    row.set_value(value)
+    assert 0 <= row.slider.value() <= SLIDER_STEPS
+
+
+def test_the_slider_functions_are_finite_for_any_finite_range():
+    for low, high in [(-BIGGEST, BIGGEST), (-1.7e308, 1.7e308), (0.0, BIGGEST), (-BIGGEST, 0.0), (0.0, 5e-324)]:
+        values = [slider_value(position, low, high) for position in range(SLIDER_STEPS + 1)]
+        assert all(math.isfinite(v) and low <= v <= high for v in values)
+        assert values[0] == low and values[-1] == high
+        assert values == sorted(values)
+        for v in (low, high, values[SLIDER_STEPS // 2], -math.inf, math.inf, math.nan):
+            assert 0 <= slider_position(v, low, high) <= SLIDER_STEPS
+    assert slider_range(1.7e308, None, None) == (0.0, BIGGEST)
+    assert slider_range(-1.7e308, None, None) == (-BIGGEST, 0.0)
+    assert slider_value(500, -0.5, 1.5) == 0.5 and slider_value(1, 0.0, 1.0) == 0.001
