@@ -76,7 +76,9 @@ def test_the_report_marks_each_figure_that_misses_its_goal():
     assert "missed" not in _targets()
     for change, row in [({"all_methods_cold_cache": 36.0}, "compiling every method"),
                         ({"c": {"ratio": 1.3, "ns_ours": 300.0, "ns_c": 230.0, "same_step": 1e-15}}, "against C"),
-                        ({"latency": 0.045}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory")]:
+                        ({"latency": 0.045}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory"),
+                        ({"hybrid": {"liftoff": {"hybrid_ms": 30.0, "glued_ms": 0.4, "ratio": 75.0},
+                                     "cylinder": {"hybrid_ms": 3.0, "glued_ms": 1.0, "ratio": 3.0}}}, "| liftoff |")]:
         missed = [line for line in _targets(**change).splitlines() if "missed" in line]
         assert len(missed) == 1 and row in missed[0], (change, missed)
 
@@ -100,3 +102,12 @@ def test_the_report_states_the_apps_latency_against_its_goal():
     latency["keystroke_typing"] = figure(70.0)   # typing lags
     missed = [line for line in _targets(app=app).splitlines() if "missed" in line]
     assert len(missed) == 2 and "typing on" in missed[1]
+
+
+def test_a_run_that_changes_mode_is_timed_against_the_same_scene_glued(monkeypatch):
+    from rollball.bench import targets
+    monkeypatch.setattr(targets, "HYBRID", ("cylinder",))
+    costs = targets.hybrid_costs(1)
+    assert set(costs) == {"cylinder", "bowl, slip and grip"}
+    for figures in costs.values():
+        assert figures["hybrid_ms"] > 0.0 and figures["glued_ms"] > 0.0 and figures["ratio"] > 0.0

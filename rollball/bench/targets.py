@@ -4,6 +4,7 @@ the two in one run, so both see the same load on a shared machine."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import random
@@ -202,6 +203,41 @@ def app_responsiveness() -> dict:
     return json.loads(lines[-1])
 
 
+# Examples whose ball flies (their own contact) and one that slips and grips on a curved surface
+HYBRID = ("liftoff", "ridge_jump", "cylinder")
+HYBRID_GOAL = 4.0   # a run that changes mode costs at most this many times the glued run
+SLIPPING = Scene("1.5*x^2 + 0.9*y^2 + 0.3*x*y", duration=0.9)   # the convergence tests' bowl
+
+
+def _run_cpu(scene: Scene) -> float:
+    """CPU time of one run of the scene (its energy and transition checks left out)."""
+    run = Simulation(scene)
+    run.judge_energy = False
+    start = time.process_time()
+    run.advance()
+    return time.process_time() - start
+
+
+def hybrid_costs(repeats: int) -> dict:
+    """CPU time of a run that changes mode against the same scene glued to its surface (friction
+    null, after_liftoff "glued": the 2011 model's one kernel run), the two in turn, medians and the
+    median of the ratios: the examples that fly, and a ball thrown across a tilted bowl with
+    friction 0.2 (a slip from rolling in 3-D, then a grip; rk4 at dt 1e-3)."""
+    scenes = {name: Scene.load(EXAMPLES_DIR / f"{name}.json") for name in HYBRID}
+    bowl = dataclasses.replace(SLIPPING, start=dataclasses.replace(SLIPPING.start, x=-0.1, y=0.1, vx=1.2, vy=-0.6))
+    scenes["bowl, slip and grip"] = dataclasses.replace(bowl, contact=dataclasses.replace(bowl.contact, friction=0.2))
+    out = {}
+    for name, scene in scenes.items():
+        glued = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, friction=None,
+                                                                       after_liftoff="glued"))
+        _run_cpu(scene), _run_cpu(glued)   # (compiled, the landscape too)
+        pairs = [(_run_cpu(scene), _run_cpu(glued)) for _ in range(repeats)]
+        hybrid, plain = (np.array(column) for column in zip(*pairs))
+        out[name] = {"hybrid_ms": float(np.median(hybrid)) * 1e3, "glued_ms": float(np.median(plain)) * 1e3,
+                     "ratio": float(np.median(hybrid / np.maximum(plain, 1e-9)))}
+    return out
+
+
 def measure(quick: bool) -> dict:
     repeats = 3 if quick else 7
     return {
@@ -212,4 +248,5 @@ def measure(quick: bool) -> dict:
         "cold": cold_start(quick),
         "memory": peak_memory(10_000_000),
         "app": app_responsiveness(),
+        "hybrid": hybrid_costs(3 if quick else 9),
     }
