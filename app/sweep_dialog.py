@@ -66,6 +66,14 @@ def parameter_span(scene: Scene, key: str) -> tuple[float, float]:
     return slider_range(p.value, p.min, p.max)
 
 
+# The range a contact key's row offers when it is chosen: friction from 0 to twice the scene's (to 1
+# where it is null: always enough), restitution from 0 to 1.
+CONTACT_SPANS = {
+    "contact.friction": lambda contact: (0.0, 1.0 if contact.friction is None else max(2.0 * contact.friction, 0.1)),
+    "contact.restitution": lambda contact: (0.0, 1.0),
+}
+
+
 class AxisRow:
     """One varied key: which, from, to, how many values. Choosing a parameter of the scene
     fills in its range."""
@@ -99,8 +107,12 @@ class AxisRow:
         key = self.key.currentData()
         if key.startswith(PARAMETER_PREFIX):
             lo, hi = parameter_span(self.scene, key)
-            self.lo.setText(format_number(lo))
-            self.hi.setText(format_number(hi))
+        elif key in CONTACT_SPANS:
+            lo, hi = CONTACT_SPANS[key](self.scene.contact)
+        else:
+            return
+        self.lo.setText(format_number(lo))
+        self.hi.setText(format_number(hi))
 
     @property
     def used(self) -> bool:

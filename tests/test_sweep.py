@@ -4,6 +4,7 @@ workers, cancellation, the files and the command line."""
 import csv
 import dataclasses
 import json
+import math
 import os
 import signal
 import threading
@@ -15,7 +16,7 @@ from rollball import Scene, simulate, sweep
 from rollball.cli import main
 from rollball.examples import EXAMPLES_DIR
 from rollball.sweeps import Grid, parse_vary
-from rollball.scene import Contact
+from rollball.scene import Contact, Start
 from rollball.sweeps.grid import with_values
 from rollball.trajectory import MODES
 
@@ -279,3 +280,23 @@ def test_the_2011_models_runs_roll_to_the_end():
     table = sweep(Scene.load(EXAMPLES_DIR / "hills.json"), {"start.vx": [0.0, 0.5]}, workers=1)
     assert list(table["end_mode"]) == [0.0, 0.0] and list(table["landings"]) == [0.0, 0.0]
     assert np.isnan(table["first_slip_time"]).all()
+
+
+def test_a_sweep_over_friction_finds_the_incline_threshold_and_over_restitution_the_bounces():
+    """On an incline of 30° from rest the ball rolls iff μ ≥ (2/7) tan 30° (0.165), else it slips at
+    once; a glued scene (friction null) given a friction by the sweep slides where it must. A
+    restitution of 0 lands once and stays; 0.6 bounces again."""
+    incline = Scene(f"{math.tan(math.radians(30.0))!r}*x", start=Start(0.0, 0.0, 0.0, 0.0, 0.0), duration=0.2,
+                    contact=Contact(None, 0.0, "glued"))
+    mu = np.array([0.1, 0.15, 0.16, 0.17, 0.2, 0.3])
+    table = sweep(incline, {"contact.friction": mu}, workers=1)
+    rolls = mu >= 2.0 / 7.0 * math.tan(math.radians(30.0))
+    assert set(table["status"]) == {"ok"}
+    np.testing.assert_array_equal(np.isnan(table["first_slip_time"]), rolls)
+    np.testing.assert_array_equal(table["end_mode"], np.where(rolls, MODES.index("rolling"), MODES.index("sliding")))
+    bounce = dataclasses.replace(Scene.load(EXAMPLES_DIR / "liftoff.json"), duration=1.5)
+    table = sweep(bounce, {"contact.restitution": [0.0, 0.6]}, workers=1)
+    assert set(table["status"]) == {"ok"}
+    assert table["landings"][0] == 1.0 and table["landings"][1] > 1.0
+    refused = sweep(bounce, {"contact.restitution": [1.5]}, workers=1)
+    assert list(refused["status"]) == ["invalid"] and "restitution" in refused.messages[0]

@@ -57,7 +57,8 @@ class Result:
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
     """Every sweepable key's value per run: the varied column or the scene's own value."""
-    keys = list(KEYS) + [PARAMETER_PREFIX + name for name in scene.parameter_names]
+    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX)]   # (the batch loop's runs roll)
+    keys += [PARAMETER_PREFIX + name for name in scene.parameter_names]
     return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
             for key in keys}
 
@@ -111,9 +112,14 @@ def _landscape(scene: Scene):
         return landscape
 
 
-def changes_mode(scene: Scene) -> bool:
-    """Whether the scene's contact can change mode (else it is the 2011 model: the batch loop's)."""
-    return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued")
+CONTACT_PREFIX = "contact."
+
+
+def changes_mode(scene: Scene, keys=()) -> bool:
+    """Whether the scene's contact can change mode (else it is the 2011 model: the batch loop's),
+    or a sweep varying ``keys`` gives it a friction."""
+    return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued") or (
+        "contact.friction" in keys)
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
@@ -150,7 +156,7 @@ def run(task: Task) -> Result:
     messages = validate(scene, grid, values)
     status = np.full(runs, NOT_RUN, dtype=np.int64)
     status[list(messages)] = INVALID
-    if changes_mode(scene):
+    if changes_mode(scene, grid.keys):
         outcomes = np.full((runs, len(OUTCOMES)), np.nan)
         for i in range(runs):
             if status[i] != INVALID:

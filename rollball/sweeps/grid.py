@@ -122,14 +122,14 @@ class Grid:
 
 
 def value_of(scene: Scene, key: str) -> float:
-    """The scene's value of a dotted key."""
+    """The scene's value of a dotted key (a null friction is inf: always enough to roll)."""
     if key.startswith(PARAMETER_PREFIX):
         check_keys(scene, [key])
         return scene.parameter_values[scene.parameter_names.index(key[len(PARAMETER_PREFIX):])]
     obj = scene
     for part in key.split("."):
         obj = getattr(obj, part)
-    return float(obj)
+    return math.inf if obj is None else float(obj)   # (friction null: always enough friction)
 
 
 def with_value(scene: Scene, key: str, value: float) -> Scene:

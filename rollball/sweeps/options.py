@@ -14,6 +14,8 @@ KEYS: dict[str, str] = {
     "gravity": "m/s²",
     "integrator.dt": "s",
     "duration": "s",
+    "contact.friction": "",      # μ (a scene whose friction is null sweeps from ∞: always enough)
+    "contact.restitution": "",   # e
 }
 
 CONNECT_TIMEOUT = 10.0   # seconds to reach a Dask scheduler and hear it answer

@@ -123,3 +123,23 @@ def test_a_parameter_is_swept_like_any_key_and_a_click_loads_its_value(qtbot, wi
     window.undo_action.trigger()
     assert window.scene.parameter_values == (0.5, 1.0)
     dialog.close()
+
+
+def test_friction_and_restitution_are_swept_with_their_own_ranges(qtbot, window):
+    from rollball.examples import EXAMPLES_DIR
+    assert window.files.open_scene(EXAMPLES_DIR / "billiard.json", remember=False)
+    dialog = _open(qtbot, window)
+    row = dialog.rows[0]
+    mu = window.scene.contact.friction
+    row.key.setCurrentIndex(row.key.findData("contact.friction"))     # 0 to twice the scene's
+    assert (float(row.lo.text()), float(row.hi.text())) == (0.0, 2 * mu)
+    row.key.setCurrentIndex(row.key.findData("contact.restitution"))
+    assert (row.lo.text(), row.hi.text()) == ("0.0", "1.0")
+    _set_row(row, "contact.friction", 0.1, 0.4, 2)
+    dialog.rows[1].enabled.setChecked(False)
+    dialog.color.setCurrentIndex(dialog.color.findData("first_slip_time"))
+    _run(qtbot, dialog)
+    table = dialog.table
+    assert table.keys == ("contact.friction",) and table.done.all() and set(table["status"]) == {"ok"}
+    np.testing.assert_array_equal(table["first_slip_time"], 0.0)   # struck without spin: it slides at once
+    dialog.close()
