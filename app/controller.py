@@ -67,10 +67,12 @@ class Run:
 
     def trajectory(self) -> Trajectory:
         """The rows received so far as a trajectory (no copy), with the finished run's check of
-        its transitions (what ``warnings`` says of them)."""
+        its transitions (what ``warnings`` says of them); ``modes`` None where the run cannot
+        change mode (the 2011 model), as ``Simulation.trajectory`` gives it."""
         scene = self.simulation.scene
+        modes = self.buffer.mode if getattr(self.simulation, "segmented", True) else None
         return Trajectory(self.buffer.rows, mass=scene.ball.mass, radius=scene.ball.radius,
-                          gravity=scene.gravity, modes=self.buffer.mode, transitions=tuple(self.transitions),
+                          gravity=scene.gravity, modes=modes, transitions=tuple(self.transitions),
                           transition_check=getattr(self.simulation, "transition_check", None))
 
 

@@ -20,10 +20,13 @@ COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
            "energy", "normal_force")
 # The CSV adds columns per row after the 23 above (docs/design.md §5); readers that take the
-# first 23 keep working: the energy error, then the contact's mode, the slip speed (m/s) and the
-# energy dissipated so far (J).
-EXTRA_COLUMNS = ("energy_error", "mode", "slip_speed", "dissipated")
-CSV_COLUMNS = COLUMNS + EXTRA_COLUMNS
+# first 23 keep working: the energy error, then, only where the run could change mode, the
+# contact's mode, the slip speed (m/s) and the energy dissipated so far (J). ``csv_columns`` says
+# which a trajectory's CSV has.
+MODE_COLUMNS = ("mode", "slip_speed", "dissipated")
+EXTRA_COLUMNS = ("energy_error", *MODE_COLUMNS)
+ROLLING_CSV_COLUMNS = COLUMNS + ("energy_error",)   # numbers only, as before the contact of version 3
+CSV_COLUMNS = ROLLING_CSV_COLUMNS + MODE_COLUMNS
 # The modes of the contact, one a row (``Trajectory.modes`` holds their positions here).
 MODES = ("rolling", "sliding", "flying")
 ROLLING, SLIDING, FLYING = range(len(MODES))
@@ -33,7 +36,6 @@ UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
          **{f"r{i}{j}": "1" for i in (1, 2, 3) for j in (1, 2, 3)},
          "energy": "J", "normal_force": "N", "energy_error": "1", "mode": "-", "slip_speed": "m/s",
          "dissipated": "J"}
-HEADER = ",".join(CSV_COLUMNS)
 
 # Where a row keeps what (the kernel's interface declares it once; use these, never raw column numbers)
 T = ROW_T                          # time
@@ -164,7 +166,9 @@ class Trajectory:
     gravity: float = 9.81
     provenance: dict = field(default_factory=dict)
     energy_check: EnergyCheck | None = None  # set by the run where one interval's jump dominates
-    modes: np.ndarray | None = None  # the mode of each row (positions in MODES); None: every row rolls
+    # the mode of each row (positions in MODES); None: the run could not change mode (the 2011
+    # model: friction null, glued after a lift-off) and every row rolls
+    modes: np.ndarray | None = None
     transitions: tuple[Transition, ...] = ()   # the changes of mode, in time order
     transition_check: TransitionCheck | None = None   # set by the run: whether they are converged
 
@@ -314,21 +318,34 @@ class Trajectory:
         atomic_write(path, self.write_csv, keep=keep)
 
     def write_csv(self, stream) -> None:
-        """Provenance and unit lines (``#``), the header, then the rows: the 23 columns, the
-        energy error, the mode, the slip speed and the energy dissipated."""
+        """Provenance and unit lines (``#``), the header, then the rows: the columns of
+        ``csv_columns`` (the 23 columns and the energy error; then, where the run could change
+        mode, the mode, the slip speed and the energy dissipated)."""
+        columns = csv_columns(self)
         for key, value in self.provenance.items():
             stream.write(f"# {key}: {value}\n")
-        stream.write(f"# units: {','.join(UNITS[name] for name in CSV_COLUMNS)}\n")
-        stream.write(HEADER + "\n")
+        stream.write(f"# units: {','.join(UNITS[name] for name in columns)}\n")
+        stream.write(",".join(columns) + "\n")
         if not len(self):
             return
+        numbers = np.column_stack([self.data[:, : len(COLUMNS)], self.energy_error()])
+        if columns == ROLLING_CSV_COLUMNS:   # numbers only: what numpy.loadtxt reads
+            np.savetxt(stream, numbers, fmt="%.17g", delimiter=",")
+            return
         before = io.StringIO()
-        np.savetxt(before, np.column_stack([self.data[:, : len(COLUMNS)], self.energy_error()]), fmt="%.17g",
-                   delimiter=",")
+        np.savetxt(before, numbers, fmt="%.17g", delimiter=",")
         after = io.StringIO()
         np.savetxt(after, np.column_stack([self.slip_speed, self.dissipated]), fmt="%.17g", delimiter=",")
         for head, mode, tail in zip(before.getvalue().splitlines(), self.mode, after.getvalue().splitlines()):
             stream.write(f"{head},{mode},{tail}\n")
+
+
+def csv_columns(trajectory: Trajectory) -> tuple[str, ...]:
+    """The columns of a trajectory's CSV, the one choice every writer follows: the 23 columns and
+    the energy error, numbers only, for a run that could not change mode (``modes`` None: the 2011
+    model, friction null and glued after a lift-off, which every version 1-2 scene is), as written
+    before version 3; else those and the mode columns (mode, slip_speed, dissipated)."""
+    return ROLLING_CSV_COLUMNS if trajectory.modes is None else CSV_COLUMNS
 
 
 def read_csv(path: str | os.PathLike, extra: bool = False):

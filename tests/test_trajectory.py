@@ -80,14 +80,20 @@ def test_csv_round_trip_at_full_precision(scene_factory, tmp_path):
     traj.to_csv(path)
     lines = path.read_text().splitlines()
     header = [line for line in lines if not line.startswith("#")][0]
-    assert header == ",".join(COLUMNS) + ",energy_error,mode,slip_speed,dissipated" and " " not in header
+    # the 2011 model cannot change mode: no mode columns (tests/test_csv_columns.py)
+    assert header == ",".join(COLUMNS) + ",energy_error" and " " not in header
     assert any(line.startswith("# landscape: 0.5*sin(x)*cos(y)") for line in lines)
     back = read_csv(path)
     assert back.shape == (len(traj), 23)
     assert np.array_equal(back, traj.data[:, :23])  # bit for bit
     rows, extra = read_csv(path, extra=True)
+    assert np.array_equal(rows, back) and list(extra) == ["energy_error"]
+    assert np.array_equal(extra["energy_error"], traj.energy_error())
+    # a run that could change mode (here: it rolled throughout) writes them too, and they read back
+    dataclasses.replace(traj, modes=np.zeros(len(traj), dtype=np.int8)).to_csv(path)
+    rows, extra = read_csv(path, extra=True)
     assert np.array_equal(rows, back) and list(extra) == ["energy_error", "mode", "slip_speed", "dissipated"]
-    assert list(extra["mode"]) == ["rolling"] * len(traj)   # the 2011 model: it rolls, loses nothing
+    assert list(extra["mode"]) == ["rolling"] * len(traj)
     assert np.array_equal(extra["slip_speed"], traj.slip_speed) and np.array_equal(extra["dissipated"], traj.dissipated)
     assert np.array_equal(extra["energy_error"], traj.energy_error())
 
@@ -96,7 +102,7 @@ def test_csv_says_every_unit_and_each_rows_energy_error(scene_factory, tmp_path)
     scene = scene_factory("0.5*sin(x)*cos(y)", x=0.3, vx=1.0)
     traj = simulate(scene, method="euler", dt=0.01, t_end=1.0)
     path = tmp_path / "out.csv"
-    traj.to_csv(path)
+    dataclasses.replace(traj, modes=np.zeros(len(traj), dtype=np.int8)).to_csv(path)   # with the mode columns
     lines = path.read_text().splitlines()
     names = lines[[not line.startswith("#") for line in lines].index(True)].split(",")
     units = next(line for line in lines if line.startswith("# units: "))[len("# units: "):].split(",")
@@ -128,7 +134,7 @@ def test_csv_of_an_empty_trajectory_has_the_header(scene_factory, tmp_path):
     path = tmp_path / "empty.csv"
     traj.to_csv(path)
     assert [line for line in path.read_text().splitlines() if not line.startswith("#")] == [
-        ",".join(COLUMNS) + ",energy_error,mode,slip_speed,dissipated"]
+        ",".join(COLUMNS) + ",energy_error"]   # the 2011 model's columns (tests/test_csv_columns.py)
     assert read_csv(path).shape == (0, 23)
 
 

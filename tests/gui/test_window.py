@@ -13,8 +13,8 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball_app.controller import PAUSED, READY, RUNNING, STOPPED
 from rollball_app.window import MainWindow
-from rollball import Scene, read_csv
-from rollball.examples import EXAMPLES_DIR, example_scenes
+from rollball import COLUMNS, Scene, read_csv
+from rollball.examples import EXAMPLES_DIR, example_scenes, scene_path
 
 from .guitools import run_to_end, set_field
 
@@ -154,6 +154,23 @@ def test_a_run_plays_to_its_end_and_exports_its_rows(qtbot, window, tmp_path):
     assert data[0, 0] == 0.0 and data[-1, 0] == 0.5
     assert np.array_equal(data, window.controller.simulation.rows[:, :23])   # (the rows go on: slip, dissipated)
     assert "Exported 501 rows" in window.message.text()
+    # the hills are a version-2 scene, the 2011 model's: the columns of version 2, numbers only
+    lines = out.read_text().splitlines()
+    header = [line for line in lines if not line.startswith("#")][0]
+    assert header.split(",") == [*COLUMNS, "energy_error"]
+    table = np.loadtxt(out, delimiter=",", comments="#", skiprows=lines.index(header) + 1)
+    assert table.shape == (501, 24) and np.array_equal(table[:, :23], data)
+
+
+def test_a_run_that_can_change_mode_exports_the_mode_columns(qtbot, window, tmp_path):
+    assert window.files.open_scene(scene_path("cylinder"), remember=False)   # version 3: it flies
+    set_field(qtbot, window, "duration", "0.2")
+    run_to_end(qtbot, window)
+    out = tmp_path / "flying.csv"
+    assert window.exports.export_csv(out)
+    rows, extra = read_csv(out, extra=True)
+    assert list(extra) == ["energy_error", "mode", "slip_speed", "dissipated"]
+    assert set(extra["mode"]) <= {"rolling", "sliding", "flying"} and len(extra["mode"]) == len(rows)
 
 
 def test_save_and_open_give_the_same_scene(qtbot, window, tmp_path, preferences):
