@@ -589,7 +589,7 @@ class Simulation:
                 self._adopt(run, len(rows) - 1)
                 self.status, self._off = run.status, run.failure
                 return
-            on_grid = np.abs(rows[:, T] / self.dt - np.round(rows[:, T] / self.dt)) < 1e-9
+            _, on_grid = self._grid(rows[:, T])
             free = [i for i in range(1, len(rows))
                     if on_grid[i] and (modes[i] != SLIDING or not self._stiff(rows[i]))]
             end = free[0] if free else len(rows) - 1
@@ -606,6 +606,11 @@ class Simulation:
                 self._start_kernel_run(_state_of(self, row), t, slides=mode == SLIDING, repeat=True)
                 return
             state, window = _state_of(self, row), 2 * window   # still stiff: on from there
+
+    def _grid(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each time's step number k on the run's grid (k·dt) and whether it is on the grid."""
+        k = np.round(times / self.dt)
+        return k, np.abs(times / self.dt - k) < 1e-9
 
     def _stiff(self, row: np.ndarray) -> bool:
         """Whether a sliding row's slip is stiff for the fixed steps: friction would stop it within
@@ -633,10 +638,9 @@ class Simulation:
         merged = sorted({id(c): c for c in [*run.changes, *run.transitions] if c.time <= t_end}.values(),
                         key=lambda c: (c.time, c.kind != "landing"))
         at = {change.time for change in merged}
-        k = np.round(rows[:, T] / self.dt)
+        k, on_grid = self._grid(rows[:, T])
         kept = [i for i in range(1, len(rows))
-                if rows[i, T] in at or rows[i, T] >= self.t_end
-                or (abs(rows[i, T] / self.dt - k[i]) < 1e-9 and k[i] % self.record_every == 0)]
+                if rows[i, T] in at or rows[i, T] >= self.t_end or (on_grid[i] and k[i] % self.record_every == 0)]
         for i in kept:
             self._mode = int(modes[i])
             self._append(rows[i: i + 1].copy())
