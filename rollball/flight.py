@@ -779,14 +779,14 @@ class Impact:
 
 
 def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: float,
-           friction: float | None) -> Impact:
+           friction: float) -> Impact:
     """The impulse J = J_n N + J_t at the contact point of a ball hitting the surface with
     the centre's ``velocity`` and ``omega``, the surface's unit ``normal`` there.
 
     The contact point's velocity u = ċ + ω × (−r N) changes by J_n/m along N and by (7/2) J_t/m
     in the tangent plane (a homogeneous ball: Δċ = J/m, Δω = (5/(2 m r²)) (−r N) × J). Normal:
     u_n → −e u_n, so J_n = (1 + e) m |u_n|. Tangential: sticking needs J_t = −(2/7) m u_t, taken
-    when |J_t| ≤ μ J_n (always for μ None); else J_t = −μ J_n û_t (the slip keeps its direction
+    when |J_t| ≤ μ J_n (always for μ = inf, a scene's null friction); else J_t = −μ J_n û_t (the slip keeps its direction
     and shrinks). Angular momentum about the contact point does not change (the impulse acts
     there)."""
     velocity, omega, normal = (np.asarray(a, dtype=float) for a in (velocity, omega, normal))
@@ -798,7 +798,7 @@ def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: 
     u_t = u - u_n * normal
     j_t = -(2.0 / 7.0) * m * u_t
     slip = float(np.linalg.norm(u_t))
-    sticking = friction is None or float(np.linalg.norm(j_t)) <= friction * j_n
+    sticking = friction == math.inf or float(np.linalg.norm(j_t)) <= friction * j_n
     if not sticking:
         j_t = -friction * j_n * u_t / slip if slip > 0 else np.zeros(3)
     impulse = j_n * normal + j_t

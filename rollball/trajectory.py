@@ -12,9 +12,11 @@ import numpy as np
 
 from .files import atomic_write
 from .kernel.interface import REASONS, ROW_ENERGY, ROW_FORCE, ROW_SLICES, ROW_T, STATUSES
+# the modes of the contact, one a row (``Trajectory.modes`` holds their positions in MODES)
+from .modes import FLYING, MODES, ROLLING, SLIDING, TRANSITION_KINDS, Change, Mode  # noqa: F401 (the row's interface)
 
 if TYPE_CHECKING:
-    from .transition_check import TransitionCheck
+    from .transition_verdict import TransitionCheck
 
 COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
            "r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33",
@@ -27,10 +29,6 @@ MODE_COLUMNS = ("mode", "slip_speed", "dissipated")
 EXTRA_COLUMNS = ("energy_error", *MODE_COLUMNS)
 ROLLING_CSV_COLUMNS = COLUMNS + ("energy_error",)   # numbers only, as before the contact of version 3
 CSV_COLUMNS = ROLLING_CSV_COLUMNS + MODE_COLUMNS
-# The modes of the contact, one a row (``Trajectory.modes`` holds their positions here).
-MODES = ("rolling", "sliding", "flying")
-ROLLING, SLIDING, FLYING = range(len(MODES))
-TRANSITION_KINDS = ("slip", "grip", "liftoff", "landing")
 UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
          "vx": "m/s", "vy": "m/s", "vz": "m/s", "wx": "rad/s", "wy": "rad/s", "wz": "rad/s",
          **{f"r{i}{j}": "1" for i in (1, 2, 3) for j in (1, 2, 3)},
@@ -132,7 +130,7 @@ class Failure:
 @dataclass(frozen=True)
 class EnergyCheck:
     """Whose a run's energy error is, found by taking again the recorded interval where most of
-    it happened (``simulation.energy_check``): with the run's step and steps 4, 16, 64, 256 times
+    it happened (``energy_check.energy_check``): with the run's step and steps 4, 16, 64, 256 times
     shorter (tolerances 10^4 times tighter for the adaptive methods; euler's interval is taken
     again by rk4). A smooth landscape's error shrinks as the method's order predicts
     (``expected``, per step 4 times shorter) once the steps resolve it; one that shrinks no faster

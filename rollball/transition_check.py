@@ -10,19 +10,19 @@ change the steps invent), the run still ends ok: this check is what says so, as 
 
 from __future__ import annotations
 
-import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
+from .mode_machine import state_of
 from .trajectory import FLYING, SLIDING, SLIP_SPEED, T, Status, Transition
+from .transition_verdict import (CHANGED, CONVERGED, GROWS, NAMES, NEGLIGIBLE, PLATEAU, TIGHTER, Retake,
+                                 TransitionCheck)
 
 RETAKEN = ("slip", "grip", "liftoff")   # the kernel's changes; a landing is a flight's root (exact) and not retaken
 MAX_CHECKED = 8        # the first this many of them are checked (the rest are counted)
 HALVINGS = 2           # fixed steps: taken again with the run's dt, dt/2 and dt/4 (phase-aligned: on its grid)
 SLACK = 1.5            # a halving must shrink the move at least 2^(p - SLACK)-fold (rk4: 5.7; 16 expected)
-TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 times tighter...
 ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least 3.2-fold per 100 times (40 to 100 expected)
 MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
 MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step); adaptive,
@@ -32,111 +32,6 @@ LEAD_STEPS = 64        # a retake starts this many of the run's steps (its avera
 MARGIN_STEPS = 2       # ...and goes on until it has the change or is this many past it (one moved further is not there)
 MAX_STRETCH_STEPS = 4096  # a change whose row to start from lies more steps before it than this is not taken again
 TURNED = 1e-3          # a slip turning about must have stopped: its slip speed there at most this share of its largest
-
-CONVERGED, NEGLIGIBLE, PLATEAU, GROWS, CHANGED = "converged", "negligible", "plateau", "grows", "changed"
-
-
-@dataclass(frozen=True)
-class Retake:
-    """One transition of the run taken again: its ``kind`` and ``time`` (s) in the run (its
-    position ``index`` in ``Trajectory.transitions``), from the row at ``start`` (s), with each
-    of ``steps`` (fixed: dt, dt/2, dt/4; adaptive: the run's own rtol, then 100 and 10^4 times
-    tighter), the transition's time in each (``times``; None where that retake had no such
-    transition there: ``found`` says what it had instead) and the ``verdict`` (CONVERGED;
-    NEGLIGIBLE: every move below the floor, MOVE_FLOOR or, adaptive, what the tolerance allows;
-    PLATEAU: the moves shrink more slowly than the method's order says; GROWS: a finer retake
-    moves it more; CHANGED: the kinds differ)."""
-
-    index: int
-    kind: str
-    time: float
-    start: float
-    steps: tuple[float, ...]
-    times: tuple[float | None, ...]
-    found: tuple[str, ...]
-    verdict: str
-
-    @property
-    def converged(self) -> bool:
-        return self.verdict in (CONVERGED, NEGLIGIBLE)
-
-    @property
-    def moves(self) -> tuple[float, ...]:
-        """|t_{k+1} − t_k| between successive retakes (empty where one lacks the transition)."""
-        if None in self.times:
-            return ()
-        return tuple(abs(b - a) for a, b in zip(self.times, self.times[1:]))
-
-
-@dataclass(frozen=True)
-class TransitionCheck:
-    """The check of a finished run's transitions (``check_transitions``): the ``method``, its
-    ``order`` and whether it is ``adaptive``; the transitions taken again (``retakes``, at most
-    MAX_CHECKED), how many kernel-located ones were not: ``unchecked`` beyond the cap, ``skipped``
-    with no row to start from (a change at the run's start, or one too far after its row) or
-    whose retake failed; and ``invented``: sentences on transitions the sequence itself shows the
-    motion does not have (two at one instant or out of order; a slip turning about where the
-    slip had not stopped)."""
-
-    method: str
-    order: int
-    adaptive: bool
-    retakes: tuple[Retake, ...] = ()
-    unchecked: int = 0
-    invented: tuple[str, ...] = ()
-    skipped: int = 0
-
-    @property
-    def converged(self) -> bool:
-        return not self.invented and all(retake.converged for retake in self.retakes)
-
-    @property
-    def failed(self) -> tuple[Retake, ...]:
-        return tuple(retake for retake in self.retakes if not retake.converged)
-
-    def warning(self) -> str | None:
-        """The sentence ``Trajectory.warnings()`` shows (None where every transition converged): the
-        first transition that did not (and which others did not), the first invented one (and how
-        many more), and what to do."""
-        if self.converged:
-            return None
-        parts = []
-        failed = self.failed
-        if failed:
-            others = " and ".join(f"the {_NAMES.get(r.kind, r.kind)} at {r.time:.6g} s" for r in failed[1:])
-            nor = f" (nor {'are' if len(failed) > 2 else 'is'} {others})" if others else ""
-            parts.append(_sentence(failed[0], self) + ": not converged" + nor)
-        if self.invented:
-            more = len(self.invented) - 1
-            parts.append(self.invented[0] + ": a change the motion does not have"
-                         + (f" ({more} more like it)" if more else ""))
-        advice = "try tighter tolerances" if self.adaptive else "try a smaller step or dopri5"
-        if self.unchecked:
-            n = len(self.retakes)
-            advice += f" (only the first {n} transition{' was' if n == 1 else 's were'} taken again)"
-        return "; ".join(parts + [advice])
-
-
-_NAMES = {"liftoff": "lift-off"}   # (as ``Transition.sentence`` writes it)
-
-
-def _sentence(retake: Retake, check: TransitionCheck) -> str:
-    what = f"the {_NAMES.get(retake.kind, retake.kind)} at {retake.time:.6g} s"
-    if check.adaptive:
-        levels = ["with its tolerances", f"with tolerances {TIGHTER:g} times tighter",
-                  f"with tolerances {TIGHTER ** 2:g} times tighter"]
-        expected = f"{check.method} should move it by about 1/{TIGHTER:g} as much each time"
-    else:
-        levels = [f"at dt {retake.steps[0]:g}", "when the step was halved", "when it was halved again"]
-        expected = f"{check.method} should move it by about 1/{2 ** check.order} as much each time"
-    if retake.verdict == CHANGED:
-        k = next(i for i, t in enumerate(retake.times) if t is None)
-        return (f"{what} is not there {levels[k]} (taken again from t = {retake.start:.6g} s: "
-                f"{retake.found[k]})")
-    moves = retake.moves
-    return (f"{what} moved by {moves[0]:.2g} s {levels[1]} and by {moves[1]:.2g} s {levels[2]} "
-            f"({expected})")
-
 
 def verdict(times, *, shrink: float, floor: float = MOVE_FLOOR) -> str:
     """How a ladder of a transition's times (coarse to fine, each level ``shrink`` times finer in
@@ -158,45 +53,16 @@ def verdict(times, *, shrink: float, floor: float = MOVE_FLOOR) -> str:
     return PLATEAU
 
 
-@functools.cache
-def _retake_class():
-    """``Simulation`` that stops at its ``wanted``-th transition (what comes after, a flight, the next
-    segment, is not looked at). Made at first use: ``simulation`` imports this module."""
-    from .simulation import Simulation
-
-    class Retaking(Simulation):
-        wanted = 1
-
-        def _transition(self) -> None:
-            super()._transition()
-            if self.status is None and len(self.transitions) >= self.wanted:
-                self._flight, self.status = None, Status.OK
-
-        def _start_kernel_run(self, state, t: float, *, slides: bool, repeat: bool) -> None:
-            if len(self.transitions) >= self.wanted:   # (not the next segment's arrays either)
-                self.status = Status.OK
-                return
-            super()._start_kernel_run(state, t, slides=slides, repeat=repeat)
-
-    return Retaking
-
-
 def _retake(run, row: np.ndarray, t_row: float, mode: int, t_stop: float, wanted: int,
             **options) -> list[Transition] | None:
     """The transitions of the run taken again from ``row`` (at t_row, in ``mode``) on the run's
     clock, so that fixed steps dt / 2^k fall on its grid (``kernel.grid_steps_before``), with
     ``options`` (Simulation's), until it has ``wanted`` of them or reaches t_stop; None where the
     retake cannot be made, or stops short (not ok) before it had ``wanted`` transitions."""
-    from .simulation import _state_of
     try:
-        redo = _retake_class()(run.scene, t_end=t_stop, **options)
+        redo = run.from_state(state_of(run, row), t_row, mode, t_end=t_stop, stop_after=wanted, **options)
     except ValueError:
         return None
-    redo.judge_energy = False   # (the check's own runs are not checked)
-    redo.wanted = wanted
-    redo._mode, redo._mode_starts = mode, [(0, mode)]
-    redo._start_kernel_run(_state_of(run, row), t_row, slides=mode == SLIDING, repeat=False)
-    redo.advance()
     changes = list(redo.transitions)
     return changes if redo.status is Status.OK or len(changes) >= wanted else None
 
@@ -212,8 +78,8 @@ def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
     for before, change in zip(changes, changes[1:]):
         if before.kind != "landing" and change.time <= before.time:
             when = "at the instant of" if change.time == before.time else "before"
-            notes.append(f"the {_NAMES.get(change.kind, change.kind)} at {change.time:.6g} s comes {when} "
-                         f"the {_NAMES.get(before.kind, before.kind)} before it")
+            notes.append(f"the {NAMES.get(change.kind, change.kind)} at {change.time:.6g} s comes {when} "
+                         f"the {NAMES.get(before.kind, before.kind)} before it")
     begun = 0.0
     for change in getattr(run, "changes", changes):   # (turns of a slip too, which are no transitions)
         if change.kind != "slip":
@@ -237,7 +103,7 @@ def check_transitions(run) -> TransitionCheck | None:
     run is the 2011 model's). Each of the first MAX_CHECKED slips, grips and lift-offs is taken
     again from a recorded row before it that is not itself at such a change: the last at least
     LEAD_STEPS of the run's steps before it, or its segment's first where that is later (its
-    state by ``simulation._state_of``, in that row's mode), until the retake has it or is
+    state by ``mode_machine.state_of``, in that row's mode), until the retake has it or is
     MARGIN_STEPS steps past it, and its time read in each retake: fixed steps with the run's dt,
     dt/2 and dt/4, their steps on the run's grid, the moves to shrink 2^(p − SLACK)-fold per
     halving at least; adaptive with the run's tolerances (its own time) and tolerances TIGHTER
@@ -299,7 +165,7 @@ def check_transitions(run) -> TransitionCheck | None:
         times, found = [], []
         for result in results:
             kinds = [c.kind for c in result[:k]]
-            found.append(", ".join(f"{_NAMES.get(c.kind, c.kind)} at {c.time:.6g} s" for c in result[:k]) or
+            found.append(", ".join(f"{NAMES.get(c.kind, c.kind)} at {c.time:.6g} s" for c in result[:k]) or
                          f"no change of mode by {t_stop:.6g} s")
             times.append(result[k - 1].time if kinds == sequence else None)
         retakes.append(Retake(index, change.kind, change.time, t_row, steps, tuple(times), tuple(found),

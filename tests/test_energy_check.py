@@ -12,6 +12,7 @@ import pytest
 from conftest import make_scene
 from rollball import simulate, simulation
 from rollball.scene import Contact, Start
+from rollball.energy_check import _judged
 from rollball.simulation import Simulation
 
 BUMP = "0.3*exp(-(x/0.3)^2)"  # smooth
@@ -149,7 +150,7 @@ def test_intervals_of_flight_or_with_a_landing_are_not_taken_again():
     traj = run.trajectory()
     kinds = [change.kind for change in traj.transitions]
     assert "liftoff" in kinds and "landing" in kinds
-    judged = simulation._judged(run, run.rows)
+    judged = _judged(run, run.rows)
     flying = traj.mode[1:] == "flying"
     assert flying.any() and not judged[flying].any()
     for change in traj.transitions:

@@ -70,7 +70,7 @@ def test_a_narrow_ridge_in_the_way_is_hit_not_flown_through():
 def test_a_sticking_impact_keeps_the_angular_momentum_about_the_contact_point():
     n = np.array([0.0, 0.0, 1.0])
     v, w = np.array([2.0, 0.5, -3.0]), np.array([1.0, -4.0, 2.0])
-    hit = impact(v, w, n, mass=M, radius=R, restitution=0.0, friction=None)
+    hit = impact(v, w, n, mass=M, radius=R, restitution=0.0, friction=math.inf)
     assert hit.sticking and hit.normal_speed == 3.0 and hit.rebound == 0.0
     about_contact = lambda vel, om: 0.4 * M * R * R * om + M * R * np.cross(n, vel)
     assert np.allclose(about_contact(hit.velocity, hit.omega), about_contact(v, w), rtol=0, atol=1e-14)
@@ -79,7 +79,7 @@ def test_a_sticking_impact_keeps_the_angular_momentum_about_the_contact_point():
     before, after = energy(v, w, 0.0, M, R, G), energy(hit.velocity, hit.omega, 0.0, M, R, G)
     assert hit.energy_lost == pytest.approx(before - after, rel=1e-14) and hit.energy_lost > 0
     # a ball sliding on without spin keeps 5/7 of its speed along the surface (billiards)
-    plain = impact([2.0, 0.0, -1.0], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.0, friction=None)
+    plain = impact([2.0, 0.0, -1.0], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.0, friction=math.inf)
     assert plain.velocity == pytest.approx([10.0 / 7.0, 0.0, 0.0], abs=1e-15)
 
 
@@ -107,7 +107,7 @@ def test_rebound_apex_heights_scale_by_e_squared():
     for _ in range(4):
         t, foot = f.landing(100.0)
         s = f.state(t)
-        hit = impact(s.velocity, s.omega, foot.normal, mass=M, radius=R, restitution=e, friction=None)
+        hit = impact(s.velocity, s.omega, foot.normal, mass=M, radius=R, restitution=e, friction=math.inf)
         assert hit.rebound > rest_speed(R, G)
         apexes.append(hit.rebound ** 2 / (2 * G))
         f = Flight(f.surface, type(s)(t, s.center, hit.velocity, hit.omega, s.R), radius=R, mass=M, gravity=G)
@@ -121,7 +121,7 @@ def test_rebound_apex_heights_scale_by_e_squared():
 def test_a_slow_rebound_settles_and_counts_the_energy():
     n = np.array([0.0, 0.0, 1.0])
     slow = rest_speed(R, G) / 2
-    hit = impact([1.0, 0.0, -slow / 0.5], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.5, friction=None)
+    hit = impact([1.0, 0.0, -slow / 0.5], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.5, friction=math.inf)
     assert hit.rebound < rest_speed(R, G)
     rest = settle(hit, n, mass=M, radius=R)
     assert rest.velocity[2] == 0.0 and rest.rebound == 0.0

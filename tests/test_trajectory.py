@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rollball import COLUMNS, Simulation, Status, read_csv, simulate
-from rollball.simulation import step_count
+from rollball.run_size import step_count
 
 
 def test_step_count():

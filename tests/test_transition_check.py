@@ -18,8 +18,8 @@ from rollball.scene import Ball, Contact, Integrator, Scene, Start
 from rollball.simulation import Simulation
 from rollball.tableaus import get_method
 from rollball.trajectory import ROLLING, SLIDING, SLIP_SPEED, T, Transition
-from rollball.transition_check import (CHANGED, CONVERGED, GROWS, PLATEAU, NEGLIGIBLE, Retake, TransitionCheck,
-                                       verdict)
+from rollball.transition_check import verdict
+from rollball.transition_verdict import CHANGED, CONVERGED, GROWS, NEGLIGIBLE, PLATEAU, Retake, TransitionCheck
 
 G = 9.81
 THETA = math.radians(30.0)

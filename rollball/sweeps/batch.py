@@ -18,7 +18,8 @@ import numpy as np
 from .. import kernel, machine_code
 from ..landscape import landscape_of
 from ..scene import Scene, SceneError
-from ..simulation import Simulation, initial_momentum, step_count
+from ..run_size import step_count
+from ..simulation import Simulation, initial_momentum
 from ..tableaus import METHODS, MethodKind, get_method
 from ..trajectory import MODES, ROLLING, SLIDING, Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values

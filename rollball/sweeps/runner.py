@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from ..scene import Scene
-from ..simulation import MAX_STEPS, step_count
+from ..run_size import MAX_STEPS, step_count
 from . import batch
 from .grid import Grid, check_keys
 from .options import CONNECT_TIMEOUT, WORKER_TIMEOUT

@@ -1,0 +1,418 @@
+"""The contact's mode machine (docs/design.md §1): a run whose ball can slide, fly and land is a
+sequence of kernel runs, each in one mode, and flights between them. The machine holds the rows
+they recorded and the mode of each, and decides at every stop of a kernel run what comes next:
+a slip or a grip (a kernel run in the new mode from the state where it happened), a lift-off (a
+flight, from a kink, a tip, or the tangent plane), a landing (the impact, then a bounce or
+contact), or a stretch where the slip is too stiff for fixed steps (an adaptive pair takes it,
+docs/design.md §8). ``Simulation`` runs the kernel and hands each stop to ``ModeMachine.stopped``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from . import kernel, sliding
+from .flight import Flight, FreeState, OffLandscape, Surface, impact, rest_speed, settle
+from .geometry import unit_normal
+from .modes import AFTER, Change, Mode
+from .run_size import MAX_ROWS
+from .trajectory import (CONTACT, DISSIPATED, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T, VELOCITY,
+                         Failure, Liftoff, Reason, Status, Transition)
+
+# A friction coefficient above this acts as this one: "always enough friction" as far as a double
+# can tell (μ F_n stays finite for F_n up to 10²⁰⁸ N; a slide on a plane grips after 2 v₀/(7 μ g),
+# 10⁻¹⁰⁰ s here), where μ F_n itself overflowed to inf and inf − inf, 0 · inf made the friction
+# bound NaN.
+FRICTION_CAP = 1e100
+MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
+# A fixed-step run takes the stretch where a slip's direction is stiff (kernel.T_STIFF: friction
+# would stop the slip within a step, at its start or its end) with this adaptive pair at this
+# tolerance, far below the fixed steps' own error, to the first step on its grid where it can go
+# on (docs/design.md §8); STIFF_WINDOW steps of the grid at a time, twice as many while it cannot.
+STIFF_METHOD = "dop853"
+STIFF_TOLERANCE = 1e-12
+STIFF_WINDOW = 16
+
+
+def friction_of(contact) -> float:
+    """The contact's μ as the machine and the kernel use it: a number, inf for "always enough
+    friction to roll" (a scene's null), at most FRICTION_CAP where it is finite."""
+    return math.inf if contact.friction is None else min(contact.friction, FRICTION_CAP)
+
+
+def state_of(run, row: np.ndarray) -> sliding.BallState:
+    """A recorded row's state, the same in every mode (contact point, ċ, ω, R, D), with ċ in the
+    tangent plane at the contact point: a sliding run's ċ drifts off it by the step's error (its
+    normal part is not a variable of the motion, only kept at 0 by F_n), and the exact motion
+    from a state off it does not keep E + D."""
+    x, y = (float(value) for value in row[CONTACT])
+    normal = unit_normal(run.landscape.evaluate(x, y, run.scene.parameter_values))
+    velocity = row[VELOCITY] - np.dot(row[VELOCITY], normal) * normal
+    return sliding.BallState(x, y, velocity, row[OMEGA].copy(), row[R].reshape(3, 3).copy(), float(row[DISSIPATED]))
+
+
+class ModeMachine:
+    """The modes of one run (``Simulation``) whose contact can change mode: its rows, the mode of
+    each, its transitions, and what happens at each change (module docstring).
+
+    ``stop_after``: the run ends (ok) once it has this many transitions, before what follows
+    them is started (a flight, the next kernel run): a transition's retake looks at no more."""
+
+    def __init__(self, run, mode: Mode, rows: int, *, stop_after: int | None = None):
+        self.run = run
+        self.mode = mode
+        self.starts: list[tuple[int, Mode]] = [(0, mode)]   # (first row, mode) where the mode changes
+        self.out = np.empty((rows, kernel.ROW_SIZE))
+        self.count = 0              # rows in ``out``
+        self.taken = 0              # the current kernel run's rows already moved to ``out``
+        self.skip_first = False     # its first row repeats the last one (a slip or a grip)
+        self.changes: list[Transition] = []       # every change the kernel runs stopped at
+        self.transitions: list[Transition] = []   # the run's transitions (a slip turning about is none)
+        self.flight: Flight | None = None
+        self.surface = Surface(run.landscape, run.scene.parameter_values)
+        self.first_liftoff: Liftoff | None = None
+        self.dissipated = 0.0       # J: what a flight carries
+        self.off: Failure | None = None   # a flight found no surface below the ball, or a tip too slow to leave
+        self.stall: str | None = None     # why the contact's modes could not go on
+        self.stop_after = stop_after
+
+    # -- the rows ---------------------------------------------------------------------------------
+
+    @property
+    def rows(self) -> np.ndarray:
+        return self.out[: self.count]
+
+    def modes(self, count: int) -> np.ndarray:
+        """The mode of each of the first ``count`` rows (positions in ``modes.MODES``)."""
+        codes = np.empty(count, dtype=np.int8)
+        starts = self.starts + [(count, None)]
+        for (first, mode), (end, _) in zip(starts, starts[1:]):
+            codes[first:end] = mode
+        return codes
+
+    def restart(self, mode: Mode) -> None:
+        """Begin anew in ``mode`` (a run from a recorded state: no rows yet)."""
+        self.mode, self.starts = Mode(mode), [(0, Mode(mode))]
+
+    def append(self, rows: np.ndarray) -> None:
+        """Add rows to the run's rows (growing the buffer), in the current mode."""
+        if not len(rows):
+            return
+        if self.starts[-1][1] != self.mode:
+            self.starts.append((self.count, self.mode))
+        need = self.count + len(rows)
+        if need > len(self.out):
+            if need > MAX_ROWS:
+                raise ValueError(f"this run would record more than {MAX_ROWS:,} rows")
+            grown = np.empty((min(max(2 * len(self.out), need), MAX_ROWS), kernel.ROW_SIZE))
+            grown[: self.count] = self.out[: self.count]
+            self.out = grown
+        self.out[self.count: need] = rows
+        self.count = need
+
+    def collect(self) -> None:
+        """Move the current kernel run's new rows to the run's rows, and keep the first lift-off
+        it found (where the ball flies, a transition's)."""
+        run = self.run
+        count = int(run._ints[kernel.I_ROWS])
+        start = self.taken
+        if self.skip_first and start == 0 and count > 0:
+            start = 1
+        rows = run._rows[start:count].copy()
+        self.taken = count
+        self.append(rows)
+        info = run._info
+        if self.first_liftoff is None and not math.isnan(info[kernel.F_LIFTOFF]):
+            self.first_liftoff = Liftoff(float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]),
+                                         float(info[kernel.F_LIFT_Y]), bool(info[kernel.F_LIFT_KINK]))
+
+    def new_kernel_run(self, repeat: bool) -> None:
+        """A new kernel run's rows begin (``repeat``: its first row is the run's last row again)."""
+        self.taken, self.skip_first = 0, repeat
+
+    # -- a kernel run stopped at a change ------------------------------------------------------
+
+    def stopped(self) -> None:
+        """The kernel run stopped where the contact changes mode: go on in the new one."""
+        run = self.run
+        info = run._info
+        if int(run._ints[kernel.I_TRANSITION]) == kernel.T_STIFF:
+            run._finish_kernel_run()
+            self._stiff_stretch()
+            return
+        kind = Change(kernel.transition_name(int(run._ints[kernel.I_TRANSITION])))
+        t = float(info[kernel.F_EVENT_T])
+        x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
+        change = Transition(t, kind, x, y)
+        self.changes.append(change)
+        if not (kind is Change.SLIP and self.mode is Mode.SLIDING):
+            # (a slip whose speed fell to zero where rolling needs more friction than μ F·N turns
+            # about and goes on: the same slip, no new transition)
+            self.transitions.append(change)
+        run._finish_kernel_run()
+        at_once = self.changes[-MAX_AT_ONCE:]
+        if len(at_once) == MAX_AT_ONCE and all(change.time == t for change in at_once):
+            self.stall = (f"the contact changes mode {MAX_AT_ONCE} times at t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g}) "
+                          f"({', '.join(sorted({str(change.kind) for change in at_once}))}) without the time moving "
+                          f"on: rolling needs more friction than μ F·N there, and sliding stops at once, so the run "
+                          f"cannot go on")
+            run.status = Status.NONFINITE
+            return
+        if kind is Change.LIFTOFF:
+            self._lift_off(t, x, y)
+            if run.status is None:
+                self._enough()
+            return
+        if self._enough():
+            return
+        state = sliding.stopped_state(run._z, run._R, run._p, run._probe_normal())
+        self.mode = AFTER[kind]
+        self.dissipated = state.dissipated
+        run._start_kernel_run(state, t, slides=kind is Change.SLIP, repeat=True)
+
+    def _enough(self) -> bool:
+        """Whether the run has the transitions it was to look for (``stop_after``): it ends ok."""
+        if self.stop_after is not None and len(self.transitions) >= self.stop_after:
+            self.flight, self.run.status = None, Status.OK
+            return True
+        return False
+
+    def _lift_off(self, t: float, x: float, y: float) -> None:
+        """The ball leaves the surface at (x, y) at t: a flight from the kernel run's last state."""
+        run, info = self.run, self.run._info
+        last = self.out[self.count - 1]
+        self.dissipated = float(last[DISSIPATED])
+        self.mode = Mode.FLYING
+        # the flight leaves along the tangent plane: a sliding state's c'.N is the integrator's
+        # drift (0 in the exact motion), and a c' into the surface would land it at once
+        start = FreeState.from_row(last)
+        if info[kernel.F_LIFT_KINK] == kernel.LIFT_TIP:
+            force = self._pivot_force(start, x, y)
+            if force > 0.0:   # too slow to leave the tip: the ball would roll over it, pivoting
+                self.transitions.pop()
+                if self.first_liftoff is not None and self.first_liftoff.time == float(info[kernel.F_LIFTOFF]):
+                    self.first_liftoff = None
+                self.off = Failure(Reason.PIVOT, t, x, y, force)
+                run.status = Status.DOES_NOT_FIT
+                return
+        # a tip left (or one F·N reached 0 within round-off of) is measured directly in the flight's
+        # distances too: Newton's method finds no closest point there
+        point = np.array([x, y, float(run.landscape.evaluate(x, y, run.scene.parameter_values)[0])])
+        if (self._at_tip(x, y) and np.isfinite(point).all()
+                and not any(np.array_equal(point, known) for known in self.surface.tips)):
+            self.surface.tips.append(point)
+        normal = run._probe_normal()
+        velocity = start.velocity - float(np.dot(start.velocity, normal)) * normal
+        start = dataclasses.replace(start, velocity=velocity)
+        if info[kernel.F_LIFT_KINK] == 1.0 and t > start.t:
+            # a ridge's kink: the run's last state is the last one before it (the kink is located
+            # between it and the step's end); the ball is on the surface up to the kink, so it
+            # rolls (slides) there along the tangent plane and the flight starts at the kink
+            start = self._to_kink(start, t, normal)
+        self.flight = self._new_flight(start)
+
+    def _to_kink(self, start: FreeState, t: float, normal: np.ndarray) -> FreeState:
+        """The state at the kink's time t from ``start`` (the last state before it, τ = t − t₀ earlier),
+        moving in the tangent plane of ``normal`` as on that plane: rolling with acceleration
+        (5/7) g_t and ω = N × ċ/r plus its spin about N (this keeps E exactly), sliding with
+        g_t − μ g₀ N_z û (u the slip velocity) and the torque of that friction. Over the short
+        τ the surface's bending moves the centre off the plane by about κ|ċ|²τ²/2."""
+        scene = self.run.scene
+        tau = t - start.t
+        r, g0 = scene.ball.radius, scene.gravity
+        gravity = np.array([0.0, 0.0, -g0])
+        tangential = gravity - float(np.dot(gravity, normal)) * normal
+        omega = start.omega
+        mu = friction_of(scene.contact)
+        sliding_now = self.mode is Mode.SLIDING and mu < math.inf
+        if sliding_now:
+            slip = start.velocity + np.cross(omega, -r * normal)
+            slip -= float(np.dot(slip, normal)) * normal
+            speed = float(np.linalg.norm(slip))
+            friction = -mu * g0 * float(normal[2]) * slip / speed if speed > 0.0 else np.zeros(3)
+            acceleration = tangential + friction
+            omega = omega - (5.0 / (2.0 * r)) * np.cross(normal, friction) * tau
+            self.dissipated += scene.ball.mass * mu * g0 * float(normal[2]) * speed * tau
+        else:
+            acceleration = (5.0 / 7.0) * tangential
+        velocity = start.velocity + acceleration * tau
+        if not sliding_now:
+            omega = np.cross(normal, velocity) / r + float(np.dot(start.omega, normal)) * normal
+        center = start.center + start.velocity * tau + 0.5 * acceleration * tau * tau
+        R = Rotation.from_rotvec(0.5 * (start.omega + omega) * tau).as_matrix() @ start.R
+        return FreeState(t, center, velocity, omega, R)
+
+    def _at_tip(self, x: float, y: float) -> bool:
+        """Whether (x, y) is (within 10⁻⁶ of) a point where the normal turns through a finite angle:
+        the unit normals on a ring of that radius about it differ by more than 10⁻² (a smooth
+        surface's by about its curvature times 10⁻⁶)."""
+        run = self.run
+        ring = 1e-6 * (1.0 + abs(x) + abs(y))
+        angles = np.arange(8) * (np.pi / 4)
+        d = run.landscape.evaluate(x + ring * np.cos(angles), y + ring * np.sin(angles), run.scene.parameter_values)
+        normals = unit_normal(d).T
+        spread = np.linalg.norm(normals[:, None, :] - normals[None, :, :], axis=2)
+        return bool(np.nanmax(spread) > 1e-2) if np.isfinite(spread).any() else False
+
+    def _pivot_force(self, start: FreeState, x: float, y: float) -> float:
+        """F·N (N) the ball at ``start`` would need to turn about the tip at (x, y): its centre on
+        the sphere about the tip, m (g₀ e_z − |ċ_t|² / |c − T|) for e the unit vector from the tip T
+        to the centre and ċ_t the velocity across it (docs/design.md §1, "A tip"). At most 0: the
+        ball leaves the tip as it reaches it."""
+        scene = self.run.scene
+        f = float(self.run.landscape.evaluate(x, y, scene.parameter_values)[0])
+        arm = start.center - np.array([x, y, f])
+        distance = float(np.linalg.norm(arm))
+        e = arm / distance
+        across = start.velocity - float(np.dot(start.velocity, e)) * e
+        return scene.ball.mass * (scene.gravity * e[2] - float(np.dot(across, across)) / distance)
+
+    # -- a stretch where the slip is stiff (docs/design.md §8) ------------------------------------
+
+    def _stiff_stretch(self) -> None:
+        """The fixed-step kernel run stopped before a step where the slip's direction is stiff
+        (kernel.T_STIFF): its direction relaxes at the rate |B| / |u| and turns with B, which no
+        fixed step can follow at its order. That stretch is taken by STIFF_METHOD at
+        STIFF_TOLERANCE (every transition in it too), recording every step of the run's grid; the
+        fixed steps go on from the first grid time where the ball no longer slides, or its slip
+        is no longer stiff: its rows and transitions up to there are the run's."""
+        run = self.run
+        t = float(run._info[kernel.F_EVENT_T])
+        state = sliding.stopped_state(run._z, run._R, run._p, run._probe_normal())
+        mode, window = Mode.SLIDING, STIFF_WINDOW
+        while True:
+            t1 = (kernel.grid_steps_before(t, run.dt) + window) * run.dt
+            if not run.t_end - t1 > kernel.GRID_SLIVER * run.dt:
+                t1 = run.t_end
+            stretch = run.from_state(state, t, mode, t_end=t1, method=STIFF_METHOD, rtol=STIFF_TOLERANCE,
+                                     atol=STIFF_TOLERANCE, record_dt=run.dt)
+            rows, modes = stretch.rows, stretch.modes
+            if stretch.status is not Status.OK:   # (its rows and transitions so far are the run's)
+                self._adopt(stretch, len(rows) - 1)
+                run.status, self.off = stretch.status, stretch.failure
+                return
+            _, on_grid = self._grid(rows[:, T])
+            free = [i for i in range(1, len(rows))
+                    if on_grid[i] and (modes[i] != Mode.SLIDING or not self._stiff(rows[i]))]
+            end = free[0] if free else len(rows) - 1
+            self._adopt(stretch, end)
+            row, mode, t = rows[end], Mode(int(modes[end])), float(rows[end, T])
+            if not run.t_end - t > 1e-12 * run.t_end:
+                run.status = Status.OK
+                return
+            if self._enough():
+                return
+            self.mode, self.dissipated = mode, float(row[DISSIPATED])
+            if free and mode is Mode.FLYING:
+                self.flight = self._new_flight(FreeState.from_row(row))
+                return
+            if free:
+                run._start_kernel_run(state_of(run, row), t, slides=mode is Mode.SLIDING, repeat=True)
+                return
+            state, window = state_of(run, row), 2 * window   # still stiff: on from there
+
+    def _grid(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each time's step number k on the run's grid (k·dt) and whether it is on the grid."""
+        k = np.round(times / self.run.dt)
+        return k, np.abs(times / self.run.dt - k) < 1e-9
+
+    def _stiff(self, row: np.ndarray) -> bool:
+        """Whether a sliding row's slip is stiff for the fixed steps: friction would stop it within
+        a step (the kernel's ``slip_reference``)."""
+        run = self.run
+        return (row[SLIP_SPEED] * run.scene.ball.mass
+                < 3.5 * float(run._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) * run.dt)
+
+    def _adopt(self, stretch, end: int) -> None:
+        """A stretch's rows 1 to ``end`` (those at the run's recording times, at its transitions or
+        at the end of the run), its transitions up to there and its counts, as the run's own."""
+        run = self.run
+        rows, modes = stretch.rows[: end + 1], stretch.modes[: end + 1]
+        t_end = float(rows[-1, T])
+        transitions, changes = {id(c) for c in stretch.transitions}, {id(c) for c in stretch.changes}
+        merged = sorted({id(c): c for c in [*stretch.changes, *stretch.transitions] if c.time <= t_end}.values(),
+                        key=lambda c: (c.time, c.kind is not Change.LANDING))
+        at = {change.time for change in merged}
+        k, on_grid = self._grid(rows[:, T])
+        kept = [i for i in range(1, len(rows))
+                if rows[i, T] in at or rows[i, T] >= run.t_end or (on_grid[i] and k[i] % run.record_every == 0)]
+        for i in kept:
+            self.mode = Mode(int(modes[i]))
+            self.append(rows[i: i + 1].copy())
+        for change in merged:
+            if id(change) in changes:
+                self.changes.append(change)
+            if id(change) in transitions:
+                self.transitions.append(change)
+        run._finished[0] += stretch.steps
+        run._finished[1] += stretch.rejected
+        run._finished[2] += stretch.evaluations
+        if self.first_liftoff is None and stretch.liftoff is not None and stretch.liftoff.time <= t_end:
+            self.first_liftoff = stretch.liftoff
+
+    # -- a flight and its landing -------------------------------------------------------------------
+
+    def _new_flight(self, start: FreeState) -> Flight:
+        scene = self.run.scene
+        return Flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity)
+
+    def record_times(self, t0: float, t1: float) -> np.ndarray:
+        """The run's recording times strictly between t0 and t1 (fixed steps: every
+        record_every-th multiple of dt; adaptive: the multiples of record_dt, or of dt), each
+        computed as the kernel computes its rows' times (k·dt, k·record_dt)."""
+        run = self.run
+        every, step = (run.record_every, run.dt) if not run.adaptive else (1, run.record_dt or run.dt)
+        spacing = every * step
+        k0, k1 = math.floor(t0 / spacing) + 1, math.ceil(t1 / spacing) - 1
+        if k1 - k0 + 1 > MAX_ROWS:
+            raise ValueError(f"this flight would record more than {MAX_ROWS:,} rows")
+        times = (np.arange(k0, k1 + 1) * every) * step
+        return times[(times > t0) & (times < t1)]
+
+    def fly(self) -> None:
+        """Take the current flight to its landing (or to t_end), then the impact there."""
+        run, flight = self.run, self.flight
+        scene = run.scene
+        ball, contact = scene.ball, scene.contact
+        dissipated = self.dissipated
+        try:
+            landing = flight.landing(run.t_end)
+        except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
+            self.append(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
+                                    if off.time > flight.start.t else np.empty(0), dissipated))
+            self.flight = None
+            self.off = Failure(Reason(off.reason), off.time, *off.point, off.value)
+            run.status = Status(FLIGHT_REASONS[off.reason][0]) if off.reason in FLIGHT_REASONS else Status.NONFINITE
+            return
+        if landing is None:
+            times = np.append(self.record_times(flight.start.t, run.t_end), run.t_end)
+            self.append(flight.rows(times, dissipated))
+            self.flight = None
+            run.status = Status.OK
+            return
+        t, foot = landing
+        self.append(flight.rows(self.record_times(flight.start.t, t), dissipated))
+        s = flight.state(t)
+        hit = impact(s.velocity, s.omega, foot.normal, mass=ball.mass, radius=ball.radius,
+                     restitution=contact.restitution, friction=friction_of(contact))
+        bounces = hit.rebound > rest_speed(ball.radius, scene.gravity)
+        if not bounces:
+            hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
+        self.dissipated = dissipated = dissipated + hit.energy_lost
+        self.transitions.append(Transition(t, Change.LANDING, foot.x, foot.y, hit.normal_speed, hit.energy_lost))
+        if self._enough():
+            return
+        if bounces:   # off again: the state just after the impact is a row of the new flight
+            self.flight = self._new_flight(FreeState(t, s.center, hit.velocity, hit.omega, s.R))
+            self.append(self.flight.rows(np.array([t]), dissipated))
+            if t >= run.t_end:
+                self.flight, run.status = None, Status.OK
+            return
+        self.flight = None
+        self.mode = Mode.ROLLING if hit.sticking else Mode.SLIDING
+        state = sliding.BallState(foot.x, foot.y, hit.velocity, hit.omega, s.R, dissipated)
+        run._start_kernel_run(state, t, slides=not hit.sticking, repeat=False)

@@ -1,0 +1,41 @@
+"""The contact's modes and the changes between them (docs/design.md §1), as named values.
+
+A recorded row is in one ``Mode``; a ``Change`` of mode is a transition. Both compare equal to
+what they were as bare values (a mode to its position in ``MODES``, a change to its name), so a
+trajectory's arrays and files keep their numbers and words.
+"""
+
+from __future__ import annotations
+
+import enum
+
+
+class Mode(enum.IntEnum):
+    """The contact's mode: on the surface without slipping, slipping on it, or off it."""
+
+    ROLLING = 0
+    SLIDING = 1
+    FLYING = 2
+
+    def __str__(self) -> str:
+        return self.name.lower()
+
+
+class Change(str, enum.Enum):
+    """A change of mode: rolling turns into sliding (slip), sliding into rolling (grip), the ball
+    leaves the surface (liftoff) or comes back to it (landing)."""
+
+    SLIP = "slip"
+    GRIP = "grip"
+    LIFTOFF = "liftoff"
+    LANDING = "landing"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+MODES = tuple(str(mode) for mode in Mode)   # the names a CSV writes, at their modes' positions
+ROLLING, SLIDING, FLYING = Mode
+TRANSITION_KINDS = tuple(str(change) for change in Change)
+# The mode a change leads to (a landing leads to rolling or sliding, as its impact decides).
+AFTER = {Change.SLIP: Mode.SLIDING, Change.GRIP: Mode.ROLLING, Change.LIFTOFF: Mode.FLYING}
