@@ -111,8 +111,11 @@ def build_parser() -> argparse.ArgumentParser:
         "sweep", help="run a scene over a grid of values: one row of outcomes per run",
         description="Run a scene once for every combination of the varied values (the last "
                     "--vary varies fastest) and write sweep.csv (one row per run: the varied "
-                    "values, status, t_reached, liftoff_time, x_end, y_end, energy_drift, "
-                    "min_normal_force, max_speed, path_length), sweep.json and sweep.png. "
+                    "values, status, then the outcomes t_reached, liftoff_time, x_end, y_end, "
+                    "energy_drift, min_normal_force, max_speed, path_length and, of the contact, "
+                    "end_mode (rolling, sliding or flying), landings, first_slip_time and "
+                    "first_grip_time), sweep.json and sweep.png (a map coloured by one outcome, "
+                    "or each outcome against one varied key). "
                     "Local on every core by default; --scheduler sends the runs to a Dask "
                     "cluster. Ctrl-C stops and writes the runs finished so far.")
     sweep.add_argument("scene", metavar="SCENE.json", help="scene file (a fixed-step method)")

@@ -169,7 +169,7 @@ def test_save_writes_csv_json_and_a_map(tmp_path):
     rows = list(csv.reader(open(tmp_path / "sweep.csv", encoding="utf-8")))
     assert rows[0] == ["start.vx", "start.spin", "status", "t_reached", "liftoff_time", "x_end", "y_end",
                        "energy_drift", "min_normal_force", "max_speed", "path_length", "end_mode", "landings",
-                       "first_slip_time", "message"]
+                       "first_slip_time", "first_grip_time", "message"]
     assert len(rows) == 7 and rows[1][:3] == ["3.0", "-1.0", "ok"] and rows[1][4] == ""   # no lift-off
     assert float(rows[5][4]) == table["liftoff_time"][4]                                  # full precision
     info = json.loads((tmp_path / "sweep.json").read_text())
@@ -270,6 +270,8 @@ def test_a_billiard_sweep_slips_from_the_start_and_grips_at_the_exact_time():
     np.testing.assert_array_equal(table["first_slip_time"], 0.0)
     np.testing.assert_array_equal(table["landings"], 0.0)
     np.testing.assert_array_equal(table["end_mode"], np.where(rolls, MODES.index("rolling"), MODES.index("sliding")))
+    np.testing.assert_allclose(table["first_grip_time"][rolls], grip[rolls], rtol=1e-13, atol=0)
+    assert np.isnan(table["first_grip_time"][~rolls]).all()
     slid = np.minimum(grip, T)
     x_end = scene.start.x + v0 * slid - 0.5 * mu * g * slid ** 2 + np.where(rolls, 5 * v0 / 7 * (T - grip), 0.0)
     np.testing.assert_allclose(table["x_end"], x_end, rtol=0, atol=1e-12)
@@ -300,3 +302,19 @@ def test_a_sweep_over_friction_finds_the_incline_threshold_and_over_restitution_
     assert table["landings"][0] == 1.0 and table["landings"][1] > 1.0
     refused = sweep(bounce, {"contact.restitution": [1.5]}, workers=1)
     assert list(refused["status"]) == ["invalid"] and "restitution" in refused.messages[0]
+
+
+def test_the_contacts_outcomes_are_drawn_where_the_contact_changes_and_named_in_the_help(capsys):
+    """A sweep whose runs slip and grip draws the contact's outcomes against the varied key too
+    (the grip at 2v₀/(7μg) falls as 1/μ), a glued one only the kernel's; sweep --help names them."""
+    from rollball.sweeps.outcomes import CONTACT_OUTCOMES, OUTCOMES
+    from rollball.sweeps.plot import _contact_changes
+
+    billiard = sweep(Scene.load(EXAMPLES_DIR / "billiard.json"), {"contact.friction": [0.1, 0.2]}, workers=1)
+    np.testing.assert_allclose(billiard["first_grip_time"], 4.0 / (7 * np.array([0.1, 0.2]) * 9.81), rtol=1e-13)
+    glued = sweep(Scene.load(EXAMPLES_DIR / "hills.json"), {"start.vx": [0.0, 0.5]}, workers=1)
+    assert _contact_changes(billiard) and not _contact_changes(glued)
+    with pytest.raises(SystemExit):
+        main(["sweep", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert all(name in text for name in OUTCOMES) and all(name in text for name in CONTACT_OUTCOMES)

@@ -17,13 +17,14 @@ import numpy as np
 
 from .. import kernel, machine_code
 from ..landscape import landscape_of
-from ..scene import Scene, SceneError
+from ..modes import MODES, ROLLING, SLIDING, Change
 from ..run_size import step_count
+from ..scene import Scene, SceneError
 from ..simulation import Simulation, initial_momentum
 from ..tableaus import METHODS, MethodKind, get_method
-from ..trajectory import MODES, ROLLING, SLIDING, Status
+from ..trajectory import Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
-from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
+from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -144,8 +145,10 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     out[O_LANDINGS] = traj.landings
     # a ball that slides from its start (a start.omega that does not roll) slips at t = 0
     slips = [float(traj.t[0])] if len(traj) and str(traj.mode[0]) == MODES[SLIDING] else []
-    slips += [change.time for change in traj.transitions if change.kind == "slip"]
+    slips += [change.time for change in traj.transitions if change.kind is Change.SLIP]
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
+    grips = [change.time for change in traj.transitions if change.kind is Change.GRIP]
+    out[O_FIRST_GRIP] = grips[0] if grips else np.nan
     return _CODES[traj.status], out
 
 

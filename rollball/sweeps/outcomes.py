@@ -12,10 +12,11 @@ from .. import kernel
 
 # The kernel's outcomes, then the contact's: the mode at the end (its position in
 # trajectory.MODES: 0 rolling, 1 sliding, 2 flying; the CSV writes its name), the number of
-# landings and the time of the first slip (0 for a ball sliding from its start; NaN: none).
-CONTACT_OUTCOMES = ("end_mode", "landings", "first_slip_time")
+# landings, the time of the first slip (0 for a ball sliding from its start; NaN: none) and of
+# the first grip (the first slip's end; NaN: none).
+CONTACT_OUTCOMES = ("end_mode", "landings", "first_slip_time", "first_grip_time")
 OUTCOMES = kernel.OUTCOMES + CONTACT_OUTCOMES
-O_END_MODE, O_LANDINGS, O_FIRST_SLIP = (OUTCOMES.index(name) for name in CONTACT_OUTCOMES)
+O_END_MODE, O_LANDINGS, O_FIRST_SLIP, O_FIRST_GRIP = (OUTCOMES.index(name) for name in CONTACT_OUTCOMES)
 
 # Status codes beyond the kernel's: a run whose varied scene was refused, and one not run yet.
 INVALID, NOT_RUN = 10, kernel.NOT_RUN

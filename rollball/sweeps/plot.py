@@ -8,6 +8,7 @@ fitting are hatched whatever their colour, so those regions read at a glance.
 from __future__ import annotations
 
 import io
+import math
 import warnings
 
 import numpy as np
@@ -15,10 +16,12 @@ import numpy as np
 from .. import kernel
 from ..files import atomic_write_bytes
 from .grid import KEYS
-from .outcomes import INVALID, NOT_RUN, OUTCOMES
+from ..modes import MODES, ROLLING
+from .outcomes import CONTACT_OUTCOMES, INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
 
 UNITS = {"t_reached": "s", "liftoff_time": "s", "x_end": "m", "y_end": "m", "energy_drift": "relative",
-         "min_normal_force": "N", "max_speed": "m/s", "path_length": "m"}
+         "min_normal_force": "N", "max_speed": "m/s", "path_length": "m", "first_slip_time": "s",
+         "first_grip_time": "s"}
 
 # Colours of the runs that have no value to colour by, with their legend text.
 _CATEGORY = {
@@ -127,12 +130,25 @@ def _map(plt, table, color):
     return fig
 
 
+def _contact_changes(table) -> bool:
+    """Whether any run's contact changed mode (it slipped, gripped, landed or did not end
+    rolling): only then are the contact's outcomes drawn against the varied key."""
+    out = table.outcomes
+    with np.errstate(invalid="ignore"):
+        return bool(np.isfinite(out[:, [O_FIRST_SLIP, O_FIRST_GRIP]]).any() or (out[:, O_LANDINGS] > 0).any()
+                    or ((out[:, O_END_MODE] != ROLLING) & np.isfinite(out[:, O_END_MODE])).any())
+
+
 def _curves(plt, table, color):
     (key,) = table.keys
     x = table.grid.axes[0]
     order = np.argsort(x)
-    names = (color,) + tuple(o for o in OUTCOMES if o != color)
-    fig, axes = plt.subplots(2, 4, figsize=(12.0, 6.0), sharex=True)
+    shown = OUTCOMES if _contact_changes(table) else tuple(o for o in OUTCOMES if o not in CONTACT_OUTCOMES)
+    names = (color,) + tuple(o for o in shown if o != color)
+    rows = math.ceil(len(names) / 4)
+    fig, axes = plt.subplots(rows, 4, figsize=(12.0, 3.0 * rows), sharex=True)
+    for ax in axes.ravel()[len(names):]:
+        ax.set_visible(False)
     codes = table.codes[order]
     for ax, name in zip(axes.ravel(), names):
         y = table[name][order]
@@ -147,8 +163,11 @@ def _curves(plt, table, color):
         ax.set_title(label(name), fontsize=9)
         if name == "energy_drift" and np.nanmax(np.abs(y), initial=0.0) > 0:
             ax.set_yscale("log")
+        if name == "end_mode":
+            ax.set_yticks(range(len(MODES)), MODES)
+            ax.set_ylim(-0.5, len(MODES) - 0.5)
         ax.tick_params(labelsize=8)
-    for ax in axes[1]:
+    for ax in axes.ravel()[max(len(names) - 4, 0): len(names)]:   # (the lowest panel of each column)
         ax.set_xlabel(label(key), fontsize=9)
     if axes[0, 0].get_legend_handles_labels()[0]:  # none when no run was run (all refused)
         axes[0, 0].legend(fontsize=8)
