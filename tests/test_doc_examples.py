@@ -1,4 +1,4 @@
-"""Every code block of the README and the user guide (docs/guide/*.md) runs: Python blocks as they
+"""Every code block of the README, the user guide (docs/guide/*.md) and the Python API page runs: Python blocks as they
 are written, ``.venv/bin/rollball`` commands with this Python. The few commands that open the app's
 window or run the whole suite are listed in NOT_RUN with the reason; any other command fails here
 until it is run or listed."""
@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md"))]
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md")), ROOT / "docs" / "reference" / "python.md"]
 NOT_RUN = {
     "scripts/run": "opens the app's window and waits for its user (tests/gui drive the app)",
     "scripts/test": "runs the whole test suite (about 8 minutes), this test among it",
