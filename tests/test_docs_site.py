@@ -14,6 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def build(config: Path, site: Path) -> subprocess.CompletedProcess:
+    """``mkdocs build --strict``; never with ``-q``, which drops the warnings before --strict counts them."""
     return subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-f", str(config),
                            "-d", str(site)], capture_output=True, text=True, cwd=ROOT, timeout=300)
 
