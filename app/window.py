@@ -380,8 +380,9 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def show_about(self) -> None:
         QtWidgets.QMessageBox.about(self, "About RollBall",
-                                    f"<b>RollBall {__version__}</b><p>A solid ball rolling without slipping on "
-                                    f"z = f(x, y). Euler, RK4 and Lawson5, classic or Munthe-Kaas.</p>")
+                                    f"<b>RollBall {__version__}</b><p>A solid ball rolling, sliding and flying over "
+                                    f"z = f(x, y): fixed-step, implicit and adaptive methods, classic or "
+                                    f"Munthe-Kaas.</p>")
 
     # -- modes, the window's own events, text size -------------------------------------
 

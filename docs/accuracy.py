@@ -1,4 +1,4 @@
-"""The accuracy figures the README quotes, measured against an independent reference.
+"""The accuracy figures the manual quotes (docs/reference/methods.md), measured against an independent reference.
 
 Run from the repository's root (about seven minutes on 2 shared cores; needs scipy):
 

@@ -133,13 +133,13 @@ def at_evaluations(runs: list[dict], method: str, evaluations: float) -> float:
     return float(np.exp(e[i - 1] + slope * (np.log(evaluations) - n[i - 1])))
 
 
-ROLLING = ("hills", "saddle", "crater")   # the README's first figures; the many valleys apart
+ROLLING = ("hills", "saddle", "crater")   # the manual's first figures; the many valleys apart
 
 
 def trade(now: dict, before: dict, method: str, scenes: tuple[str, ...]) -> dict[str, tuple[float, float]]:
     """Over these scenes and the three tolerances, the (smallest, largest) ratio now / before of
     the error at the same rtol ("error"), of the evaluations ("evaluations") and of the error
-    against before's at as many evaluations ("same_cost"): what README.md quotes."""
+    against before's at as many evaluations ("same_cost"): what docs/reference/methods.md quotes."""
     out = {"error": [], "evaluations": [], "same_cost": []}
     for entry, old in zip(now["scenes"], before["scenes"]):
         if entry["scene"] not in scenes:

@@ -1,14 +1,14 @@
-"""The README's lift-off map: the ``liftoff`` example (it flies after its lift-off and lands)
+"""The lift-off map of docs/reference/sweeps.md: the ``liftoff`` example (it flies after its lift-off and lands)
 swept over start speed × spin, 400 × 300 = 120 000 runs of 1 s at rk4, dt = 1e-3.
 
 Run from the repository's root (a quarter of an hour or more on 2 shared cores):
 
     .venv/bin/python docs/sweep_liftoff.py          # writes docs/sweep_liftoff.png, .json and .md
 
-It runs the sweep the README's command runs (``rollball sweep liftoff --vary start.vx=3:8:400
+It runs the sweep the manual's command runs (``rollball sweep liftoff --vary start.vx=3:8:400
 --vary start.spin=-4:4:300``), on every core, and keeps the map (coloured by the first
 lift-off's time) and sweep.json beside it; the CSV (some 30 MB) is left out. sweep_liftoff.md
-holds what the README quotes about the outcomes: how many runs lift off, land, and in which
+holds what the manual quotes about the outcomes: how many runs lift off, land, and in which
 mode they end, the lowest speed that lifts off, whether the spin changes any outcome, and the
 wall time and rate.
 """

@@ -1,4 +1,4 @@
-"""Runs per second of sweeps over contact scenes (the README's figures), one thread.
+"""Runs per second of sweeps over contact scenes (the figures of docs/reference/sweeps.md), one thread.
 
 Run from the repository's root (a minute or two):
 

@@ -1,4 +1,4 @@
-"""RollBall: a solid ball rolling without slipping over a landscape z = f(x, y).
+"""RollBall: a solid ball rolling, sliding and flying over a landscape z = f(x, y).
 
 The public names below are imported when first used (PEP 562), not with the package: ``import
 rollball.cli`` stays cheap, so ``rollball --help`` and a refused argument answer at once, and

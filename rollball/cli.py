@@ -73,7 +73,7 @@ def _method(text: str) -> str:
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
-        description="Simulate a solid ball rolling without slipping over a landscape z = f(x, y).",
+        description="Simulate a solid ball rolling, sliding and flying over a landscape z = f(x, y).",
         epilog="Example: rollball simulate hills --csv hills.csv (an example by name, or a scene file)",
     )
     parser.add_argument("--version", action="version", version=f"rollball {__version__}")

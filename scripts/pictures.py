@@ -1,4 +1,4 @@
-"""Regenerate the pictures in docs/: the README's screenshot (hills, run to t = 4 s) and a
+"""Regenerate the pictures in docs/: the README's and the manual's screenshot (hills, run to t = 4 s) and a
 contact sheet of every example as it opens (docs/examples.png, the 3-D view of each).
 
 Run under a display with OpenGL, e.g. ``xvfb-run -a -s "-screen 0 1400x900x24 +extension GLX

@@ -1,6 +1,6 @@
-"""The README's accuracy figures are what the scripts that make them measured: docs/accuracy.py
+"""The manual's accuracy figures are what the scripts that make them measured: docs/accuracy.py
 (docs/accuracy.json) and ``rollball compare hills`` (docs/compare-hills/compare.json). When a
-script is run again and its figures move beyond noise, this fails until the README says so."""
+script is run again and its figures move beyond noise, this fails until the manual says so."""
 
 import json
 import math
@@ -10,12 +10,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-README = (ROOT / "README.md").read_text(encoding="utf-8")
+# the pages that quote the figures (the reports the scripts write are not among them)
+MANUAL = "\n".join(p.read_text(encoding="utf-8") for p in sorted(
+    [*(ROOT / "docs" / "guide").glob("*.md"), *(ROOT / "docs" / "reference").glob("*.md"), ROOT / "docs" / "performance.md"]))
 ACCURACY = json.loads((ROOT / "docs" / "accuracy.json").read_text())
 
 
 def within(values, lo, hi, slack=0.1):
-    """Every measured value inside the README's range [lo, hi], give or take ``slack`` (relative)."""
+    """Every measured value inside the manual's range [lo, hi], give or take ``slack`` (relative)."""
     values = list(values)
     return lo * (1 - slack) <= min(values) and max(values) <= hi * (1 + slack)
 
@@ -41,7 +43,7 @@ def same_error(scene):
     ("(at most 0.3 rtol)", lambda: [r["R_over_rtol"] for r in runs("saddle", "dop853")], 0, 0.3, 0.1),
     ("0.62–0.72 times its evaluations on the saddle", lambda: same_error("saddle"), 0.62, 0.72, 0.05),
     ("0.59–0.74 on a crater that is not an example", lambda: same_error("crater"), 0.59, 0.74, 0.05),
-    # at most scipy's evaluations at every error measured (the README's "0.79–0.93" within noise, never above 1)
+    # at most scipy's evaluations at every error measured (the manual's "0.79–0.93" within noise, never above 1)
     ("and 0.79–0.93 on the hills;", lambda: same_error("hills"), 0.79, 0.93, 0.05),
     ("and 0.79–0.93 on the hills;", lambda: same_error("hills") + same_error("saddle") + same_error("crater"), 0,
      1.0, 0),
@@ -53,16 +55,16 @@ def same_error(scene):
     ("RK4's grows to 5e-6", lambda: [ACCURACY["energy"]["rk4"]], 4.5e-6, 5.5e-6, 0.1),
     ("0.3 m amplitude takes 2.306 s (measured", lambda: ACCURACY["bowl_period"]["periods"], 2.3055, 2.3065, 0),
 ])
-def test_readme_figures_are_the_accuracy_scripts(text, values, lo, hi, slack):
-    assert " ".join(text.split()) in " ".join(README.split())
+def test_the_manuals_figures_are_the_accuracy_scripts(text, values, lo, hi, slack):
+    assert " ".join(text.split()) in " ".join(MANUAL.split())
     assert within(values(), lo, hi, slack), (text, values())
 
 
-def test_readme_orders_are_the_hills_comparisons():
+def test_the_manuals_orders_are_the_hills_comparisons():
     doc = json.loads((ROOT / "docs" / "compare-hills" / "compare.json").read_text())
     orders = {o["method"]: o["orientation"] for o in doc["orders"] if o["munthe_kaas"]}
     quoted = re.search(r"fitted slopes ([\d.]+), ([\d.]+), ([\d.]+), ([\d.]+) and ([\d.]+) are the orders",
-                       " ".join(README.split()))
+                       " ".join(MANUAL.split()))
     assert quoted
     for method, text in zip(("euler", "rk4", "lawson5", "gauss4", "gauss6"), quoted.groups()):
         assert f"{orders[method]:.2f}" == text
@@ -83,8 +85,8 @@ def test_the_evaluations_for_an_error_are_read_off_each_ladders_front():
     assert on_front(points, 1e-10) is None and on_front(points, 1e-6) is None
 
 
-def test_readme_figures_on_the_error_scale_are_docs_dopri5_scale():
-    """The ranges README.md and design.md quote are docs/dopri5_scale.py's, read from the figures
+def test_the_manuals_figures_on_the_error_scale_are_docs_dopri5_scale():
+    """The ranges the manual (docs/reference/methods.md) and design.md quote are docs/dopri5_scale.py's, read from the figures
     it wrote (docs/dopri5_scale.json: the code before the scale and this one)."""
     import sys
     sys.path.insert(0, str(ROOT / "docs"))
@@ -92,7 +94,7 @@ def test_readme_figures_on_the_error_scale_are_docs_dopri5_scale():
 
     doc = json.loads((ROOT / "docs" / "dopri5_scale.json").read_text())
     design = " ".join((ROOT / "docs" / "design.md").read_text().split())
-    readme = " ".join(README.split())
+    manual = " ".join(MANUAL.split())
 
     def span(pair):
         return f"{pair[0]:.2f}–{pair[1]:.2f}"
@@ -108,7 +110,7 @@ def test_readme_figures_on_the_error_scale_are_docs_dopri5_scale():
                  f"the error is {span(valleys['error'])} times, with {span(valleys['evaluations'])} times",
                  f"is at {span(dop853['error'])} times its error with {span(dop853['evaluations'])} times",
                  f"({span(dop853['same_cost'])} times for as many evaluations)"):
-        assert text in readme, text
+        assert text in manual, text
     for text in (f"dopri5 {span(dopri5['evaluations'])} times the evaluations, {span(dopri5['error'])} times",
                  f"{span(dopri5['same_cost'])} times the error the scale before", f"dop853 {span(dop853['evaluations'])}",
                  f"{span(dop853['error'])} times the error", f"{span(dop853['same_cost'])} times for as many"):
@@ -116,10 +118,10 @@ def test_readme_figures_on_the_error_scale_are_docs_dopri5_scale():
     lift = {(b["scene"], b["rtol"]): (b["error"], n["error"], b["evaluations"], n["evaluations"])
             for b, n in zip(doc["before"]["liftoffs"], doc["now"]["liftoffs"])}
     was, now, evaluations, _ = lift[("liftoff", 1e-8)]
-    assert sci(now) == sci(was) and f"within {sci(now)} s" in readme and f"same {evaluations} evaluations" in readme
+    assert sci(now) == sci(was) and f"within {sci(now)} s" in manual and f"same {evaluations} evaluations" in manual
     was, now, _, _ = lift[("cylinder", 1e-8)]
-    assert f"within {sci(now)} s (was {sci(was)}) at rtol 1e-8" in readme
+    assert f"within {sci(now)} s (was {sci(was)}) at rtol 1e-8" in manual
     was, now, _, _ = lift[("cylinder", 1e-10)]
-    assert f"{sci(now)} s (was {sci(was)}) at 1e-10" in readme
+    assert f"{sci(now)} s (was {sci(was)}) at 1e-10" in manual
     worst = dopri5["error"][1]
-    assert f"about {worst:.1f} times tighter" in readme
+    assert f"about {worst:.1f} times tighter" in manual

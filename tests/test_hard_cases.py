@@ -1,4 +1,4 @@
-"""Numerical hard cases, each with its documented outcome (summarised in README, "Limits of the model").
+"""Numerical hard cases, each with its documented outcome (summarised in docs/guide/limits.md).
 
 Exact answers tested elsewhere and not repeated here: the cylinder lift-off cos θ = (10/17) cos θ₀
 (test_physics), a ball too big at the start, running off the domain of sqrt (test_physics), the
