@@ -79,6 +79,11 @@ class ModeMachine:
         self.off: Failure | None = None   # a flight found no surface below the ball, or a tip too slow to leave
         self.stall: str | None = None     # why the contact's modes could not go on
         self.stop_after = stop_after
+        # a kernel run recording every adaptive step writes its rows straight into ``out`` from
+        # row ``base`` on (``shared_rows``): no second buffer of millions of rows; None: it has
+        # its own rows, moved here as it goes
+        self.base: int | None = None
+        self.saved: np.ndarray | None = None   # the row its first row lands on, put back (``collect``)
 
     # -- the rows ---------------------------------------------------------------------------------
 
@@ -108,31 +113,61 @@ class ModeMachine:
         if need > len(self.out):
             if need > MAX_ROWS:
                 raise ValueError(f"this run would record more than {MAX_ROWS:,} rows")
-            grown = np.empty((min(max(2 * len(self.out), need), MAX_ROWS), kernel.ROW_SIZE))
-            grown[: self.count] = self.out[: self.count]
-            self.out = grown
+            self._grow(self.count, need)
         self.out[self.count: need] = rows
         self.count = need
 
+    def shared_rows(self, repeat: bool, rows: int) -> np.ndarray:
+        """The rows a kernel run that records every adaptive step writes to: ``out`` from the
+        run's next row on, room for ``rows`` made (``repeat``: from its last row, which the
+        kernel's first row, the same state again, lands on and ``collect`` puts back)."""
+        self.base = self.count - (1 if repeat else 0)
+        self.saved = self.out[self.base].copy() if repeat else None
+        if self.base + rows > len(self.out):
+            self._grow(self.count, self.base + rows)
+        return self.out[self.base:]
+
+    def grow_shared(self, written: int) -> np.ndarray | None:
+        """More room for the kernel run writing into ``out`` (``written`` rows of it so far), as
+        its rows from ``base`` on; None at MAX_ROWS."""
+        if len(self.out) >= MAX_ROWS:
+            return None
+        self._grow(self.base + written, 2 * len(self.out))
+        return self.out[self.base:]
+
+    def _grow(self, used: int, need: int) -> None:
+        grown = np.empty((min(max(2 * len(self.out), need), MAX_ROWS), kernel.ROW_SIZE))
+        grown[:used] = self.out[:used]
+        self.out = grown
+
     def collect(self) -> None:
-        """Move the current kernel run's new rows to the run's rows, and keep the first lift-off
+        """Take the current kernel run's new rows as the run's rows, and keep the first lift-off
         it found (where the ball flies, a transition's)."""
         run = self.run
         count = int(run._ints[kernel.I_ROWS])
         start = self.taken
         if self.skip_first and start == 0 and count > 0:
             start = 1
-        rows = run._rows[start:count].copy()
+            if self.base is not None:
+                self.out[self.base] = self.saved
+        if self.base is None:
+            self.append(run._rows[start:count].copy())
+        elif count > start:   # (written in place)
+            if self.starts[-1][1] != self.mode:
+                self.starts.append((self.count, self.mode))
+            self.count = self.base + count
         self.taken = count
-        self.append(rows)
         info = run._info
         if self.first_liftoff is None and not math.isnan(info[kernel.F_LIFTOFF]):
             self.first_liftoff = Liftoff(float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]),
                                          float(info[kernel.F_LIFT_Y]), bool(info[kernel.F_LIFT_KINK]))
 
-    def new_kernel_run(self, repeat: bool) -> None:
-        """A new kernel run's rows begin (``repeat``: its first row is the run's last row again)."""
+    def new_kernel_run(self, repeat: bool, shared: bool) -> None:
+        """A new kernel run's rows begin (``repeat``: its first row is the run's last row again;
+        ``shared``: it writes them into ``out``, ``shared_rows``)."""
         self.taken, self.skip_first = 0, repeat
+        if not shared:
+            self.base = self.saved = None
 
     # -- a kernel run stopped at a change ------------------------------------------------------
 

@@ -30,6 +30,7 @@ CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
 AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
 ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in time
+SHARED_ROWS = 4        # rows a kernel run writing into the mode machine's rows finds free at its start (it grows them)
 
 _STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES)
            if code not in (kernel.RUNNING, kernel.TRANSITION)}
@@ -216,16 +217,26 @@ class Simulation:
             if not mk:
                 arrays["z"][5:] = arrays["R"].ravel()
         arrays["info"][kernel.F_H] = self.dt
-        self._arm(arrays, 0.0)
         self._finished = [0, 0, 0]   # steps, rejected tries and evaluations of the finished kernel runs
         # the runs after the first, where the contact changes mode (``stop_after``: the run ends
         # once it has this many transitions, ``ModeMachine``)
         self.machine = ModeMachine(self, Mode.SLIDING if slips else Mode.ROLLING, n_rows if self.segmented else 0,
                                    stop_after=stop_after)
+        if self._shares_rows:
+            arrays["rows"] = self.machine.shared_rows(False, SHARED_ROWS)
+            self.machine.new_kernel_run(False, True)
+        self._arm(arrays, 0.0)
         self.status: Status | None = None
         self._energy_check: EnergyCheck | None = None
         self._transition_check: TransitionCheck | None = None
         self.judge_energy = True  # whether the finished run looks at whose its energy error is (and its transitions)
+
+    @property
+    def _shares_rows(self) -> bool:
+        """Whether the kernel runs write their rows into the mode machine's (``ModeMachine.shared_rows``):
+        those of a run whose contact changes mode that records every adaptive step (millions of
+        rows, which a buffer of their own would hold twice)."""
+        return self.segmented and self.adaptive and self.record_dt is None
 
     def _parameters(self, dissipated: float) -> np.ndarray:
         scene = self.scene
@@ -370,11 +381,16 @@ class Simulation:
             chunk = int(min(remaining, CHUNK))
             if self.adaptive:
                 if self._ints[kernel.I_ROWS] >= len(self._rows) - 2:
-                    if len(self._rows) >= MAX_ROWS:  # stop rather than fill the memory
+                    if self._shares_rows:
+                        grown = self.machine.grow_shared(int(self._ints[kernel.I_ROWS]))
+                    elif len(self._rows) < MAX_ROWS:
+                        grown = np.empty((min(2 * len(self._rows), MAX_ROWS), kernel.ROW_SIZE))
+                        grown[: len(self._rows)] = self._rows
+                    else:
+                        grown = None
+                    if grown is None:  # stop rather than fill the memory
                         self.status = Status.ROW_LIMIT
                         break
-                    grown = np.empty((min(2 * len(self._rows), MAX_ROWS), kernel.ROW_SIZE))
-                    grown[: len(self._rows)] = self._rows
                     self._rows = grown
                     self._kernel.set("rows", grown)
                 before = self.steps + self.rejected
@@ -426,9 +442,11 @@ class Simulation:
         arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=len(self._W),
                                rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass)
         arrays["info"][kernel.F_H] = h
+        if self._shares_rows:
+            arrays["rows"] = self.machine.shared_rows(repeat, SHARED_ROWS)
+        self.machine.new_kernel_run(repeat, self._shares_rows)
         self._p = self._parameters(state.dissipated)
         self._arm(arrays, t)
-        self.machine.new_kernel_run(repeat)
 
     def from_state(self, state: sliding.BallState, t: float, mode: Mode, *, t_end: float, **options) -> "Simulation":
         """A run of this scene from ``state`` at time t in ``mode`` (ROLLING or SLIDING) to t_end,
