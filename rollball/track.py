@@ -36,7 +36,7 @@ class TrackError(ValueError):
     """A track file that cannot be read: the message is one line (the file, row and column)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Track:
     """Measured positions of the ball's centre (or contact point) in the scene's frame.
 
@@ -104,8 +104,8 @@ class Track:
 
     @classmethod
     def _parse(cls, text, name, columns, length_unit, time_unit) -> "Track":
-        _check_unit(length_unit, LENGTH_UNITS, "length")
-        _check_unit(time_unit, TIME_UNITS, "time")
+        _check_unit(length_unit, LENGTH_UNITS, "length", name)
+        _check_unit(time_unit, TIME_UNITS, "time", name)
         lines = [(number, line) for number, line in enumerate(text.splitlines(), 1)
                  if line.strip() and not line.lstrip().startswith("#")]
         if not lines:
@@ -203,9 +203,9 @@ def parse_columns(text: str) -> dict[str, str]:
     return mapping
 
 
-def _check_unit(unit, units, kind) -> None:
+def _check_unit(unit, units, kind, name) -> None:
     if unit is not None and unit not in units:
-        raise TrackError(f"unknown {kind} unit {shown(str(unit))} (known: {', '.join(units)})")
+        raise TrackError(f"{name}: unknown {kind} unit {shown(str(unit))} (known: {', '.join(units)})")
 
 
 def _delimiter(line: str) -> str:
