@@ -18,6 +18,8 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from exact_tracks import billiard, noisy  # noqa: E402
 
+from rollball.files import atomic_write_text  # noqa: E402
+
 MU, V0, SIGMA, SEED, FPS, SECONDS = 0.25, 2.2, 1e-3, 33, 60, 1.2
 LOST = (17, 18, 40)   # frames where the ball was not found: written as empty cells
 
@@ -36,7 +38,7 @@ def main() -> None:
     header = sum(line.startswith("#") for line in lines) + 1
     for frame in LOST:
         lines[header + frame] = lines[header + frame].split(",")[0] + ",,"
-    (ROOT / "resources" / "examples" / "billiard_track.csv").write_text("\n".join(lines) + "\n")
+    atomic_write_text(ROOT / "resources" / "examples" / "billiard_track.csv", "\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":
