@@ -21,11 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit_options import LOSSES, NOT_FITTED
-from .track_check import Residuals, check_point, model_at, residuals, run_for
 from .scene import Scene, SceneError
 from .sweeps.grid import PARAMETER_PREFIX, check_keys, unit, value_of, with_values
 from .sweeps.options import KEYS
 from .track import Track
+from .track_check import Residuals, check_point, model_at, residuals, run_for
 
 # Where a value is valid (as a scene file checks it): the default bounds of a fit.
 LIMITS = {"ball.radius": (0.0, math.inf), "ball.mass": (0.0, math.inf), "gravity": (0.0, math.inf),
@@ -65,8 +65,8 @@ class Fit:
         """The report as the command line prints it: each estimate ± its standard error, the
         correlations, the residuals against the noise and the verdict."""
         width = max(len(k) for k in self.keys)
-        out = [f"{'converged' if self.converged else 'NOT converged'} after {self.runs} runs "
-               f"({self.seconds:.2f} s CPU; {self.message})"]
+        out = [(f"{'converged' if self.converged else 'NOT converged'} after {self.runs} runs "
+                f"({self.seconds:.2f} s CPU; {self.message})")]
         for key, value, error, start in zip(self.keys, self.values, self.errors, self.initial):
             u = f" {unit(key)}" if unit(key) else ""
             err = f"{error:.3g}" if math.isfinite(error) else "not determined"
@@ -80,10 +80,9 @@ class Fit:
 
     def to_dict(self) -> dict:
         """The estimates as plain data (strict JSON: NaN as None)."""
-        clean = lambda v: float(v) if math.isfinite(v) else None  # noqa: E731
         return {"keys": list(self.keys), "values": [float(v) for v in self.values],
-                "errors": [clean(e) for e in self.errors],
-                "correlation": [[clean(c) for c in row] for row in self.correlation],
+                "errors": [_finite_or_none(e) for e in self.errors],
+                "correlation": [[_finite_or_none(c) for c in row] for row in self.correlation],
                 "runs": self.runs, "converged": self.converged, "loss": self.loss,
                 "rms": self.residuals.rms, "noise": self.residuals.noise, "points": len(self.residuals.track)}
 
@@ -200,13 +199,17 @@ def _uncertainty(jac: np.ndarray, squares: float, p: int) -> tuple[np.ndarray, n
     Jacobian and cost are those of the loss, which this approximates). A value the track does
     not determine (J's column zero or dependent on others) gets NaN."""
     s2 = squares / max(jac.shape[0] - p, 1)
-    u, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
     if sv.size == 0 or sv[-1] <= sv[0] * 1e-10:
         nan = np.full(p, math.nan)
         return nan, np.full((p, p), math.nan)
     cov = (vt.T / sv ** 2) @ vt * s2
     errors = np.sqrt(np.diag(cov))
     return errors, cov / np.outer(errors, errors)
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
 
 
 def _values(keys, x) -> str:

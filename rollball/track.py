@@ -80,7 +80,7 @@ class Track:
 
     @classmethod
     def load(cls, path: str | os.PathLike, *, columns: dict[str, str] | None = None,
-             length_unit: str | None = None, time_unit: str | None = None) -> "Track":
+             length_unit: str | None = None, time_unit: str | None = None) -> Track:
         """Read a track from a CSV or TSV file (the delimiter is detected: comma, tab or semicolon).
 
         ``columns`` maps scene axes to the file's column names, e.g. ``{"x": "x", "z": "y"}`` for a
@@ -103,7 +103,7 @@ class Track:
         return cls._parse(text, name, columns, length_unit, time_unit)
 
     @classmethod
-    def _parse(cls, text, name, columns, length_unit, time_unit) -> "Track":
+    def _parse(cls, text, name, columns, length_unit, time_unit) -> Track:
         _check_unit(length_unit, LENGTH_UNITS, "length", name)
         _check_unit(time_unit, TIME_UNITS, "time", name)
         lines = [(number, line) for number, line in enumerate(text.splitlines(), 1)

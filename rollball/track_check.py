@@ -146,8 +146,8 @@ class Residuals:
         """The figures as the command line prints them."""
         axes = ", ".join(f"{axis} {_mm(rms)}" for axis, (rms, _) in self.per_axis.items())
         largest = ", ".join(f"{axis} {_mm(m)}" for axis, (_, m) in self.per_axis.items())
-        return [f"residual RMS {_mm(self.rms)} ({axes}); largest {_mm(self.max)} at t = {self.max_time:.6g} s "
-                f"(largest per axis: {largest})",
+        return [(f"residual RMS {_mm(self.rms)} ({axes}); largest {_mm(self.max)} at t = {self.max_time:.6g} s "
+                 f"(largest per axis: {largest})"),
                 self.verdict()]
 
 

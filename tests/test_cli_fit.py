@@ -38,7 +38,7 @@ def test_check_of_a_side_view_in_centimetres_with_a_title_line(tmp_path, capsys)
     """A Tracker export (title, tabs) of the billiard example seen from the side, in cm: x and z."""
     times = np.arange(1, 31) / 60
     exact = Track(times, ("x", "z"), np.zeros((30, 2)))
-    from rollball.track_check import model_at, run_for   # the scene's own motion
+    from rollball.track_check import model_at, run_for  # the scene's own motion
     scene = Scene.load(EXAMPLES_DIR / "billiard.json")
     centre = model_at(run_for(scene, exact), scene, exact)
     rows = "\n".join(f"{t}\t{x * 100}\t{z * 100}" for t, (x, z) in zip(times, centre))

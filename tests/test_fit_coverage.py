@@ -8,7 +8,6 @@ happen with probability 1 %; a standard error half what it should be would give 
 """
 
 import numpy as np
-import pytest
 from exact_tracks import billiard, incline, noisy
 from hybrid_reference import reference
 from test_track_check import BILLIARD, BOUNCE, INCLINE
