@@ -29,7 +29,7 @@ def figure_png(res: Residuals, title: str) -> bytes | None:
             panel.axhline(0.0, color="0.5", linewidth=0.8)
             panel.plot(t, values[:, k], ".", markersize=3, color="C0", label="track − model")
             panel.set_ylabel(f"{axis} (mm)")
-        panels[0, 0].legend(loc="upper right", fontsize=8)
+        panels[0, 0].legend(loc="best", fontsize=8, framealpha=0.9)
         panels[-1, 0].set_xlabel("t (s)")
         fig.suptitle(f"{title}\n{textwrap.fill(res.verdict(), 110)}", fontsize=9, parse_math=False, usetex=False)
         fig.tight_layout()

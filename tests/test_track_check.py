@@ -43,7 +43,7 @@ def test_the_centre_between_rows_is_the_exact_motion_sliding_rolling_and_on_a_sl
 
 def test_the_contact_point_between_rows_is_the_exact_contact_point():
     """On the incline the contact point is the centre minus r N; linear interpolation between 5 ms
-    rows is within h²/8 |α̈| (2.2 µm) of it."""
+    rows is within h²/8 |α̈| (9.8 µm) of it."""
     centre = incline(FRAMES, 0.5, 0.5, 0.3, -1.0, 0.0)
     contact = centre - 0.1 * np.array([0.5, 0.0, 1.0]) / np.sqrt(1.25)
     res = residuals(INCLINE, exact(FRAMES, contact), point="contact", noise=1e-3)
