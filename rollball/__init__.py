@@ -24,6 +24,8 @@ _LAZY = {
     "Tableau": "tableaus", "get_method": "tableaus",
     "COLUMNS": "trajectory", "Failure": "trajectory", "Reason": "trajectory", "Status": "trajectory",
     "Trajectory": "trajectory", "read_csv": "trajectory",
+    "Track": "track", "TrackError": "track", "Residuals": "track_check", "residuals": "track_check",
+    "Fit": "fitting", "FitError": "fitting", "fit": "fitting",
     "Comparison": "comparison", "RunSpec": "comparison", "compare": "comparison", "parse_runs": "comparison",
 }
 

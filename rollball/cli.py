@@ -18,8 +18,9 @@ from pathlib import Path
 # Only what the parser needs, none of it numerical: the help and a refused argument answer at
 # once; each command imports the simulation, sympy, numba or scipy it runs on (a test holds this).
 from . import __version__
-from .examples import EXAMPLES_DIR, example_scenes, scene_path
+from .examples import EXAMPLES_DIR, example_scenes, scene_path, track_path
 from .files import write_target
+from .fit_options import LENGTH_UNITS, LOSSES, NOT_FITTED, POINTS, TIME_UNITS
 from .kinds import KINDS, MethodKind, method_name
 from .sweeps.options import CONNECT_TIMEOUT as SWEEP_CONNECT_TIMEOUT
 from .sweeps.options import KEYS as SWEEP_KEYS
@@ -154,6 +155,32 @@ def build_parser() -> argparse.ArgumentParser:
     cmp.add_argument("--quick", action="store_true", help="fewer, shorter ladders (under a minute)")
     cmp.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
 
+    check = commands.add_parser(
+        "check", help="a measured track against a run of a scene: residuals",
+        description="Run a scene to a measured track's last time and print the residuals (the track "
+                    "minus the ball's centre, or its contact point, at the track's times): RMS, largest, "
+                    "per axis, against the track's noise, and whether the model explains the track.")
+    _track_arguments(check)
+
+    fit = commands.add_parser(
+        "fit", help="fit scene values to a measured track (least squares)",
+        description="Fit scene values (start, ball, contact, gravity, parameters) to a measured track "
+                    "by least squares from the scene's values, and print each estimate with its "
+                    "standard error, the correlations, the residuals against the track's noise and the "
+                    "number of runs.")
+    _track_arguments(fit)
+    fit.add_argument("--fit", required=True, metavar="KEYS",
+                     help=f"comma-separated keys to fit: {', '.join(k for k in SWEEP_KEYS if k not in NOT_FITTED)}, "
+                          f"or parameters.NAME; e.g. contact.friction,start.vx")
+    fit.add_argument("--bounds", action="append", default=[], metavar="KEY=LO:HI",
+                     help="bounds of a fitted key (LO or HI may be empty: unbounded); by default a value's "
+                          "valid range (friction >= 0, restitution 0 to 1, a parameter's min and max)")
+    fit.add_argument("--loss", choices=LOSSES, default="linear",
+                     help="linear: least squares (default); the others are robust, scaled by the noise: "
+                          "far-off positions (wrongly tracked frames) count less")
+    fit.add_argument("--out", metavar="FITTED.json", type=_output_file,
+                     help="write the scene with the fitted values")
+
     commands.add_parser("examples", help="list the example scenes",
                         description="List the example scenes shipped with RollBall.")
 
@@ -166,6 +193,26 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="a smaller run (under a minute)")
     bench.add_argument("--out", metavar="DIR", default=".", help="output folder (default: .)")
     return parser
+
+
+def _track_arguments(parser) -> None:
+    """The arguments ``check`` and ``fit`` share: the scene, the track and how to read it."""
+    parser.add_argument("scene", metavar="SCENE", help="scene file, or an example's name")
+    parser.add_argument("track", metavar="TRACK", help="CSV or TSV: a header naming t and two or three of "
+                        "x, y, z (units as x (cm) or by option), Tracker's export too")
+    parser.add_argument("--columns", metavar="AXIS=COLUMN,...",
+                        help="the file's columns for the scene's axes (and t), e.g. x=x,z=y for a side view "
+                             "(default: the columns named t, x, y, z)")
+    parser.add_argument("--length-unit", choices=LENGTH_UNITS,
+                        help="unit of the positions whose header names none (default m)")
+    parser.add_argument("--time-unit", choices=TIME_UNITS, help="unit of the times if the header names none (default s)")
+    parser.add_argument("--point", choices=POINTS, default="center",
+                        help="the point of the ball the track follows (default center)")
+    parser.add_argument("--noise", type=_positive_float, metavar="METRES",
+                        help="the track's noise, one coordinate's standard deviation (default: estimated "
+                             "from the track)")
+    parser.add_argument("--plot", metavar="RESIDUALS.png", type=_output_file,
+                        help="write a figure of the residuals against time")
 
 
 def _load_scene(name: str):
@@ -368,6 +415,122 @@ def _compare(args) -> int:
     return EXIT_OK
 
 
+def _load_track(args):
+    """The track file the arguments name, or (after a one-line message) exit status 2."""
+    from .track import Track, TrackError, parse_columns
+
+    try:
+        columns = None if args.columns is None else parse_columns(args.columns)
+        return Track.load(track_path(args.track), columns=columns, length_unit=args.length_unit, time_unit=args.time_unit)
+    except OSError as e:
+        return _fail(f"{shown(e.filename or args.track)}: {e.strerror or e}")
+    except (TrackError, ValueError) as e:
+        return _fail(str(e))
+
+
+def _measured(args, outputs):
+    """(scene, track) for check and fit, their outputs checked before any run; or an exit status."""
+    from .scene import Scene
+
+    scene = _load_scene(args.scene)
+    if not isinstance(scene, Scene):
+        return scene
+    track = _load_track(args)
+    if isinstance(track, int):
+        return track
+    named = [path for path in outputs if path]
+    if len(set(map(os.path.abspath, named))) < len(named):
+        return _fail(f"the outputs must be different files: {', '.join(map(shown, named))}")
+    for path in named:
+        try:  # before the runs: a refused target must not cost them
+            write_target(path, keep=[scene_path(args.scene), track_path(args.track)])
+        except OSError as e:
+            return _fail(f"cannot write {shown(path)}: {e.strerror or e}")
+    failure = _compiles(scene)
+    if failure:
+        return _fail(failure)
+    return scene, track
+
+
+def _write_plot(args, res, title: str) -> int | None:
+    """The residuals' figure at --plot (if asked), or an exit status after a one-line message."""
+    from .files import atomic_write_bytes
+    from .residual_plot import figure_png
+
+    if not args.plot:
+        return None
+    png = figure_png(res, title)
+    if png is None:
+        return _fail("cannot draw the residuals: matplotlib is not installed")
+    try:
+        atomic_write_bytes(args.plot, png, keep=[scene_path(args.scene), track_path(args.track)])
+    except OSError as e:
+        return _fail(f"cannot write {shown(args.plot)}: {e.strerror or e}")
+    return None
+
+
+def _heading(args, track) -> str:
+    skipped = f", {track.skipped} rows without a position skipped" if track.skipped else ""
+    return (f"{shown(args.track)}: {len(track)} positions ({', '.join(track.axes)}) from t = {track.t[0]:.6g} "
+            f"to {track.t[-1]:.6g} s{skipped}; the ball's {args.point}, scene {shown(args.scene)}")
+
+
+def _check(args) -> int:
+    from .track_check import residuals
+
+    loaded = _measured(args, [args.plot])
+    if isinstance(loaded, int):
+        return loaded
+    scene, track = loaded
+    try:
+        res = residuals(scene, track, args.point, args.noise)
+    except ValueError as e:
+        return _fail(str(e))
+    print(_heading(args, track))
+    for line in res.lines():
+        print(line)
+    failed = _write_plot(args, res, f"{shown(args.track)} against {shown(args.scene)}")
+    if failed is not None:
+        return failed
+    if args.plot:
+        print(f"wrote {shown(args.plot)}")
+    return EXIT_OK if res.covered else EXIT_STOPPED
+
+
+def _fit(args) -> int:
+    from .fitting import fit, parse_bounds
+
+    loaded = _measured(args, [args.out, args.plot])
+    if isinstance(loaded, int):
+        return loaded
+    scene, track = loaded
+    keys = [key.strip() for key in args.fit.split(",")]
+    try:
+        bounds = dict(parse_bounds(text) for text in args.bounds)
+        result = fit(scene, track, keys, bounds=bounds, loss=args.loss, point=args.point, noise=args.noise)
+    except ValueError as e:   # FitError, SceneError
+        return _fail(shown(str(e)))
+    print(_heading(args, track))
+    for line in result.lines():
+        print(line)
+    written = []
+    if args.out:
+        try:
+            result.scene.save(args.out)
+        except OSError as e:
+            return _fail(f"cannot write {shown(args.out)}: {e.strerror or e}")
+        written.append(shown(args.out))
+    failed = _write_plot(args, result.residuals, f"{shown(args.track)} against {shown(args.scene)} fitted "
+                                                 f"({', '.join(keys)})")
+    if failed is not None:
+        return failed
+    if args.plot:
+        written.append(shown(args.plot))
+    if written:
+        print(f"wrote {', '.join(written)}")
+    return EXIT_OK if result.converged else EXIT_STOPPED
+
+
 def _compiles(scene) -> str | None:
     """None when the scene's landscape compiles, else why not (one line): before any run."""
     from .landscape import landscape_of
@@ -409,9 +572,10 @@ def _warning(message, category, filename, lineno, file=None, line=None):
     print(f"rollball: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
 
-COMMANDS = {"simulate": _simulate, "compare": _compare, "sweep": _sweep,
+COMMANDS = {"simulate": _simulate, "compare": _compare, "sweep": _sweep, "check": _check, "fit": _fit,
             "examples": lambda args: _examples(), "bench": _bench}
-INTERRUPTED = {"simulate": "rollball: interrupted", "compare": "rollball: interrupted (nothing written)"}
+INTERRUPTED = {"simulate": "rollball: interrupted", "compare": "rollball: interrupted (nothing written)",
+               "check": "rollball: interrupted", "fit": "rollball: interrupted (nothing written)"}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,6 +29,20 @@ def example_scenes() -> list[tuple[Path, Scene]]:
             for name in example_names()]
 
 
+def example_tracks() -> list[str]:
+    """The file names of the example tracks (measured-track CSV files, ``Track.load``), sorted."""
+    return sorted(entry.name for entry in EXAMPLES_DIR.iterdir() if entry.name.endswith(".csv"))
+
+
+def track_path(text: str) -> Path:
+    """The track file ``text`` names: what exists at that path, else the example track of that
+    name (``billiard_track.csv``), else the path as given (reading it says what is wrong)."""
+    path = Path(text)
+    if path.exists() or path.parent != Path(".") or path.name not in example_tracks():
+        return path
+    return EXAMPLES_DIR / path.name
+
+
 def scene_path(text: str) -> Path:
     """The scene file ``text`` names: what exists at that path (reading it says what is wrong
     with it), else the example of that name (with or without ``.json``). Raises

@@ -10,7 +10,7 @@ import zipfile
 
 import pytest
 
-from rollball.examples import example_names
+from rollball.examples import example_names, example_tracks
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parent.parent
 
@@ -36,6 +36,8 @@ def wheel(tmp_path_factory):
 def test_wheel_holds_examples_icon_help_c_source_and_the_kernels_code(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert {f"rollball/resources/examples/{name}.json" for name in example_names()} <= names
+    assert {f"rollball/resources/examples/{name}" for name in example_tracks()} <= names
+    assert example_tracks() == ["billiard_track.csv"]
     assert len(example_names()) >= 10
     assert {"rollball/resources/__init__.py", "rollball/resources/icons/rollball.svg",
             "rollball/resources/help_pages/model.html", "rollball/resources/help_pages/plots.html",
