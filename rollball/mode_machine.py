@@ -16,12 +16,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import kernel, sliding
-from .flight import Flight, FreeState, OffLandscape, Surface, impact, rest_speed, settle
+from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
 from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
+from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, onto_face, turn_over
 from .run_size import MAX_ROWS
-from .trajectory import (CONTACT, DISSIPATED, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T, VELOCITY,
-                         Failure, Liftoff, Reason, Status, Transition)
+from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
+                         VELOCITY, Failure, Liftoff, Reason, Status, Transition)
 
 # A friction coefficient above this acts as this one: "always enough friction" as far as a double
 # can tell (μ F_n stays finite for F_n up to 10²⁰⁸ N; a slide on a plane grips after 2 v₀/(7 μ g),
@@ -36,6 +37,7 @@ MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it 
 STIFF_METHOD = "dop853"
 STIFF_TOLERANCE = 1e-12
 STIFF_WINDOW = 16
+SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
 
 
 def friction_of(contact) -> float:
@@ -221,16 +223,14 @@ class ModeMachine:
         run, info = self.run, self.run._info
         last = self.out[self.count - 1]
         self.dissipated = float(last[DISSIPATED])
-        self.mode = Mode.FLYING
+        before = self.mode
         # the flight leaves along the tangent plane: a sliding state's c'.N is the integrator's
         # drift (0 in the exact motion), and a c' into the surface would land it at once
         start = FreeState.from_row(last)
         if info[kernel.F_LIFT_KINK] == kernel.LIFT_TIP:
             force = self._pivot_force(start, x, y)
             if force > 0.0:   # too slow to leave the tip: the ball would roll over it, pivoting
-                self.transitions.pop()
-                if self.first_liftoff is not None and self.first_liftoff.time == float(info[kernel.F_LIFTOFF]):
-                    self.first_liftoff = None
+                self._no_liftoff()
                 self.off = Failure(Reason.PIVOT, t, x, y, force)
                 run.status = Status.DOES_NOT_FIT
                 return
@@ -247,10 +247,83 @@ class ModeMachine:
             # a ridge's kink: the run's last state is the last one before it (the kink is located
             # between it and the step's end); the ball is on the surface up to the kink, so it
             # rolls (slides) there along the tangent plane and the flight starts at the kink
-            start = self._to_kink(start, t, normal)
+            start = self._to_kink(start, t, normal, before)
+            if before is Mode.ROLLING and self._turn_over(start, x, y):
+                return
+        self.mode = Mode.FLYING
         self.flight = self._new_flight(start)
 
-    def _to_kink(self, start: FreeState, t: float, normal: np.ndarray) -> FreeState:
+    def _no_liftoff(self) -> Transition:
+        """The lift-off the kernel run stopped at is none (the ball stays on the surface there)."""
+        lift = self.transitions.pop()
+        if self.first_liftoff is not None and self.first_liftoff.time == float(self.run._info[kernel.F_LIFTOFF]):
+            self.first_liftoff = None
+        return lift
+
+    def _turn_over(self, start: FreeState, x: float, y: float) -> bool:
+        """A rolling ball at a ridge's edge (x, y) at ``start``: where it is too slow to leave the
+        edge it turns over it (``ridge.turn_over``), and then rolls on the far face, rolls back
+        on the near one, flies off the edge, or stops where the friction cannot hold the turn;
+        False where it leaves the edge at once (it flies from ``start``)."""
+        run = self.run
+        scene = run.scene
+        values = scene.parameter_values
+        point = np.array([x, y, float(run.landscape.evaluate(x, y, values)[0])])
+        heading = start.velocity[:2] / max(float(np.linalg.norm(start.velocity[:2])), 1e-300)
+        scale = 1.0 + abs(x) + abs(y)
+        beyond = unit_normal(run.landscape.evaluate(x + SIDE * scale * heading[0], y + SIDE * scale * heading[1],
+                                                    values))
+        arm = start.center - point
+        ridge_line = Ridge.between(point, arm / float(np.linalg.norm(arm)), beyond)
+        if ridge_line is None or not np.isfinite(beyond).all():
+            return False
+        ball = scene.ball
+        turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
+                         friction=friction_of(scene.contact), t_end=run.t_end,
+                         times=self.record_times(start.t, run.t_end))
+        if turn is None:
+            return False
+        lift = self._no_liftoff()
+        self.mode = Mode.ROLLING
+        self._append_turn(turn)
+        t, (cx, cy) = turn.state.t, turn.contact
+        if turn.how == TIME:
+            run.status = Status.OK
+        elif turn.how == SLIP:
+            self.off = Failure(Reason.RIDGE_SLIP, t, cx, cy, turn.force)
+            run.status = Status.DOES_NOT_FIT
+        elif turn.how == LIFTOFF:   # off the edge where holding it would need a pull
+            self.transitions.append(dataclasses.replace(lift, time=t, x=cx, y=cy))
+            if self.first_liftoff is None:
+                self.first_liftoff = Liftoff(t, cx, cy, True)
+            self.mode = Mode.FLYING
+            self.flight = self._new_flight(turn.state)
+        else:   # on a face: rolling on from a little past the edge
+            face = beyond if turn.how == END else ridge_line.near
+            on = onto_face(turn.state, face, radius=ball.radius, gravity=scene.gravity, scale=scale)
+            foot = on.center - ball.radius * face
+            state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated)
+            run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        return True
+
+    def _append_turn(self, turn) -> None:
+        """The rows of a turn over a ridge (rolling: no slip, nothing dissipated)."""
+        scene = self.run.scene
+        m, r, g0 = scene.ball.mass, scene.ball.radius, scene.gravity
+        rows = np.zeros((len(turn.states), kernel.ROW_SIZE))
+        for row, state, contact, force in zip(rows, turn.states, turn.contacts, turn.forces):
+            row[T] = state.t
+            row[CONTACT] = contact
+            row[CENTER] = state.center
+            row[VELOCITY] = state.velocity
+            row[OMEGA] = state.omega
+            row[R] = state.R.ravel()
+            row[ENERGY] = energy(state.velocity, state.omega, state.center[2], m, r, g0)
+            row[NORMAL_FORCE] = force
+            row[DISSIPATED] = self.dissipated
+        self.append(rows)
+
+    def _to_kink(self, start: FreeState, t: float, normal: np.ndarray, mode: Mode) -> FreeState:
         """The state at the kink's time t from ``start`` (the last state before it, τ = t − t₀ earlier),
         moving in the tangent plane of ``normal`` as on that plane: rolling with acceleration
         (5/7) g_t and ω = N × ċ/r plus its spin about N (this keeps E exactly), sliding with
@@ -263,7 +336,7 @@ class ModeMachine:
         tangential = gravity - float(np.dot(gravity, normal)) * normal
         omega = start.omega
         mu = friction_of(scene.contact)
-        sliding_now = self.mode is Mode.SLIDING and mu < math.inf
+        sliding_now = mode is Mode.SLIDING and mu < math.inf
         if sliding_now:
             slip = start.velocity + np.cross(omega, -r * normal)
             slip -= float(np.dot(slip, normal)) * normal

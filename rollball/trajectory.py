@@ -78,6 +78,10 @@ FLIGHT_REASONS = {
                       "a landing found at {where} is not where the ball touches the surface (the centre is "
                       "{value:.6g} m from that surface point, not r = {radius:g} m): the run stops rather than "
                       "land there"),
+    "ridge_slip": ("does_not_fit", "the normal force on the ridge's edge there (N)",
+                   "the ball turning over a ridge at {where} would need more friction than μ F·N to roll over "
+                   "its edge (F·N = {value:.3g} N): a real ball would slide over it, which the model does not "
+                   "follow"),
 }
 Reason = _Named("Reason", [(name.upper(), name) for name in (*REASONS, *FLIGHT_REASONS)], module=__name__)
 

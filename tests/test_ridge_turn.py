@@ -1,0 +1,96 @@
+"""A ball rolling slowly over a ridge turns over its edge (rollball/ridge.py) rather than flying:
+on a roof of two planes, against the closed forms of the rolling on each plane and of the turn
+about the edge (its time from the energy, by quadrature), with no energy lost; where holding the
+turn would need a pull it leaves the edge then; where the friction cannot hold it the run stops."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq
+
+from rollball import Scene, simulate
+from rollball.scene import Ball, Contact, Integrator, Start
+
+G, RADIUS = 9.81, 0.1
+UP, DOWN = 0.25, 0.15            # the roof min(UP x, -DOWN x): up to the edge at x = 0, then down
+PHI1, PHI2 = -math.atan(UP), math.atan(DOWN)   # the faces' normals, from the vertical towards +x
+
+
+def roof(vx: float, friction=None, duration=1.0, method="rk4", dt=1e-3, down=DOWN) -> Scene:
+    return Scene(f"min({UP}*x, -{down}*x)", gravity=G, ball=Ball(RADIUS, 1.0), start=Start(-0.3, 0.0, vx, 0.0, 0.0),
+                 integrator=Integrator(method, True, dt), duration=duration, contact=Contact(friction, 0.0, "fly"))
+
+
+def at_edge(vx: float) -> tuple[float, float]:
+    """The time the contact point reaches the edge rolling up the near face, and the speed then."""
+    alpha = math.atan(UP)
+    v0, a, length = vx / math.cos(alpha), 5.0 / 7.0 * G * math.sin(alpha), 0.3 / math.cos(alpha)
+    v1 = math.sqrt(v0 * v0 - 2.0 * a * length)
+    return (v0 - v1) / a, v1
+
+
+def turn_rate(theta: float, v1: float) -> float:
+    """θ̇ at θ of the turn about the edge, from E: (7/10) r² θ̇² + g r cos(φ₁ + θ) = const."""
+    square = (v1 / RADIUS) ** 2 + 10.0 / 7.0 * G / RADIUS * (math.cos(PHI1) - math.cos(PHI1 + theta))
+    return math.sqrt(square)
+
+
+def turn_time(v1: float, upto: float) -> float:
+    return quad(lambda theta: 1.0 / turn_rate(theta, v1), 0.0, upto, epsabs=1e-14, epsrel=1e-13)[0]
+
+
+@pytest.mark.parametrize("method, dt", [("rk4", 1e-3), ("dopri5", 1e-3)])
+def test_a_slow_ball_turns_over_the_edge_and_rolls_down_the_far_face(method, dt):
+    vx, duration = 1.1, 1.0
+    traj = simulate(roof(vx, duration=duration, method=method, dt=dt))
+    assert traj.status == "ok" and traj.transitions == () and set(traj.mode) == {"rolling"}, traj.message
+    t_edge, v1 = at_edge(vx)
+    turn = PHI2 - PHI1
+    t_down = t_edge + turn_time(v1, turn)
+    v2 = RADIUS * turn_rate(turn, v1)
+    tau = duration - t_down
+    along = v2 * tau + 0.5 * (5.0 / 7.0 * G * math.sin(PHI2)) * tau * tau
+    assert traj.contact[-1, 0] == pytest.approx(along * math.cos(PHI2), abs=1e-8)
+    turning = (traj.t > t_edge + 1e-9) & (traj.t < t_down - 1e-9)
+    assert turning.sum() >= 10 and np.all(np.abs(traj.contact[turning, 0]) < 1e-12)   # on the edge
+    centre = np.linalg.norm(traj.center[turning] - np.column_stack([traj.contact[turning], np.zeros(turning.sum())]),
+                            axis=1)
+    np.testing.assert_allclose(centre, RADIUS, rtol=0, atol=1e-12)
+    energy = traj.energy - traj.energy[0]
+    assert np.max(np.abs(energy)) < 1e-9   # nothing lost: a real ball's turn over an edge is smooth
+    assert np.all(traj.normal_force[turning] > 0.0)
+
+
+def test_a_faster_ball_leaves_the_edge_where_holding_it_would_need_a_pull():
+    """On a roof whose far face is steep (slope 1), a ball arriving slowly enough to turn
+    (r θ̇₀² < g cos φ₁) speeds up as it turns and F·N falls to 0 at θ* (r θ̇(θ*)² = g cos(φ₁ + θ*)):
+    it lifts off the edge there, and lands on the far face."""
+    alpha, v1 = math.atan(UP), math.sqrt(9.0 * RADIUS)   # r θ̇₀² = 9 < g cos φ₁ = 9.52
+    v0 = math.sqrt(v1 * v1 + 2.0 * (5.0 / 7.0 * G * math.sin(alpha)) * 0.3 / math.cos(alpha))
+    vx = v0 * math.cos(alpha)
+    t_edge, arrived = at_edge(vx)
+    assert arrived == pytest.approx(v1, rel=1e-12)
+    theta = brentq(lambda th: RADIUS * turn_rate(th, v1) ** 2 - G * math.cos(PHI1 + th), 0.0, math.atan(1.0) - PHI1)
+    assert 0.3 < theta < math.atan(1.0) - PHI1 - 0.3   # well inside the turn
+    traj = simulate(roof(vx, duration=0.6, down=1.0))
+    kinds = [str(change.kind) for change in traj.transitions]
+    assert traj.status == "ok" and kinds[:2] == ["liftoff", "landing"], traj.message
+    assert traj.transitions[0].time == pytest.approx(t_edge + turn_time(v1, theta), abs=1e-9)
+    assert traj.transitions[0].x == pytest.approx(0.0, abs=1e-12)
+    assert traj.liftoff.time == traj.transitions[0].time
+
+
+def test_where_friction_cannot_hold_the_turn_the_run_stops_and_says_so():
+    """Turning over the edge needs |F_t| = (2/7) m g |sin(φ)| against F·N = m (g cos φ − r θ̇²): at
+    its start (φ = φ₁) μ = 1 holds it as μ null does; μ just below what the start needs stops."""
+    vx = 1.1
+    _, v1 = at_edge(vx)
+    needed = (2.0 / 7.0) * G * math.sin(-PHI1) / (G * math.cos(PHI1) - v1 * v1 / RADIUS)
+    held = simulate(roof(vx, friction=1.0, duration=0.6))
+    free = simulate(roof(vx, duration=0.6))
+    assert held.status == "ok" and np.array_equal(held.contact, free.contact)
+    stopped = simulate(roof(vx, friction=0.99 * needed, duration=0.6))
+    assert stopped.status == "does_not_fit" and stopped.failure.reason == "ridge_slip", stopped.message
+    assert "ridge" in stopped.message and "more friction" in stopped.message
