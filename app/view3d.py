@@ -350,7 +350,6 @@ class SceneView(gl.GLViewWidget):
         for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
-        self._marked_colors = np.zeros((0, 4))   # of the marked points (lift-off, transitions)
         self._trail_colors = [np.asarray(TRAIL_COLOR)]   # each run's own
         self.addItem(self.casing)
         self.ball_radius = 0.1
@@ -942,23 +941,14 @@ class SceneView(gl.GLViewWidget):
         trail.setData(pos=points if enough else np.zeros((0, 3)), color=colors if enough else np.zeros((0, 4)))
         trail.casing.setData(pos=points if enough else np.zeros((0, 3)), width=trail.width + CASING_EXTRA)
 
-    def set_liftoff(self, point: np.ndarray | None) -> None:
-        """Mark the lift-off point; None hides the marker (and every other marked point)."""
-        self.liftoff.setVisible(point is not None)
-        self._marked_colors = np.zeros((0, 4))
-        if point is not None:
-            self.add_liftoff(point)
-
-    def add_liftoff(self, point: np.ndarray, color=LIFTOFF_COLOR) -> None:
-        """One more marked point: a lift-off (one per run in compare mode), or any change of the
-        contact's mode in the colour given."""
-        shown = self.liftoff.pos if self.liftoff.visible() and self.liftoff.pos is not None else np.zeros((0, 3))
-        colors = self._marked_colors[: len(shown)]
-        color = np.asarray(pg.mkColor(color).getRgbF() if isinstance(color, str) else color, dtype=float)
-        self._marked_colors = np.vstack([colors, color.reshape(1, 4)])
-        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]),
-                             color=self._marked_colors)
-        self.liftoff.setVisible(True)
+    def set_marked(self, points: np.ndarray, colors: np.ndarray) -> None:
+        """The marked points (n, 3), each in its colour (n, 4): lift-offs and the other changes of
+        the contact's mode, those playback has reached (none: the marker hidden)."""
+        shown = len(points) > 0
+        self.liftoff.setVisible(shown)
+        if shown:
+            self.liftoff.setData(pos=np.asarray(points, dtype=float).reshape(-1, 3),
+                                 color=np.asarray(colors, dtype=float).reshape(-1, 4))
 
     def set_follow(self, follow: bool, radius: float | None = None, index: int | None = None) -> None:
         """Keep a run's ball (``index``, or the one followed so far) in the centre of the view;

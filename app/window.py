@@ -214,6 +214,11 @@ class MainWindow(QtWidgets.QMainWindow):
                                         "height (a mark to see it from afar; the ball inside is to scale)", checkable=True,
                                         name="ball_marker")
         self.mark_action.setChecked(True)
+        self.future_action = self._action("Show &Future Events", self.drawing.show_future_events, None,
+                                          "Mark every event of the run from the start (lift-offs, landings, "
+                                          "slips, grips), not only those playback has reached", checkable=True)
+        self.future_action.setChecked(self.drawing.show_future)
+        self.timeline.set_show_future(self.drawing.show_future)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
                                               "The equations of motion, lift-off, no-fit, Munthe-Kaas")
         self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
@@ -280,7 +285,8 @@ class MainWindow(QtWidgets.QMainWindow):
             action.triggered.connect(lambda _=False, k=scale: self._set_text_size(k, remember=True))
             self.text_size_group.addAction(action)
         view.addSeparator()
-        view.addActions([self.follow_action, self.trail_action, self.mark_action, self.camera_action])
+        view.addActions([self.follow_action, self.trail_action, self.mark_action, self.future_action,
+                         self.camera_action])
         view.addSeparator()
         view.addActions([self.scene_panel_action, self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")
