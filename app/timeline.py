@@ -8,7 +8,7 @@ An event is shown once playback has reached it ("where will it land?" is not ans
 the ball gets there), or from the start with ``set_show_future``. Markers closer than
 ``MERGE_PIXELS`` are drawn as one, with their count beside it. Beside the slider the most telling
 events (``telling``: lift-off, the first landing, ...) are links, as many as fit without the
-slider losing more than ``LINKS_SHARE`` of the width; every shown event is in the menu after them.
+slider keeping less than ``SLIDER_SHARE`` of the width; every shown event is in the menu after them.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ STEPS = 10_000          # slider positions over the run
 MARKER_PIXELS = 6       # a click this close to a marker jumps to it
 MERGE_PIXELS = 12       # markers closer than this are drawn as one (their count beside it)
 MAX_LINKS = 2           # events named beside the slider at most; every event is in its menu
-LINKS_SHARE = 0.35      # of the time line's width the links may take: the slider keeps the rest
+SLIDER_SHARE = 0.5      # of the time line's width the slider keeps, whatever the links beside it
 # which events make the links, most telling first: the first of each kind, in this order
 TELLING = ("lift-off", "landing", "stop", "slip", "grip")
 
@@ -218,8 +218,9 @@ class TimeSlider(QtWidgets.QWidget):
         self._lay_out_links()
 
     def _lay_out_links(self) -> None:
-        """The most telling shown events as links, as many (up to ``MAX_LINKS``) as fit in
-        ``LINKS_SHARE`` of the width with the menu button; the menu lists every shown event."""
+        """The most telling shown events as links, as many (up to ``MAX_LINKS``) as fit beside the
+        time's label with the menu button, the slider keeping ``SLIDER_SHARE`` of the width; the
+        menu lists every shown event."""
         shown = self.shown
         key = (tuple(shown), self.width())
         if key == self._links_for:
@@ -230,12 +231,14 @@ class TimeSlider(QtWidgets.QWidget):
         for m in shown:
             action = menu.addAction(m.text)
             action.setData(m.time)
-        room = LINKS_SHARE * self.width()
+        layout = self.layout()
+        margins = layout.contentsMargins()
+        room = ((1 - SLIDER_SHARE) * self.width() - self.label.width() - margins.left() - margins.right()
+                - 3 * layout.spacing())
         for count in range(min(MAX_LINKS, len(shown)), -1, -1):
             links = telling(shown, count)
             more = len(shown) - count
-            self.events.setText(("Go to: " if count else "")
-                                + " · ".join(f'<a href="{m.time!r}">{escape(m.short or m.text)}</a>' for m in links))
+            self.events.setText(" · ".join(f'<a href="{m.time!r}">{escape(m.short or m.text)}</a>' for m in links))
             self.more.setText(f"+{more} ▾" if count else f"{len(shown)} events ▾")
             needed = (self.events.sizeHint().width() if count else 0) + (self.more.sizeHint().width() if more else 0)
             if needed <= room or count == 0:

@@ -110,3 +110,29 @@ def test_the_links_are_telling_and_every_event_is_in_the_menu(qtbot, window, tmp
     menu_grip = window.timeline.more.menu().actions()[0]
     menu_grip.trigger()
     assert window.controller.play_time == T1
+
+
+@pytest.mark.parametrize("size", [(1024, 768), (1400, 900)])
+def test_ridge_jump_keeps_a_usable_slider_and_merges_its_landings(qtbot, window, size):
+    """Nine landings close together: the slider keeps most of the width, the links name the
+    lift-off and the first landing, the markers drawn are apart (merged where they would touch)."""
+    from rollball.examples import EXAMPLES_DIR
+
+    from .guitools import run_to_end
+    from rollball_app.timeline import MERGE_PIXELS, SLIDER_SHARE
+
+    window.resize(*size)
+    window.files.open_scene(EXAMPLES_DIR / "ridge_jump.json", remember=False)
+    run_to_end(qtbot, window)
+    qtbot.wait(50)
+    timeline, slider = window.timeline, window.timeline.slider
+    assert len(timeline.markers) >= 9
+    assert slider.width() >= SLIDER_SHARE * timeline.width() >= 300
+    text = timeline.events.text()   # the lift-off first; the first landing where there is room
+    assert "lift-off" in text and ("landing" in text) == (size[0] > 1024)
+    groups = slider.groups()
+    assert sum(len(g) for _, g in groups) == len(timeline.markers)
+    assert all(b[0] - a[0] >= MERGE_PIXELS for a, b in zip(groups, groups[1:]))
+    assert len(groups) < len(timeline.markers)   # the landings' bounces merged
+    menu = timeline.more.menu().actions()
+    assert len(menu) == len(timeline.markers)
