@@ -23,7 +23,7 @@ from .compare_mode import CompareMode
 from .controller import RunController
 from .drawing import Drawing
 from .exports import Exports
-from .inputs import ScenePanel
+from .inputs import UNDO_KEYS, ScenePanel
 from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .plots import LivePlots
 from .preferences import Preferences
@@ -160,9 +160,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.revert_action = self._action("Re&vert Scene", self.files.revert, None,
                                           "Back to the scene as it was opened or last saved")
         self.undo_action = self.undo_stack.createUndoAction(self, "&Undo")
-        self.undo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Z")])
+        self.undo_action.setShortcuts(UNDO_KEYS[:1])
         self.redo_action = self.undo_stack.createRedoAction(self, "&Redo")
-        self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
+        self.redo_action.setShortcuts(UNDO_KEYS[1:])
         self.undo_action.setStatusTip("Undo the last change of the scene's fields")
         self.redo_action.setStatusTip("Redo the change undone last")
         self.quit_action = self._action("&Quit", self.close, keys.Quit, "Quit RollBall")
