@@ -19,11 +19,12 @@ import numpy as np
 
 from rollball import Scene
 from rollball.geometry import unit_normal
-from rollball.trajectory import CENTER, CONTACT, R
+from rollball.trajectory import CENTER, CONTACT, R, SLIDING
 
 from .closeup import inset_place
 from .contact_view import KIND_COLORS, beyond_2011, rgba, trail_colors
 from .controller import RUNNING
+from .view3d import MARK_FILL
 
 PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
 
@@ -98,6 +99,9 @@ class Drawing:
                 # coloured by the contact's mode (in compare mode, shades of the run's colour)
                 colors = trail_colors(run.buffer.mode[picked], run.color)
                 w.view.set_trail(trail, k, colors)
+                if run.color is None:   # one run: its ring tinted while it slides
+                    sliding = run.buffer.mode_of(i) == SLIDING
+                    w.view.set_mark_fill((*colors[-1][:3], MARK_FILL[3]) if sliding else MARK_FILL)
                 if k == followed:
                     self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color, colors)
                 w.readouts.show_row(k, run.buffer, i)

@@ -34,10 +34,11 @@ TEXT_COLOR = (60, 60, 60, 255)
 TRAIL_COLOR = (0.80, 0.10, 0.10, 1.0)
 CASING_COLOR = (0.08, 0.08, 0.08, 0.85)   # a dark edge under each trail: readable on every surface colour
 CASING_EXTRA = 4.0                        # pixels wider than the trail
-# Drawn after the surface (depth 0) and before the ball: the casing, then its trail over it, both
-# without the depth test, as the trail always was (a line's many short antialiased segments would
-# hide each other's pixels in the depth buffer): the whole path stays in sight, over the hills too.
-CASING_DEPTH, TRAIL_DEPTH = 0.01, 0.02
+# Drawn after the surface (depth 0) and the ball's ring (MARK_DEPTH), before the ball: the casing,
+# then its trail over it, both without the depth test, as the trail always was (a line's many
+# short antialiased segments would hide each other's pixels in the depth buffer): the whole path
+# stays in sight, over the hills too, and a short one (a billiard ball's slide) over the ring.
+CASING_DEPTH, TRAIL_DEPTH = 0.52, 0.54
 TRAIL_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,
             "glBlendFunc": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA)}
 CASING_GL = TRAIL_GL
@@ -853,10 +854,18 @@ class SceneView(gl.GLViewWidget):
         return mark
 
     @staticmethod
-    def _color_mark(mark: gl.GLScatterPlotItem, edge) -> None:
+    def _color_mark(mark: gl.GLScatterPlotItem, edge, fill=MARK_FILL) -> None:
         edge = np.asarray(pg.mkColor(edge).getRgbF() if isinstance(edge, str) else edge, dtype=float)
         edge[3] = MARK_EDGE[3]
-        mark.setData(color=np.array([edge, MARK_FILL]))
+        mark.fill = tuple(fill)
+        mark.setData(color=np.array([edge, fill]))
+
+    def set_mark_fill(self, fill=MARK_FILL, index: int = 0) -> None:
+        """The inside of a ball's ring: pale white, or tinted (the contact's mode while it slides:
+        a slip seen from afar while it happens, however short its trail)."""
+        mark = self.marks[index]
+        if mark.fill != tuple(fill):
+            self._color_mark(mark, mark.color[0], fill)
 
     def ball_pixels(self, index: int = 0, size: tuple[int, int] | None = None) -> float:
         """A ball's diameter in pixels, true to scale, on screen or in a picture of ``size``
