@@ -43,7 +43,6 @@ TRAIL_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,
             "glBlendFunc": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA)}
 CASING_GL = TRAIL_GL
 LIFTOFF_COLOR = (1.0, 0.55, 0.0, 1.0)
-PREVIEW_COLOR = (1.0, 0.2, 0.8, 1.0)        # the path's preview before a run (magenta: seen on every height colour)
 ARROW_COLOR = (0.05, 0.05, 0.05, 0.9)       # the start velocity's arrow
 ARROW_SECONDS = 1.0      # the arrow reaches where the centre would be this long after the start
 HANDLE_PIXELS = 14       # the arrow head's handle on screen; a press this near grabs it
@@ -62,6 +61,9 @@ MARK_FILL = (1.0, 1.0, 1.0, 0.55)      # its inside, behind the ball
 MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,   # never hidden by the surface
            "glBlendFuncSeparate": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)}
 BALL_DEPTH, MARK_DEPTH, GHOST_DEPTH = 0.6, 0.5, 1.0   # drawing order: surface, marks, ball, ghosts
+# before a run, after the marks and before the ball (neither depth-tested): the start velocity's
+# arrow, then the preview's casing and line over it (the path it predicts is not hidden by the arrow)
+ARROW_DEPTH, PREVIEW_DEPTH = 0.55, 0.58
 LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's framebuffer unbound
 MIN_LABEL_PIXELS = 10      # axis numbers and names in an exported picture are at least this high
 LABEL_GAP = 3              # pixels kept free around an axis label (times the picture's scale)
@@ -362,15 +364,18 @@ class SceneView(gl.GLViewWidget):
         self.colors: list | None = None   # the runs' colours in compare mode
         self.marks_shown = True   # a ring around a ball too small to be seen from afar
         self.marks = [self._mark(MARK_EDGE)]   # one per ball
-        self.preview = gl.GLLinePlotItem(color=PREVIEW_COLOR, width=3.0, antialias=False, mode="line_strip")
-        self.preview.setGLOptions("translucent")
+        # the path's preview before a run, drawn as a trail is, in the colours of the modes it predicts
+        self.preview = self._trail_items(TRAIL_COLOR)
+        self.preview.setDepthValue(PREVIEW_DEPTH)
+        self.preview.casing.setDepthValue(PREVIEW_DEPTH - 0.01)
         self.arrow = gl.GLLinePlotItem(color=ARROW_COLOR, width=2.5, antialias=True, mode="lines")
         self.arrow.setGLOptions(MARK_GL)          # over the surface, as the ball's ring
         self.arrow_head = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), size=HANDLE_PIXELS, pxMode=True,
                                                color=(0.05, 0.05, 0.05, 0.35))
         self.arrow_head.setGLOptions(MARK_GL)
-        for item in (self.preview, self.arrow, self.arrow_head):
-            item.setDepthValue(BALL_DEPTH + 0.05)
+        for item in (self.arrow, self.arrow_head):
+            item.setDepthValue(ARROW_DEPTH)
+        for item in (self.preview.casing, self.preview, self.arrow, self.arrow_head):
             item.setVisible(False)
             self.addItem(item)
         self.start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None   # centre, normal, velocity
@@ -421,7 +426,8 @@ class SceneView(gl.GLViewWidget):
         xs_kept, ys_kept = xs[near], ys[near]
         self.bounds = np.array([[xs_kept.min(), ys_kept.min(), float(shown.min())],
                                 [xs_kept.max(), ys_kept.max(), float(min(shown.max(), self.cap))]])
-        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff, self.preview):   # after the surface
+        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff, self.preview.casing,
+                     self.preview):   # after the surface
             self.removeItem(item)
             self.addItem(item)
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
@@ -705,12 +711,16 @@ class SceneView(gl.GLViewWidget):
         self.arrow.setData(pos=np.array([center, tip, tip, tip + back + side, tip, tip + back - side]))
         self.arrow_head.setData(pos=tip.reshape(1, 3))
 
-    def set_preview(self, points: np.ndarray | None) -> None:
-        """The path's preview (None or fewer than two points: none)."""
+    def set_preview(self, points: np.ndarray | None, colors: np.ndarray | None = None) -> None:
+        """The path's preview (None or fewer than two points: none), ``colors`` one (r, g, b, a)
+        per point: the mode it predicts there (``contact_view.trail_colors``)."""
         shown = points is not None and len(points) >= 2
         self.preview.setVisible(shown)
+        self.preview.casing.setVisible(shown)
         if shown:
-            self.preview.setData(pos=np.asarray(points, dtype=float))
+            points = np.asarray(points, dtype=float)
+            self.preview.setData(pos=points, color=np.asarray(colors, dtype=float))
+            self.preview.casing.setData(pos=points, width=self.preview.width + CASING_EXTRA)
 
     def _matrix(self) -> np.ndarray:
         w, h = self.width(), self.height()
