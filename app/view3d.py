@@ -18,6 +18,7 @@ import pyqtgraph as pg
 import pyqtgraph.opengl as gl
 from OpenGL import GL
 from PySide6 import QtCore, QtGui
+from scipy import ndimage
 
 from rollball.geometry import fit_ratio
 
@@ -187,10 +188,21 @@ def height_cap(lowest: float, reachable: float, radius: float) -> float:
     return reachable + 2.0 * radius + 0.1 * max(reachable - lowest, 0.0)
 
 
+def lidded(z: np.ndarray, cap: float) -> np.ndarray:
+    """The grid points above ``cap`` that are closed by a flat lid at the cap: those of hilltops
+    (regions above the cap that do not reach the grid's edge). A wall reaching the edge stays
+    open, cut: the view looks over it into the landscape."""
+    above = z > cap
+    regions, _ = ndimage.label(above)   # (4-connected: a triangle's corners above are in one)
+    edge = np.unique(np.concatenate([regions[0], regions[-1], regions[:, 0], regions[:, -1]]))
+    return above & ~np.isin(regions, edge)
+
+
 def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float) -> gl.MeshData:
     """The grid as triangles, without those wholly above ``cap``, so the surface ends in a level
     cut: a point above it slides towards its lowest neighbour (of eight) to where the surface
-    crosses the cap (or, with no neighbour below, is lowered onto it)."""
+    crosses the cap (or, with no neighbour below, is lowered onto it). A hilltop cut away is
+    closed by a flat lid at the cap (``lidded``): no hole shows the background through the hill."""
     n = len(axis)
     xs, ys = np.meshgrid(axis, axis, indexing="ij")
     vertexes = np.stack([xs, ys, np.minimum(z, cap)], axis=-1)
@@ -209,7 +221,7 @@ def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float
     index = np.arange(n * n).reshape(n, n)
     a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[:-1, 1:].ravel(), index[1:, 1:].ravel()
     faces = np.concatenate([np.stack([a, d, b], axis=1), np.stack([a, c, d], axis=1)])   # as GLSurfacePlotItem winds them
-    faces = faces[(z.ravel()[faces] <= cap).any(axis=1)]
+    faces = faces[(z.ravel()[faces] <= cap).any(axis=1) | lidded(z, cap).ravel()[faces].all(axis=1)]
     mesh = gl.MeshData(vertexes=vertexes, faces=faces, vertexColors=colors.reshape(-1, 4))
     mesh._vertexNormals = vertex_normals(vertexes, faces)   # pyqtgraph's loop takes ~0.3 s a redraw
     return mesh
@@ -415,7 +427,8 @@ class SceneView(gl.GLViewWidget):
         self.grid_lines.setData(pos=grid_lines(axis, shown, lift=lift, cap=self.cap))
         cut = level_segments(axis, shown, self.cap) if shown.max() > self.cap else np.zeros((0, 3))
         self.cut_edge.setData(pos=cut + [0.0, 0.0, lift])
-        self._axis, self._drawn = axis, np.where(shown <= self.cap, shown, -np.inf)
+        self._axis, self._drawn = axis, np.where(shown <= self.cap, shown,
+                                                 np.where(lidded(shown, self.cap), self.cap, -np.inf))
         red = np.flatnonzero(((fit >= 1.0) & (shown <= self.cap)).ravel())   # a few no-fit points to show
         picked = red[np.linspace(0, len(red) - 1, min(len(red), 5)).astype(int)] if len(red) else red
         low = np.unravel_index(np.argmin(np.where(finite, shown, np.inf)), shown.shape)
