@@ -364,7 +364,9 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
         window.compare.enter([CompareRun.of(spec, window.scene) for spec in compare])
     window.show()
     window.view.reset_camera()   # framed for the final size of the view
-    if run_to is not None:
+    if run_to is None:   # the picture before a run shows the live path (the camera framed with it)
+        wait_until(app, lambda: not window.start_editing.preview.busy, stopped)
+    else:
         controller = window.controller
         window.speed.setCurrentIndex(window.speed.count() - 1)   # as fast as computed
         window.runs.start()

@@ -68,6 +68,7 @@ ARROW_DEPTH, PREVIEW_DEPTH = 0.55, 0.58
 LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's framebuffer unbound
 MIN_LABEL_PIXELS = 10      # axis numbers and names in an exported picture are at least this high
 LABEL_GAP = 3              # pixels kept free around an axis label (times the picture's scale)
+PATH_SAMPLES = 12          # points of the preview's path the camera keeps in sight
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
@@ -340,6 +341,8 @@ class SceneView(gl.GLViewWidget):
         self.bounds = np.array([[-3.0, -3.0, 0.0], [3.0, 3.0, 0.0]])  # drawn box: lowest, highest corner
         self.no_fit_points = np.zeros((0, 3))  # some drawn points where the ball does not fit
         self.lowest_point = np.zeros(3)         # where the ball is heading, shown if possible
+        self.path: np.ndarray | None = None     # the preview's points on this landscape, once come
+        self.awaiting_path = False              # framed before the path came: framed again then
         self.cap = np.inf                     # heights above this are cut away
         self._axis = np.linspace(-3.0, 3.0, 2)
         self._drawn = np.zeros((2, 2))        # drawn heights on the grid (-inf where cut away)
@@ -411,6 +414,7 @@ class SceneView(gl.GLViewWidget):
         z = d[0]
         fit = np.nan_to_num(fit_ratio(d, radius), nan=0.0)
         self.extent = float(axis[-1] - axis[0])
+        self.path = None   # the preview on the landscape before is not this one's
         finite = np.isfinite(z)
         lowest = z[finite].min() if finite.any() else 0.0
         # undefined points sit at the lowest height (drawn grey); walls are cut at twice the grid
@@ -474,13 +478,17 @@ class SceneView(gl.GLViewWidget):
 
     def reset_camera(self, include: np.ndarray | None = None, aspect: float | None = None) -> None:
         """Frame the drawn landscape, its heights included, from the first viewpoint of
-        ``VIEWPOINTS`` where the ball, some of the region where it does not fit and the lowest
-        point are in sight (not behind a wall); failing that, without the lowest point.
-        ``include``: more points (n, 3) the ball's centre passes (an export frames the whole
-        path, also where it leaves the drawn grid); ``aspect``: the framed picture's height over
-        its width (default: the view's)."""
+        ``VIEWPOINTS`` where the ball, some of the region where it does not fit, the path
+        (``PATH_SAMPLES`` of the preview's points, once it has come: ``set_preview``) and the
+        lowest point are in sight (not behind a wall); failing that, without the lowest point,
+        then without the path. ``include``: more points (n, 3) the ball's centre passes (an export
+        frames the whole path, also where it leaves the drawn grid; default: the preview's path);
+        ``aspect``: the framed picture's height over its width (default: the view's)."""
         r = self.ball_radius
-        box = self._box(include)
+        path = self.path[np.linspace(1, len(self.path) - 1, min(PATH_SAMPLES, len(self.path) - 1)).astype(int)] \
+            if self.path is not None else np.zeros((0, 3))
+        self.awaiting_path = self.path is None   # framed again when it comes
+        box = self._box(include if include is not None else self.path)
         center = box.mean(axis=0)
         corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
         aspect = aspect or self.height() / max(self.width(), 1)
@@ -495,7 +503,8 @@ class SceneView(gl.GLViewWidget):
                     fov, aspect), elevation, azimuth)
             return fitted[elevation, azimuth]
         must = (self.ball_center, *self.no_fit_points)
-        chosen = next((view(*v) for wanted in ((*must, self.lowest_point), must) for v in VIEWPOINTS
+        tried = ((*must, self.lowest_point, *path), (*must, *path), (*must, self.lowest_point), must)
+        chosen = next((view(*v) for wanted in tried for v in VIEWPOINTS
                        if all(self.in_sight(point, look(center, *view(*v)), 2 * r) for point in wanted)),
                       None) or view(*VIEWPOINTS[0])   # the landscape framed, should no side show the ball
         distance, elevation, azimuth = chosen
@@ -734,6 +743,9 @@ class SceneView(gl.GLViewWidget):
             points = np.asarray(points, dtype=float)
             self.preview.setData(pos=points, color=np.asarray(colors, dtype=float))
             self.preview.casing.setData(pos=points, width=self.preview.width + CASING_EXTRA)
+            self.path = points
+            if self.framed and self.awaiting_path:   # the camera was chosen without it (just opened)
+                self.reset_camera()
 
     def _matrix(self) -> np.ndarray:
         w, h = self.width(), self.height()
