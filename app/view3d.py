@@ -18,7 +18,6 @@ import pyqtgraph as pg
 import pyqtgraph.opengl as gl
 from OpenGL import GL
 from PySide6 import QtCore, QtGui
-from scipy import ndimage
 
 from rollball.geometry import fit_ratio
 
@@ -194,9 +193,19 @@ def lidded(z: np.ndarray, cap: float) -> np.ndarray:
     (regions above the cap that do not reach the grid's edge). A wall reaching the edge stays
     open, cut: the view looks over it into the landscape."""
     above = z > cap
-    regions, _ = ndimage.label(above)   # (4-connected: a triangle's corners above are in one)
-    edge = np.unique(np.concatenate([regions[0], regions[-1], regions[:, 0], regions[:, -1]]))
-    return above & ~np.isin(regions, edge)
+    reached = np.zeros_like(above)   # above the cap and joined to the edge (4-connected: a
+    reached[[0, -1], :] = above[[0, -1], :]   # triangle's corners above are joined)
+    reached[:, [0, -1]] |= above[:, [0, -1]]
+    while True:   # grown into the neighbours above until it no longer grows
+        grown = reached.copy()
+        grown[1:] |= reached[:-1]
+        grown[:-1] |= reached[1:]
+        grown[:, 1:] |= reached[:, :-1]
+        grown[:, :-1] |= reached[:, 1:]
+        grown &= above
+        if (grown == reached).all():
+            return above & ~reached
+        reached = grown
 
 
 def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float) -> gl.MeshData:
