@@ -129,11 +129,17 @@ class MarkedSlider(QtWidgets.QSlider):
             painter.drawPolygon(QtGui.QPolygon([QtCore.QPoint(x - 5, 0), QtCore.QPoint(x + 5, 0),
                                                 QtCore.QPoint(x, 7)]))
             painter.drawRect(x - 1, 0, 2, h)
-            if len(group) > 1:   # merged: how many, beside the marker
-                painter.setPen(QtGui.QColor(group[0].color).darker(150))
-                painter.drawText(QtCore.QRect(x + 3, h // 2, 40, h - h // 2),
-                                 QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter,
-                                 f"×{len(group)}")
+            if len(group) > 1:   # merged: how many, on a pale badge beside the marker
+                font = QtGui.QFont(self.font())
+                font.setBold(True)
+                painter.setFont(font)
+                text = f"×{len(group)}"
+                box = QtGui.QFontMetrics(font).boundingRect(text).adjusted(-2, 0, 2, 0)
+                box.moveTo(x + 4, max(0, (h - box.height()) // 2))
+                painter.setPen(QtGui.QColor(group[0].color).darker(160))
+                painter.setBrush(QtGui.QColor(255, 255, 255, 230))
+                painter.drawRoundedRect(box, 3, 3)
+                painter.drawText(box, QtCore.Qt.AlignmentFlag.AlignCenter, text)
         painter.end()
 
 
@@ -235,13 +241,16 @@ class TimeSlider(QtWidgets.QWidget):
         margins = layout.contentsMargins()
         room = ((1 - SLIDER_SHARE) * self.width() - self.label.width() - margins.left() - margins.right()
                 - 3 * layout.spacing())
-        for count in range(min(MAX_LINKS, len(shown)), -1, -1):
+        # the most links that fit, each with its time, else only its kind ("lift-off"); else the menu alone
+        tries = [(count, timed) for count in range(min(MAX_LINKS, len(shown)), 0, -1) for timed in (True, False)]
+        for count, timed in tries + [(0, False)]:
             links = telling(shown, count)
             more = len(shown) - count
-            self.events.setText(" · ".join(f'<a href="{m.time!r}">{escape(m.short or m.text)}</a>' for m in links))
-            self.more.setText(f"+{more} ▾" if count else f"{len(shown)} events ▾")
+            self.events.setText(" · ".join(f'<a href="{m.time!r}">{escape((m.short or m.text) if timed else (m.kind or m.short or m.text))}</a>'
+                                           for m in links))
+            self.more.setText(f"+{more}" if count else f"{len(shown)} events")
             needed = (self.events.sizeHint().width() if count else 0) + (self.more.sizeHint().width() if more else 0)
-            if needed <= room or count == 0:
+            if needed <= room:
                 break
         self.events.setVisible(count > 0)
         self.more.setVisible(more > 0)

