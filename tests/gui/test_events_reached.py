@@ -159,6 +159,10 @@ def test_compare_mode_shows_each_runs_events_when_reached(qtbot, window, tmp_pat
         window.runs.seek(t)
         assert shown_times(window) == wanted, t
     assert all(m.text.startswith("flies: ") for _, m in window.timeline.slider.markers)
+    window.runs.seek(0.0)
+    window.future_action.trigger()   # and all of them from the start when asked
+    assert shown_times(window) == ([T1, T2, T3], 3)
+    window.future_action.trigger()
 
 
 @pytest.mark.parametrize("size", [(1024, 768), (1400, 900)])
