@@ -168,6 +168,7 @@ class TimeSlider(QtWidgets.QWidget):
         self.label = QtWidgets.QLabel(objectName="timeLabel")
         self.label.setMinimumWidth(150)
         self.label.setAlignment(QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter)
+        self.label.installEventFilter(self)
         layout = QtWidgets.QHBoxLayout(self)
         layout.setContentsMargins(6, 0, 6, 0)
         layout.addWidget(self.slider, 1)
@@ -228,7 +229,7 @@ class TimeSlider(QtWidgets.QWidget):
         time's label with the menu button, the slider keeping ``SLIDER_SHARE`` of the width; the
         menu lists every shown event."""
         shown = self.shown
-        key = (tuple(shown), self.width())
+        key = (tuple(shown), self.width(), self.label.width())
         if key == self._links_for:
             return
         self._links_for = key
@@ -261,6 +262,18 @@ class TimeSlider(QtWidgets.QWidget):
     def resizeEvent(self, event) -> None:
         super().resizeEvent(event)
         self._lay_out_links()
+
+    def eventFilter(self, watched, event) -> bool:
+        if watched is self.label and event.type() == QtCore.QEvent.Type.Resize:
+            self._lay_out_links()   # the time's label grew (larger text): less room for links
+        return super().eventFilter(watched, event)
+
+    def changeEvent(self, event) -> None:
+        """Larger text (presentation, Text Size) makes the links wider: laid out again."""
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange):
+            self._links_for = None
+            self._lay_out_links()
 
     def set_time(self, t: float, shown: float | None = None) -> None:
         """Put the handle at time t (no ``seeked``); the label says ``shown``, the time of the

@@ -194,3 +194,20 @@ def test_presentation_mode_shows_events_when_reached_and_a_clicked_marker_jumps(
     assert window.controller.play_time == group[0].time
     assert [m.time for _, m in slider.markers] == [m.time for m in timeline.markers if m.time <= group[0].time]
     window.presentation_action.setChecked(False)
+
+
+def test_larger_text_lays_the_links_out_again(qtbot, window, tmp_path):
+    """At the same width, a larger text (View → Text Size) leaves fewer links, never a squeezed slider."""
+    from rollball_app.timeline import SLIDER_SHARE
+
+    window.resize(1024, 768)
+    _play(qtbot, window, tmp_path)
+    timeline = window.timeline
+    for action in window.text_size_group.actions():   # every text size, the largest last
+        action.trigger()
+        qtbot.wait(300)
+        needed = (timeline.events.sizeHint().width() if timeline.events.isVisibleTo(timeline) else 0) \
+            + (timeline.more.sizeHint().width() if timeline.more.isVisibleTo(timeline) else 0)
+        assert timeline.slider.width() >= SLIDER_SHARE * timeline.width() - 1, action.text()
+        assert needed <= (1 - SLIDER_SHARE) * timeline.width() - timeline.label.width(), action.text()
+    window.text_size_group.actions()[0].trigger()
