@@ -355,6 +355,7 @@ class SceneView(gl.GLViewWidget):
         self.cap = np.inf                     # heights above this are cut away
         self._axis = np.linspace(-3.0, 3.0, 2)
         self._drawn = np.zeros((2, 2))        # drawn heights on the grid (-inf where cut away)
+        self._top = self._drawn               # the same with the hilltops' lids (what hides what)
         self.grid_lines = gl.GLLinePlotItem(color=GRID_COLOR, width=1.0, antialias=True, mode="lines")
         self.grid_lines.setGLOptions("translucent")
         self.cut_edge = gl.GLLinePlotItem(color=CUT_COLOR, width=1.5, antialias=True, mode="lines")
@@ -440,8 +441,8 @@ class SceneView(gl.GLViewWidget):
         self.grid_lines.setData(pos=grid_lines(axis, shown, lift=lift, cap=self.cap))
         cut = level_segments(axis, shown, self.cap) if shown.max() > self.cap else np.zeros((0, 3))
         self.cut_edge.setData(pos=cut + [0.0, 0.0, lift])
-        self._axis, self._drawn = axis, np.where(shown <= self.cap, shown,
-                                                 np.where(lidded(shown, self.cap), self.cap, -np.inf))
+        self._axis, self._drawn = axis, np.where(shown <= self.cap, shown, -np.inf)
+        self._top = np.where(lidded(shown, self.cap), self.cap, self._drawn)   # and the hilltops' lids
         red = np.flatnonzero(((fit >= 1.0) & (shown <= self.cap)).ravel())   # a few no-fit points to show
         picked = red[np.linspace(0, len(red) - 1, min(len(red), 5)).astype(int)] if len(red) else red
         low = np.unravel_index(np.argmin(np.where(finite, shown, np.inf)), shown.shape)
@@ -460,15 +461,15 @@ class SceneView(gl.GLViewWidget):
                 "cut": bool(shown.max() > self.cap), "coarse": too_coarse(landscape, axis, z)}
 
     def height_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """The drawn surface's height at points, interpolated bilinearly on the grid (-inf
-        outside the grid or where the surface is cut away)."""
+        """The drawn surface's height at points, a hilltop's lid included, interpolated
+        bilinearly on the grid (-inf outside the grid or where the surface is cut away)."""
         axis, n = self._axis, len(self._axis)
         step = (axis[-1] - axis[0]) / max(n - 1, 1)
         u, v = (np.asarray(x) - axis[0]) / step, (np.asarray(y) - axis[0]) / step
         inside = (u >= 0) & (u <= n - 1) & (v >= 0) & (v <= n - 1)
         i, j = np.clip(np.floor(u).astype(int), 0, n - 2), np.clip(np.floor(v).astype(int), 0, n - 2)
         a, b = np.clip(u - i, 0, 1), np.clip(v - j, 0, 1)
-        z = self._drawn
+        z = self._top
         with np.errstate(invalid="ignore"):   # -inf corners stay -inf
             h = ((1 - a) * (1 - b) * z[i, j] + a * (1 - b) * z[i + 1, j] + (1 - a) * b * z[i, j + 1]
                  + a * b * z[i + 1, j + 1])
