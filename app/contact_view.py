@@ -90,7 +90,7 @@ def markers(transitions, label: str = "") -> list[Marker]:
         if change.kind == "landing" and change.impact_speed is not None:
             text += f" ({change.impact_speed:.3g} m/s, {change.energy_lost:.3g} J lost)"
         out.append(Marker(change.time, KIND_COLORS[change.kind], text,
-                          f"{KIND_WORDS[change.kind]} {change.time:.3g} s"))
+                          f"{KIND_WORDS[change.kind]} {change.time:.3g} s", KIND_WORDS[change.kind]))
     return out
 
 

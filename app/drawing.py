@@ -1,6 +1,10 @@
 """What the window draws of the runs: the ball (or every run's ball) at the moment shown, its
-trail and close-up, the readouts, the time slider, the plots and the progress bar; before any
-run, the ball at its start.
+trail and close-up, the events reached so far (markers in the view and on the time slider), the
+readouts, the plots and the progress bar; before any run, the ball at its start.
+
+An event (a lift-off, a landing, a slip, a grip) is marked once playback reaches it, on screen
+and in an exported video alike, unless the View menu's Show Future Events asks for all of them
+from the start (a preference).
 
 The run controller says when the moment shown has moved (``frameReady``); ``draw`` shows it,
 and brings the plots up to it at most every ``PLOT_INTERVAL``.
@@ -15,11 +19,12 @@ import numpy as np
 
 from rollball import Scene
 from rollball.geometry import unit_normal
-from rollball.trajectory import CENTER, CONTACT, R
+from rollball.trajectory import CENTER, CONTACT, R, SLIDING
 
 from .closeup import inset_place
-from .contact_view import beyond_2011, trail_colors
+from .contact_view import KIND_COLORS, beyond_2011, rgba, trail_colors
 from .controller import RUNNING
+from .view3d import MARK_FILL
 
 PLOT_INTERVAL = 0.1   # s between plot updates while playing (at most 10/s; at every frame where frames are slower)
 
@@ -32,6 +37,8 @@ class Drawing:
         self.window = window
         self.drawn_index = -1                # the rows the view shows
         self.plotted_at = -math.inf          # when the plots were last brought up to the shown time
+        self.marked: tuple | None = ()      # the events marked in the view (run, time, kind) as last drawn
+        self.show_future = window.preferences.show_future_events()   # (the time slider is told by the window)
 
     def clear(self) -> None:
         """No run: the ball at the start of the scene, empty plots and time slider."""
@@ -48,7 +55,8 @@ class Drawing:
         w.plots.show_run(None, 0)
         w.plots.set_cursor(None)
         w.timeline.set_span(0.0)
-        w.view.set_liftoff(None)
+        self.marked = ()
+        w.view.set_marked(np.zeros((0, 3)), np.zeros((0, 4)))
         w.view.set_trail(np.zeros((0, 3)))
         w.progress.setValue(0)
 
@@ -76,6 +84,7 @@ class Drawing:
         if not runs or all(len(run.buffer) == 0 for run in runs):
             return
         indices = tuple(run.index_at(t) for run in runs)
+        self.mark_events(t)
         if indices == self.drawn_index and not force:
             return  # the same rows as the last frame
         self.drawn_index = indices
@@ -90,6 +99,9 @@ class Drawing:
                 # coloured by the contact's mode (in compare mode, shades of the run's colour)
                 colors = trail_colors(run.buffer.mode[picked], run.color)
                 w.view.set_trail(trail, k, colors)
+                if run.color is None:   # one run: its ring tinted while it slides
+                    sliding = run.buffer.mode_of(i) == SLIDING
+                    w.view.set_mark_fill((*colors[-1][:3], MARK_FILL[3]) if sliding else MARK_FILL)
                 if k == followed:
                     self._show_closeup_at(row[CENTER], row[R].reshape(3, 3), row[CONTACT], trail, run.color, colors)
                 w.readouts.show_row(k, run.buffer, i)
@@ -118,6 +130,45 @@ class Drawing:
         if runs:
             w.timeline.set_available(w.controller.end_time)
             w.runs.show_events()
+
+    def events(self, run, t: float) -> list[tuple[float, str, float, float]]:
+        """A run's events to mark at time t: (time, kind, x, y) of its lift-off (a glued ball's,
+        where it would leave the surface) and its transitions, those up to t (all of them with
+        ``show_future``)."""
+        out = []
+        liftoff = run.simulation.liftoff_time
+        if run.glued and liftoff is not None and len(run.buffer):
+            out.append((liftoff, "liftoff", *run.buffer.point_at(liftoff)[:2]))
+        out += [(c.time, c.kind, c.x, c.y) for c in run.transitions]
+        return [e for e in out if self.show_future or e[0] <= t]
+
+    def mark_events(self, t: float) -> None:
+        """Mark in the view every run's events reached at time t (changed only when they change),
+        over the surface as the trail is (0.3 r along the normal)."""
+        w = self.window
+        runs = w.controller.runs
+        marked = [(k, e) for k, run in enumerate(runs) for e in self.events(run, t)]
+        key = tuple((k, e[0], e[1]) for k, e in marked)
+        if key == self.marked:
+            return
+        self.marked = key
+        points, colors = [], []
+        for k, (_, kind, x, y) in marked:
+            d = runs[k].buffer.landscape.evaluate(x, y)
+            if np.all(np.isfinite(d[:3])):
+                points.append(np.array([x, y, d[0]]) + 0.3 * runs[k].buffer.radius * unit_normal(d))
+                colors.append(rgba(KIND_COLORS[kind]))
+        w.view.set_marked(np.array(points).reshape(-1, 3), np.array(colors).reshape(-1, 4))
+
+    def show_future_events(self, on: bool) -> None:
+        """Every event marked from the start (on), or each once playback reaches it; remembered."""
+        self.show_future = on
+        self.window.preferences.set_show_future_events(on)
+        self.window.timeline.set_show_future(on)
+        self.marked = None   # marked again, whatever they were
+        if self.window.controller.runs:
+            self.mark_events(self.window.controller.play_time)
+            self.window.view.update()
 
     def follow(self, on: bool) -> None:
         """The camera follows the ball (in compare mode, the followed run's)."""

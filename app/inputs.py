@@ -12,7 +12,7 @@ from __future__ import annotations
 import re
 import time
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball import FormulaError, Scene, SceneError
 from rollball.formula import parameter_problem
@@ -26,6 +26,8 @@ from .parameters import ParameterRows
 from .worker import Worker
 
 # (dotted scene key, label, unit, tooltip), by group
+# the Edit menu's Undo and Redo keys: in a field too they undo the scene's changes
+UNDO_KEYS = [QtGui.QKeySequence(k) for k in ("Ctrl+Z", "Ctrl+Shift+Z", "Ctrl+Y")]
 NUMBER_FIELDS = {
     "Ball": (
         ("ball.radius", "Radius", "m", "Radius r of the ball"),
@@ -165,6 +167,9 @@ class ScenePanel(QtWidgets.QWidget):
     landscape is drawn at most ``REDRAW_MS`` after the one before (the newest valid text then),
     so that keys do not wait for drawing. The scenes applied during one burst of typing (until
     the pause ends) are one undo step: ``gesture`` is the burst's.
+
+    Undo and Redo keys (Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y) in a field are the Edit menu's: they undo
+    the scene's last change, not the field's text (which would be one more change).
     """
 
     sceneChanged = QtCore.Signal(object)
@@ -191,6 +196,8 @@ class ScenePanel(QtWidgets.QWidget):
         self._drawn_at = -float("inf")                        # when the last text typed was drawn
         self.contact = ContactFields(self)   # friction, restitution, after lift-off, start ω
         self.contact.edited.connect(self._edited)
+        # every text field of the panel, those added later too, once it has the keyboard
+        QtWidgets.QApplication.instance().focusChanged.connect(self._focused)
 
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(6, 6, 6, 6)
@@ -214,6 +221,18 @@ class ScenePanel(QtWidgets.QWidget):
             if title == "Start":
                 layout.addWidget(self.contact.group())
         layout.addStretch(1)
+
+    def _focused(self, _old, new) -> None:
+        if isinstance(new, QtWidgets.QLineEdit) and self.isAncestorOf(new):
+            new.installEventFilter(self)   # (once: installing it again only moves it first)
+
+    def eventFilter(self, watched, event) -> bool:
+        """A field's Undo and Redo keys are left to the window's actions (the scene's undo)."""
+        if event.type() == QtCore.QEvent.Type.ShortcutOverride and isinstance(watched, QtWidgets.QLineEdit) \
+                and QtGui.QKeySequence(event.keyCombination()) in UNDO_KEYS:
+            event.ignore()   # not taken by the field: the shortcut goes to the Edit menu's action
+            return True
+        return super().eventFilter(watched, event)
 
     # -- building ---------------------------------------------------------------------
 

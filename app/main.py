@@ -30,6 +30,7 @@ import time
 from pathlib import Path
 
 from .formats import DEFAULT_FPS, MAX_FPS, MIN_FPS, format_of
+from .opening_notice import OpeningNotice
 
 RUN_TIMEOUT = 600.0   # seconds a --run-to may compute before the screenshot gives up
 MIN_SIZE, MAX_SIZE = (320, 240), (7680, 4320)   # --size bounds, width × height
@@ -127,6 +128,16 @@ def main(argv: list[str] | None = None) -> int:
         if len(specs) > MAX_RUNS:
             fail(f"--compare: at most {MAX_RUNS} runs, not {len(specs)}")
 
+    opening = None if headless else OpeningNotice().start()   # a first launch imports for many seconds
+    try:
+        return _open(args, specs, headless, fail, opening)
+    finally:
+        if opening is not None:
+            opening.done()
+
+
+def _open(args, specs, headless: bool, fail, opening: OpeningNotice | None) -> int:
+    """The app, from the scene named on the command line (``main``'s arguments checked)."""
     from rollball import Scene, SceneError
     from rollball.examples import DEFAULT_EXAMPLE, scene_path
 
@@ -167,6 +178,8 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         return 0
 
+    from PySide6 import QtCore
+
     from .window import MainWindow
 
     window = MainWindow()
@@ -178,6 +191,7 @@ def main(argv: list[str] | None = None) -> int:
 
         window.compare.enter([CompareRun.of(spec, window.scene) for spec in specs])
     window.show()
+    QtCore.QTimer.singleShot(0, opening.done)   # the window is up once the event loop turns
     code = app.exec()
     close_down(app, window)
     return code
@@ -364,7 +378,9 @@ def screenshot(window, scene: Path, out: Path, run_to: float | None, size: tuple
         window.compare.enter([CompareRun.of(spec, window.scene) for spec in compare])
     window.show()
     window.view.reset_camera()   # framed for the final size of the view
-    if run_to is not None:
+    if run_to is None:   # the picture before a run shows the live path (the camera framed with it)
+        wait_until(app, lambda: not window.start_editing.preview.busy, stopped)
+    else:
         controller = window.controller
         window.speed.setCurrentIndex(window.speed.count() - 1)   # as fast as computed
         window.runs.start()

@@ -1,5 +1,5 @@
 """Preferences kept in QSettings, apart from scenes: window geometry, recent files, last folder,
-text size."""
+text size, whether future events are shown."""
 
 from __future__ import annotations
 
@@ -111,6 +111,14 @@ class Preferences:
 
     def set_font_scale(self, scale: float) -> None:
         self.settings.setValue("fontScale", float(scale))
+
+    def show_future_events(self) -> bool:
+        """Whether events are marked before playback reaches them (View ▸ Show Future Events)."""
+        value = self.settings.value("showFutureEvents", False)
+        return value is True or (isinstance(value, str) and value.lower() == "true")
+
+    def set_show_future_events(self, on: bool) -> None:
+        self.settings.setValue("showFutureEvents", bool(on))
 
     def restore(self, window) -> None:
         geometry, state = self.settings.value("geometry"), self.settings.value("windowState")

@@ -1,6 +1,6 @@
 """The live path preview: the first seconds of the path, computed in the background while the
 scene is edited (the formula typed, a slider dragged, the start moved) and drawn as a thin line
-on the surface.
+on the surface, coloured by the mode it predicts (rolling, sliding, flying: the trail's colours).
 
 Each preview is a short run of the scene (``PREVIEW_SECONDS`` at most) with a cheap, accurate
 method (dopri5 at loose tolerances, a few hundred rows), in a ``worker.Worker``. A newer edit
@@ -19,7 +19,7 @@ from PySide6 import QtCore
 
 from rollball import Scene, Simulation
 from rollball.comparison import Cancelled
-from rollball.trajectory import CENTER
+from rollball.trajectory import CENTER, T
 
 from .worker import Worker, one_line
 
@@ -33,11 +33,15 @@ CHUNK_STEPS = 100         # steps between looks at the cancel flag
 @dataclasses.dataclass(frozen=True)
 class Preview:
     """The preview of ``scene``: ``points`` (n, 3), the ball's centre along the path (drawn
-    there, a radius above the surface, it is never hidden by the grid lines), to time ``t_end``; ``status`` how the short run ended (ok, or where it stopped)."""
+    there, a radius above the surface, it is never hidden by the grid lines), at ``times`` (n,)
+    to time ``t_end``, with the contact's ``modes`` there (n,; positions in ``trajectory.MODES``);
+    ``status`` how the short run ended (ok, or where it stopped)."""
     scene: Scene
     points: np.ndarray
     t_end: float
     status: str
+    times: np.ndarray
+    modes: np.ndarray
 
 
 def preview_scene(scene: Scene) -> Scene:
@@ -58,8 +62,9 @@ def compute(scene: Scene, cancel=None) -> Preview:
         simulation.advance(CHUNK_STEPS)
     rows = simulation.rows
     points = rows[:, CENTER].copy()
-    t_end = float(rows[-1, 0]) if len(rows) else 0.0
-    return Preview(scene, points, t_end, simulation.status.value)
+    t_end = float(rows[-1, T]) if len(rows) else 0.0
+    modes = simulation.modes if hasattr(type(simulation), "modes") else np.zeros(len(rows), dtype=np.int8)
+    return Preview(scene, points, t_end, simulation.status.value, rows[:, T].copy(), np.array(modes[:len(rows)]))
 
 
 class PathPreview(QtCore.QObject):

@@ -9,11 +9,9 @@ drawing a moment of them is ``drawing.Drawing``'s; compare mode's runs are made 
 
 from __future__ import annotations
 
-import numpy as np
 from PySide6 import QtCore
 
 from rollball import Scene, Simulation, Status
-from rollball.geometry import unit_normal
 from rollball.simulation import recording
 
 from . import contact_view
@@ -194,15 +192,16 @@ class RunCommands:
         first = self.controller.runs[0]
         if simulation.liftoff_time is not None and first.glued:
             events.append(Marker(simulation.liftoff_time, LIFTOFF_COLOR,
-                                 f"lift-off at t = {simulation.liftoff_time:.4g} s"))
+                                 f"lift-off at t = {simulation.liftoff_time:.4g} s", kind="lift-off"))
         compare = w.compare.active
         for run in self.controller.runs if compare else self.controller.runs[:1]:
             events += contact_view.markers(run.transitions, run.label if compare else "")
         events.sort(key=lambda marker: marker.time)
         if simulation.status not in (None, Status.OK, Status.ABORTED) and len(self.controller.buffer):
             t = self.controller.buffer.end_time
-            events.append(Marker(t, STOP_COLOR, f"{simulation.status.value.replace('_', ' ')} at t = {t:.4g} s"))
-        if [m.text for m in events] != [m.text for _, m in w.timeline.slider.markers]:
+            events.append(Marker(t, STOP_COLOR, f"{simulation.status.value.replace('_', ' ')} at t = {t:.4g} s",
+                                 kind="stop"))
+        if events != w.timeline.markers:
             w.timeline.set_markers(events)
             w.liftoff_action.setEnabled(simulation.liftoff_time is not None)
 
@@ -238,21 +237,15 @@ class RunCommands:
         return "" if t is None else f"; lift-off at t = {t:.4g} s (not physical from there on)"
 
     def run_event(self, index: int, kind: str, t: float) -> None:
+        """Playback has passed an event: the status bar says so (the view marks it: ``Drawing``)."""
         w = self.window
         run = self.controller.runs[index]
         who = f"{run.label}: " if w.compare.active else ""
         if kind == "liftoff" and run.glued:
-            w.view.add_liftoff(run.buffer.point_at(t))
             w.show_message(f"{who}Lift-off at t = {t:.4g} s: the real ball would leave the surface "
                            f"here; the model keeps it on, so what follows is not physical", warning=True)
             return
-        change = next((c for c in run.transitions if c.time == t and c.kind == kind), None)
-        if change is not None:
-            d = run.buffer.landscape.evaluate(change.x, change.y)
-            if np.all(np.isfinite(d[:3])):   # over the surface, as the trail is (0.3 r along the normal)
-                point = np.array([change.x, change.y, d[0]]) + 0.3 * run.buffer.radius * unit_normal(d)
-                w.view.add_liftoff(point, contact_view.KIND_COLORS[kind])
-            w.show_message(contact_view.sentence(kind, t, who))
+        w.show_message(contact_view.sentence(kind, t, who))
 
     def update_controls(self) -> None:
         """The run controls as the state says: what Start does, which commands are open."""

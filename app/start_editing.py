@@ -15,6 +15,7 @@ from PySide6 import QtCore
 from rollball import Scene
 
 from .picking import rounded
+from .contact_view import trail_colors
 from .preview import PathPreview, Preview
 from .view3d import ARROW_SECONDS
 
@@ -59,7 +60,7 @@ class StartEditing(QtCore.QObject):
 
     def _preview_ready(self, preview: Preview) -> None:
         if preview.scene == self.scene:
-            self.view.set_preview(preview.points)
+            self.view.set_preview(preview.points, trail_colors(preview.modes))
 
     def _resolution(self) -> float:
         view = self.panel.scene().view

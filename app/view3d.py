@@ -34,15 +34,15 @@ TEXT_COLOR = (60, 60, 60, 255)
 TRAIL_COLOR = (0.80, 0.10, 0.10, 1.0)
 CASING_COLOR = (0.08, 0.08, 0.08, 0.85)   # a dark edge under each trail: readable on every surface colour
 CASING_EXTRA = 4.0                        # pixels wider than the trail
-# Drawn after the surface (depth 0) and before the ball: the casing, then its trail over it, both
-# without the depth test, as the trail always was (a line's many short antialiased segments would
-# hide each other's pixels in the depth buffer): the whole path stays in sight, over the hills too.
-CASING_DEPTH, TRAIL_DEPTH = 0.01, 0.02
+# Drawn after the surface (depth 0) and the ball's ring (MARK_DEPTH), before the ball: the casing,
+# then its trail over it, both without the depth test, as the trail always was (a line's many
+# short antialiased segments would hide each other's pixels in the depth buffer): the whole path
+# stays in sight, over the hills too, and a short one (a billiard ball's slide) over the ring.
+CASING_DEPTH, TRAIL_DEPTH = 0.52, 0.54
 TRAIL_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,
             "glBlendFunc": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA)}
 CASING_GL = TRAIL_GL
 LIFTOFF_COLOR = (1.0, 0.55, 0.0, 1.0)
-PREVIEW_COLOR = (1.0, 0.2, 0.8, 1.0)        # the path's preview before a run (magenta: seen on every height colour)
 ARROW_COLOR = (0.05, 0.05, 0.05, 0.9)       # the start velocity's arrow
 ARROW_SECONDS = 1.0      # the arrow reaches where the centre would be this long after the start
 HANDLE_PIXELS = 14       # the arrow head's handle on screen; a press this near grabs it
@@ -61,9 +61,13 @@ MARK_FILL = (1.0, 1.0, 1.0, 0.55)      # its inside, behind the ball
 MARK_GL = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,   # never hidden by the surface
            "glBlendFuncSeparate": (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)}
 BALL_DEPTH, MARK_DEPTH, GHOST_DEPTH = 0.6, 0.5, 1.0   # drawing order: surface, marks, ball, ghosts
+# before a run, after the marks and before the ball (neither depth-tested): the start velocity's
+# arrow, then the preview's casing and line over it (the path it predicts is not hidden by the arrow)
+ARROW_DEPTH, PREVIEW_DEPTH = 0.55, 0.58
 LABEL_DEPTH = 10.0   # text last: its painter leaves an off-screen rendering's framebuffer unbound
 MIN_LABEL_PIXELS = 10      # axis numbers and names in an exported picture are at least this high
 LABEL_GAP = 3              # pixels kept free around an axis label (times the picture's scale)
+PATH_SAMPLES = 12          # points of the preview's path the camera keeps in sight
 # camera directions tried in turn (elevation, azimuth in degrees) until the ball is in sight:
 # the usual side from ever higher up, then the other sides
 VIEWPOINTS = [(elevation, azimuth) for azimuth in (-60, -30, -90, -120, 0, -150, 30, 180, 60, 150, 90, 120)
@@ -184,10 +188,31 @@ def height_cap(lowest: float, reachable: float, radius: float) -> float:
     return reachable + 2.0 * radius + 0.1 * max(reachable - lowest, 0.0)
 
 
+def lidded(z: np.ndarray, cap: float) -> np.ndarray:
+    """The grid points above ``cap`` that are closed by a flat lid at the cap: those of hilltops
+    (regions above the cap that do not reach the grid's edge). A wall reaching the edge stays
+    open, cut: the view looks over it into the landscape."""
+    above = z > cap
+    reached = np.zeros_like(above)   # above the cap and joined to the edge (4-connected: a
+    reached[[0, -1], :] = above[[0, -1], :]   # triangle's corners above are joined)
+    reached[:, [0, -1]] |= above[:, [0, -1]]
+    while True:   # grown into the neighbours above until it no longer grows
+        grown = reached.copy()
+        grown[1:] |= reached[:-1]
+        grown[:-1] |= reached[1:]
+        grown[:, 1:] |= reached[:, :-1]
+        grown[:, :-1] |= reached[:, 1:]
+        grown &= above
+        if (grown == reached).all():
+            return above & ~reached
+        reached = grown
+
+
 def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float) -> gl.MeshData:
     """The grid as triangles, without those wholly above ``cap``, so the surface ends in a level
     cut: a point above it slides towards its lowest neighbour (of eight) to where the surface
-    crosses the cap (or, with no neighbour below, is lowered onto it)."""
+    crosses the cap (or, with no neighbour below, is lowered onto it). A hilltop cut away is
+    closed by a flat lid at the cap (``lidded``): no hole shows the background through the hill."""
     n = len(axis)
     xs, ys = np.meshgrid(axis, axis, indexing="ij")
     vertexes = np.stack([xs, ys, np.minimum(z, cap)], axis=-1)
@@ -206,7 +231,7 @@ def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float
     index = np.arange(n * n).reshape(n, n)
     a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[:-1, 1:].ravel(), index[1:, 1:].ravel()
     faces = np.concatenate([np.stack([a, d, b], axis=1), np.stack([a, c, d], axis=1)])   # as GLSurfacePlotItem winds them
-    faces = faces[(z.ravel()[faces] <= cap).any(axis=1)]
+    faces = faces[(z.ravel()[faces] <= cap).any(axis=1) | lidded(z, cap).ravel()[faces].all(axis=1)]
     mesh = gl.MeshData(vertexes=vertexes, faces=faces, vertexColors=colors.reshape(-1, 4))
     mesh._vertexNormals = vertex_normals(vertexes, faces)   # pyqtgraph's loop takes ~0.3 s a redraw
     return mesh
@@ -325,9 +350,12 @@ class SceneView(gl.GLViewWidget):
         self.bounds = np.array([[-3.0, -3.0, 0.0], [3.0, 3.0, 0.0]])  # drawn box: lowest, highest corner
         self.no_fit_points = np.zeros((0, 3))  # some drawn points where the ball does not fit
         self.lowest_point = np.zeros(3)         # where the ball is heading, shown if possible
+        self.path: np.ndarray | None = None     # the preview's points on this landscape, once come
+        self.awaiting_path = False              # framed before the path came: framed again then
         self.cap = np.inf                     # heights above this are cut away
         self._axis = np.linspace(-3.0, 3.0, 2)
         self._drawn = np.zeros((2, 2))        # drawn heights on the grid (-inf where cut away)
+        self._top = self._drawn               # the same with the hilltops' lids (what hides what)
         self.grid_lines = gl.GLLinePlotItem(color=GRID_COLOR, width=1.0, antialias=True, mode="lines")
         self.grid_lines.setGLOptions("translucent")
         self.cut_edge = gl.GLLinePlotItem(color=CUT_COLOR, width=1.5, antialias=True, mode="lines")
@@ -350,7 +378,6 @@ class SceneView(gl.GLViewWidget):
         for item in (self.grid_lines, self.cut_edge, self.axes, self.ball, self.trail, self.liftoff):
             self.addItem(item)
         self.liftoff.setVisible(False)
-        self._marked_colors = np.zeros((0, 4))   # of the marked points (lift-off, transitions)
         self._trail_colors = [np.asarray(TRAIL_COLOR)]   # each run's own
         self.addItem(self.casing)
         self.ball_radius = 0.1
@@ -362,15 +389,18 @@ class SceneView(gl.GLViewWidget):
         self.colors: list | None = None   # the runs' colours in compare mode
         self.marks_shown = True   # a ring around a ball too small to be seen from afar
         self.marks = [self._mark(MARK_EDGE)]   # one per ball
-        self.preview = gl.GLLinePlotItem(color=PREVIEW_COLOR, width=3.0, antialias=False, mode="line_strip")
-        self.preview.setGLOptions("translucent")
+        # the path's preview before a run, drawn as a trail is, in the colours of the modes it predicts
+        self.preview = self._trail_items(TRAIL_COLOR)
+        self.preview.setDepthValue(PREVIEW_DEPTH)
+        self.preview.casing.setDepthValue(PREVIEW_DEPTH - 0.01)
         self.arrow = gl.GLLinePlotItem(color=ARROW_COLOR, width=2.5, antialias=True, mode="lines")
         self.arrow.setGLOptions(MARK_GL)          # over the surface, as the ball's ring
         self.arrow_head = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), size=HANDLE_PIXELS, pxMode=True,
                                                color=(0.05, 0.05, 0.05, 0.35))
         self.arrow_head.setGLOptions(MARK_GL)
-        for item in (self.preview, self.arrow, self.arrow_head):
-            item.setDepthValue(BALL_DEPTH + 0.05)
+        for item in (self.arrow, self.arrow_head):
+            item.setDepthValue(ARROW_DEPTH)
+        for item in (self.preview.casing, self.preview, self.arrow, self.arrow_head):
             item.setVisible(False)
             self.addItem(item)
         self.start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None   # centre, normal, velocity
@@ -394,6 +424,7 @@ class SceneView(gl.GLViewWidget):
         z = d[0]
         fit = np.nan_to_num(fit_ratio(d, radius), nan=0.0)
         self.extent = float(axis[-1] - axis[0])
+        self.path = None   # the preview on the landscape before is not this one's
         finite = np.isfinite(z)
         lowest = z[finite].min() if finite.any() else 0.0
         # undefined points sit at the lowest height (drawn grey); walls are cut at twice the grid
@@ -411,6 +442,7 @@ class SceneView(gl.GLViewWidget):
         cut = level_segments(axis, shown, self.cap) if shown.max() > self.cap else np.zeros((0, 3))
         self.cut_edge.setData(pos=cut + [0.0, 0.0, lift])
         self._axis, self._drawn = axis, np.where(shown <= self.cap, shown, -np.inf)
+        self._top = np.where(lidded(shown, self.cap), self.cap, self._drawn)   # and the hilltops' lids
         red = np.flatnonzero(((fit >= 1.0) & (shown <= self.cap)).ravel())   # a few no-fit points to show
         picked = red[np.linspace(0, len(red) - 1, min(len(red), 5)).astype(int)] if len(red) else red
         low = np.unravel_index(np.argmin(np.where(finite, shown, np.inf)), shown.shape)
@@ -421,22 +453,23 @@ class SceneView(gl.GLViewWidget):
         xs_kept, ys_kept = xs[near], ys[near]
         self.bounds = np.array([[xs_kept.min(), ys_kept.min(), float(shown.min())],
                                 [xs_kept.max(), ys_kept.max(), float(min(shown.max(), self.cap))]])
-        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff, self.preview):   # after the surface
+        for item in (self.grid_lines, self.cut_edge, *self.trails, self.liftoff, self.preview.casing,
+                     self.preview):   # after the surface
             self.removeItem(item)
             self.addItem(item)
         return {"no_fit": bool((fit >= 1.0).any()), "undefined": bool((~np.isfinite(z)).any()),
                 "cut": bool(shown.max() > self.cap), "coarse": too_coarse(landscape, axis, z)}
 
     def height_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """The drawn surface's height at points, interpolated bilinearly on the grid (-inf
-        outside the grid or where the surface is cut away)."""
+        """The drawn surface's height at points, a hilltop's lid included, interpolated
+        bilinearly on the grid (-inf outside the grid or where the surface is cut away)."""
         axis, n = self._axis, len(self._axis)
         step = (axis[-1] - axis[0]) / max(n - 1, 1)
         u, v = (np.asarray(x) - axis[0]) / step, (np.asarray(y) - axis[0]) / step
         inside = (u >= 0) & (u <= n - 1) & (v >= 0) & (v <= n - 1)
         i, j = np.clip(np.floor(u).astype(int), 0, n - 2), np.clip(np.floor(v).astype(int), 0, n - 2)
         a, b = np.clip(u - i, 0, 1), np.clip(v - j, 0, 1)
-        z = self._drawn
+        z = self._top
         with np.errstate(invalid="ignore"):   # -inf corners stay -inf
             h = ((1 - a) * (1 - b) * z[i, j] + a * (1 - b) * z[i + 1, j] + (1 - a) * b * z[i, j + 1]
                  + a * b * z[i + 1, j + 1])
@@ -455,13 +488,17 @@ class SceneView(gl.GLViewWidget):
 
     def reset_camera(self, include: np.ndarray | None = None, aspect: float | None = None) -> None:
         """Frame the drawn landscape, its heights included, from the first viewpoint of
-        ``VIEWPOINTS`` where the ball, some of the region where it does not fit and the lowest
-        point are in sight (not behind a wall); failing that, without the lowest point.
-        ``include``: more points (n, 3) the ball's centre passes (an export frames the whole
-        path, also where it leaves the drawn grid); ``aspect``: the framed picture's height over
-        its width (default: the view's)."""
+        ``VIEWPOINTS`` where the ball, some of the region where it does not fit, the path
+        (``PATH_SAMPLES`` of the preview's points, once it has come: ``set_preview``) and the
+        lowest point are in sight (not behind a wall); failing that, without the lowest point,
+        then without the path. ``include``: more points (n, 3) the ball's centre passes (an export
+        frames the whole path, also where it leaves the drawn grid; default: the preview's path);
+        ``aspect``: the framed picture's height over its width (default: the view's)."""
         r = self.ball_radius
-        box = self._box(include)
+        path = self.path[np.linspace(1, len(self.path) - 1, min(PATH_SAMPLES, len(self.path) - 1)).astype(int)] \
+            if self.path is not None else np.zeros((0, 3))
+        self.awaiting_path = self.path is None   # framed again when it comes
+        box = self._box(include if include is not None else self.path)
         center = box.mean(axis=0)
         corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
         aspect = aspect or self.height() / max(self.width(), 1)
@@ -476,7 +513,8 @@ class SceneView(gl.GLViewWidget):
                     fov, aspect), elevation, azimuth)
             return fitted[elevation, azimuth]
         must = (self.ball_center, *self.no_fit_points)
-        chosen = next((view(*v) for wanted in ((*must, self.lowest_point), must) for v in VIEWPOINTS
+        tried = ((*must, self.lowest_point, *path), (*must, *path), (*must, self.lowest_point), must)
+        chosen = next((view(*v) for wanted in tried for v in VIEWPOINTS
                        if all(self.in_sight(point, look(center, *view(*v)), 2 * r) for point in wanted)),
                       None) or view(*VIEWPOINTS[0])   # the landscape framed, should no side show the ball
         distance, elevation, azimuth = chosen
@@ -705,12 +743,19 @@ class SceneView(gl.GLViewWidget):
         self.arrow.setData(pos=np.array([center, tip, tip, tip + back + side, tip, tip + back - side]))
         self.arrow_head.setData(pos=tip.reshape(1, 3))
 
-    def set_preview(self, points: np.ndarray | None) -> None:
-        """The path's preview (None or fewer than two points: none)."""
+    def set_preview(self, points: np.ndarray | None, colors: np.ndarray | None = None) -> None:
+        """The path's preview (None or fewer than two points: none), ``colors`` one (r, g, b, a)
+        per point: the mode it predicts there (``contact_view.trail_colors``)."""
         shown = points is not None and len(points) >= 2
         self.preview.setVisible(shown)
+        self.preview.casing.setVisible(shown)
         if shown:
-            self.preview.setData(pos=np.asarray(points, dtype=float))
+            points = np.asarray(points, dtype=float)
+            self.preview.setData(pos=points, color=np.asarray(colors, dtype=float))
+            self.preview.casing.setData(pos=points, width=self.preview.width + CASING_EXTRA)
+            self.path = points
+            if self.framed and self.awaiting_path:   # the camera was chosen without it (just opened)
+                self.reset_camera()
 
     def _matrix(self) -> np.ndarray:
         w, h = self.width(), self.height()
@@ -854,10 +899,18 @@ class SceneView(gl.GLViewWidget):
         return mark
 
     @staticmethod
-    def _color_mark(mark: gl.GLScatterPlotItem, edge) -> None:
+    def _color_mark(mark: gl.GLScatterPlotItem, edge, fill=MARK_FILL) -> None:
         edge = np.asarray(pg.mkColor(edge).getRgbF() if isinstance(edge, str) else edge, dtype=float)
         edge[3] = MARK_EDGE[3]
-        mark.setData(color=np.array([edge, MARK_FILL]))
+        mark.fill = tuple(fill)
+        mark.setData(color=np.array([edge, fill]))
+
+    def set_mark_fill(self, fill=MARK_FILL, index: int = 0) -> None:
+        """The inside of a ball's ring: pale white, or tinted (the contact's mode while it slides:
+        a slip seen from afar while it happens, however short its trail)."""
+        mark = self.marks[index]
+        if mark.fill != tuple(fill):
+            self._color_mark(mark, mark.color[0], fill)
 
     def ball_pixels(self, index: int = 0, size: tuple[int, int] | None = None) -> float:
         """A ball's diameter in pixels, true to scale, on screen or in a picture of ``size``
@@ -942,23 +995,14 @@ class SceneView(gl.GLViewWidget):
         trail.setData(pos=points if enough else np.zeros((0, 3)), color=colors if enough else np.zeros((0, 4)))
         trail.casing.setData(pos=points if enough else np.zeros((0, 3)), width=trail.width + CASING_EXTRA)
 
-    def set_liftoff(self, point: np.ndarray | None) -> None:
-        """Mark the lift-off point; None hides the marker (and every other marked point)."""
-        self.liftoff.setVisible(point is not None)
-        self._marked_colors = np.zeros((0, 4))
-        if point is not None:
-            self.add_liftoff(point)
-
-    def add_liftoff(self, point: np.ndarray, color=LIFTOFF_COLOR) -> None:
-        """One more marked point: a lift-off (one per run in compare mode), or any change of the
-        contact's mode in the colour given."""
-        shown = self.liftoff.pos if self.liftoff.visible() and self.liftoff.pos is not None else np.zeros((0, 3))
-        colors = self._marked_colors[: len(shown)]
-        color = np.asarray(pg.mkColor(color).getRgbF() if isinstance(color, str) else color, dtype=float)
-        self._marked_colors = np.vstack([colors, color.reshape(1, 4)])
-        self.liftoff.setData(pos=np.vstack([shown, np.asarray(point, dtype=float).reshape(1, 3)]),
-                             color=self._marked_colors)
-        self.liftoff.setVisible(True)
+    def set_marked(self, points: np.ndarray, colors: np.ndarray) -> None:
+        """The marked points (n, 3), each in its colour (n, 4): lift-offs and the other changes of
+        the contact's mode, those playback has reached (none: the marker hidden)."""
+        shown = len(points) > 0
+        self.liftoff.setVisible(shown)
+        if shown:
+            self.liftoff.setData(pos=np.asarray(points, dtype=float).reshape(-1, 3),
+                                 color=np.asarray(colors, dtype=float).reshape(-1, 4))
 
     def set_follow(self, follow: bool, radius: float | None = None, index: int | None = None) -> None:
         """Keep a run's ball (``index``, or the one followed so far) in the centre of the view;

@@ -23,7 +23,7 @@ from .compare_mode import CompareMode
 from .controller import RunController
 from .drawing import Drawing
 from .exports import Exports
-from .inputs import ScenePanel
+from .inputs import UNDO_KEYS, ScenePanel
 from .modes import DEFAULT_SIZE, Modes, fitted, place_over
 from .plots import LivePlots
 from .preferences import Preferences
@@ -160,9 +160,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.revert_action = self._action("Re&vert Scene", self.files.revert, None,
                                           "Back to the scene as it was opened or last saved")
         self.undo_action = self.undo_stack.createUndoAction(self, "&Undo")
-        self.undo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Z")])
+        self.undo_action.setShortcuts(UNDO_KEYS[:1])
         self.redo_action = self.undo_stack.createRedoAction(self, "&Redo")
-        self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
+        self.redo_action.setShortcuts(UNDO_KEYS[1:])
         self.undo_action.setStatusTip("Undo the last change of the scene's fields")
         self.redo_action.setStatusTip("Redo the change undone last")
         self.quit_action = self._action("&Quit", self.close, keys.Quit, "Quit RollBall")
@@ -214,6 +214,11 @@ class MainWindow(QtWidgets.QMainWindow):
                                         "height (a mark to see it from afar; the ball inside is to scale)", checkable=True,
                                         name="ball_marker")
         self.mark_action.setChecked(True)
+        self.future_action = self._action("Show &Future Events", self.drawing.show_future_events, None,
+                                          "Mark every event of the run from the start (lift-offs, landings, "
+                                          "slips, grips), not only those playback has reached", checkable=True)
+        self.future_action.setChecked(self.drawing.show_future)
+        self.timeline.set_show_future(self.drawing.show_future)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
                                               "The equations of motion, lift-off, no-fit, Munthe-Kaas")
         self.plots_help_action = self._action("Reading the &Plots", lambda: self.show_help("plots.html"), None,
@@ -280,7 +285,8 @@ class MainWindow(QtWidgets.QMainWindow):
             action.triggered.connect(lambda _=False, k=scale: self._set_text_size(k, remember=True))
             self.text_size_group.addAction(action)
         view.addSeparator()
-        view.addActions([self.follow_action, self.trail_action, self.mark_action, self.camera_action])
+        view.addActions([self.follow_action, self.trail_action, self.mark_action, self.future_action,
+                         self.camera_action])
         view.addSeparator()
         view.addActions([self.scene_panel_action, self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")

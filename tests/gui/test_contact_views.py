@@ -55,9 +55,11 @@ def test_trail_coloured_by_mode_and_a_marker_at_every_transition(qtbot, window, 
     assert "0.5 J lost" in markers[2].text
     window.timeline.slider.markerClicked.emit(markers[2].time)   # a marker moves the time there
     assert window.controller.play_time == T3
+    assert len(window.view.liftoff.pos) == 3                     # every transition reached marked in the view
     window.timeline.events.linkActivated.emit(repr(T1))          # and so does its link
     assert window.controller.play_time == T1
-    assert len(window.view.liftoff.pos) == 3                     # every transition marked in the view
+    assert len(window.view.liftoff.pos) == 1                     # the events ahead are not shown yet
+    assert [m.time for _, m in window.timeline.slider.markers] == [T1]
     assert f"landing at t = {T3:.4g} s (0.5 J lost)" in window.message.toolTip()
     window.closeup_action.setChecked(True)   # the close-up's trail by mode too
     window.runs.seek(T3 - 0.05)
