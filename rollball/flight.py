@@ -18,8 +18,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
-from scipy.spatial.transform import Rotation
 
 from . import machine_code
 from .geometry import fit_ratio
@@ -416,6 +414,8 @@ class Flight:
     def state(self, t: float) -> FreeState:
         s = self.start
         tau = t - s.t
+        from scipy.spatial.transform import Rotation   # (scipy loads with a flight, not with the program)
+
         rotation = Rotation.from_rotvec(s.omega * tau).as_matrix()
         return FreeState(t, s.center + s.velocity * tau + 0.5 * self.g * tau * tau, s.velocity + self.g * tau,
                          s.omega.copy(), rotation @ s.R)
@@ -704,6 +704,8 @@ class Flight:
 
     def _locate(self, a: float, b: float, guess) -> tuple[float, Foot]:
         """The root of the gap in [a, b] (gap(a) ≥ 0 ≥ gap(b)), to round-off."""
+        from scipy.optimize import brentq
+
         def gap(t):
             return self.gap(t, guess)[0]
         if gap(a) <= 0.0:
@@ -734,6 +736,8 @@ class Flight:
             foot = self.surface.foot(centers[i])
             alpha[i], normals[i] = (foot.x, foot.y), foot.normal
         s = self.start
+        from scipy.spatial.transform import Rotation
+
         rotations = Rotation.from_rotvec(np.outer(times - s.t, s.omega)).as_matrix() @ s.R
         m, r = self.mass, self.radius
         rows[:, ROW_SLICES["t"]] = times[:, None]

@@ -13,7 +13,6 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from . import kernel, sliding
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
@@ -351,6 +350,8 @@ class ModeMachine:
         if not sliding_now:
             omega = np.cross(normal, velocity) / r + float(np.dot(start.omega, normal)) * normal
         center = start.center + start.velocity * tau + 0.5 * acceleration * tau * tau
+        from scipy.spatial.transform import Rotation   # (scipy loads with a flight, not with the program)
+
         R = Rotation.from_rotvec(0.5 * (start.omega + omega) * tau).as_matrix() @ start.R
         return FreeState(t, center, velocity, omega, R)
 

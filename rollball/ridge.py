@@ -26,8 +26,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
-
 from .flight import FreeState
 
 TOLERANCE = 1e-12        # DOP853's rtol (and atol in units of r, r/s, rad)
@@ -94,6 +92,8 @@ def turn_over(ridge: Ridge, start: FreeState, *, radius: float, mass: float, gra
     r, rolling) turned over ``ridge`` until the turn ends (``Turn``), with rows at ``times``
     (within it); None where it does not turn over the edge (it moves away from the far face, or
     holding it on the edge needs a pull already: it flies)."""
+    from scipy.integrate import solve_ivp   # (scipy loads with a turn, not with the program)
+
     r, g0, mu = radius, gravity, friction
     g = np.array([0.0, 0.0, -g0])
     arm = start.center - ridge.point
