@@ -8,8 +8,8 @@ every refusal comes before a window opens (bad options, a scene that cannot be r
 output that cannot be written or would replace the scene), and a problem met on the way is
 said in that one line too, never in a dialog. Bad options are refused before the core or Qt is
 loaded (``formats`` holds what they are checked against), and a missing package of the app's
-(PySide6, pyqtgraph, PyOpenGL) is said in that one line with what to install. SIGTERM, SIGINT or SIGHUP during a headless run
-ends it cleanly: nothing half-written stays behind, and the exit code is 128 + the signal.
+(PySide6, pyqtgraph, PyOpenGL) is said in that one line with what to install. SIGTERM, SIGINT or SIGHUP during a
+headless run ends it cleanly: nothing half-written stays behind, and the exit code is 128 + the signal.
 
 Shutting down: the window and every Qt object in it are deleted while Python is whole
 (``close_down``), not left to the interpreter's finalization, where PySide deletes what is

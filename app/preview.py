@@ -33,7 +33,8 @@ CHUNK_STEPS = 100         # steps between looks at the cancel flag
 @dataclasses.dataclass(frozen=True)
 class Preview:
     """The preview of ``scene``: ``points`` (n, 3), the ball's centre along the path (drawn
-    there, a radius above the surface, it is never hidden by the grid lines), to time ``t_end``; ``status`` how the short run ended (ok, or where it stopped)."""
+    there, a radius above the surface, it is never hidden by the grid lines), to time ``t_end``; ``status`` how the
+    short run ended (ok, or where it stopped)."""
     scene: Scene
     points: np.ndarray
     t_end: float

@@ -211,8 +211,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.trail_action.setChecked(True)
         self.mark_action = self._action("Ball &Marker", self.view.set_marks_visible, "M",
                                         "A ring around the ball where it is drawn smaller than 6 % of the view's "
-                                        "height (a mark to see it from afar; the ball inside is to scale)", checkable=True,
-                                        name="ball_marker")
+                                        "height (a mark to see it from afar; the ball inside is to scale)",
+                                        checkable=True, name="ball_marker")
         self.mark_action.setChecked(True)
         self.model_help_action = self._action("The &Model", lambda: self.show_help("model.html"), None,
                                               "The equations of motion, lift-off, no-fit, Munthe-Kaas")

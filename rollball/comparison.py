@@ -609,7 +609,8 @@ def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Ord
             slopes[key] = None
             reasons[key] = (f"{len(used)} run{'s' if len(used) != 1 else ''} ended ok with a {key} error "
                             f"above the reference's floor ({reference.floor(key):.1e}); a slope needs two"
-                            + (" (the error is at the floor already at the coarsest step)" if mine and not used else ""))
+                            + (" (the error is at the floor already at the coarsest step)"
+                               if mine and not used else ""))
             continue
         dts, errors = [r.dt for r in used], [r.error[key] for r in used]
         lo, hi, stalls = fit_range(dts, errors)
@@ -673,7 +674,8 @@ class Comparison:
         """(spec, error key, in words) for every spec whose error stops shrinking as its step
         or tolerance does, above the reference's floor."""
         out = [(o.spec, key, text) for o in self.orders for key, text in o.not_converging.items()]
-        return out + [(spec, key, text) for spec, stalls in self.tolerance_stalls.items() for key, text in stalls.items()]
+        return out + [(spec, key, text) for spec, stalls in self.tolerance_stalls.items()
+                      for key, text in stalls.items()]
 
     @property
     def specs(self) -> list[RunSpec]:

@@ -496,7 +496,8 @@ class Simulation:
         self._finish_kernel_run()
         at_once = self.changes[-MAX_AT_ONCE:]
         if len(at_once) == MAX_AT_ONCE and all(change.time == t for change in at_once):
-            self._stall = (f"the contact changes mode {MAX_AT_ONCE} times at t = {t:.6g} s, (x, y) = ({x:.6g}, {y:.6g}) "
+            self._stall = (f"the contact changes mode {MAX_AT_ONCE} times at t = {t:.6g} s, "
+                           f"(x, y) = ({x:.6g}, {y:.6g}) "
                            f"({', '.join(sorted({change.kind for change in at_once}))}) without the time moving on: "
                            f"rolling needs more friction than μ F·N there, and sliding stops at once, so the run "
                            f"cannot go on")
@@ -953,7 +954,8 @@ def energy_check(run: Simulation) -> EnergyCheck | None:
     them (coarse steps may not yet resolve a smooth landscape, nor show the jump's rate under the
     step's own error; over two levels, one whose phases all fell lucky counts once too high and
     once too low): the landscape's where it is less than the geometric mean of SHORTER^p and
-    SHORTER^ROUGH_ORDER (adaptive: the change shrank by less than the square root of TIGHTER). A method of order below PROBE_ORDER (euler) cannot
+    SHORTER^ROUGH_ORDER (adaptive: the change shrank by less than the square root of TIGHTER). A method of order below
+    PROBE_ORDER (euler) cannot
     tell a jump of the curvature so (its own error shrinks more slowly than the jump's), so rk4
     takes the interval again for it."""
     rows = run.rows

@@ -70,8 +70,9 @@ def outside(window: MainWindow) -> list[str]:
     out = [] if screen.contains(frame) else [f"window {rect(frame)} beyond screen {rect(screen)}"]
     widgets = [window.view, window.timeline.slider, window.timeline.label, window.message, window.state_label,
                window.speed, window.progress]
+    # (slip and dissipation: where the ball can slide or fly)
     widgets += [label for row in window.readouts.rows for label in row.values()
-                if not label.isHidden()] + window.readouts.names   # (slip and dissipation: where the ball can slide or fly)
+                if not label.isHidden()] + window.readouts.names
     if window.presentation.active:
         widgets += window.presentation.bar.findChildren(QtWidgets.QToolButton)
     if window.compare.dock.isVisible():
@@ -89,7 +90,8 @@ STARTED = time.monotonic()
 
 
 def state(window: MainWindow) -> dict:
-    return {"at": round(time.monotonic() - STARTED, 1), "geometry": rect(window.geometry()), "full_screen": window.isFullScreen(),
+    return {"at": round(time.monotonic() - STARTED, 1), "geometry": rect(window.geometry()),
+            "full_screen": window.isFullScreen(),
             "title": window.windowTitle(), "presentation": window.presentation.active,
             "compare": window.compare.active, "scene_panel": window.scene_dock.isVisible(),
             "compare_panel": window.compare.dock.isVisible(), "outside": outside(window),
