@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT))   # this checkout's rollball, whatever is installed (hence E402 below)
 
 from rollball import Scene, simulate  # noqa: E402
 from rollball.scene import Ball, Integrator, Start  # noqa: E402

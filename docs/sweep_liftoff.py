@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT))   # this checkout's rollball, whatever is installed (hence E402 below)
 
 from rollball import Scene, sweep  # noqa: E402
 from rollball.examples import scene_path  # noqa: E402

@@ -388,7 +388,9 @@ def _examples() -> int:
 def _bench(args) -> int:
     from . import bench
 
-    log = lambda text: print(text, file=sys.stderr)  # noqa: E731
+    def log(text: str) -> None:
+        print(text, file=sys.stderr)
+
     try:
         print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
     except OSError as e:

@@ -17,6 +17,7 @@ from rollball_app.main import prepare_qt
 prepare_qt()
 app = QtWidgets.QApplication(sys.argv[:1])
 
+# the app's modules load after the QApplication, as when the app starts (hence E402 below)
 from rollball_app.controller import FINISHED  # noqa: E402
 from rollball_app.preferences import Preferences  # noqa: E402
 from rollball_app.window import SPEEDS, MainWindow  # noqa: E402
