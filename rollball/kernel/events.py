@@ -642,8 +642,9 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
     if sharp and stop > 1.0:
         a, b, turn = locate_break(KINK, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
         if turn > BREAK_MIN:
-            phi = ((sb[0] - sa[0]) * (sb[3] - sa[3]) + (sb[1] - sa[1]) * (sb[4] - sa[4])
-                   + (sb[2] - sa[2]) * (sb[5] - sa[5]))
+            # (a backslash, not parentheses: the shipped code's stamp is made from the tokens)
+            phi = (sb[0] - sa[0]) * (sb[3] - sa[3]) + (sb[1] - sa[1]) * (sb[4] - sa[4]) \
+                + (sb[2] - sa[2]) * (sb[5] - sa[5])
             if phi < 0.0:  # the normal turns towards the motion: a valley, where the ball cannot fit
                 _fail(ints, info, DOES_NOT_FIT, R_KINK, t + b * h, sb[0], sb[1], turn)
                 stop, valid = b, a
