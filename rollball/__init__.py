@@ -24,7 +24,8 @@ _LAZY = {
     "Tableau": "tableaus", "get_method": "tableaus",
     "COLUMNS": "trajectory", "Failure": "trajectory", "Reason": "trajectory", "Status": "trajectory",
     "Trajectory": "trajectory", "read_csv": "trajectory",
-    "Comparison": "comparison", "RunSpec": "comparison", "compare": "comparison", "parse_runs": "comparison",
+    "Comparison": "comparison", "compare": "comparison",
+    "RunSpec": "run_specs", "parse_runs": "run_specs",
 }
 
 __all__ = sorted(_LAZY)

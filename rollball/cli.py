@@ -314,20 +314,23 @@ def _sweep(args) -> int:
 
 
 def _compare(args) -> int:
+    from .run_specs import parse_runs
+
+    try:  # before the numerical modules load: a bad spec is refused at once
+        runs = None if args.runs is None else parse_runs(args.runs)
+    except ValueError as e:
+        return _fail(str(e))
+
     from tqdm import tqdm
 
     from . import comparison_report
-    from .comparison import NothingToCompare, compare, parse_runs
+    from .comparison import NothingToCompare, compare
     from .files import NotReplaced
     from .scene import Scene
 
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
-    try:
-        runs = None if args.runs is None else parse_runs(args.runs)
-    except ValueError as e:
-        return _fail(str(e))
     keep = [scene_path(args.scene)]
     try:  # before the first run: a refused folder or file must not cost the runs
         comparison_report.check(Path(args.out), keep)
