@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from rollball import METHODS, RunSpec, Scene, Simulation, parse_runs
 from rollball.simulation import ADAPTIVE_ROWS, recording
 
-MAX_RUNS = 6
+from .compare_limit import MAX_RUNS
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b")
 MAX_REFERENCE_ROWS = 50_000     # the reference records at most about this many rows
 COMMENSURATE = 1e-9             # steps whose ratio is this close to a whole number share row times

@@ -2,8 +2,8 @@
 back in sync on one clock. A QObject without widgets, so it is tested without a window or GL.
 
 States: ``ready`` (nothing started), ``running`` (playing; the worker may still be computing:
-see ``computed``, and before that compiling a method's kernel: see ``compiling``), ``paused``, ``finished`` (played to the end), ``stopped`` (the user stopped
-it; what was computed stays). Signals tell the window what to show:
+see ``computed``, and before that compiling a method's kernel: see ``compiling``), ``paused``, ``finished`` (played to
+the end), ``stopped`` (the user stopped it; what was computed stays). Signals tell the window what to show:
 
 - ``stateChanged(state)`` whenever the state or ``computed`` changes,
 - ``frameReady(force)`` when the play time moved (``force``: draw even an unchanged row),

@@ -81,7 +81,8 @@ class HelpWindow(QtWidgets.QWidget):
         self.resize(860, 680)
 
     def show_topic(self, topic: str) -> None:
-        """Show a page (``model.html``, ``plots.html``, ``compare.html`` or ``keys``), scrolled to ``#anchor`` if given."""
+        """Show a page (``model.html``, ``plots.html``, ``compare.html`` or ``keys``), scrolled to
+        ``#anchor`` if given."""
         name, _, anchor = topic.partition("#")
         if name != self.page:
             self.page = name

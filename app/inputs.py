@@ -539,7 +539,8 @@ class ScenePanel(QtWidgets.QWidget):
         if self._scene is not None:
             valid = self._scene.to_dict()
             for key in reversed(self._edits):
-                if (key not in self.numbers and key not in self.contact.edits) or _lookup(data, key) == _lookup(valid, key):
+                if ((key not in self.numbers and key not in self.contact.edits)
+                        or _lookup(data, key) == _lookup(valid, key)):
                     continue
                 alone = self._scene.to_dict()
                 if _lookup(data, key) is None and key == contact_fields.OMEGA:

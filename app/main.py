@@ -7,9 +7,9 @@ Headless (docs/design.md §7): with ``--screenshot PNG`` the app opens the scene
 every refusal comes before a window opens (bad options, a scene that cannot be read, an
 output that cannot be written or would replace the scene), and a problem met on the way is
 said in that one line too, never in a dialog. Bad options are refused before the core or Qt is
-loaded (``formats`` holds what they are checked against), and a missing package of the app's
-(PySide6, pyqtgraph, PyOpenGL) is said in that one line with what to install. SIGTERM, SIGINT or SIGHUP during a headless run
-ends it cleanly: nothing half-written stays behind, and the exit code is 128 + the signal.
+loaded (``formats`` and ``compare_limit`` hold what they are checked against), and a missing package of the app's
+(PySide6, pyqtgraph, PyOpenGL) is said in that one line with what to install. SIGTERM, SIGINT or SIGHUP during a
+headless run ends it cleanly: nothing half-written stays behind, and the exit code is 128 + the signal.
 
 Shutting down: the window and every Qt object in it are deleted while Python is whole
 (``close_down``), not left to the interpreter's finalization, where PySide deletes what is
@@ -96,7 +96,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    fail = lambda message: parser.exit(2, f"rollball-app: error: {message}\n")  # noqa: E731
+
+    def fail(message: str):
+        parser.exit(2, f"rollball-app: error: {message}\n")
+
     headless = args.screenshot is not None or args.record is not None   # an empty name counts: refused below
     if args.screenshot is not None and args.record is not None:
         fail("--screenshot or --record, not both")
@@ -117,9 +120,9 @@ def main(argv: list[str] | None = None) -> int:
         fail(f"the app needs {missing}, which is not installed: pip install 'rollball[app]'")
     specs = None
     if args.compare is not None:
-        from rollball import parse_runs
+        from rollball.run_specs import parse_runs
 
-        from .compare_runs import MAX_RUNS
+        from .compare_limit import MAX_RUNS
 
         try:
             specs = parse_runs(args.compare)

@@ -158,7 +158,8 @@ class LivePlots(QtWidgets.QWidget):
             plot.setMouseEnabled(x=False, y=False)
             cache_axes(plot)
             if name == "force":
-                plot.addItem(pg.InfiniteLine(pos=0.0, angle=0, pen=pg.mkPen("#c0392b", style=QtCore.Qt.PenStyle.DashLine)))
+                dashed = pg.mkPen("#c0392b", style=QtCore.Qt.PenStyle.DashLine)
+                plot.addItem(pg.InfiniteLine(pos=0.0, angle=0, pen=dashed))
             cursor = pg.InfiniteLine(pos=0.0, angle=90, pen=pg.mkPen("#555", width=1))
             cursor.setVisible(False)
             plot.addItem(cursor, ignoreBounds=True)

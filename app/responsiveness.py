@@ -153,7 +153,8 @@ def latency(repeats: int = 9) -> dict:
             for i in range(repeats):   # in turns, so that the machine's load weighs on both alike
                 seen_s.append(drawn_after(lambda t=seen[i % 2]: keystroke(t),
                                           lambda t=seen[i % 2]: window.scene.landscape == t))
-                new_s.append(drawn_after(lambda t=fresh[i]: keystroke(t), lambda t=fresh[i]: window.scene.landscape == t))
+                new_s.append(drawn_after(lambda t=fresh[i]: keystroke(t),
+                                         lambda t=fresh[i]: window.scene.landscape == t))
         finally:
             core._compile = real
         editing = window.start_editing

@@ -267,8 +267,9 @@ class SweepDialog(QtWidgets.QDialog):
         why = {status: int(n) for status, n in zip(*np.unique(table["status"][blank], return_counts=True))}
         if "ok" in why:  # finished runs without this value
             why["no lift-off" if name == "liftoff_time" else f"no {name}"] = why.pop("ok")
+        none = blank.sum() == table.done.sum()
         self.note.setText("" if not why else
-                          ("No run has a value to show" if blank.sum() == table.done.sum() else "Blank: runs without a value")
+                          ("No run has a value to show" if none else "Blank: runs without a value")
                           + " (" + ", ".join(f"{text}: {n:,}" for text, n in why.items()) + ")")
         if blank.sum() == table.done.sum():
             self.colorbar.setVisible(False)

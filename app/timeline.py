@@ -247,8 +247,9 @@ class TimeSlider(QtWidgets.QWidget):
         for count, timed in tries + [(0, False)]:
             links = telling(shown, count)
             more = len(shown) - count
-            self.events.setText(" · ".join(f'<a href="{m.time!r}">{escape((m.short or m.text) if timed else (m.kind or m.short or m.text))}</a>'
-                                           for m in links))
+            self.events.setText(" · ".join(
+                f'<a href="{m.time!r}">{escape((m.short or m.text) if timed else (m.kind or m.short or m.text))}</a>'
+                for m in links))
             self.more.setText(f"+{more}" if count else f"{len(shown)} events")
             needed = (self.events.sizeHint().width() if count else 0) + (self.more.sizeHint().width() if more else 0)
             if needed <= room:

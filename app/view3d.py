@@ -230,7 +230,8 @@ def surface_mesh(axis: np.ndarray, z: np.ndarray, colors: np.ndarray, cap: float
     vertexes = vertexes.reshape(-1, 3)
     index = np.arange(n * n).reshape(n, n)
     a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[:-1, 1:].ravel(), index[1:, 1:].ravel()
-    faces = np.concatenate([np.stack([a, d, b], axis=1), np.stack([a, c, d], axis=1)])   # as GLSurfacePlotItem winds them
+    # wound as GLSurfacePlotItem winds them
+    faces = np.concatenate([np.stack([a, d, b], axis=1), np.stack([a, c, d], axis=1)])
     faces = faces[(z.ravel()[faces] <= cap).any(axis=1) | lidded(z, cap).ravel()[faces].all(axis=1)]
     mesh = gl.MeshData(vertexes=vertexes, faces=faces, vertexColors=colors.reshape(-1, 4))
     mesh._vertexNormals = vertex_normals(vertexes, faces)   # pyqtgraph's loop takes ~0.3 s a redraw

@@ -211,8 +211,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.trail_action.setChecked(True)
         self.mark_action = self._action("Ball &Marker", self.view.set_marks_visible, "M",
                                         "A ring around the ball where it is drawn smaller than 6 % of the view's "
-                                        "height (a mark to see it from afar; the ball inside is to scale)", checkable=True,
-                                        name="ball_marker")
+                                        "height (a mark to see it from afar; the ball inside is to scale)",
+                                        checkable=True, name="ball_marker")
         self.mark_action.setChecked(True)
         self.future_action = self._action("Show &Future Events", self.drawing.show_future_events, None,
                                           "Mark every event of the run from the start (lift-offs, landings, "

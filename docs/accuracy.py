@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT))   # this checkout's rollball, whatever is installed (hence E402 below)
 
 from rollball import Scene, simulate  # noqa: E402
 from rollball.scene import Ball, Integrator, Start  # noqa: E402
@@ -217,7 +217,8 @@ def markdown(results: dict) -> str:
         same = scene["same_error"]
         lines += ["", "Evaluations for the same contact error (each ladder's front, log-log): dop853 against scipy's "
                       "DOP853:", "", "| contact (m) | dop853 | scipy's DOP853 | ratio |", "|---:|---:|---:|---:|"]
-        lines += [f"| {s['contact']:.2g} | {s['dop853']:.0f} | {s['scipy_dop853']:.0f} | {s['ratio']:.2f} |" for s in same]
+        lines += [f"| {s['contact']:.2g} | {s['dop853']:.0f} | {s['scipy_dop853']:.0f} | {s['ratio']:.2f} |"
+                  for s in same]
         ratios = [s["ratio"] for s in same]
         lines += ["", f"- dop853's evaluations against scipy's DOP853 for the same contact error, "
                       f"{same[0]['contact']:.2g} to {same[-1]['contact']:.2g} m: {min(ratios):.2f}–{max(ratios):.2f} ×"]

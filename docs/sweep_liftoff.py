@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT))   # this checkout's rollball, whatever is installed (hence E402 below)
 
 from rollball import Scene, sweep  # noqa: E402
 from rollball.examples import scene_path  # noqa: E402
@@ -70,7 +70,8 @@ def markdown(s: dict) -> str:
              f"the fastest that stays on {s['fastest_staying_on']!r} m/s",
              f"- first lift-off between {s['liftoff_time_range'][0]:.6f} and {s['liftoff_time_range'][1]:.6f} s",
              "- landings: " + ", ".join(f"{n} in {count:,} runs" for n, count in s["landings"].items()),
-             "- mode at the end: " + ", ".join(f"{MODES[int(float(m))]} {count:,}" for m, count in s["end_modes"].items()),
+             "- mode at the end: "
+             + ", ".join(f"{MODES[int(float(m))]} {count:,}" for m, count in s["end_modes"].items()),
              "- the same for every spin, to the last bit: "
              + ", ".join(f"{name} {'yes' if same else 'no'}" for name, same in s["same_for_every_spin"].items()),
              f"- wall time {s['seconds']:.1f} s on {s['workers']} threads ({s['runs_per_second']:.0f} runs/s)"]

@@ -26,7 +26,8 @@ _LAZY = {
     "Trajectory": "trajectory", "read_csv": "trajectory",
     "Track": "track", "TrackError": "track", "Residuals": "track_check", "residuals": "track_check",
     "Fit": "fitting", "FitError": "fitting", "fit": "fitting",
-    "Comparison": "comparison", "RunSpec": "comparison", "compare": "comparison", "parse_runs": "comparison",
+    "Comparison": "comparison", "compare": "comparison",
+    "RunSpec": "run_specs", "parse_runs": "run_specs",
 }
 
 __all__ = sorted(_LAZY)

@@ -205,7 +205,8 @@ def _track_arguments(parser) -> None:
                              "(default: the columns named t, x, y, z)")
     parser.add_argument("--length-unit", choices=LENGTH_UNITS,
                         help="unit of the positions whose header names none (default m)")
-    parser.add_argument("--time-unit", choices=TIME_UNITS, help="unit of the times if the header names none (default s)")
+    parser.add_argument("--time-unit", choices=TIME_UNITS,
+                        help="unit of the times if the header names none (default s)")
     parser.add_argument("--point", choices=POINTS, default="center",
                         help="the point of the ball the track follows (default center)")
     parser.add_argument("--noise", type=_positive_float, metavar="METRES",
@@ -364,20 +365,23 @@ def _sweep(args) -> int:
 
 
 def _compare(args) -> int:
+    from .run_specs import parse_runs
+
+    try:  # before the numerical modules load: a bad spec is refused at once
+        runs = None if args.runs is None else parse_runs(args.runs)
+    except ValueError as e:
+        return _fail(str(e))
+
     from tqdm import tqdm
 
     from . import comparison_report
-    from .comparison import NothingToCompare, compare, parse_runs
+    from .comparison import NothingToCompare, compare
     from .files import NotReplaced
     from .scene import Scene
 
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
-    try:
-        runs = None if args.runs is None else parse_runs(args.runs)
-    except ValueError as e:
-        return _fail(str(e))
     keep = [scene_path(args.scene)]
     try:  # before the first run: a refused folder or file must not cost the runs
         comparison_report.check(Path(args.out), keep)
@@ -421,7 +425,8 @@ def _load_track(args):
 
     try:
         columns = None if args.columns is None else parse_columns(args.columns)
-        return Track.load(track_path(args.track), columns=columns, length_unit=args.length_unit, time_unit=args.time_unit)
+        return Track.load(track_path(args.track), columns=columns, length_unit=args.length_unit,
+                          time_unit=args.time_unit)
     except OSError as e:
         return _fail(f"{shown(e.filename or args.track)}: {e.strerror or e}")
     except (TrackError, ValueError) as e:
@@ -554,7 +559,9 @@ def _examples() -> int:
 def _bench(args) -> int:
     from . import bench
 
-    log = lambda text: print(text, file=sys.stderr)  # noqa: E731
+    def log(text: str) -> None:
+        print(text, file=sys.stderr)
+
     try:
         print(bench.run(Path(args.out), bench.QUICK if args.quick else bench.FULL, log=log))
     except OSError as e:

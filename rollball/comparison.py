@@ -28,7 +28,8 @@ import numpy as np
 from . import __version__
 from .scene import Scene
 from .simulation import CHUNK, Simulation
-from .tableaus import ALIASES, METHODS, MethodKind, get_method
+from .run_specs import RunSpec, default_runs, parse_runs, valid_specs
+from .tableaus import METHODS, MethodKind
 from .trajectory import Status, Trajectory
 
 ERRORS = ("contact", "velocity", "omega", "orientation", "energy")  # keys of every error dict
@@ -76,74 +77,6 @@ class Cancelled(Exception):
 
 class NothingToCompare(ValueError):
     """The reference run stopped (the physics ended it) before the first common time."""
-
-
-# -- run specs ----------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class RunSpec:
-    """A method and how it advances the orientation: ``"rk4"`` (Munthe-Kaas) or ``"rk4/classic"``."""
-
-    method: str
-    munthe_kaas: bool = True
-
-    def __post_init__(self):
-        method = get_method(self.method)  # ValueError listing the valid names
-        object.__setattr__(self, "method", method.name)
-        if not isinstance(self.munthe_kaas, bool):
-            raise ValueError(f"munthe_kaas must be True or False, not {self.munthe_kaas!r}")
-        if not self.munthe_kaas and not method.classic_allowed:
-            raise ValueError(f"{method.name} always advances the orientation by Munthe-Kaas: "
-                             f"{method.name}/classic is not a run; valid runs: {', '.join(valid_specs())}")
-
-    def __str__(self) -> str:
-        return self.method if self.munthe_kaas else f"{self.method}/classic"
-
-    @property
-    def kind(self) -> MethodKind:
-        return METHODS[self.method].kind
-
-    @property
-    def fixed_step(self) -> bool:
-        return METHODS[self.method].fixed_step
-
-    @property
-    def label(self) -> str:
-        """For legends and tables: the method's label and, for fixed steps, the scheme."""
-        method = METHODS[self.method]
-        if not method.classic_allowed:
-            return method.label
-        return f"{method.label} {'Munthe-Kaas' if self.munthe_kaas else 'classic'}"
-
-
-def default_runs() -> list[RunSpec]:
-    """Every method in ``METHODS``, the explicit fixed-step ones both ways."""
-    return [RunSpec(name, mk) for name, method in METHODS.items()
-            for mk in ((True, False) if method.classic_allowed else (True,))]
-
-
-def valid_specs() -> list[str]:
-    return [str(spec) for spec in default_runs()]
-
-
-def parse_runs(text: str) -> list[RunSpec]:
-    """``"euler/classic,rk4,dopri5"`` -> run specs (duplicates dropped); ValueError listing
-    the valid specs for anything else."""
-    specs = []
-    for part in str(text).split(","):
-        part = part.strip()
-        name, slash, scheme = part.partition("/")
-        if name in METHODS or name in ALIASES:
-            if slash and scheme != "classic":
-                raise ValueError(f"unknown run {part!r}: only /classic may follow a method; "
-                                 f"valid runs: {', '.join(valid_specs())}")
-            spec = RunSpec(name, not slash)  # ValueError when the method has no classic scheme
-        else:
-            raise ValueError(f"unknown run {part!r}; valid runs: {', '.join(valid_specs())} "
-                             f"(comma-separated)")
-        if spec not in specs:
-            specs.append(spec)
-    return specs
 
 
 def _specs(runs) -> list[RunSpec]:
@@ -609,7 +542,8 @@ def fit_order(spec: RunSpec, runs: list[RunResult], reference: Reference) -> Ord
             slopes[key] = None
             reasons[key] = (f"{len(used)} run{'s' if len(used) != 1 else ''} ended ok with a {key} error "
                             f"above the reference's floor ({reference.floor(key):.1e}); a slope needs two"
-                            + (" (the error is at the floor already at the coarsest step)" if mine and not used else ""))
+                            + (" (the error is at the floor already at the coarsest step)"
+                               if mine and not used else ""))
             continue
         dts, errors = [r.dt for r in used], [r.error[key] for r in used]
         lo, hi, stalls = fit_range(dts, errors)
@@ -673,7 +607,8 @@ class Comparison:
         """(spec, error key, in words) for every spec whose error stops shrinking as its step
         or tolerance does, above the reference's floor."""
         out = [(o.spec, key, text) for o in self.orders for key, text in o.not_converging.items()]
-        return out + [(spec, key, text) for spec, stalls in self.tolerance_stalls.items() for key, text in stalls.items()]
+        return out + [(spec, key, text) for spec, stalls in self.tolerance_stalls.items()
+                      for key, text in stalls.items()]
 
     @property
     def specs(self) -> list[RunSpec]:

@@ -69,9 +69,9 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
              f"{ref.seconds * 1e3:.3g} ms). Its own error is estimated as the larger difference from two checks, "
              f"the same method a decade looser and another method at its tolerance ({checks}): "
              + ", ".join(f"{k} {_number(ref.error_estimates.get(k), '.1e')}" for k in ERRORS) + ". "
-             f"Errors below the floor, the larger of {FLOOR_FACTOR:g}× the first difference (the looser run's error, of the "
-             f"reference's order), the second (both runs' errors together) and round-off (100 ε times the quantity's "
-             f"size), are not measured: "
+             f"Errors below the floor, the larger of {FLOOR_FACTOR:g}× the first difference (the looser run's error, "
+             f"of the reference's order), the second (both runs' errors together) and round-off (100 ε times the "
+             f"quantity's size), are not measured: "
              f"they read \"{BELOW}\", the run's setting is marked *, and they are left out of the fitted "
              f"orders: floors " + ", ".join(f"{k} {ref.floor(k):.1e}" for k in FITTED) + "."]
     lines += ["", f"**The reference is not checked to {REFERENCE_ACCURACY:.0e}**: {'; '.join(ref.problems)}. "
@@ -83,8 +83,8 @@ def findings(cmp: Comparison, heading: str = "##") -> list[str]:
                       f"t = {cmp.t_end:g} s."]
     lines += ["", f"{heading} Fastest runs", "",
               "Errors are maxima over the run at the common times; cost is compute time (processor "
-              "time of the run, the median of repeats for short runs). Ranked by the larger of the contact-point (m) and orientation "
-              "errors.", "", "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
+              "time of the run, the median of repeats for short runs). Ranked by the larger of the contact-point (m) "
+              "and orientation errors.", "", "| error at most | run | time (ms) | steps |", "|---|---|---:|---:|"]
     floor = max(ref.floor(key) for key in FITTED)
     for target in TARGETS:
         best = cmp.best(target)
@@ -236,7 +236,8 @@ def figure(cmp: Comparison) -> bytes:
     warning = "" if ref.checked else (f"\nREFERENCE NOT CHECKED to {REFERENCE_ACCURACY:.0e}: "
                                       f"{'; '.join(ref.problems)}; nothing below the dashed line is measured")
     fig.suptitle(f"{literal(cmp.scene.description or cmp.scene.landscape)} — to t = {cmp.t_end:g} s; dashed "
-                 f"grey: the floor of the reference's own error (open triangles on it: {BELOW}){warning}\n{literal(cmp.machine)}",
+                 f"grey: the floor of the reference's own error (open triangles on it: {BELOW}){warning}\n"
+                 f"{literal(cmp.machine)}",
                  fontsize=8, parse_math=False, usetex=False, color="black" if ref.checked else "firebrick")
     with warnings.catch_warnings():  # a glyph the font lacks is drawn as a box, not reported
         warnings.simplefilter("ignore")
@@ -279,8 +280,8 @@ def check(directory: Path, keep=()) -> None:
 
 def save(cmp: Comparison, directory: str | Path, keep=()) -> list[Path]:
     """compare.json, compare.md and compare.png in ``directory`` (made if missing); ``keep``:
-    paths not to overwrite (the scene). Render the three files, then replace them together (files.replace_together): all or
-    none. ``NotReplaced`` when none was; the new files are then kept in a folder of their own
+    paths not to overwrite (the scene). Render the three files, then replace them together (files.replace_together): all
+    or none. ``NotReplaced`` when none was; the new files are then kept in a folder of their own
     (its name in the message). Returns the files written."""
     files, notes = render(cmp)
     written = replace_together(Path(directory), files, keep=keep, kept_name=KEPT_NAME)

@@ -228,7 +228,9 @@ class DensePair(MethodInfo):
         """(W, E, P) as kernel.loops.advance_adaptive reads them: W the stage matrix over all
         sixteen stages (row 12, the derivative at the new state, is b; rows 13 .. 15 the dense
         output's stages), E the two error estimates over stages 0 .. 12, P the dense output."""
-        floats = lambda rows: np.array([[float(v) for v in row] for row in rows])  # noqa: E731
+        def floats(rows):
+            return np.array([[float(v) for v in row] for row in rows])
+
         return floats(self.A), floats((self.e5, self.e3)), floats(self.P)
 
 

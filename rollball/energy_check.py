@@ -125,7 +125,8 @@ def energy_check(run) -> EnergyCheck | None:
     them (coarse steps may not yet resolve a smooth landscape, nor show the jump's rate under the
     step's own error; over two levels, one whose phases all fell lucky counts once too high and
     once too low): the landscape's where it is less than the geometric mean of SHORTER^p and
-    SHORTER^ROUGH_ORDER (adaptive: the change shrank by less than the square root of TIGHTER). A method of order below PROBE_ORDER (euler) cannot
+    SHORTER^ROUGH_ORDER (adaptive: the change shrank by less than the square root of TIGHTER).
+    A method of order below PROBE_ORDER (euler) cannot
     tell a jump of the curvature so (its own error shrinks more slowly than the jump's), so rk4
     takes the interval again for it."""
     rows = run.rows

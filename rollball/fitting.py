@@ -186,7 +186,8 @@ def fit(scene: Scene, track: Track, keys, *, bounds: dict | None = None, loss: s
     seconds = time.process_time() - clock
     errors, correlation = _uncertainty(result.jac, 2 * result.cost, len(keys))
     estimates = ", ".join(f"{k} = {v:.6g} ± {e:.2g}" for k, v, e in zip(keys, result.x, errors))
-    note = f"Fitted to the track {os.path.basename(track.source)}: {estimates}." if track.source else f"Fitted to a track: {estimates}."
+    note = (f"Fitted to the track {os.path.basename(track.source)}: {estimates}." if track.source
+            else f"Fitted to a track: {estimates}.")
     fitted = dataclasses.replace(with_values(scene, keys, result.x),
                                  description=f"{scene.description} {note}".strip())
     return Fit(keys, tuple(x0), result.x, errors, correlation, fitted, residuals(fitted, track, point, noise),

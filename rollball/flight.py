@@ -7,8 +7,8 @@ centre's distance to the surface first comes down to r. That distance is measure
 closest surface point (its foot), found by Newton's method on (c − φ(α)) ∥ N(α); the first root
 in time is never stepped over (each step is certified to hold none, from the distance being
 1-Lipschitz in the centre and the empty balls about the ends, ``landing``; provided each look's
-distance is the true one) and is then located by a bracketing root finder to round-off. The impact there is an impulse at
-the contact point (``impact``): the normal velocity turns into −e times itself, the tangential
+distance is the true one) and is then located by a bracketing root finder to round-off. The impact there is an impulse
+at the contact point (``impact``): the normal velocity turns into −e times itself, the tangential
 impulse is Coulomb's, sticking where μ allows.
 """
 
@@ -575,7 +575,7 @@ class Flight:
         at most GRAZE × r while the gap no longer falls (a graze: contact there). Just after a
         lift-off the gap grows from 0 like τ³, and below GRAZE × r the ball is in contact: the
         first looks double from FIRST_STEP until it is clear, checking the gap's sign only."""
-        r, g = self.radius, self.gravity
+        r = self.radius
         tol, floor = GAP_TOLERANCE * r, GRAZE * r
         t = self.start.t
         h, foot = self.gap(t)
@@ -790,7 +790,8 @@ def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: 
     The contact point's velocity u = ċ + ω × (−r N) changes by J_n/m along N and by (7/2) J_t/m
     in the tangent plane (a homogeneous ball: Δċ = J/m, Δω = (5/(2 m r²)) (−r N) × J). Normal:
     u_n → −e u_n, so J_n = (1 + e) m |u_n|. Tangential: sticking needs J_t = −(2/7) m u_t, taken
-    when |J_t| ≤ μ J_n (always for μ = inf, a scene's null friction); else J_t = −μ J_n û_t (the slip keeps its direction
+    when |J_t| ≤ μ J_n (always for μ = inf, a scene's null friction); else J_t = −μ J_n û_t (the slip
+    keeps its direction
     and shrinks). Angular momentum about the contact point does not change (the impulse acts
     there)."""
     velocity, omega, normal = (np.asarray(a, dtype=float) for a in (velocity, omega, normal))

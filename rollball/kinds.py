@@ -15,6 +15,20 @@ class MethodKind(str, enum.Enum):
     def __str__(self) -> str:
         return self.value
 
+    @property
+    def adaptive(self) -> bool:
+        return self is MethodKind.ADAPTIVE
+
+    @property
+    def fixed_step(self) -> bool:
+        """Steps of the size dt (explicit fixed-step and implicit methods)."""
+        return self is not MethodKind.ADAPTIVE
+
+    @property
+    def classic_allowed(self) -> bool:
+        """Whether the orientation may also be integrated as a plain matrix (``munthe_kaas=False``)."""
+        return self is MethodKind.FIXED
+
 
 # Every method's name and kind, in the order they are listed. The registry (``tableaus.METHODS``)
 # holds exactly these, checked when it is built; the command line reads the names here, without
@@ -48,17 +62,15 @@ class MethodInfo:
 
     @property
     def adaptive(self) -> bool:
-        return self.kind is MethodKind.ADAPTIVE
+        return self.kind.adaptive
 
     @property
     def fixed_step(self) -> bool:
-        """Steps of the size dt (explicit fixed-step and implicit methods)."""
-        return self.kind is not MethodKind.ADAPTIVE
+        return self.kind.fixed_step
 
     @property
     def classic_allowed(self) -> bool:
-        """Whether the orientation may also be integrated as a plain matrix (``munthe_kaas=False``)."""
-        return self.kind is MethodKind.FIXED
+        return self.kind.classic_allowed
 
 
 def cubic_hermite(b, last: int) -> tuple[tuple, ...]:

@@ -169,8 +169,8 @@ def _compile(text: str, name: str, machine) -> tuple[list[str], bytes]:
 # -- the generated source as LLVM IR ------------------------------------------------------
 #
 # The generated ``landscape`` is straight-line arithmetic: assignments of numbers, x, y, the
-# parameters' values p[k], earlier names, + - * / **, calls of math functions and abs/min/max, comparisons, and/or/not and
-# conditional expressions. It is translated here as numba would compile it (floats throughout;
+# parameters' values p[k], earlier names, + - * / **, calls of math functions and abs/min/max, comparisons, and/or/not
+# and conditional expressions. It is translated here as numba would compile it (floats throughout;
 # an integer constant exponent by repeated squaring, any other power by pow; conditional
 # expressions evaluate both sides, which cannot fail), in an LLVM context of its own that is
 # freed afterwards. Anything else in the source is ``_Unsupported``, and numba compiles it.

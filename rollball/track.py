@@ -116,7 +116,8 @@ class Track:
         wanted = _wanted_columns(header, columns, name)   # axis or "t" -> (index, unit in header)
         scale = {}
         for key, (index, unit) in wanted.items():
-            units, given, kind = (TIME_UNITS, time_unit, "time") if key == "t" else (LENGTH_UNITS, length_unit, "length")
+            units, given, kind = ((TIME_UNITS, time_unit, "time") if key == "t"
+                                  else (LENGTH_UNITS, length_unit, "length"))
             if unit is not None and unit not in units:
                 raise TrackError(f"{name}: column {shown(header[index][0])}: unknown {kind} unit {shown(unit)} "
                                  f"(known: {', '.join(units)})")
@@ -158,7 +159,8 @@ class Track:
         """The track's noise (m, one coordinate's standard deviation), estimated from the track
         alone: from its fourth differences, which take out a smooth path (what is left of it is
         h⁴ times the fourth derivative: 10⁻⁷ m for 60 frames a second and 1 m/s⁴) and leave
-        white noise of variance 70 σ² (taken where five positions are evenly spaced). The differences more than 4 robust standard deviations
+        white noise of variance 70 σ² (taken where five positions are evenly spaced). The differences
+        more than 4 robust standard deviations
         (1.4826 times the median absolute deviation) out, across a bounce or a change of mode,
         are left out, and σ is the root mean square of the others over √70."""
         if len(self) < 8:
@@ -246,7 +248,8 @@ def _wanted_columns(header, columns, name) -> dict[str, tuple[int, str | None]]:
     wanted = {}
     for key, column in mapping.items():
         if column not in names:
-            raise TrackError(f"{name}: no column {shown(column)} (for {key}); the header has {', '.join(map(shown, names))}")
+            raise TrackError(f"{name}: no column {shown(column)} (for {key}); "
+                             f"the header has {', '.join(map(shown, names))}")
         wanted[key] = (names.index(column), header[names.index(column)][1])
     measured = [axis for axis in AXES if axis in wanted]
     if len(measured) < 2:

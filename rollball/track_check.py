@@ -130,7 +130,8 @@ class Residuals:
 
     def verdict(self) -> str:
         """One sentence: whether the model explains the track, in words."""
-        noise = f"the track's noise ({_mm(self.noise)}, {'estimated from the track' if self.noise_estimated else 'given'})"
+        how = "estimated from the track" if self.noise_estimated else "given"
+        noise = f"the track's noise ({_mm(self.noise)}, {how})"
         if not self.covered:
             return (f"the model does not explain the track: the run stopped at t = {self.t_reached:.6g} s "
                     f"({self.status}), before the track's end at {self.track.t[-1]:.6g} s")

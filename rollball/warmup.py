@@ -90,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m rollball.warmup [RUNS]``: warm up, the runs named (e.g. ``rk4/classic``)
     first; say on stderr what is compiled (nothing but a last line when it is cached) and on
     stdout ``ready METHOD mk|classic`` as each variant becomes ready."""
-    from .comparison import parse_runs
+    from .run_specs import parse_runs
 
     args = sys.argv[1:] if argv is None else argv
     try:

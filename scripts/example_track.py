@@ -16,9 +16,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
-from exact_tracks import billiard, noisy
+from exact_tracks import billiard, noisy  # noqa: E402 (tests/ is on the path only from here)
 
-from rollball.files import atomic_write_text
+from rollball.files import atomic_write_text  # noqa: E402 (the checkout's, ahead of an installed one)
 
 MU, V0, SIGMA, SEED, FPS, SECONDS = 0.25, 2.2, 1e-3, 33, 60, 1.2
 LOST = (17, 18, 40)   # frames where the ball was not found: written as empty cells
@@ -31,7 +31,8 @@ def main() -> None:
         f"Synthetic, not a measurement: the billiard example's shot in closed form with mu = {MU} and v0 = {V0} m/s,",
         (f"seen from above at {FPS} frames/s, with Gaussian noise of {SIGMA * 1000:g} mm "
          f"(seed {SEED}); frames {', '.join(map(str, LOST))} lost."),
-        "Made by scripts/example_track.py; try: rollball fit billiard billiard_track.csv --fit contact.friction,start.vx",
+        "Made by scripts/example_track.py; "
+        "try: rollball fit billiard billiard_track.csv --fit contact.friction,start.vx",
     )).splitlines()
     header = sum(line.startswith("#") for line in lines) + 1
     for frame in LOST:

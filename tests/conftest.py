@@ -2,16 +2,16 @@ import atexit
 import os
 import shutil
 import tempfile
+from pathlib import Path
 
 import pytest
 
-# compiled landscapes go to a cache of the test run's own, not the user's, removed at the end
+from rollball.scene import Ball, Contact, Integrator, Scene, Start
+
+# compiled landscapes go to a cache of the test run's own, not the user's, removed at the end (the
+# cache module reads the variable when it first needs the folder, not on import)
 os.environ["ROLLBALL_CACHE_DIR"] = tempfile.mkdtemp(prefix="rollball-test-cache-")
 atexit.register(shutil.rmtree, os.environ["ROLLBALL_CACHE_DIR"], True)
-
-from pathlib import Path
-
-from rollball.scene import Ball, Contact, Integrator, Scene, Start
 
 # The examples that became version-3 scenes that fly (liftoff, cylinder, bump), as they were shipped
 # in version 2: the 2011 model's scenes for the tests of the rolling ball

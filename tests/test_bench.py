@@ -62,7 +62,8 @@ def _targets(**changes):
             "process_cold_cache": 21.0, "first_simulate_disk_cache": 0.3, "known_formula_disk_cache": 0.09,
             "process_disk_cache": 1.0, "all_methods_cold_cache": 8.0}
     results = {"c": {"ratio": 1.1, "ns_ours": 270.0, "ns_c": 245.0, "same_step": 1e-15},
-               "costs": {"rk4 MK": 270.0}, "real_time": 400.0, "latency": 0.02, "latency_cpu": 0.015, "memory": 100 * 2**20,
+               "costs": {"rk4 MK": 270.0}, "real_time": 400.0, "latency": 0.02, "latency_cpu": 0.015,
+               "memory": 100 * 2**20,
                "app": {"longest_gap_ms": 90.0, "median_gap_ms": 20.0}, "cold": cold}
     for key, value in changes.items():
         if key in cold:

@@ -16,7 +16,8 @@ def test_check_prints_the_residuals_and_says_the_model_does_not_explain_the_trac
     """The example track was made with μ = 0.25, v₀ = 2.2: the billiard scene (0.2, 2.0) is far off."""
     assert main(["check", "billiard", TRACK]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].startswith("billiard_track.csv: 69 positions (x, y)") and "3 rows without a position skipped" in out[0]
+    assert out[0].startswith("billiard_track.csv: 69 positions (x, y)")
+    assert "3 rows without a position skipped" in out[0]
     assert out[1].startswith("residual RMS ") and "largest" in out[1]
     assert out[2].startswith("the model does not explain the track")
 
@@ -29,7 +30,8 @@ def test_fit_reports_and_writes_the_fitted_scene_and_the_plot(tmp_path, capsys):
     assert "converged after" in text and "contact.friction = 0.25" in text and "start.vx         = 2.20" in text
     assert "correlations:" in text and "the model explains the track" in text
     fitted = Scene.load(out)
-    assert fitted.contact.friction == pytest.approx(0.25, abs=0.004) and fitted.start.vx == pytest.approx(2.2, abs=0.002)
+    assert fitted.contact.friction == pytest.approx(0.25, abs=0.004)
+    assert fitted.start.vx == pytest.approx(2.2, abs=0.002)
     assert "Fitted to the track billiard_track.csv" in fitted.description
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

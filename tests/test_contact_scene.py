@@ -106,7 +106,8 @@ def test_a_rolling_start_omega_runs_as_the_start_velocity_and_spin_it_equals():
 
     landscape, start = "0.3*sin(x)*cos(y)", {"x": 0.4, "y": -0.3, "vx": 0.7, "vy": -0.2}
     plain = Scene.from_dict({**V3, "landscape": landscape, "start": {**start, "spin": 2.0}})
-    d = np.array([0.3 * np.sin(0.4) * np.cos(-0.3), 0.3 * np.cos(0.4) * np.cos(-0.3), -0.3 * np.sin(0.4) * np.sin(-0.3)])
+    d = np.array([0.3 * np.sin(0.4) * np.cos(-0.3), 0.3 * np.cos(0.4) * np.cos(-0.3),
+                  -0.3 * np.sin(0.4) * np.sin(-0.3)])
     n = np.array([-d[1], -d[2], 1.0]) / np.sqrt(1 + d[1] ** 2 + d[2] ** 2)
     velocity = np.array([0.7, -0.2, d[1] * 0.7 - d[2] * 0.2])
     omega = np.cross(n, velocity) / 0.1 + 2.0 * n

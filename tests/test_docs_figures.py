@@ -12,7 +12,8 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 # the pages that quote the figures (the reports the scripts write are not among them)
 MANUAL = "\n".join(p.read_text(encoding="utf-8") for p in sorted(
-    [*(ROOT / "docs" / "guide").glob("*.md"), *(ROOT / "docs" / "reference").glob("*.md"), ROOT / "docs" / "performance.md"]))
+    [*(ROOT / "docs" / "guide").glob("*.md"), *(ROOT / "docs" / "reference").glob("*.md"),
+     ROOT / "docs" / "performance.md"]))
 ACCURACY = json.loads((ROOT / "docs" / "accuracy.json").read_text())
 
 
@@ -49,7 +50,8 @@ def same_error(scene):
      1.0, 0),
     ("rk4's R error is 88–110 times", lambda: [r["R_over_contact"] for r in ACCURACY["rk4_orientation"]["runs"]],
      88, 110, 0.1),
-    ("dopri5 at rtol 1e-10 within 9e-11 s", lambda: [r["dopri5_rtol_1e-10"] for r in ACCURACY["liftoff"]], 0, 9e-11, 0.1),
+    ("dopri5 at rtol 1e-10 within 9e-11 s", lambda: [r["dopri5_rtol_1e-10"] for r in ACCURACY["liftoff"]],
+     0, 9e-11, 0.1),
     ("h = 1e-2 within 6e-9 s", lambda: [r["rk4_dt_0.01"] for r in ACCURACY["liftoff"]], 0, 6e-9, 0.1),
     ("2e-10 after 1000 s on the bowl", lambda: [ACCURACY["energy"]["gauss4"]], 1.5e-10, 2.5e-10, 0.1),
     ("RK4's grows to 5e-6", lambda: [ACCURACY["energy"]["rk4"]], 4.5e-6, 5.5e-6, 0.1),
@@ -86,7 +88,8 @@ def test_the_evaluations_for_an_error_are_read_off_each_ladders_front():
 
 
 def test_the_manuals_figures_on_the_error_scale_are_docs_dopri5_scale():
-    """The ranges the manual (docs/reference/methods.md) and design.md quote are docs/dopri5_scale.py's, read from the figures
+    """The ranges the manual (docs/reference/methods.md) and design.md quote are docs/dopri5_scale.py's, read from
+    the figures
     it wrote (docs/dopri5_scale.json: the code before the scale and this one)."""
     import sys
     sys.path.insert(0, str(ROOT / "docs"))
@@ -112,7 +115,8 @@ def test_the_manuals_figures_on_the_error_scale_are_docs_dopri5_scale():
                  f"({span(dop853['same_cost'])} times for as many evaluations)"):
         assert text in manual, text
     for text in (f"dopri5 {span(dopri5['evaluations'])} times the evaluations, {span(dopri5['error'])} times",
-                 f"{span(dopri5['same_cost'])} times the error the scale before", f"dop853 {span(dop853['evaluations'])}",
+                 f"{span(dopri5['same_cost'])} times the error the scale before",
+                 f"dop853 {span(dop853['evaluations'])}",
                  f"{span(dop853['error'])} times the error", f"{span(dop853['same_cost'])} times for as many"):
         assert text in design, text
     lift = {(b["scene"], b["rtol"]): (b["error"], n["error"], b["evaluations"], n["evaluations"])

@@ -1,5 +1,5 @@
-"""Saving a scene, exporting a CSV and writing bytes (the app's images) are atomic: a failing write leaves any existing file intact,
-leaves no temporary file behind and raises an OSError naming the file."""
+"""Saving a scene, exporting a CSV and writing bytes (the app's images) are atomic: a failing write leaves any
+existing file intact, leaves no temporary file behind and raises an OSError naming the file."""
 
 import errno
 import functools

@@ -37,7 +37,10 @@ def edge_time(scene, gap=1e-6):
     """When the reference contact point reaches r·κ = 1 − gap (it cannot pass the edge itself: its
     speed there is unbounded; the last 1e-6 of r·κ takes well under a microsecond)."""
     alpha, v = initial_state(landscape_for(scene.landscape), scene)
-    event = lambda t, y: valley_fit(scene.ball.radius, y[1]) - (1 - gap)  # noqa: E731
+
+    def event(t, y):
+        return valley_fit(scene.ball.radius, y[1]) - (1 - gap)
+
     event.terminal = True
     sol = solve_ivp(reference_rhs(scene), (0.0, scene.duration), np.concatenate([alpha, v, np.eye(3).ravel()]),
                     method="DOP853", rtol=1e-12, atol=1e-12, events=event)

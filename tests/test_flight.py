@@ -11,8 +11,10 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
 from scipy.optimize import brentq
 
+from rollball import Scene, simulate
 from rollball.flight import FreeState, Flight, Surface
 from rollball.landscape import landscape_for
 
@@ -66,11 +68,6 @@ def test_the_ball_off_the_cylinder_lands_where_brentq_says():
 
 
 # -- whole runs: rolling, the lift-off, the flight, the landing and rolling on -----------------------
-
-from scipy.integrate import quad  # noqa: E402
-
-from rollball import Scene, simulate  # noqa: E402
-
 
 def cylinder_scene(**contact):
     return Scene.from_dict({

@@ -76,7 +76,10 @@ def test_a_ball_off_the_top_of_a_steeper_parabola_never_lands():
     start = FreeState(0.0, np.array([0.0, 0.0, R]), np.array([5.0, 0.0, 0.0]), np.zeros(3), np.eye(3))
     flight = Flight(surface, start, radius=R, mass=1.0, gravity=G)
     assert flight.landing(2.0) is None
-    curve = lambda x: -10.0 * np.asarray(x) ** 2   # noqa: E731
+
+    def curve(x):
+        return -10.0 * np.asarray(x) ** 2
+
     for t in (0.3, 1.0, 1.4228115869430378, 2.0):
         c = flight.centers(np.array([t]))[0][0]
         expected = curve_distance(curve, c[0], c[2], samples=400001)
@@ -161,7 +164,10 @@ def test_a_ball_off_a_smooth_drop_flies_and_lands_where_brentq_says(height, rate
     assert "liftoff" in kinds and "landing" in kinds
     landing = next(change for change in traj.transitions if change.kind == "landing")
     t0, center, velocity = flying_start(traj)
-    curve = lambda x: -height * (1 + np.tanh(rate * np.asarray(x)))   # noqa: E731
+
+    def curve(x):
+        return -height * (1 + np.tanh(rate * np.asarray(x)))
+
     expected = first_contact(curve, center, velocity, 1e-4, landing.time - t0 + 0.05, count=800)
     assert landing.time == pytest.approx(t0 + expected, abs=1e-9)
 

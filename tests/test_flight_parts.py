@@ -67,13 +67,17 @@ def test_a_narrow_ridge_in_the_way_is_hit_not_flown_through():
     assert t == pytest.approx(expected, abs=1e-9) and foot.x < 1.0
 
 
+def about_contact(velocity, omega, normal):
+    """The angular momentum about the contact point of a ball below its centre along -normal."""
+    return 0.4 * M * R * R * omega + M * R * np.cross(normal, velocity)
+
+
 def test_a_sticking_impact_keeps_the_angular_momentum_about_the_contact_point():
     n = np.array([0.0, 0.0, 1.0])
     v, w = np.array([2.0, 0.5, -3.0]), np.array([1.0, -4.0, 2.0])
     hit = impact(v, w, n, mass=M, radius=R, restitution=0.0, friction=math.inf)
     assert hit.sticking and hit.normal_speed == 3.0 and hit.rebound == 0.0
-    about_contact = lambda vel, om: 0.4 * M * R * R * om + M * R * np.cross(n, vel)
-    assert np.allclose(about_contact(hit.velocity, hit.omega), about_contact(v, w), rtol=0, atol=1e-14)
+    assert np.allclose(about_contact(hit.velocity, hit.omega, n), about_contact(v, w, n), rtol=0, atol=1e-14)
     u = hit.velocity - R * np.cross(hit.omega, n)   # the contact point is at rest after
     assert np.abs(u).max() < 1e-14
     before, after = energy(v, w, 0.0, M, R, G), energy(hit.velocity, hit.omega, 0.0, M, R, G)
@@ -92,8 +96,7 @@ def test_a_sliding_impact_takes_mu_times_the_normal_impulse():
     assert not hit.sticking and hit.rebound == pytest.approx(1.0)
     assert hit.impulse == pytest.approx(j_n * n - 0.1 * j_n * t1, abs=1e-14)
     assert np.dot(hit.velocity, n) == pytest.approx(1.0, abs=1e-14)
-    about_contact = lambda vel, om: 0.4 * M * R * R * om + M * R * np.cross(n, vel)
-    assert np.allclose(about_contact(hit.velocity, hit.omega), about_contact(v, np.zeros(3)), atol=1e-14)
+    assert np.allclose(about_contact(hit.velocity, hit.omega, n), about_contact(v, np.zeros(3), n), atol=1e-14)
     # enough friction: it sticks
     assert impact(v, np.zeros(3), n, mass=M, radius=R, restitution=0.5, friction=1.0).sticking
     # a frictionless surface gives no tangential impulse

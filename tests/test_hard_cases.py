@@ -275,7 +275,10 @@ def test_kink_crossing_costs_energy_of_order_h(h):
 def no_fit_time(scene, boundary_y):
     """When the reference contact point reaches y = boundary_y (the solver cannot go past it)."""
     alpha, v = initial_state(landscape_for(scene.landscape), scene)
-    event = lambda t, y: y[1] - boundary_y  # noqa: E731
+
+    def event(t, y):
+        return y[1] - boundary_y
+
     event.terminal = True
     from scipy.integrate import solve_ivp
 

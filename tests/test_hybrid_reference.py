@@ -237,6 +237,10 @@ if __name__ == "__main__":
         centre, when = threshold_changes(name)
         print(f"  {name}: onset and grip speeds 10 times smaller move the centre {centre:.1e} m, "
               f"transitions {when:.1e} s")
+
+    def fmt(v):
+        return f"{v:8.1e}" if v is not None else "       -"
+
     print()
     print(f"{'scene':8s} {'ref CPU':>8s} {'rb CPU':>7s} {'centre':>8s} {'contact':>8s} "
           f"{'t err':>8s} {'x err':>8s}  transitions")
@@ -247,7 +251,6 @@ if __name__ == "__main__":
         run, (centre, contact, when, where, kinds, ref_kinds) = dopri5_errors(name)
         t2 = t1 + run.provenance["cpu"]
         same = "same" if kinds == ref_kinds else f"DIFFER: {kinds} vs {ref_kinds}"
-        fmt = (lambda v: f"{v:8.1e}" if v is not None else "       -")
         print(f"{name:8s} {t1 - t0:8.2f} {t2 - t1:7.2f} {centre:8.1e} {contact:8.1e} {fmt(when)} "
               f"{fmt(where)}  {same} ({len(ref_kinds)}: {' '.join(ref_kinds[:4])}"
               f"{' …' if len(ref_kinds) > 4 else ''}) status {run.status}")

@@ -34,7 +34,7 @@ def test_compiled_numpy_and_sympy_agree(text):
 def test_derivatives_against_finite_differences():
     landscape = Landscape("0.5*sin(x)*cos(y) + 0.1*x^2*y")
     x, y, h = 0.4, -0.3, 1e-5
-    f = lambda a, b: landscape.evaluate(a, b)
+    f = landscape.evaluate
     values = f(x, y)
     np.testing.assert_allclose(values[1], (f(x + h, y)[0] - f(x - h, y)[0]) / (2 * h), rtol=1e-8)
     np.testing.assert_allclose(values[2], (f(x, y + h)[0] - f(x, y - h)[0]) / (2 * h), rtol=1e-8)

@@ -293,8 +293,9 @@ def test_a_corrupt_kernel_file_that_cannot_be_replaced_is_said_once_a_run_not_fi
             assert set(addresses) == set(kernel.ENTRIES) and all(addresses.values())
             lines = capsys.readouterr().err.splitlines()
             assert said == [] and len(lines) == 1, lines
+            why = "a read-only file" if blocked == "file" else "its folder is read-only"
             assert lines[0].startswith(f"rollball: warning: the cached machine code of the kernel {path} is corrupt "
-                                       f"and cannot be replaced ({'a read-only file' if blocked == 'file' else 'its folder is read-only'})")
+                                       f"and cannot be replaced ({why})")
             assert path.read_bytes() == bytes(data) and "first run only" not in lines[0]
     finally:
         folder.chmod(0o700)

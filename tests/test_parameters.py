@@ -148,4 +148,5 @@ def test_a_formula_is_derived_once_however_it_is_asked_for():
 
     scene = Scene(landscape="0.0321*x*y")
     assert landscape_for("0.0321*x*y") is landscape_of(scene) is landscape_for("0.0321*x*y", [])
-    assert landscape_for("a*x", ("a",)) is landscape_of(Scene.from_dict({**V3, "landscape": "a*x", "parameters": {"a": 3}}))
+    with_a = Scene.from_dict({**V3, "landscape": "a*x", "parameters": {"a": 3}})
+    assert landscape_for("a*x", ("a",)) is landscape_of(with_a)

@@ -1,26 +1,95 @@
-"""scripts/setup: which optional groups an install brings, so that a later setup asking for one
-of them (scripts/run's "app" after scripts/test's "test") does not run pip again."""
+"""scripts/setup: what an install brings (a dependency group such as "test", pip install --group;
+an extra such as "app", pip install ".[app]"; and what each includes), so that a later setup asking
+for one of them (scripts/run's "app" after scripts/test's "test") does not run pip again."""
 
+import os
 import subprocess
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+SETUP = (ROOT / "scripts" / "setup").read_text()
 
 
-def groups_with_included(*groups: str) -> set[str]:
-    """The shell function of scripts/setup, run on the project's pyproject.toml."""
-    script = (ROOT / "scripts" / "setup").read_text()
-    function = script[script.index("with_included() {"):script.index("\n}\n", script.index("with_included() {")) + 3]
-    result = subprocess.run(["bash", "-c", function + 'with_included "$@"', "setup", *groups], cwd=ROOT,
+def included(*names: str, cwd: Path = ROOT) -> set[tuple[str, str]]:
+    """The shell function of scripts/setup, run on the pyproject.toml in ``cwd``: (kind, name) pairs."""
+    function = SETUP[SETUP.index("with_included() {"):SETUP.index("\n}\n", SETUP.index("with_included() {")) + 3]
+    result = subprocess.run(["bash", "-c", function + 'with_included "$@"', "setup", *names], cwd=cwd,
                             capture_output=True, text=True, timeout=60, check=True)
-    return set(result.stdout.split())
+    return {tuple(line.split(" ", 1)) for line in result.stdout.splitlines()}
 
 
-def test_the_test_group_includes_the_app_and_dask_groups():
-    assert groups_with_included("test") == {"test", "app", "dask"}
-    assert groups_with_included("app") == {"app"}
-    assert groups_with_included("bench", "test") == {"bench", "test", "app", "dask"}
-    assert groups_with_included() == set()
+def test_the_test_group_includes_the_app_and_dask_extras():
+    assert included("test") == {("group", "test"), ("extra", "app"), ("extra", "dask")}
+    assert included("app") == {("extra", "app")}
+    assert included("dask", "app") == {("extra", "dask"), ("extra", "app")}
+    assert included() == set()
+    assert ("unknown", "bench") in included("bench", "test")
+
+
+def test_a_group_listed_with_include_group_comes_along(tmp_path):
+    """Another group (documentation tools, say) installs with "test" by one line in its list."""
+    text = (ROOT / "pyproject.toml").read_text()
+    text = text.replace("test = [\n", 'test = [\n    {include-group = "docs"},\n', 1)
+    text = text.replace("[dependency-groups]\n", '[dependency-groups]\n'
+                        'docs = ["mkdocs>=1.5", {include-group = "more"}]\n'
+                        'more = [\n    "rollball[app]",  # a comment naming rollball[dask]\n]\n', 1)
+    (tmp_path / "pyproject.toml").write_text(text)
+    assert included("test", cwd=tmp_path) == {("group", "test"), ("group", "docs"), ("group", "more"),
+                                             ("extra", "app"), ("extra", "dask")}
+    assert included("docs", cwd=tmp_path) == {("group", "docs"), ("group", "more"), ("extra", "app")}
+
+
+# A stand-in for .venv/bin/python that notes the commands it is given (pip installs, the warm-up)
+FAKE_PYTHON = """#!/usr/bin/env bash
+echo "$*" >> "$CALLS"
+"""
+
+
+def _setup(folder: Path, *names: str) -> tuple[subprocess.CompletedProcess, list[str]]:
+    calls = folder / "calls.txt"
+    calls.write_text("")
+    result = subprocess.run(["bash", "scripts/setup", *names], cwd=folder, capture_output=True, text=True,
+                            timeout=60, env={**os.environ, "CALLS": str(calls)})
+    return result, calls.read_text().splitlines()
+
+
+def test_setup_installs_groups_with_pip_s_group_option_and_only_what_changed(tmp_path):
+    (tmp_path / "scripts").mkdir()
+    (tmp_path / "scripts" / "setup").write_text(SETUP)
+    (tmp_path / "pyproject.toml").write_text((ROOT / "pyproject.toml").read_text())
+    python = tmp_path / ".venv" / "bin" / "python"
+    python.parent.mkdir(parents=True)
+    python.write_text(FAKE_PYTHON)
+    python.chmod(0o755)
+    warm_up = "-m rollball.warmup"
+
+    result, calls = _setup(tmp_path, "test")
+    assert result.returncode == 0, result.stderr
+    assert [call.split()[-1] for call in calls[:1]] == ["pip>=25.1"]   # pip reads groups from 25.1 on
+    assert calls[1].startswith("-m pip install") and calls[1].endswith("--no-compile -e . --group test")
+    assert calls[2:] == [warm_up]
+    # the app and the Dask extras came with the test group: nothing more to install
+    assert _setup(tmp_path, "app")[1] == [warm_up]
+    assert _setup(tmp_path, "dask", "test")[1] == [warm_up]
+    # an extra not installed yet: pip, for it alone (no group, so no newer pip needed)
+    (tmp_path / ".venv" / "rollball-installed").write_text(
+        (tmp_path / ".venv" / "rollball-installed").read_text().replace("extra dask\n", ""))
+    result, calls = _setup(tmp_path, "dask")
+    assert len(calls) == 2 and calls[0].endswith('--no-compile -e .[dask]') and calls[1] == warm_up
+    # a changed pyproject.toml: installed again
+    with open(tmp_path / "pyproject.toml", "a") as file:
+        file.write("\n")
+    assert _setup(tmp_path, "app")[1][-2:] == ["-m pip install --disable-pip-version-check --progress-bar off "
+                                              "--no-compile -e .[app]", warm_up]
+
+
+def test_setup_refuses_a_name_that_is_neither_a_group_nor_an_extra(tmp_path):
+    (tmp_path / "scripts").mkdir()
+    (tmp_path / "scripts" / "setup").write_text(SETUP)
+    (tmp_path / "pyproject.toml").write_text((ROOT / "pyproject.toml").read_text())
+    result, calls = _setup(tmp_path, "test", "bench")
+    assert result.returncode == 2 and calls == [] and not (tmp_path / ".venv").exists()
+    assert result.stderr.splitlines() == ["rollball setup: no dependency group or extra named bench in pyproject.toml"]
 
 
 def test_a_long_silent_step_says_every_few_seconds_that_it_is_still_at_work():

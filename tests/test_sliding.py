@@ -178,8 +178,8 @@ if __name__ == "__main__":
     for method, step in CASES:
         for backspin in (0.0, 20.0):
             (dt_star, dv, dd), _, _ = billiard_errors(method, step, backspin=backspin)
-            print(f"plane, backspin {backspin:g} rad/s, {method} {step:g}: t* {dt_star:.2e} s, final speed {dv:.2e} m/s, "
-                  f"dissipated {dd:.2e} J")
+            print(f"plane, backspin {backspin:g} rad/s, {method} {step:g}: t* {dt_star:.2e} s, "
+                  f"final speed {dv:.2e} m/s, dissipated {dd:.2e} J")
         for mu in (0.1, 0.2):
             ds, dw, slid = incline_errors(method, step, math.radians(30.0), mu)
             print(f"incline 30°, mu {mu}: {'slides' if slid else 'rolls'}, {method} {step:g}: distance {ds:.2e} m, "

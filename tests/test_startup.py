@@ -53,6 +53,8 @@ def test_the_command_line_module_loads_nothing_numerical():
     (["simulate", "hills", "--method", "rk45"], 2),
     (["simulate"], 2),
     (["no-such-command"], 2),
+    (["compare", "hills", "--runs", "rk9"], 2),
+    (["compare", "hills", "--runs", "dopri5/classic"], 2),
 ])
 def test_help_and_refused_arguments_answer_at_once(args, code):
     result, cpu = _run(["-m", "rollball", *args])
@@ -71,6 +73,10 @@ def test_help_and_refused_arguments_answer_at_once(args, code):
     ["--record", "out.mp4", "--fps", "500"],
     ["--screenshot", "out.png", "--size", "10x10"],
     ["--fps", "10"],
+    ["--compare", "rk9"],
+    ["--compare", "rk4/mk"],
+    ["--compare", "dopri5/classic"],
+    ["--compare", "euler,euler/classic,rk4,rk4/classic,lawson5,lawson5/classic,dopri5"],   # seven runs
 ])
 def test_the_app_refuses_bad_arguments_in_a_line_before_loading_qt_or_the_core(args):
     result, cpu = _run(["-m", "rollball_app", *args])

@@ -80,7 +80,8 @@ def test_a_failed_batch_ends_the_sweep_with_the_runs_finished(monkeypatch):
         return real(task)
 
     monkeypatch.setattr(batch, "run", flaky)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=":0") as cluster:
         table = sweep(Scene.load(EXAMPLES_DIR / "liftoff.json"), {"start.vx": np.linspace(3, 6, 40)},
                       scheduler=cluster.scheduler_address)
     assert table.partial and "worker out of memory" in table.error

@@ -91,8 +91,8 @@ def _targets(t: dict) -> list[str]:
         f"| whole process (interpreter, import, both runs) | {cold['process_cold_cache']:.2f} s | "
         f"{cold['process_disk_cache']:.2f} s |",
         *([] if cold.get("all_methods_numba_cold_cache") is None else [
-            "", f"Where the shipped kernel code does not fit this machine, numba compiles the kernel's sources (rollball/kernel/) instead: "
-                f"every method in one process with empty caches then took "
+            "", "Where the shipped kernel code does not fit this machine, numba compiles the kernel's sources "
+                "(rollball/kernel/) instead: every method in one process with empty caches then took "
                 f"{cold['all_methods_numba_cold_cache']:.1f} s of CPU time."]),
         "", "Cost of one step (hills, h = 1e-3):", "", "| method | ns per step |", "|---|---|",
     ]

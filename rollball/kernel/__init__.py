@@ -28,6 +28,8 @@ fold, the changes of contact mode), ``unpacking`` (slots and scratch, generated)
 ``entries`` (the entry points).
 """
 
+# The names the rest of the core reads the kernel by (it imports rollball.kernel and
+# rollball.kernel.interface only: pyproject.toml's import contracts), re-exported here
 from .interface import *  # noqa: F401,F403  (the names Python reads the kernel's arrays by)
 from .collocation import collocation_step  # noqa: F401
 from .dense import TURN_SHARE, omega_polynomial, turn  # noqa: F401

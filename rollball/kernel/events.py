@@ -642,7 +642,9 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
     if sharp and stop > 1.0:
         a, b, turn = locate_break(KINK, fn, d, r, z, h, P, K, Ye, sa, sb, sm, 0.0, 1.0)
         if turn > BREAK_MIN:
-            phi = (sb[0] - sa[0]) * (sb[3] - sa[3]) + (sb[1] - sa[1]) * (sb[4] - sa[4]) + (sb[2] - sa[2]) * (sb[5] - sa[5])
+            # (a backslash, not parentheses: the shipped code's stamp is made from the tokens)
+            phi = (sb[0] - sa[0]) * (sb[3] - sa[3]) + (sb[1] - sa[1]) * (sb[4] - sa[4]) \
+                + (sb[2] - sa[2]) * (sb[5] - sa[5])
             if phi < 0.0:  # the normal turns towards the motion: a valley, where the ball cannot fit
                 _fail(ints, info, DOES_NOT_FIT, R_KINK, t + b * h, sb[0], sb[1], turn)
                 stop, valid = b, a
@@ -730,8 +732,8 @@ def tip_liftoff(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, 
     or fail, or come within 4 BREAK_SPAN of it: in the model's motion the contact point may creep
     into the tip while the centre turns about it), to round-off of the time; then again from the
     state reached (z, R, probe move on to it), whose shorter sub-steps resolve the last stretch
-    better, until the contact point is within twice that of the tip or no sub-step gets nearer. The lift-off's place is the tip.
-    Returns the fraction of the step where the run stops."""
+    better, until the contact point is within twice that of the tip or no sub-step gets nearer. The lift-off's place is
+    the tip. Returns the fraction of the step where the run stops."""
     r = p[0]
     n, mk = shape_of(z)
     done, m = 0.0, theta    # (the fraction of the step the state has moved on by)

@@ -17,6 +17,7 @@ from rollball_app.main import prepare_qt
 prepare_qt()
 app = QtWidgets.QApplication(sys.argv[:1])
 
+# the app's modules load after the QApplication, as when the app starts (hence E402 below)
 from rollball_app.controller import FINISHED  # noqa: E402
 from rollball_app.preferences import Preferences  # noqa: E402
 from rollball_app.window import SPEEDS, MainWindow  # noqa: E402
@@ -70,8 +71,9 @@ def outside(window: MainWindow) -> list[str]:
     out = [] if screen.contains(frame) else [f"window {rect(frame)} beyond screen {rect(screen)}"]
     widgets = [window.view, window.timeline.slider, window.timeline.label, window.message, window.state_label,
                window.speed, window.progress]
+    # (slip and dissipation: where the ball can slide or fly)
     widgets += [label for row in window.readouts.rows for label in row.values()
-                if not label.isHidden()] + window.readouts.names   # (slip and dissipation: where the ball can slide or fly)
+                if not label.isHidden()] + window.readouts.names
     if window.presentation.active:
         widgets += window.presentation.bar.findChildren(QtWidgets.QToolButton)
     if window.compare.dock.isVisible():
@@ -89,7 +91,8 @@ STARTED = time.monotonic()
 
 
 def state(window: MainWindow) -> dict:
-    return {"at": round(time.monotonic() - STARTED, 1), "geometry": rect(window.geometry()), "full_screen": window.isFullScreen(),
+    return {"at": round(time.monotonic() - STARTED, 1), "geometry": rect(window.geometry()),
+            "full_screen": window.isFullScreen(),
             "title": window.windowTitle(), "presentation": window.presentation.active,
             "compare": window.compare.active, "scene_panel": window.scene_dock.isVisible(),
             "compare_panel": window.compare.dock.isVisible(), "outside": outside(window),

@@ -33,7 +33,6 @@ def rows(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The rows at ``times`` and their modes (positions in ``trajectory.MODES``)."""
     v1 = 5 * V0 / 7
     x1 = -1.0 + V0 * T1 - 0.5 * MU * G * T1 ** 2
-    x2 = x1 + v1 * (T2 - T1)
     out = np.zeros((len(times), ROW_SIZE))
     modes = np.zeros(len(times), dtype=np.int8)
     for k, t in enumerate(times):

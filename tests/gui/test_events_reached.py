@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from PySide6 import QtCore
 
-from rollball_app import contact_view
 from rollball_app.controller import FINISHED, Run
 from rollball_app.preferences import Preferences
 from rollball_app.timeline import Marker, merged, telling

@@ -167,7 +167,8 @@ def test_the_last_word_of_a_run_keeps_its_lift_off(qtbot, window, tmp_path):
 
 
 def test_start_goes_as_soon_as_its_method_is_ready(qtbot, window):
-    says = "import time; print('ready euler mk', flush=True); time.sleep(0.5); print('ready rk4 mk', flush=True); time.sleep(30)"
+    says = ("import time; print('ready euler mk', flush=True); time.sleep(0.5); "
+            "print('ready rk4 mk', flush=True); time.sleep(30)")
     window.runs.prepare_integrator([sys.executable, "-c", says])
     window.runs.start()   # hills: rk4 with Munthe-Kaas
     assert window.runs.state == "ready"

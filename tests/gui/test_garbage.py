@@ -4,7 +4,7 @@ happens to allocate (there, freeing a QObject deadlocks against the GUI thread).
 import gc
 import threading
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtWidgets
 
 from rollball_app.garbage import INTERVAL
 

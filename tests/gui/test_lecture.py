@@ -82,7 +82,8 @@ def test_the_slider_shows_a_chosen_time(qtbot, window):
     t = window.controller.play_time
     assert t == pytest.approx(0.74) and window.controller.state == PAUSED
     i = np.searchsorted(trajectory.t, t, side="right") - 1
-    np.testing.assert_allclose(drawn_center(window), trajectory.center[i], rtol=0, atol=1e-6)  # float32 transform; a row apart is ~1e-3 m
+    # a float32 transform; a row apart is ~1e-3 m
+    np.testing.assert_allclose(drawn_center(window), trajectory.center[i], rtol=0, atol=1e-6)
     assert window.readouts["t"].text() == f"{trajectory.t[i]:.4f} s"
     assert all(cursor.value() == trajectory.t[i] for cursor in window.plots.cursors)
     window.speed.setCurrentIndex(window.speed.findText("Real time"))
@@ -93,7 +94,8 @@ def test_the_slider_shows_a_chosen_time(qtbot, window):
     assert window.controller.play_time == pytest.approx(t - 0.016)
     qtbot.keyClick(window, QtCore.Qt.Key.Key_End)
     assert window.controller.play_time == 2.0
-    np.testing.assert_allclose(drawn_center(window), trajectory.center[-1], rtol=0, atol=1e-6)  # float32 transform; a row apart is ~1e-3 m
+    # a float32 transform; a row apart is ~1e-3 m
+    np.testing.assert_allclose(drawn_center(window), trajectory.center[-1], rtol=0, atol=1e-6)
     qtbot.keyClick(window, QtCore.Qt.Key.Key_Home)
     assert window.controller.play_time == 0.0
     window.runs.toggle_pause()                                       # replay from here

@@ -281,7 +281,8 @@ def test_a_parameter_removed_by_mistake_comes_back_as_it_was(qtbot, ripples):
     assert "unknown name 'a'" in window.panel.error_text
     qtbot.mouseClick(rows.add_button, QtCore.Qt.MouseButton.LeftButton)
     dialog = rows.dialog
-    assert (dialog.name.text(), dialog.value.text(), dialog.low.text(), dialog.high.text()) == ("a", "0.75", "0.0", "1.0")
+    fields = (dialog.name.text(), dialog.value.text(), dialog.low.text(), dialog.high.text())
+    assert fields == ("a", "0.75", "0.0", "1.0")
     qtbot.mouseClick(dialog.ok, QtCore.Qt.MouseButton.LeftButton)
     apply_fields(qtbot, window)
     assert window.panel.error_text == "" and window.scene.parameters[-1] == Parameter("a", 0.75, 0.0, 1.0)

@@ -29,7 +29,8 @@ def test_a_hundred_start_stop_cycles_leave_no_threads_or_memory(qtbot, window):
         for i in range(n):
             window.runs.start()
             if i % 2:
-                qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0, timeout=30_000)
+                qtbot.waitUntil(lambda: window.controller.buffer is not None and len(window.controller.buffer) > 0,
+                                timeout=30_000)
             window.runs.stop() if i % 3 else window.runs.reset()
         qtbot.wait(50)  # deleteLater of the finished threads
         gc.collect()
@@ -64,7 +65,8 @@ def test_a_hostile_scene_file_opened_during_a_run_changes_nothing(qtbot, window,
     path.write_text(text, encoding="utf-8")
     assert not window.files.open_scene(path)
     assert dialogs[-1][0] == "warning" and f"hostile.json: {shown(key)}" in dialogs[-1][2]
-    assert window.scene == scene and window.controller.state == state and window.controller.thread is not None or window.controller.computed
+    assert (window.scene == scene and window.controller.state == state and window.controller.thread is not None
+            or window.controller.computed)
 
 
 @pytest.mark.parametrize("data", SCENE_BYTES, ids=range(len(SCENE_BYTES)))

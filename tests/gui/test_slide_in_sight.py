@@ -1,6 +1,6 @@
 """A short slide is seen while it happens: the trail is drawn over the ball's ring (which marks a
-ball drawn small), not hidden under it, and the ring is tinted in the sliding colour. On the closed-form billiard shot (``scripted``): the ball
-slides until T1."""
+ball drawn small), not hidden under it, and the ring is tinted in the sliding colour. On the
+closed-form billiard shot (``scripted``): the ball slides until T1."""
 
 import numpy as np
 import pytest

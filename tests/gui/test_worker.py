@@ -105,7 +105,7 @@ def test_a_worker_let_go_of_is_freed_with_what_it_computed_with(qtbot):
     """A slot naming its worker (as the run controller's do) keeps nothing once it has ended:
     100 runs must not keep 100 runs' arrays."""
     big = np.ones(10**6)
-    worker = Worker(lambda progress, cancel: float(big.sum()))
+    worker = Worker(lambda progress, cancel, big=big: float(big.sum()))
     worker.done.connect(functools.partial(lambda w, result: None, worker))
     freed, kept = weakref.ref(worker), weakref.ref(big)
     worker.start()
