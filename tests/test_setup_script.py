@@ -19,7 +19,7 @@ def included(*names: str, cwd: Path = ROOT) -> set[tuple[str, str]]:
 
 
 def test_the_test_group_includes_the_app_and_dask_extras():
-    assert included("test") == {("group", "test"), ("extra", "app"), ("extra", "dask")}
+    assert included("test") == {("group", "test"), ("group", "docs"), ("extra", "app"), ("extra", "dask")}
     assert included("app") == {("extra", "app")}
     assert included("dask", "app") == {("extra", "dask"), ("extra", "app")}
     assert included() == set()
@@ -126,7 +126,7 @@ def _checkout(tmp_path: Path) -> tuple[Path, Path]:
     python.write_text(f'#!/usr/bin/env bash\necho "$*" >> {log}\n')
     python.chmod(0o755)
     project = hashlib.sha256((root / "pyproject.toml").read_bytes()).hexdigest()
-    (root / ".venv" / "rollball-installed").write_text(f"{project}\napp\n")
+    (root / ".venv" / "rollball-installed").write_text(f"{project}\nextra app\n")
     log.write_text("")
     return root, log
 
