@@ -136,7 +136,7 @@ class LivePlots(QtWidgets.QWidget):
         self.graphics.setBackground("w")
         self.graphics.scene().sigMouseMoved.connect(self._hovered)
         layout.addWidget(self.graphics)
-        self.setMinimumSize(3 * 150, 150)   # three side by side in a 1024-pixel window
+        self.setMinimumSize(3 * 150, 120)   # three side by side in a 1024-pixel window
         self.curves = {}
         self.plots: list[pg.PlotItem] = []
         self.cursors = []

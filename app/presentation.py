@@ -15,7 +15,9 @@ from __future__ import annotations
 from PySide6 import QtCore, QtWidgets
 
 PRESENTATION_SCALE = 2.0      # times the preferred text size
-VIEW_HEIGHT, PRESENTATION_VIEW_HEIGHT = 280, 200   # the 3-D view's least height (the close-up is in it)
+# the 3-D view's least height (the close-up is in it); the smaller in presentation and at a larger text
+# size, where the readouts' lines and the plots' text take more of a small screen's height
+VIEW_HEIGHT, SMALL_VIEW_HEIGHT = 280, 200
 TRAIL_WIDTH = 3.0             # pixels; times the scale in presentation mode
 TEXT_SIZES = (("Normal", 1.0), ("Large (125 %)", 1.25), ("Larger (150 %)", 1.5), ("Largest (200 %)", 2.0))
 
@@ -74,7 +76,7 @@ class Presentation:
         for dock in (w.scene_dock, w.compare.dock):
             dock.widget().setFont(panel_font)
         w.view.trail.setData(width=TRAIL_WIDTH * (PRESENTATION_SCALE if self.active else 1.0))
-        w.view.setMinimumHeight(PRESENTATION_VIEW_HEIGHT if self.active else VIEW_HEIGHT)
+        w.view.setMinimumHeight(SMALL_VIEW_HEIGHT if scale != 1.0 else VIEW_HEIGHT)
         # the run buttons as icons in presentation: the toolbar keeps the Scene and Leave
         # buttons on a 1024-pixel screen (their names are in their tooltips)
         w.run_toolbar.setToolButtonStyle(QtCore.Qt.ToolButtonStyle.ToolButtonIconOnly if self.active
@@ -83,8 +85,8 @@ class Presentation:
     def _fit_readouts(self, points: float) -> None:
         """The readouts at ``points``, or as large as the screen's width holds them."""
         readouts = self.window.readouts
-        if points == self.base_points():
-            readouts.setStyleSheet("")
+        if points == self.base_points() or not self.active:   # outside presentation they wrap instead
+            readouts.setStyleSheet(label_style(points) if points != self.base_points() else "")
             return
         screen = self.window.screen() or QtWidgets.QApplication.primaryScreen()
         room = screen.availableGeometry().width() - 24
@@ -93,8 +95,7 @@ class Presentation:
             readouts.ensurePolished()
             for label in readouts.findChildren(QtWidgets.QLabel):
                 label.ensurePolished()
-            readouts.layout().invalidate()
-            needed = readouts.layout().minimumSize().width()
+            needed = readouts.one_line_width()
             if needed <= room or points <= self.base_points():
                 return
             points = max(self.base_points(), points * room / needed * 0.98)

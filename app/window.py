@@ -78,7 +78,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_status()
         self.compare = CompareMode(self)
         self.presentation = Presentation(self)
-        self.presentation.add_actions([self.scene_panel_action, self.presentation_action])
+        self.presentation.add_actions([self.scene_panel_action, self.plots_action, self.presentation_action])
         self.modes = Modes(self)
         self._wire()
         self.preferences.restore(self)
@@ -123,6 +123,8 @@ class MainWindow(QtWidgets.QMainWindow):
         v.setContentsMargins(0, 0, 0, 0)
         v.addWidget(self.view, 1)
         v.addWidget(self.timeline)
+        # the events' links beside the slider give way (cut at the right) rather than widen the window
+        self.timeline.events.setMinimumWidth(1)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
         self.bottom = QtWidgets.QStackedWidget()   # the live plots, or compare mode's error plots
@@ -196,6 +198,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.reset_layout_action = self._action("Reset &Layout", lambda: self.modes.reset_layout(), None,
                                                 "The panels where they were at first, the window at its "
                                                 "default size", name="reset_layout")
+        self.plots_action = self._action("&Plots", lambda _on: self.modes.choose_folds(), "P",
+                                         "Show the plots, or fold them away for a larger 3-D view", checkable=True)
+        self.readouts_action = self._action("Rea&douts", lambda _on: self.modes.choose_folds(), None,
+                                            "Show the readouts, or fold them away for a larger 3-D view",
+                                            checkable=True)
+        for shown in (self.plots_action, self.readouts_action):
+            with QtCore.QSignalBlocker(shown):
+                shown.setChecked(True)
         self.leave_action.setEnabled(False)
         self.closeup_action = self._action("&Close-up", lambda on: self.modes.choose_closeup(on), "Z",
                                            "A close-up following the ball in the corner of the view",
@@ -282,7 +292,8 @@ class MainWindow(QtWidgets.QMainWindow):
         view.addSeparator()
         view.addActions([self.follow_action, self.trail_action, self.mark_action, self.camera_action])
         view.addSeparator()
-        view.addActions([self.scene_panel_action, self.reset_layout_action])
+        view.addActions([self.scene_panel_action, self.plots_action, self.readouts_action,
+                         self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")
         analysis.addActions([self.speed_error_action, self.sweep_action])
         help_menu = bar.addMenu("&Help")
