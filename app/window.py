@@ -110,7 +110,7 @@ class MainWindow(QtWidgets.QMainWindow):
         scroll = QtWidgets.QScrollArea(widgetResizable=True)
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)
-        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)   # large text: all of a row in reach
         self.scene_dock = dock = QtWidgets.QDockWidget("Scene", self, objectName="sceneDock")
         dock.setWidget(scroll)
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetMovable
