@@ -117,6 +117,8 @@ class _Name(QtWidgets.QLabel):
 class Readouts(QtWidgets.QWidget):
     """``readouts[key]`` is the first run's label for a quantity (``QUANTITIES``)."""
 
+    runsChanged = QtCore.Signal()   # a row per run: their height changed
+
     def __init__(self, parent=None):
         super().__init__(parent)
         self.grid = QtWidgets.QGridLayout(self)
@@ -160,6 +162,7 @@ class Readouts(QtWidgets.QWidget):
             self.rows.append({key: _Value(prefix + key, key) for key, _ in QUANTITIES})
         self.show_contact(self.mode_shown, self.contact_shown)
         self.clear()
+        self.runsChanged.emit()
 
     def show_contact(self, on: bool, columns: bool = True) -> None:
         """Show the mode, the slip speed and the energy dissipated (a scene whose ball can slip or
@@ -238,6 +241,14 @@ class Readouts(QtWidgets.QWidget):
             dot.hide()
         self.grid.setHorizontalSpacing(self._spacing())
         self.updateGeometry()
+
+    def height_for(self, width: int) -> int:
+        """The least height of the readouts laid out in ``width`` pixels."""
+        lines = -(-len(self.shown_keys()) // self._fitting(width))
+        label = self.rows[0]["t"]
+        row = max(label.sizeHint().height(), self.titles["t"].sizeHint().height()) + self.grid.verticalSpacing()
+        margins = self.grid.contentsMargins()
+        return lines * (len(self.rows) + 1) * row + margins.top() + margins.bottom()
 
     def fit_width(self, width: int) -> None:
         """Lay the quantities out for ``width`` pixels now (before a resize to it)."""

@@ -99,6 +99,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline.seeked.connect(runs.seek)
         self.undo_stack.cleanChanged.connect(lambda _clean: runs.update_controls())
         self.compare.panel.followChanged.connect(lambda _i: drawing.follow(self.follow_action.isChecked()))
+        self.readouts.runsChanged.connect(self.presentation.fit_readouts)   # a row per run: their size again
         self.view.installEventFilter(self)   # keeps the close-up in the view's corner
         # the close-up out of the axes' way, after the paint that moved them
         self.view.axesPlaced.connect(drawing.place_closeup, QtCore.Qt.ConnectionType.QueuedConnection)
