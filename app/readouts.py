@@ -182,10 +182,11 @@ class Readouts(QtWidgets.QWidget):
     # -- wrapping --------------------------------------------------------------------
 
     def _spacing(self) -> int:
-        """Between two columns: two spaces of the values' font (a value never runs into the next)."""
+        """Between two columns: a space of the values' font and a little more (a value never runs
+        into the next)."""
         label = self.rows[0]["t"]
         label.ensurePolished()
-        return label.fontMetrics().horizontalAdvance("  ")
+        return label.fontMetrics().horizontalAdvance(" ") + 2
 
     def width_for(self, per_line: int) -> int:
         """The least width of the readouts with ``per_line`` quantities on a line."""
