@@ -39,6 +39,7 @@ from .timeline import TimeSlider
 from .view3d import SceneView
 from .worker import finish_all
 
+SLIDER_WIDTH = 240   # pixels of the time slider, at least, whatever the text beside it
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 
@@ -125,7 +126,9 @@ class MainWindow(QtWidgets.QMainWindow):
         v.addWidget(self.view, 1)
         v.addWidget(self.timeline)
         # the events' links beside the slider give way (cut at the right) rather than widen the window
+        # or squeeze the slider (large text in presentation left it a handle's width)
         self.timeline.events.setMinimumWidth(1)
+        self.timeline.slider.setMinimumWidth(SLIDER_WIDTH)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
         self.bottom = QtWidgets.QStackedWidget()   # the live plots, or compare mode's error plots

@@ -112,7 +112,7 @@ def measure(window: MainWindow) -> dict:
         "state_cut": text_width(window.state_label) > window.state_label.contentsRect().width(),
         "ticks_overlap": [t for p in plot_items for t in tick_overlaps(p)] if window.bottom.isVisible() else [],
         "mode": readouts.rows[0]["mode"].text() if "mode" in readouts.rows[0] else None,
-        "splitter": window.splitter.sizes(),
+        "splitter": window.splitter.sizes(), "slider_width": window.timeline.slider.width(),
     }
 
 

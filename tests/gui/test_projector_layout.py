@@ -17,6 +17,7 @@ from rollball_app.compare_runs import CompareRun
 from rollball_app.dialogs import AnimationDialog
 from rollball_app.modes import VIEW_SHARE
 from rollball_app.plots import TimeAxis
+from rollball_app.window import SLIDER_WIDTH
 from rollball_app.readouts import _Name, distinct_names
 from rollball import parse_runs
 from rollball.examples import EXAMPLES_DIR
@@ -54,6 +55,7 @@ def test_on_a_projector_every_text_size_and_mode_fits_and_the_view_comes_first(t
         assert not state["status_overlap"] and not state["state_cut"], (where, state)
         assert not state["ticks_overlap"], (where, state["ticks_overlap"])
         assert state["mode"] in MODES, where
+        assert state["slider_width"] >= SLIDER_WIDTH, (where, state["slider_width"])   # not squeezed by text
         if state["compare"] and state["readouts_shown"]:   # the runs told apart in text
             assert len(set(state["names"])) == len(state["names"]) == 3, (where, state["names"])
         if not state["presentation"]:
