@@ -189,3 +189,18 @@ def test_export_animation_offers_video_sizes(qtbot, tmp_path):
     assert dialog.presets.currentText() == "720p (1280×720)"
     dialog.width.setValue(1000)
     assert dialog.presets.currentText() == "Custom" and dialog.options()["size"] == (1000, 720)
+
+
+def test_speed_against_error_and_a_sweep_fit_a_1024_by_768_screen(qtbot, window):
+    """Their windows' least sizes fit a projector's screen (a long result line widened Speed
+    against Error to 1075 pixels)."""
+    room = QtCore.QSize(1024 - 8, 768 - 40)
+    window.show_speed_against_error()
+    speed = window.speed_window
+    speed.cancel()
+    speed.status.setText("fastest for 1e-06: lawson5/classic dt 0.00425 (75.2 ms, 222 steps); "
+                         "for 1e-10: rk4 dt 0.000567 (77.5 ms, 1669 steps)")
+    speed.layout().activate()
+    assert speed.minimumSizeHint().boundedTo(room) == speed.minimumSizeHint(), speed.minimumSizeHint()
+    sweep = window.open_sweep()
+    assert sweep.minimumSizeHint().boundedTo(room) == sweep.minimumSizeHint(), sweep.minimumSizeHint()
