@@ -153,20 +153,23 @@ def main() -> None:
     settings, scene = sys.argv[1], sys.argv[2]
     report = {"states": []}
     window = open_window(settings, scene)
+    # compare → F11 → leave compare → Esc: the editing heights back; and after View → Reset Layout
+    report["splitter_editing"] = window.splitter.sizes()
+    for k in (KEY.Key_K, KEY.Key_F11, KEY.Key_K, KEY.Key_Escape):
+        key(window, k, QtCore.Qt.KeyboardModifier.ControlModifier if k == KEY.Key_K else
+            QtCore.Qt.KeyboardModifier.NoModifier)
+    settle(3.5)   # the window manager's moves after full screen have settled
+    report["splitter_after"] = window.splitter.sizes()
+    window.reset_layout_action.trigger()
+    settle(1.0)
+    report["splitter_reset"] = window.splitter.sizes()
     run_to_end(window)
     every_text_size(window, report["states"])
     # compare mode (Ctrl+K) with three runs, two of them RK4
-    editing = window.splitter.sizes()
     key(window, KEY.Key_K, QtCore.Qt.KeyboardModifier.ControlModifier)
     window.compare.enter([CompareRun.of(spec, window.scene) for spec in parse_runs(RUNS)])
     run_to_end(window)
     every_text_size(window, report["states"])
-    # compare → F11 → leave compare → Esc: the editing heights back
-    key(window, KEY.Key_F11)
-    key(window, KEY.Key_K, QtCore.Qt.KeyboardModifier.ControlModifier)
-    key(window, KEY.Key_Escape)
-    settle(3.5)   # the window manager's moves after full screen have settled
-    report["splitter_editing"], report["splitter_after"] = editing, window.splitter.sizes()
     # a restart at Large: the Scene panel reaches all of its rows
     text_size(window, 1.25)
     window.document.saved_scene = window.scene
