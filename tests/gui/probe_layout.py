@@ -112,6 +112,9 @@ def measure(window: MainWindow) -> dict:
         "state_cut": text_width(window.state_label) > window.state_label.contentsRect().width(),
         "ticks_overlap": [t for p in plot_items for t in tick_overlaps(p)] if window.bottom.isVisible() else [],
         "mode": readouts.rows[0]["mode"].text() if "mode" in readouts.rows[0] else None,
+        "heights": {"readouts": readouts.height(), "timeline": window.timeline.height(),
+                    "status": window.statusBar().height(), "toolbar": window.run_toolbar.height(),
+                    "per_line": readouts.per_line},
         "splitter": window.splitter.sizes(), "slider_width": window.timeline.slider.width(),
     }
 
@@ -139,13 +142,30 @@ def text_size(window: MainWindow, scale: float) -> None:
     settle(0.3)
 
 
+def settled(window: MainWindow, full_screen: bool) -> dict:
+    """What is measured once the window manager has made the window full screen (or not) and
+    the layout has stopped changing (a busy machine takes its time)."""
+    screen = window.screen().geometry()
+    wait_until(lambda: window.isFullScreen() == full_screen
+               and (window.geometry() == screen) == full_screen, 20.0)
+    last = None
+    for _ in range(50):
+        settle(0.2)
+        now = (window.geometry().getRect(), window.view.height(), window.readouts.height())
+        if now == last:
+            break
+        last = now
+    return measure(window)
+
+
 def every_text_size(window: MainWindow, states: list) -> None:
     for _, scale in TEXT_SIZES:
         text_size(window, scale)
-        states.append(measure(window))
+        states.append(settled(window, False))
         key(window, KEY.Key_F11)
-        states.append(measure(window))
+        states.append(settled(window, True))
         key(window, KEY.Key_Escape)
+        settled(window, False)
     text_size(window, 1.0)
 
 

@@ -63,7 +63,7 @@ def test_on_a_projector_every_text_size_and_mode_fits_and_the_view_comes_first(t
     # the view's share of the height is back after compare → F11 → leave compare → Esc
     before = report["splitter_editing"]
     for after in (report["splitter_after"], report["splitter_reset"]):   # (the issue: 380 of 633 instead of 443)
-        assert after[0] / sum(after) == pytest.approx(before[0] / sum(before), abs=0.01), (before, after)
+        assert after[0] / sum(after) == pytest.approx(before[0] / sum(before), abs=0.02), (before, after)
     # a restart at Large: on the screen, the Scene panel's rows within reach
     assert report["restart_frame"][0] <= width and report["panel_reachable"], report
 
