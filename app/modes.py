@@ -14,8 +14,8 @@ start (a layout can never hide the Scene panel).
 
 The plots and the readouts can be folded away (View → Plots, View → Readouts). Presentation
 folds what would leave the 3-D view less than ``VIEW_SHARE`` of the screen's height (a 1024×768
-projector: the plots, in compare mode with many runs the readouts too); the bar's buttons unfold
-them; leaving presentation gives back what the editing layout showed.
+projector: the plots, in compare mode with many runs the readouts too); the bar's Plots button and
+View → Readouts unfold them; leaving presentation gives back what the editing layout showed.
 """
 
 from __future__ import annotations
@@ -231,7 +231,7 @@ class Modes:
         w = self.window
         screen = w.screen() or QtWidgets.QApplication.primaryScreen()
         height = screen.geometry().height()
-        for widget in (w.readouts, w.timeline, w.statusBar(), w.message):
+        for widget in (w.readouts, w.timeline, w.statusBar()):
             widget.ensurePolished()
         fixed = sum(part.sizeHint().height() for part in (w.menuBar(), w.run_toolbar, w.statusBar(), w.timeline))
         room = height - fixed - round(VIEW_SHARE * height)   # for the readouts and the plots

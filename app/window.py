@@ -427,6 +427,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _set_text_size(self, scale: float, remember: bool = False) -> None:
         self.presentation.set_preferred(scale)
+        if self.modes.presentation:
+            self.modes.apply()   # what the 3-D view's share of the screen leaves room for, at this size
         for action in self.text_size_group.actions():
             action.setChecked(action.data() == scale)
         if remember:
