@@ -36,8 +36,12 @@ class CompareMode:
         box.addWidget(self.panel)
         box.addWidget(QtWidgets.QLabel(" Summary (hover the names for what they mean)"))
         box.addWidget(self.summary, 1)
+        scroll = QtWidgets.QScrollArea(widgetResizable=True)   # large text: all of it in reach, the window
+        scroll.setWidget(content)                               # no wider than the screen
+        scroll.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        scroll.setMinimumWidth(content.minimumSizeHint().width() + scroll.verticalScrollBar().sizeHint().width())
         self.dock = QtWidgets.QDockWidget("Compare", w, objectName="compareDock")
-        self.dock.setWidget(content)
+        self.dock.setWidget(scroll)
         self.dock.setFeatures(w.scene_dock.features())
         w.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, self.dock)
         w.tabifyDockWidget(w.scene_dock, self.dock)

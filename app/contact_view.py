@@ -65,9 +65,14 @@ def sentence(kind: str, t: float, who: str = "") -> str:
 def summary(transitions, listed: int = 3) -> str:
     """The transitions of a finished run in a few words: each with its time where there are at
     most ``listed`` ("; lift-off at t = 0.4465 s, landing at t = 0.8919 s (2.3 J lost)"), else
-    counted ("; 2 lift-offs, 5 landings (3.1 J lost)"); "" for none."""
+    counted ("; 2 lift-offs, 5 landings (3.1 J lost)"); "" for none. A landing the ball bounces
+    from (the next change is another landing, no lift-off between) is counted as a bounce too:
+    one lift-off and nine landings is no miscount ("9 landings (8 bounces, 3.35 J lost)")."""
     def lost(changes) -> str:
-        return f" ({sum(c.energy_lost or 0.0 for c in changes):.3g} J lost)"
+        bounces = sum(1 for c, after in zip(transitions, transitions[1:])
+                      if c.kind == "landing" and after.kind == "landing") if changes[0].kind == "landing" else 0
+        counted = (f"{bounces} bounce{'s' if bounces > 1 else ''}, " if bounces and len(changes) > 1 else "")
+        return f" ({counted}{sum(c.energy_lost or 0.0 for c in changes):.3g} J lost)"
 
     if len(transitions) <= listed:
         return "".join(("; " if i == 0 else ", ") + f"{KIND_WORDS[c.kind]} at t = {c.time:.4g} s"

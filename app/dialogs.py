@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6 import QtWidgets
+from PySide6 import QtCore, QtWidgets
 
 from .formats import DEFAULT_FPS, FORMATS, MAX_FPS
 
 IMAGE_SCALES = (("1× (as on screen)", 1), ("2×", 2), ("4× (print)", 4))
 ANIMATION_FILTER = ";;".join(f"{words} (*{suffix})" for suffix, words in FORMATS.items())
 MAX_SIDE = 4096
+VIDEO_PRESETS = (("720p (1280×720)", (1280, 720)), ("1080p (1920×1080)", (1920, 1080)))   # besides the view's size
 
 
 class _FileDialog(QtWidgets.QDialog):
@@ -81,7 +82,13 @@ class AnimationDialog(_FileDialog):
         super().__init__("Export animation", path, ANIMATION_FILTER, parent)
         self.width = _spin(size[0], 16, MAX_SIDE, suffix=" px")
         self.height = _spin(size[1], 16, MAX_SIDE, suffix=" px")
+        self.presets = QtWidgets.QComboBox(objectName="sizePresets")
+        for label, (w, h) in ((f"The view ({size[0]}×{size[1]})", size), *VIDEO_PRESETS):
+            self.presets.addItem(label, (w, h))
+        self.presets.addItem("Custom", None)
+        self.presets.activated.connect(self._preset_chosen)
         sizes = QtWidgets.QHBoxLayout()
+        sizes.addWidget(self.presets)
         sizes.addWidget(self.width)
         sizes.addWidget(QtWidgets.QLabel("×"))
         sizes.addWidget(self.height)
@@ -96,6 +103,23 @@ class AnimationDialog(_FileDialog):
         self.form.addRow("From", self.start)
         self.form.addRow("To", self.end)
         self.form.addRow("", self.caption)
+
+        for spin in (self.width, self.height):
+            spin.valueChanged.connect(self._size_typed)
+
+    def _preset_chosen(self, index: int) -> None:
+        size = self.presets.itemData(index)
+        if size is not None:
+            with QtCore.QSignalBlocker(self.width), QtCore.QSignalBlocker(self.height):
+                self.width.setValue(size[0])
+                self.height.setValue(size[1])
+
+    def _size_typed(self) -> None:
+        """A size typed in: the preset that has it, else Custom."""
+        typed = (self.width.value(), self.height.value())
+        match = next((i for i in range(self.presets.count()) if self.presets.itemData(i) == typed),
+                     self.presets.count() - 1)
+        self.presets.setCurrentIndex(match)
 
     def options(self) -> dict:
         return {"size": (self.width.value(), self.height.value()), "fps": self.fps.value(),

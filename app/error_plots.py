@@ -9,7 +9,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from .plots import FLOOR, DecadeAxis, cache_axes, fit_decades, thinned
+from .plots import FLOOR, DecadeAxis, TimeAxis, cache_axes, fit_decades, thinned
 
 PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
           ("orthogonality", "‖RᵀR − I‖"))
@@ -30,7 +30,7 @@ class ErrorPlots(QtWidgets.QWidget):
         self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
         self.plots: dict[str, pg.PlotItem] = {}
         for col, (key, title) in enumerate(PANELS):
-            plot = self.graphics.addPlot(row=1, col=col, axisItems={"left": DecadeAxis()})
+            plot = self.graphics.addPlot(row=1, col=col, axisItems={"left": DecadeAxis(), "bottom": TimeAxis()})
             plot.setTitle(title, size="9pt", color="#333")
             plot.setLabel("bottom", "t", units="s")
             plot.setLogMode(y=True)

@@ -77,7 +77,7 @@ class Exports:
         w = self.window
         return compose(w.view, size, inset=w.closeup if w.closeup.isVisible() else None,
                        caption=self.caption() if caption else None,
-                       plots=w.bottom.currentWidget() if plots else None)
+                       plots=w.bottom.currentWidget() if plots and w.bottom.isVisible() else None)   # (not folded away)
 
     def caption(self) -> str | None:
         """What is shown, in one line: formula, method(s) and step, time."""

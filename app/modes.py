@@ -11,6 +11,11 @@ mode gives exactly that back.
 The layout remembered between sessions is always the editing one: leaving the modes comes
 before saving, and whatever was saved, the Scene panel is shown and the Compare panel hidden at
 start (a layout can never hide the Scene panel).
+
+The plots and the readouts can be folded away (View → Plots, View → Readouts). Presentation
+folds what would leave the 3-D view less than ``VIEW_SHARE`` of the screen's height (a 1024×768
+projector: the plots, in compare mode with many runs the readouts too); the bar's Plots button and
+View → Readouts unfold them; leaving presentation gives back what the editing layout showed.
 """
 
 from __future__ import annotations
@@ -28,6 +33,9 @@ ERROR_PLOTS_SHARE = 0.4      # of the view's and plots' height, at least, for co
 PRESENTATION_PLOTS_SHARE = 0.47   # the same in presentation, where their text is larger
 PLOTS_ENOUGH = 380           # pixels: the error plots need no more (a large screen's view takes the rest)
 PRESENTATION_PLOTS_LEAST = 240   # pixels the error plots keep in presentation, where the 3-D view comes first
+LIVE_PLOTS_LEAST = 160      # pixels the live plots need in presentation to be read
+VIEW_SHARE = 0.6            # of the screen's height, at least, for the 3-D view in presentation: the
+                            # readouts, then the plots, are folded away where they would leave it less
 
 
 @dataclass(frozen=True)
@@ -106,6 +114,8 @@ class Modes:
         self._normal_sizes: list[int] | None = None     # the view's and plots' heights before presentation
         self._applying = False
         self._editing_sizes: list[int] | None = None   # the view's and plots' heights when editing
+        self._editing_folds: tuple[bool, bool] | None = None   # plots and readouts shown, before presentation
+        self._folds_chosen = False    # in presentation: the user folded or unfolded them
         self.default_state = window.saveState()   # for View → Reset Layout
 
     def shown(self) -> Shown:
@@ -117,6 +127,8 @@ class Modes:
         if on == self.compare:
             return
         self.compare = on
+        if self.presentation:   # leaving presentation gives back the heights of the mode it leaves to
+            self._normal_sizes = None if on else self._editing_sizes
         self.apply(raise_compare=on)
 
     def set_presentation(self, on: bool) -> None:
@@ -127,9 +139,13 @@ class Modes:
             self._normal_geometry = QtCore.QRect(w.geometry())
             self._was_maximized = w.isMaximized()
             self._normal_sizes = w.splitter.sizes()
+            self._editing_folds = (w.plots_action.isChecked(), w.readouts_action.isChecked())
+            self._folds_chosen = False
         self.presentation = on
         w.presentation.active = on
         w.presentation.apply_scale()
+        if not on and self._editing_folds is not None:
+            self._set_folds(*self._editing_folds)
         if on:
             self._settle_until = 0.0
             self.apply(raise_compare=self.compare)
@@ -189,6 +205,43 @@ class Modes:
             self.closeup_wanted = on
         self.window.drawing.show_closeup(on)
 
+    def choose_folds(self) -> None:
+        """View → Plots or Readouts toggled: shown or folded away (in presentation, until it is left)."""
+        if self._applying:
+            return
+        self._folds_chosen = self.presentation
+        w = self.window
+        self._set_folds(w.plots_action.isChecked(), w.readouts_action.isChecked())
+        self._share_height(self.shown())
+
+    def _set_folds(self, plots: bool, readouts: bool) -> None:
+        w = self.window
+        applying, self._applying = self._applying, True
+        try:
+            w.plots_action.setChecked(plots)
+            w.readouts_action.setChecked(readouts)
+        finally:
+            self._applying = applying
+        w.bottom.setVisible(plots)
+        w.readouts.setVisible(readouts)
+
+    def presentation_folds(self) -> tuple[bool, bool]:
+        """Whether the plots and the readouts are shown in presentation: each only where the 3-D
+        view keeps ``VIEW_SHARE`` of the screen's height (the readouts first, the plots after)."""
+        w = self.window
+        screen = w.screen() or QtWidgets.QApplication.primaryScreen()
+        height = screen.geometry().height()
+        for widget in (w.readouts, w.timeline, w.statusBar()):
+            widget.ensurePolished()
+        fixed = sum(part.sizeHint().height() for part in (w.menuBar(), w.run_toolbar, w.statusBar(), w.timeline))
+        room = height - fixed - round(VIEW_SHARE * height)   # for the readouts and the plots
+        w.readouts.fit_width(screen.geometry().width())   # as the full screen will lay them out
+        readouts = w.readouts.minimumSizeHint().height()
+        shown_readouts = readouts <= room
+        room -= readouts if shown_readouts else 0
+        least = PRESENTATION_PLOTS_LEAST if self.compare else LIVE_PLOTS_LEAST
+        return least <= room, shown_readouts
+
     # -- applying --------------------------------------------------------------------
 
     def apply(self, raise_compare: bool = False) -> None:
@@ -207,6 +260,8 @@ class Modes:
             w.closeup_action.setChecked(shown.closeup)
             w.drawing.show_closeup(shown.closeup)
             w.bottom.setCurrentWidget(w.compare.error_plots if shown.error_plots else w.plots)
+            if self.presentation and not self._folds_chosen:
+                self._set_folds(*self.presentation_folds())
             self._share_height(shown)
             w.compare_action.setChecked(self.compare)
             w.presentation_action.setChecked(self.presentation)
@@ -237,6 +292,9 @@ class Modes:
                          if column.itemAt(i).widget() is not self.window.view)
             beside += column.spacing() * (column.count() - 1)
             below = min(below, max(PRESENTATION_PLOTS_LEAST, (total - beside) // 2))
+            screen = self.window.screen() or QtWidgets.QApplication.primaryScreen()
+            view_least = round(VIEW_SHARE * screen.geometry().height())
+            below = max(min(below, total - beside - view_least), LIVE_PLOTS_LEAST)
         if shown.error_plots and total and (sizes[1] < below or self.presentation and sizes[1] != below):
             splitter.setSizes([total - below, below])
 
@@ -273,6 +331,10 @@ class Modes:
         screen = w.screen() or QtWidgets.QApplication.primaryScreen()
         w.resize(fitted(DEFAULT_SIZE, screen.availableGeometry()))
         clamp_to_screen(w)
+        self._set_folds(True, True)
+        self._editing_sizes = None
+        total = sum(w.splitter.sizes())
+        w.splitter.setSizes([total - total // 5, total // 5])   # the view 4 : the plots 1, as at first
         self.apply(raise_compare=self.compare)
 
 

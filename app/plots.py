@@ -124,6 +124,36 @@ class DecadeAxis(pg.AxisItem):
             else rect.adjusted(-margin, 0, margin, 0)
 
 
+class TimeAxis(pg.AxisItem):
+    """A time axis whose labels never run together: the finest of 1, 2, 5 × 10ⁿ seconds that
+    leaves a gap of two spaces between the widest labels, in the axis' font; only those ticks
+    are labelled (pyqtgraph labels its minor ticks too where its own estimate finds room, and a
+    narrow plot then reads "0.51.0")."""
+
+    def __init__(self, orientation: str = "bottom", **options):
+        super().__init__(orientation, **options)
+        self.setStyle(maxTextLevel=0)
+
+    def tickSpacing(self, minVal, maxVal, size):  # noqa: N802 (pyqtgraph's names)
+        low, high = sorted((minVal, maxVal))
+        span = high - low
+        if not (math.isfinite(span) and span > 0 and size > 0):
+            return super().tickSpacing(minVal, maxVal, size)
+        metrics = QtGui.QFontMetricsF(self.style["tickFont"] or QtGui.QFont())
+        gap = metrics.horizontalAdvance("  ")
+        exponent = math.floor(math.log10(span)) - 3
+        while True:
+            for mantissa in (1, 2, 5):
+                spacing = mantissa * 10.0 ** exponent
+                values = np.arange(math.ceil(low / spacing), math.floor(high / spacing) + 1) * spacing
+                widest = max((metrics.horizontalAdvance(text) for text in self.tickStrings(values, 1.0, spacing)),
+                             default=0.0)
+                if spacing / span * size >= widest + gap or len(values) <= 1:
+                    minor = spacing / (2 if mantissa == 5 else 5 if mantissa == 1 else 2)
+                    return [(spacing, 0.0), (minor, 0.0)]
+            exponent += 1
+
+
 class LivePlots(QtWidgets.QWidget):
     """Three plots in one graphics view: in a window composed with OpenGL, every widget that
     repaints costs a share of the frame, so the plots are one widget, not three."""
@@ -136,7 +166,7 @@ class LivePlots(QtWidgets.QWidget):
         self.graphics.setBackground("w")
         self.graphics.scene().sigMouseMoved.connect(self._hovered)
         layout.addWidget(self.graphics)
-        self.setMinimumSize(3 * 150, 150)   # three side by side in a 1024-pixel window
+        self.setMinimumSize(3 * 150, 120)   # three side by side in a 1024-pixel window
         self.curves = {}
         self.plots: list[pg.PlotItem] = []
         self.cursors = []
@@ -145,7 +175,8 @@ class LivePlots(QtWidgets.QWidget):
             ("orthogonality", "‖RᵀR − I‖", "", True),
             ("force", "Normal force F·N", "N", False),
         ):
-            plot = self.graphics.addPlot(row=0, col=len(self.plots), axisItems={"left": DecadeAxis()} if log else None)
+            axes = {"left": DecadeAxis(), "bottom": TimeAxis()} if log else {"bottom": TimeAxis()}
+            plot = self.graphics.addPlot(row=0, col=len(self.plots), axisItems=axes)
             plot.setObjectName(f"plot.{name}")
             plot.setProperty("plotTitle", title)
             plot.setTitle(title, size=f"{TITLE_POINTS}pt", color="#333")

@@ -113,7 +113,7 @@ class RunCommands:
             note = f"Running adaptive steps to t = {scene.duration:g} s"
         else:
             every = simulation.record_every
-            note = (f"Running {simulation.n_steps:,} steps"
+            note = (f"Running to t = {scene.duration:g} s in steps of {simulation.dt:g} s"
                     + (f" (recording every {every}th step)" if every > 1 else ""))
         w.plots.set_duration(scene.duration)
         w.timeline.set_span(simulation.t_end)

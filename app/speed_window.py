@@ -78,6 +78,7 @@ class SpeedWindow(QtWidgets.QWidget):
         self.cancel_button.clicked.connect(self.cancel)
         self.progress = QtWidgets.QProgressBar(objectName="progress", minimum=0, maximum=1)
         self.status = QtWidgets.QLabel(objectName="status")
+        self.status.setWordWrap(True)   # a long result takes a second line rather than widen the window past the screen
         self.export_button = QtWidgets.QPushButton("Export…", objectName="export", enabled=False)
         self.export_button.setToolTip(f"compare.json, compare.md, compare.png (as rollball compare "
                                       f"--out writes them) and {CSV_NAME}, into a folder")

@@ -39,6 +39,7 @@ from .timeline import TimeSlider
 from .view3d import SceneView
 from .worker import finish_all
 
+SLIDER_WIDTH = 240   # pixels of the time slider, at least, whatever the text beside it
 SPEEDS = (("0.1×", 0.1), ("0.25×", 0.25), ("0.5×", 0.5), ("Real time", 1.0), ("2×", 2.0),
           ("5×", 5.0), ("10×", 10.0), ("As fast as computed", math.inf))
 
@@ -78,7 +79,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._build_status()
         self.compare = CompareMode(self)
         self.presentation = Presentation(self)
-        self.presentation.add_actions([self.scene_panel_action, self.presentation_action])
+        self.presentation.add_actions([self.scene_panel_action, self.plots_action, self.presentation_action])
         self.modes = Modes(self)
         self._wire()
         self.preferences.restore(self)
@@ -99,6 +100,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.timeline.seeked.connect(runs.seek)
         self.undo_stack.cleanChanged.connect(lambda _clean: runs.update_controls())
         self.compare.panel.followChanged.connect(lambda _i: drawing.follow(self.follow_action.isChecked()))
+        self.readouts.runsChanged.connect(self.presentation.fit_readouts)   # a row per run: their size again
         self.view.installEventFilter(self)   # keeps the close-up in the view's corner
         # the close-up out of the axes' way, after the paint that moved them
         self.view.axesPlaced.connect(drawing.place_closeup, QtCore.Qt.ConnectionType.QueuedConnection)
@@ -110,7 +112,7 @@ class MainWindow(QtWidgets.QMainWindow):
         scroll = QtWidgets.QScrollArea(widgetResizable=True)
         scroll.setWidget(self.panel)
         scroll.setMinimumWidth(340)
-        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)   # large text: all of a row in reach
         self.scene_dock = dock = QtWidgets.QDockWidget("Scene", self, objectName="sceneDock")
         dock.setWidget(scroll)
         dock.setFeatures(QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetMovable
@@ -123,6 +125,10 @@ class MainWindow(QtWidgets.QMainWindow):
         v.setContentsMargins(0, 0, 0, 0)
         v.addWidget(self.view, 1)
         v.addWidget(self.timeline)
+        # the events' links beside the slider give way (cut at the right) rather than widen the window
+        # or squeeze the slider (large text in presentation left it a handle's width)
+        self.timeline.events.setMinimumWidth(1)
+        self.timeline.slider.setMinimumWidth(SLIDER_WIDTH)
         v.addWidget(self.readouts)
         splitter.addWidget(top)
         self.bottom = QtWidgets.QStackedWidget()   # the live plots, or compare mode's error plots
@@ -196,6 +202,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.reset_layout_action = self._action("Reset &Layout", lambda: self.modes.reset_layout(), None,
                                                 "The panels where they were at first, the window at its "
                                                 "default size", name="reset_layout")
+        self.plots_action = self._action("&Plots", lambda _on: self.modes.choose_folds(), "P",
+                                         "Show the plots, or fold them away for a larger 3-D view", checkable=True)
+        self.readouts_action = self._action("Rea&douts", lambda _on: self.modes.choose_folds(), None,
+                                            "Show the readouts, or fold them away for a larger 3-D view",
+                                            checkable=True)
+        for shown in (self.plots_action, self.readouts_action):
+            with QtCore.QSignalBlocker(shown):
+                shown.setChecked(True)
         self.leave_action.setEnabled(False)
         self.closeup_action = self._action("&Close-up", lambda on: self.modes.choose_closeup(on), "Z",
                                            "A close-up following the ball in the corner of the view",
@@ -288,7 +302,8 @@ class MainWindow(QtWidgets.QMainWindow):
         view.addActions([self.follow_action, self.trail_action, self.mark_action, self.future_action,
                          self.camera_action])
         view.addSeparator()
-        view.addActions([self.scene_panel_action, self.reset_layout_action])
+        view.addActions([self.scene_panel_action, self.plots_action, self.readouts_action,
+                         self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")
         analysis.addActions([self.speed_error_action, self.sweep_action])
         help_menu = bar.addMenu("&Help")
@@ -419,6 +434,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _set_text_size(self, scale: float, remember: bool = False) -> None:
         self.presentation.set_preferred(scale)
+        if self.modes.presentation:
+            self.modes.apply()   # what the 3-D view's share of the screen leaves room for, at this size
         for action in self.text_size_group.actions():
             action.setChecked(action.data() == scale)
         if remember:

@@ -497,7 +497,9 @@ class Simulation:
             return describe(failure, self.scene.ball.radius)
         if status is Status.OK:
             rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
-            return f"reached t = {self.t_end:g} s in {self.steps} steps{rejected}"
+            flew = any(change.kind == "landing" for change in self.transitions)
+            where = " on the surface (a flight is exact: no steps)" if flew else ""
+            return f"reached t = {self.t_end:g} s in {self.steps} steps{where}{rejected}"
         if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"
         if status is Status.ROW_LIMIT:
@@ -524,7 +526,8 @@ class Simulation:
         }
         if self.segmented:
             c = scene.contact
-            provenance["contact"] = (f"friction {c.friction!r}, restitution {c.restitution!r}, "
+            friction = "none (it always rolls)" if c.friction is None else repr(c.friction)
+            provenance["contact"] = (f"friction {friction}, restitution {c.restitution!r}, "
                                      f"after_liftoff {c.after_liftoff}")
         # rows are only ever appended: the trajectory can share them instead of copying
         return Trajectory(self.rows, status=status, message=message,

@@ -121,3 +121,13 @@ def test_the_command_line_to_standard_output_follows_the_scene(tmp_path, capsys)
     lines = [line for line in capsys.readouterr().out.splitlines() if not line.startswith("#")]
     assert lines[0] == ",".join(OLD_COLUMNS + MODE_COLUMNS)
     assert {line.split(",")[24] for line in lines[1:]} <= set(MODES)
+
+
+def test_the_header_names_a_missing_friction_in_words(scene_factory, tmp_path):
+    """A scene that flies but always rolls on the surface (friction null) says so, not "None"."""
+    traj = simulate(scene_factory("0.5*sin(x)*cos(y)", x=0.3, vx=1.0,
+                                  contact=Contact(friction=None, restitution=0.4, after_liftoff="fly")), t_end=0.1)
+    path = tmp_path / "flies.csv"
+    traj.to_csv(path)
+    contact = next(line for line in path.read_text(encoding="utf-8").splitlines() if "restitution" in line)
+    assert "friction none (it always rolls), restitution 0.4" in contact and "None" not in contact

@@ -78,8 +78,8 @@ def outside(window: MainWindow) -> list[str]:
         widgets += window.presentation.bar.findChildren(QtWidgets.QToolButton)
     if window.compare.dock.isVisible():
         widgets += [window.compare.panel.compare_button, window.compare.panel.add_button]
-    plots = window.bottom.currentWidget()
-    widgets.append(plots)
+    if window.bottom.isVisible():   # (presentation folds them where the 3-D view would be too low)
+        widgets.append(window.bottom.currentWidget())
     for widget in widgets:
         corner = widget.mapTo(window, QtCore.QPoint(0, 0))
         if not (widget.isVisible() and window.rect().contains(QtCore.QRect(corner, widget.size()))):
@@ -97,7 +97,7 @@ def state(window: MainWindow) -> dict:
             "compare": window.compare.active, "scene_panel": window.scene_dock.isVisible(),
             "compare_panel": window.compare.dock.isVisible(), "outside": outside(window),
             "minimum": [window.minimumSizeHint().width(), window.minimumSizeHint().height()],
-            "view_height": window.view.height(), "plots_height": window.bottom.height()}
+            "view_height": window.view.height(), "plots_height": window.bottom.height() if window.bottom.isVisible() else 0}
 
 
 def main() -> None:
