@@ -27,8 +27,8 @@ FORCE_ZERO = 1e-12     # times m·g: a normal force this small is shown as 0 (th
 # titles that change where the contact quantities are shown: shorter, so all fit a 1024-pixel window
 TITLES = {False: {"drift": "(E − E₀)/E₀", "force": "Normal force F·N"},
           True: {"drift": "(E+D−E₀)/E₀", "force": "Force F·N"}}   # D: the energy dissipated
-FORMATS = {"t": "{:.4f} s", "mode": "{}", "energy": "{:.8g} J", "drift": "{:.2e}", "orth": "{:.2e}", "force": "{:.5g} N",
-           "speed": "{:.5g} m/s", "slip": "{:.3g} m/s", "dissipated": "{:.5g} J"}
+FORMATS = {"t": "{:.4f} s", "mode": "{}", "energy": "{:.8g} J", "drift": "{:.2e}", "orth": "{:.2e}",
+           "force": "{:.5g} N", "speed": "{:.5g} m/s", "slip": "{:.3g} m/s", "dissipated": "{:.5g} J"}
 WIDEST = {"t": 99.0, "mode": "sliding", "energy": -0.12345678, "drift": -1e-10, "orth": 1e-10, "force": -0.12345,
           "speed": 0.12345, "slip": 0.123, "dissipated": 0.12345}   # a value as wide as each readout usually shows
 TIPS = {"mode": "The contact's mode: rolling (no slip), sliding (slipping against friction) or flying "

@@ -97,7 +97,8 @@ def state(window: MainWindow) -> dict:
             "compare": window.compare.active, "scene_panel": window.scene_dock.isVisible(),
             "compare_panel": window.compare.dock.isVisible(), "outside": outside(window),
             "minimum": [window.minimumSizeHint().width(), window.minimumSizeHint().height()],
-            "view_height": window.view.height(), "plots_height": window.bottom.height() if window.bottom.isVisible() else 0}
+            "view_height": window.view.height(),
+            "plots_height": window.bottom.height() if window.bottom.isVisible() else 0}
 
 
 def main() -> None:

@@ -141,8 +141,8 @@ def test_time_labels_never_run_together_on_a_narrow_plot(qtbot):
             rects = sorted((rect for rect, _ in label_rects(axis)), key=lambda r: r.left())
             metrics = QtGui.QFontMetricsF(font)
             texts = [text for _, text in sorted(label_rects(axis), key=lambda rt: rt[0].left())]
-            spans = [(r.center().x() - metrics.horizontalAdvance(t) / 2, r.center().x() + metrics.horizontalAdvance(t) / 2)
-                     for r, t in zip(rects, texts)]
+            halves = [metrics.horizontalAdvance(t) / 2 for t in texts]
+            spans = [(r.center().x() - half, r.center().x() + half) for r, half in zip(rects, halves)]
             assert texts, (points, width)
             assert all(a[1] < b[0] for a, b in zip(spans, spans[1:])), (points, width, texts)
 
