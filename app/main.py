@@ -73,7 +73,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="rollball-app", description="RollBall: a ball rolling on a landscape")
+    parser = _Parser(prog="rollball-app", description="RollBall: a ball rolling, sliding and flying on a landscape")
     parser.add_argument("scene", nargs="?", help="scene file or example name to open (default: hills)")
     parser.add_argument("--compare", metavar="SPECS",
                         help="open in compare mode with these runs, e.g. euler/classic,rk4/classic,rk4")
