@@ -11,7 +11,6 @@ heights before and after a compare → presentation → leave compare → Esc se
 
 import json
 import sys
-import time
 
 from PySide6 import QtCore, QtGui, QtTest, QtWidgets
 
@@ -27,26 +26,10 @@ from rollball_app.presentation import TEXT_SIZES  # noqa: E402
 from rollball_app.window import SPEEDS, MainWindow  # noqa: E402
 from rollball import parse_runs  # noqa: E402
 from rollball.examples import EXAMPLES_DIR  # noqa: E402
+from tests.gui.probing import settle, wait_until  # noqa: E402
 
 KEY = QtCore.Qt.Key
 RUNS = "rk4/classic,rk4,dopri5"   # two RK4s: names alike but for their last words
-
-
-def settle(seconds: float = 0.5) -> None:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        app.processEvents()
-        time.sleep(0.01)
-
-
-def wait_until(condition, seconds: float = 120.0) -> bool:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        app.processEvents()
-        if condition():
-            return True
-        time.sleep(0.01)
-    return False
 
 
 def key(window: MainWindow, k, modifiers=QtCore.Qt.KeyboardModifier.NoModifier) -> None:

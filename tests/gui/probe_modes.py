@@ -22,25 +22,9 @@ from rollball_app.controller import FINISHED  # noqa: E402
 from rollball_app.preferences import Preferences  # noqa: E402
 from rollball_app.window import SPEEDS, MainWindow  # noqa: E402
 from rollball.examples import EXAMPLES_DIR  # noqa: E402
+from tests.gui.probing import settle, wait_until  # noqa: E402
 
 KEY = QtCore.Qt.Key
-
-
-def settle(seconds: float = 0.6) -> None:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        app.processEvents()
-        time.sleep(0.01)
-
-
-def wait_until(condition, seconds: float = 60.0) -> bool:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        app.processEvents()
-        if condition():
-            return True
-        time.sleep(0.01)
-    return False
 
 
 def rect(r: QtCore.QRect) -> list[int]:

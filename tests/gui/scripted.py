@@ -130,3 +130,35 @@ class RollingSimulation(ScriptedSimulation):
     @property
     def transitions(self) -> list:
         return []
+
+
+def compare_scripted(window, tmp_path):
+    """The scripted scene opened in compare mode with two runs: one that slides and flies
+    ("flies", ``ScriptedSimulation``) and one that only rolls ("rolls"), set up in the window as
+    compare mode sets up its runs; the runs, not started."""
+    from rollball_app.controller import Run
+
+    open_scene(window, tmp_path)
+    window.compare_action.setChecked(True)
+    runs = [Run(ScriptedSimulation(), window.landscape, "flies", "#1f77b4"),
+            Run(RollingSimulation(), window.landscape, "rolls", "#2ca02c")]
+    window.view.set_runs([run.color for run in runs])
+    window.readouts.set_runs([(run.label, run.color) for run in runs])
+    return runs
+
+
+def open_scene(window, tmp_path) -> None:
+    """The scripted scene opened in the window (from a file in ``tmp_path``)."""
+    SCENE.save(tmp_path / "billiard.json")
+    window.files.open_scene(tmp_path / "billiard.json", remember=False)
+
+
+def ready_to_play(window, tmp_path) -> "ScriptedSimulation":
+    """The scripted scene opened, played as fast as computed over its time: its run, not started."""
+    from .guitools import FASTEST
+
+    open_scene(window, tmp_path)
+    simulation = ScriptedSimulation()
+    window.speed.setCurrentIndex(FASTEST)
+    window.timeline.set_span(simulation.t_end)
+    return simulation

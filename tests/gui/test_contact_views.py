@@ -11,16 +11,12 @@ from rollball.examples import EXAMPLES_DIR
 from rollball.trajectory import CENTER, FLYING, ROLLING, SLIDING
 
 from .guitools import FASTEST
-from .scripted import MU, SCENE, T1, T2, T3, TRANSITIONS, V0, RollingSimulation, ScriptedSimulation
+from .scripted import MU, SCENE, T1, T2, T3, TRANSITIONS, V0, compare_scripted, ready_to_play
 
 
 def _play(qtbot, window, tmp_path):
-    SCENE.save(tmp_path / "billiard.json")
-    window.files.open_scene(tmp_path / "billiard.json", remember=False)
-    simulation = ScriptedSimulation()
-    window.speed.setCurrentIndex(FASTEST)
+    simulation = ready_to_play(window, tmp_path)
     window.plots.set_duration(simulation.t_end)
-    window.timeline.set_span(simulation.t_end)
     events = []
     window.controller.event.connect(lambda i, kind, t: events.append((kind, t)))
     window.controller.start([Run(simulation, window.landscape)])
@@ -107,13 +103,7 @@ def test_spans_from_modes():
 def test_compare_mode_each_run_shows_its_own_transitions(qtbot, window, tmp_path):
     """One run slides and flies, the other only rolls: each trail in its own colour's shades, the
     markers of the one that has transitions named by run, nothing of the other."""
-    SCENE.save(tmp_path / "billiard.json")
-    window.files.open_scene(tmp_path / "billiard.json", remember=False)
-    window.compare_action.setChecked(True)
-    runs = [Run(ScriptedSimulation(), window.landscape, "flies", "#1f77b4"),
-            Run(RollingSimulation(), window.landscape, "rolls", "#2ca02c")]
-    window.view.set_runs([run.color for run in runs])
-    window.readouts.set_runs([(run.label, run.color) for run in runs])
+    runs = compare_scripted(window, tmp_path)
     window.readouts.show_contact(True, columns=False)
     window.timeline.set_span(1.0)
     window.speed.setCurrentIndex(FASTEST)

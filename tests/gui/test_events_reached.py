@@ -14,17 +14,13 @@ from rollball_app.timeline import Marker, merged, telling
 from rollball_app.window import MainWindow
 
 from .guitools import FASTEST
-from .scripted import SCENE, T1, T2, T3, ScriptedSimulation
+from .scripted import T1, T2, T3, ready_to_play
 
 LANDING = np.array([204, 121, 167])   # contact_view.KIND_COLORS["landing"], #cc79a7
 
 
 def _play(qtbot, window, tmp_path):
-    SCENE.save(tmp_path / "billiard.json")
-    window.files.open_scene(tmp_path / "billiard.json", remember=False)
-    simulation = ScriptedSimulation()
-    window.speed.setCurrentIndex(FASTEST)
-    window.timeline.set_span(simulation.t_end)
+    simulation = ready_to_play(window, tmp_path)
     window.controller.start([Run(simulation, window.landscape)])
     qtbot.waitUntil(lambda: window.controller.state == FINISHED, timeout=20_000)
     window.drawing.plot()
@@ -140,15 +136,9 @@ def test_ridge_jump_keeps_a_usable_slider_and_merges_its_landings(qtbot, window,
 def test_compare_mode_shows_each_runs_events_when_reached(qtbot, window, tmp_path):
     """Two runs in compare mode: the one that slides and flies has its events shown as playback
     reaches them, named by run; the one that only rolls has none."""
-    from .scripted import RollingSimulation
+    from .scripted import compare_scripted
 
-    SCENE.save(tmp_path / "billiard.json")
-    window.files.open_scene(tmp_path / "billiard.json", remember=False)
-    window.compare_action.setChecked(True)
-    runs = [Run(ScriptedSimulation(), window.landscape, "flies", "#1f77b4"),
-            Run(RollingSimulation(), window.landscape, "rolls", "#2ca02c")]
-    window.view.set_runs([run.color for run in runs])
-    window.readouts.set_runs([(run.label, run.color) for run in runs])
+    runs = compare_scripted(window, tmp_path)
     window.timeline.set_span(1.0)
     window.speed.setCurrentIndex(FASTEST)
     window.controller.start(runs)

@@ -1,11 +1,7 @@
 """The window's modes together: editing, compare, presentation, scrubbing, opening a scene, and
 a restart after each — driven through the real window's actions and keys."""
 
-import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +17,7 @@ from rollball_app.window import MainWindow
 from rollball import parse_runs
 from rollball.examples import EXAMPLES_DIR
 
+from .probing import run_probe
 from .guitools import FASTEST, apply_fields, set_field
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -230,14 +227,7 @@ def test_on_a_projector_screen_every_mode_fits_and_cycles_back(tmp_path, screen)
     and compare in presentation fit it with every control inside; F11/Esc cycles put the window
     back exactly; quitting while comparing restarts in the editing layout."""
     quick = "" if screen == "1024x768" else "quick"   # the cycles once, on the small screen
-    command = (f"openbox >/dev/null 2>&1 & sleep 1; {sys.executable} -m tests.gui.probe_modes "
-               f"{tmp_path / 'preferences.ini'} {quick}")
-    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
-    done = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {screen}x24 +extension GLX +render",
-                           "bash", "-c", command], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report = run_probe("probe_modes", screen, str(tmp_path / "preferences.ini"), quick, timeout=300)
     width, height = map(int, screen.split("x"))
     start = report["start"]
     assert not start["outside"] and start["geometry"][2] <= width and start["scene_panel"]

@@ -2,11 +2,7 @@
 compare mode; no text overlaps or is cut at any text size; the window is never larger than the
 screen; the readouts name the mode; the run's status says what was counted."""
 
-import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pyqtgraph as pg
@@ -23,6 +19,7 @@ from rollball import parse_runs
 from rollball.examples import EXAMPLES_DIR
 from rollball.trajectory import MODES
 
+from .probing import run_probe
 from .guitools import label_rects, run_to_end
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -34,14 +31,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_on_a_projector_every_text_size_and_mode_fits_and_the_view_comes_first(tmp_path, screen, scene):
     """The real app under a window manager (``probe_layout``): each text size in editing,
     presentation, compare mode and compare in presentation."""
-    command = (f"openbox >/dev/null 2>&1 & sleep 1; {sys.executable} -m tests.gui.probe_layout "
-               f"{tmp_path / 'preferences.ini'} {scene}")
-    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
-    done = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {screen}x24 +extension GLX +render",
-                           "bash", "-c", command], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=400)
-    assert done.returncode == 0, done.stderr[-3000:]
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report = run_probe("probe_layout", screen, str(tmp_path / "preferences.ini"), scene, timeout=400)
     width, height = map(int, screen.split("x"))
     states = report["states"]
     assert len(states) == 16   # four text sizes × editing, presentation × one run, compare
