@@ -23,7 +23,6 @@ PREVIEW_BYTES = 4096       # read at most this much for them
 MAPPINGS = (("As the header names them: t and x, y, z", None),
             ("Side view: the file's x, y are the scene's x, z (height)", {"x": "x", "z": "y"}))
 POINTS = (("The ball's centre", "center"), ("Its contact point (on the surface)", "contact"))
-FROM_HEADER = "as the header says, else "   # a unit used where the header names none
 
 
 @dataclass(frozen=True)
@@ -58,8 +57,11 @@ class TrackImportDialog(QtWidgets.QDialog):
         preview.setLineWrapMode(QtWidgets.QPlainTextEdit.LineWrapMode.NoWrap)
         preview.setMaximumHeight(preview.fontMetrics().lineSpacing() * (PREVIEW_LINES + 2))
         self.mapping = self._combo("mapping", MAPPINGS)
-        self.length_unit = self._combo("lengthUnit", [(FROM_HEADER + u, u) for u in LENGTH_UNITS])
-        self.time_unit = self._combo("timeUnit", [(FROM_HEADER + u, u) for u in TIME_UNITS])
+        self.length_unit = self._combo("lengthUnit", [(u, u) for u in LENGTH_UNITS])
+        self.time_unit = self._combo("timeUnit", [(u, u) for u in TIME_UNITS])
+        for combo in (self.length_unit, self.time_unit):
+            combo.setToolTip("The unit of the columns whose header names none (x, not x (cm)); a header "
+                             "naming another unit than one chosen here is refused")
         self.point = self._combo("point", POINTS)
         self.mapping.setToolTip("Positions are in the scene's frame; a camera looking at the ball from the "
                                 "side calls the scene's height y")
@@ -67,8 +69,8 @@ class TrackImportDialog(QtWidgets.QDialog):
                               "point where it touches the surface")
         form = QtWidgets.QFormLayout()
         form.addRow("Columns", self.mapping)
-        form.addRow("Lengths", self.length_unit)
-        form.addRow("Times", self.time_unit)
+        form.addRow("Lengths without a unit", self.length_unit)
+        form.addRow("Times without a unit", self.time_unit)
         form.addRow("Tracked", self.point)
         note = QtWidgets.QLabel(f"CSV or TSV with a header naming t and two or three of x, y, z, units as "
                                 f"x (cm); Tracker's export too; at most {MAX_BYTES // 1_000_000} MB.",

@@ -26,12 +26,14 @@ def billiard(window):
     return window
 
 
-def _choose(monkeypatch, path, mapping=0):
-    """The file dialog answers ``path``; the import dialog is answered with the mapping at that index."""
+def _choose(monkeypatch, path, mapping=0, length="m"):
+    """The file dialog answers ``path``; the import dialog is answered with the mapping at that index
+    and the length unit ``length``."""
     monkeypatch.setattr(QtWidgets.QFileDialog, "getOpenFileName", lambda *a, **k: (str(path), ""))
 
     def answer(dialog):
         dialog.mapping.setCurrentIndex(mapping)
+        dialog.length_unit.setCurrentIndex(dialog.length_unit.findData(length))
         return QtWidgets.QDialog.DialogCode.Accepted
 
     monkeypatch.setattr(TrackImportDialog, "exec", answer)
@@ -83,6 +85,15 @@ def test_a_side_view_in_centimetres_is_drawn_as_measured(qtbot, billiard, monkey
     assert track.axes == ("x", "z")
     y = billiard.scene.start.y
     np.testing.assert_allclose(billiard.measured.seen.pos, [[0.1, y, 0.05], [0.2, y, 0.06], [0.3, y, 0.07]])
+
+
+def test_the_unit_chosen_applies_where_the_header_names_none(qtbot, billiard, monkeypatch, tmp_path):
+    path = tmp_path / "top.csv"
+    path.write_text("t,x,y,z\n0.0,10,5,10\n0.1,20,6,10\n")
+    _choose(monkeypatch, path, length="cm")
+    assert billiard.measured.import_dialog()
+    np.testing.assert_allclose(billiard.measured.track.positions, [[0.1, 0.05, 0.1], [0.2, 0.06, 0.1]])
+    np.testing.assert_allclose(billiard.measured.seen.pos, billiard.measured.track.positions)   # z as measured
 
 
 def test_a_bad_track_file_is_refused_in_one_line_and_the_track_shown_stays(qtbot, billiard, dialogs, tmp_path):
