@@ -75,13 +75,11 @@ class FitDialog(QtWidgets.QDialog):
                                    f"from t = {track.t[0]:.4g} to {track.t[-1]:.4g} s, of the ball's {what}. "
                                    f"Tick the values to fit; blank bounds are the value's valid range.",
                                    wordWrap=True)
-        self.keys = fit_keys(scene)
-        self.table = QtWidgets.QTableWidget(len(self.keys), len(HEADERS), objectName="values")
+        self.keys: list[str] = []
+        self.table = QtWidgets.QTableWidget(0, len(HEADERS), objectName="values")
         self.table.setHorizontalHeaderLabels(HEADERS)
         self.table.verticalHeader().hide()
         self.bounds: dict[str, tuple[QtWidgets.QLineEdit, QtWidgets.QLineEdit]] = {}
-        for row, key in enumerate(self.keys):
-            self._add_row(row, key)
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         header.setSectionResizeMode(KEY, QtWidgets.QHeaderView.ResizeMode.Stretch)
@@ -134,6 +132,34 @@ class FitDialog(QtWidgets.QDialog):
         layout.addWidget(self.plot, 2)
         layout.addLayout(bottom)
         self.resize(720, 680)
+        self._fill()
+
+    def set_scene(self, scene: Scene) -> None:
+        """The scene shown in the main window changed: the next fit starts from it (the rows keep
+        their boxes and bounds; a fit under way goes on from the scene it started from)."""
+        if scene != self.scene:
+            self.scene = scene
+            self._fill()
+
+    def _fill(self) -> None:
+        """One row per value the scene offers, with the scene's value; what was ticked or typed stays."""
+        ticked = set(self.checked())
+        typed = {key: (lo.text(), hi.text()) for key, (lo, hi) in self.bounds.items()}
+        estimates = {key: (self.table.item(row, ESTIMATE).text(), self.table.item(row, ERROR).text())
+                     for row, key in enumerate(self.keys)}
+        self.table.blockSignals(True)
+        self.keys, self.bounds = fit_keys(self.scene), {}
+        self.table.setRowCount(len(self.keys))
+        for row, key in enumerate(self.keys):
+            self._add_row(row, key)
+            item = self.table.item(row, CHECK)
+            if key in ticked and item.flags() & QtCore.Qt.ItemFlag.ItemIsEnabled:
+                item.setCheckState(QtCore.Qt.CheckState.Checked)
+            for edit, text in zip(self.bounds[key], typed.get(key, ("", ""))):
+                edit.setText(text)
+            for column, text in zip((ESTIMATE, ERROR), estimates.get(key, ("", ""))):
+                self.table.item(row, column).setText(text)
+        self.table.blockSignals(False)
         self._update_buttons()
 
     def _add_row(self, row: int, key: str) -> None:
@@ -258,6 +284,8 @@ class FitDialog(QtWidgets.QDialog):
     def _finished(self, result: Fit) -> None:
         self.result = result
         for key, value, error in zip(result.keys, result.values, result.errors):
+            if key not in self.keys:
+                continue   # a parameter the scene has lost while the fit ran
             row = self.keys.index(key)
             self.table.item(row, ESTIMATE).setText(f"{value:.6g}")
             self.table.item(row, ERROR).setText(f"{error:.2g}" if math.isfinite(error) else "not determined")

@@ -189,6 +189,8 @@ class MeasuredTrack(QtCore.QObject):
         if self.track is None or scene is None:
             return
         self._points, self.residuals = self.points_3d(scene), None
+        for dialog in self.window.findChildren(FitDialog):
+            dialog.set_scene(scene)   # the next fit starts from the scene shown
         self.show_time()
         self.label.setText("Track: comparing…")
         self.label.setToolTip("")

@@ -141,8 +141,11 @@ def test_a_fit_finds_the_track_values_and_apply_is_one_undoable_change(qtbot, bi
     assert "Fitted to the track billiard_track.csv" in w.scene.description
     assert w.undo_action.text() == "&Undo Apply Fit to Track"
     qtbot.waitUntil(lambda: w.measured.residuals is not None and w.measured.residuals.explained, timeout=30_000)
+    row = dialog.keys.index("start.vx")
+    assert float(dialog.table.item(row, 2).text()) == estimates["start.vx"]   # the next fit starts there
     w.undo_action.trigger()                                  # one step puts every old value back
     assert w.scene == before
+    assert dialog.table.item(row, 2).text() == "2.0" and dialog.checked() == ["start.vx", "contact.friction"]
     assert w.panel.numbers["start.vx"].text() == "2.0"
     dialog.close()
 
@@ -174,7 +177,12 @@ def test_cancel_stops_a_fit(qtbot, billiard, monkeypatch):
     assert dialog.status.text().startswith(f"Cancelled after {dialog.runs} runs")
     assert dialog.runs < 10   # a fit of two values takes more than that
     assert w.scene == before and dialog.fit_button.isEnabled()
+
+    qtbot.mouseClick(dialog.fit_button, QtCore.Qt.MouseButton.LeftButton)   # again, then closed meanwhile
+    worker = dialog.thread
+    qtbot.waitUntil(lambda: dialog.runs >= 1, timeout=30_000)
     dialog.close()
+    assert not worker.is_running() and w.scene == before
 
 
 def test_a_value_the_scene_cannot_start_from_is_offered_but_not_tickable(qtbot, window):
