@@ -12,6 +12,7 @@ estimates into the scene as one undoable change (``applied``).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
@@ -69,7 +70,7 @@ class FitDialog(QtWidgets.QDialog):
         self.result: Fit | None = None
         self.thread: Worker | None = None
         self.runs = 0
-        name = track.source.rsplit("/", 1)[-1] or "the track"
+        name = Path(track.source).name or "the track"
         what = "centre" if point == "center" else "contact point"
         heading = QtWidgets.QLabel(f"Fit the scene to {name}: {len(track)} positions ({', '.join(track.axes)}) "
                                    f"from t = {track.t[0]:.4g} to {track.t[-1]:.4g} s, of the ball's {what}. "

@@ -26,7 +26,6 @@ from OpenGL import GL
 from PySide6 import QtCore, QtWidgets
 
 from rollball import Fit, Scene, Track
-from rollball.examples import EXAMPLES_DIR
 from rollball.sweeps.grid import with_values
 from rollball.text import shown
 from rollball.track import TrackError
@@ -104,11 +103,8 @@ class MeasuredTrack(QtCore.QObject):
     def import_dialog(self) -> bool:
         """File → Import Measured Track…: a file, then how to read it; False if none was imported."""
         w = self.window
-        folder = w.preferences.last_folder() if self.track is None or not self.track.source else \
-            str(Path(self.track.source).parent)
-        if not Path(folder).is_dir():
-            folder = str(EXAMPLES_DIR)
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(w, "Import measured track", folder, TRACK_FILTER)
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(w, "Import measured track", w.preferences.last_folder(),
+                                                        TRACK_FILTER)
         if not path:
             return False
         dialog = TrackImportDialog(Path(path), w)
@@ -132,6 +128,7 @@ class MeasuredTrack(QtCore.QObject):
             return False
         self.track, self.point, self.residuals = track, reading.point, None
         self._announce = True
+        w.preferences.set_last_folder(path)
         self.close_action.setEnabled(True)
         skipped = f"; {track.skipped} frames without a position skipped" if track.skipped else ""
         w.show_message(f"Imported {path.name}: {len(track)} positions ({', '.join(track.axes)}) from "
