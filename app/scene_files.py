@@ -146,6 +146,7 @@ class SceneFiles:
             w.view.refresh_axes()   # new heights (a slider): the camera stays
         w.session.shown = scene
         w.compare.scene_changed(scene)
+        w.measured.scene_changed(scene)
         self.update_title()
         return notes
 

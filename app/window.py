@@ -36,6 +36,7 @@ from .speed_window import SpeedWindow
 from .start_editing import StartEditing
 from .sweep_dialog import SweepDialog
 from .timeline import TimeSlider
+from .track_view import MeasuredTrack
 from .view3d import SceneView
 from .worker import finish_all
 
@@ -72,6 +73,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.speed_window: SpeedWindow | None = None   # made when first asked for
         self.start_editing = StartEditing(self.view, self.panel, self)   # the preview; the start dragged
         self.help_window: helps.HelpWindow | None = None
+        self.measured = MeasuredTrack(self)    # File → Import Measured Track…, Analysis → Fit to Track…
         self._build_layout()
         self._build_actions()
         self._build_menus()
@@ -278,6 +280,8 @@ class MainWindow(QtWidgets.QMainWindow):
         files.addSeparator()
         files.addActions([self.export_action, self.image_action, self.animation_action])
         files.addSeparator()
+        files.addActions([self.measured.import_action, self.measured.close_action])
+        files.addSeparator()
         files.addAction(self.quit_action)
         edit = bar.addMenu("&Edit")
         edit.addActions([self.undo_action, self.redo_action])
@@ -306,7 +310,7 @@ class MainWindow(QtWidgets.QMainWindow):
         view.addActions([self.scene_panel_action, self.plots_action, self.readouts_action,
                          self.reset_layout_action])
         analysis = bar.addMenu("&Analysis")
-        analysis.addActions([self.speed_error_action, self.sweep_action])
+        analysis.addActions([self.speed_error_action, self.sweep_action, self.measured.fit_action])
         help_menu = bar.addMenu("&Help")
         help_menu.addActions([self.model_help_action, self.plots_help_action, self.compare_help_action,
                               self.keys_help_action,

@@ -19,7 +19,7 @@ from pathlib import Path
 # once; each command imports the simulation, sympy, numba or scipy it runs on (a test holds this).
 from . import __version__
 from .examples import EXAMPLES_DIR, example_scenes, scene_path, track_path
-from .files import write_target
+from .files import replace_together, write_target
 from .fit_options import LENGTH_UNITS, LOSSES, NOT_FITTED, POINTS, TIME_UNITS
 from .kinds import KINDS, MethodKind, method_name
 from .sweeps.options import CONNECT_TIMEOUT as SWEEP_CONNECT_TIMEOUT
@@ -29,6 +29,7 @@ from .text import shown
 
 EXIT_OK, EXIT_STOPPED, EXIT_BAD_INPUT, EXIT_BROKEN_PIPE = 0, 1, 2, 141
 STDOUT = "-"
+FIT_KEPT_NAME = "fit-unsaved"   # where a fit's files that could not replace the old ones are kept
 
 
 class _Parser(argparse.ArgumentParser):
@@ -446,6 +447,9 @@ def _measured(args, outputs):
     named = [path for path in outputs if path]
     if len(set(map(os.path.abspath, named))) < len(named):
         return _fail(f"the outputs must be different files: {', '.join(map(shown, named))}")
+    if len({os.path.dirname(os.path.abspath(path)) for path in named}) > 1:   # replaced together: one folder
+        return _fail(f"the outputs must be in one folder (they are replaced together or not at all): "
+                     f"{', '.join(map(shown, named))}")
     for path in named:
         try:  # before the runs: a refused target must not cost them
             write_target(path, keep=[scene_path(args.scene), track_path(args.track)])
@@ -518,21 +522,24 @@ def _fit(args) -> int:
     print(_heading(args, track))
     for line in result.lines():
         print(line)
-    written = []
+    files = {}
     if args.out:
-        try:
-            result.scene.save(args.out)
-        except OSError as e:
-            return _fail(f"cannot write {shown(args.out)}: {e.strerror or e}")
-        written.append(shown(args.out))
-    failed = _write_plot(args, result.residuals, f"{shown(args.track)} against {shown(args.scene)} fitted "
-                                                 f"({', '.join(keys)})")
-    if failed is not None:
-        return failed
+        files[args.out] = result.scene.dumps()
     if args.plot:
-        written.append(shown(args.plot))
-    if written:
-        print(f"wrote {', '.join(written)}")
+        from .residual_plot import figure_png
+
+        files[args.plot] = figure_png(result.residuals, f"{shown(args.track)} against {shown(args.scene)} "
+                                                        f"fitted ({', '.join(keys)})")
+        if files[args.plot] is None:
+            return _fail("cannot draw the residuals: matplotlib is not installed; nothing was written")
+    if files:
+        folder = Path(next(iter(files))).parent
+        try:  # the fitted scene and its residuals: both replaced, or neither
+            replace_together(folder, {Path(path).name: content for path, content in files.items()},
+                             keep=[scene_path(args.scene), track_path(args.track)], kept_name=FIT_KEPT_NAME)
+        except OSError as e:
+            return _fail(f"cannot write {shown(e.filename or folder)}: {e.strerror or e}")
+        print(f"wrote {', '.join(shown(path) for path in files)}")
     return EXIT_OK if result.converged else EXIT_STOPPED
 
 

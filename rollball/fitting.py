@@ -15,11 +15,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from .comparison import Cancelled
 from .fit_options import LOSSES, NOT_FITTED
 from .scene import Scene, SceneError
 from .sweeps.grid import PARAMETER_PREFIX, check_keys, unit, value_of, with_values
@@ -145,7 +148,8 @@ def _bounds(scene: Scene, keys, given: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fit(scene: Scene, track: Track, keys, *, bounds: dict | None = None, loss: str = "linear",
-        point: str = "center", noise: float | None = None) -> Fit:
+        point: str = "center", noise: float | None = None, progress: Callable[[int], None] | None = None,
+        cancel: threading.Event | None = None) -> Fit:
     """Fit the scene values named by ``keys`` (dotted, as a sweep varies them) to ``track``.
 
     The scene's values are the starting point. ``bounds``: key -> (lo, hi) (by default a value's
@@ -153,7 +157,9 @@ def fit(scene: Scene, track: Track, keys, *, bounds: dict | None = None, loss: s
     (least squares) or one of scipy's robust losses, scaled by the noise, which count far-off
     positions (a frame that tracked the wrong thing) less; ``point``: the track follows the ball's
     "center" or its "contact" point; ``noise``: one coordinate's noise (m), else estimated from
-    the track. Raises ``FitError`` (or ``SceneError``) with one line.
+    the track. ``progress(runs)`` is called after each run (the runs made so far); ``cancel``, when
+    set, stops the fit before its next run with ``Cancelled`` (nothing is returned). Raises
+    ``FitError`` (or ``SceneError``) with one line.
     """
     if loss not in LOSSES:
         raise FitError(f"unknown loss {loss!r}; the losses: {', '.join(LOSSES)}")
@@ -171,6 +177,8 @@ def fit(scene: Scene, track: Track, keys, *, bounds: dict | None = None, loss: s
 
     def difference(x):
         nonlocal runs
+        if cancel is not None and cancel.is_set():
+            raise Cancelled
         runs += 1
         try:
             trial = with_values(scene, keys, x)
@@ -178,6 +186,8 @@ def fit(scene: Scene, track: Track, keys, *, bounds: dict | None = None, loss: s
             raise FitError(f"the fit tried {_values(keys, x)}, which the scene refuses ({e}); "
                            f"bound it with --bounds") from None
         traj = run_for(trial, track)
+        if progress is not None:
+            progress(runs)
         return (model_at(traj, trial, track, point) - track.positions).ravel()
 
     result = least_squares(difference, x0, bounds=(lo, hi), method="trf", loss=loss, f_scale=scale,

@@ -99,3 +99,35 @@ def test_outputs_are_checked_before_the_fit(tmp_path, capsys):
     folder.mkdir()
     assert main(["fit", str(scene), TRACK, "--fit", "contact.friction", "--plot", str(folder)]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+def test_the_fitted_scene_and_the_plot_are_replaced_together_or_not_at_all(tmp_path, capsys, monkeypatch):
+    """The plot's rename fails: the old fitted scene stays too (the two are one set of outputs)."""
+    import os
+
+    out, plot = tmp_path / "fitted.json", tmp_path / "residuals.png"
+    out.write_text("old scene")
+    plot.write_bytes(b"old png")
+    real = os.replace
+
+    def failing(src, dst):
+        if str(dst).endswith("residuals.png"):
+            raise OSError(28, "No space left on device", str(dst))
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    assert main(["fit", "billiard", TRACK, "--fit", "contact.friction", "--out", str(out), "--plot", str(plot)]) == 2
+    monkeypatch.setattr(os, "replace", real)
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "none of fitted.json, residuals.png was replaced" in err
+    assert out.read_text() == "old scene" and plot.read_bytes() == b"old png"
+    kept = [p for p in tmp_path.iterdir() if p.name.startswith("fit-unsaved-")]
+    assert len(kept) == 1 and sorted(os.listdir(kept[0])) == ["fitted.json", "residuals.png"]
+    assert Scene.load(kept[0] / "fitted.json").contact.friction != Scene.load(EXAMPLES_DIR / "billiard.json").contact.friction
+
+
+def test_the_outputs_must_share_a_folder(tmp_path, capsys):
+    (tmp_path / "a").mkdir()
+    assert main(["fit", "billiard", TRACK, "--fit", "contact.friction", "--out", str(tmp_path / "a" / "f.json"),
+                 "--plot", str(tmp_path / "r.png")]) == 2
+    assert "in one folder" in capsys.readouterr().err

@@ -120,3 +120,26 @@ def test_three_values_fitted_to_a_5_s_track_of_300_points_in_2_s_of_cpu():
     result = fit(begin, track, ["start.vx", "start.vy", "parameters.a"])
     assert cpu() - before < 2.0
     assert result.converged and np.all(np.abs(result.values - [0.2, 0.0, 0.5]) < 3 * result.errors)
+
+
+def test_a_fit_says_its_runs_as_it_goes_and_stops_when_cancelled():
+    import threading
+
+    from rollball.comparison import Cancelled
+
+    track = Track.load(EXAMPLES_DIR / "billiard_track.csv")
+    scene = Scene.load(EXAMPLES_DIR / "billiard.json")
+    said = []
+    result = fit(scene, track, ["contact.friction"], progress=said.append)
+    assert said == list(range(1, result.runs + 1))
+    cancel = threading.Event()
+
+    def third(runs):
+        said.append(runs)
+        if runs == 3:
+            cancel.set()
+
+    said.clear()
+    with pytest.raises(Cancelled):
+        fit(scene, track, ["contact.friction", "start.vx"], progress=third, cancel=cancel)
+    assert said == [1, 2, 3]   # no run after the cancel
