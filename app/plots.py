@@ -13,7 +13,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from rollball.trajectory import FLYING, NORMAL_FORCE
+from rollball.trajectory import CENTER, CONTACT, FLYING, NORMAL_FORCE
 
 from .contact_view import ModeSpans
 from .help import TOPIC
@@ -28,6 +28,10 @@ LABEL_PITCH = 1.6   # labels on a log axis at least this many text heights apart
 DECADE_STEPS = (1, 2, 3, 5, 10, 20, 50)   # decades from one label to the next, smallest that fits
 MINOR_PIXELS = 40   # a decade at least this long shows minor ticks at 2·10ⁿ … 9·10ⁿ
 SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+# A measured track's coordinates against time (``LivePlots.set_track``): its points as dots, the
+# run's same coordinate as a line, each axis in its colour (Okabe–Ito: vermillion, blue, green)
+TRACK_TITLE = "Track {} (m)"   # the axes measured; dots: the track, lines: the run (short: four plots share a row)
+AXIS_COLORS = {"x": "#d55e00", "y": "#0072b2", "z": "#009e73"}
 
 
 def power_of_ten(exponent: float) -> str:
@@ -204,6 +208,8 @@ class LivePlots(QtWidgets.QWidget):
         self.mode_spans = ModeSpans(self.plots[2])
         self.scale = 1.0
         self.landings: list[float] = []   # the times of the shown run's landings (set with its transitions)
+        self.track = None                 # (track, point) shown in a fourth plot (``set_track``)
+        self.track_plot: pg.PlotItem | None = None
         self.show_run(None, 0)
 
     def _hovered(self, pos: QtCore.QPointF) -> None:
@@ -247,9 +253,62 @@ class LivePlots(QtWidgets.QWidget):
         for plot in self.plots:
             plot.setXRange(0.0, t_end, padding=0.02)
 
+    def set_track(self, track, point: str = "center") -> None:
+        """A fourth plot of the measured ``track``'s coordinates against time, its points as dots
+        and the run's ``point`` ("center" or "contact") as lines beside them, with the playback
+        cursor (None: the plot goes)."""
+        if self.track_plot is not None:
+            self.graphics.removeItem(self.track_plot)
+            self.cursors.remove(self.track_cursor)
+            self.plots.remove(self.track_plot)
+            self.track_plot = None
+        self.track = None if track is None else (track, point)
+        if track is None:
+            return
+        plot = self.graphics.addPlot(row=0, col=3, axisItems={"bottom": TimeAxis()})
+        plot.setObjectName("plot.track")
+        title = TRACK_TITLE.format(", ".join(track.axes))
+        plot.setProperty("plotTitle", title)
+        plot.setTitle(title, size=f"{TITLE_POINTS * self.scale:g}pt", color="#333")
+        plot.setLabel("bottom", "t", units="s")
+        plot.showGrid(x=True, y=True, alpha=0.25)
+        plot.setMouseEnabled(x=False, y=False)
+        cache_axes(plot)
+        self.track_cursor = pg.InfiniteLine(pos=0.0, angle=90, pen=pg.mkPen("#555", width=1))
+        self.track_cursor.setVisible(self.cursors[0].isVisible())
+        self.track_cursor.setValue(self.cursors[0].value())
+        plot.addItem(self.track_cursor, ignoreBounds=True)
+        self.track_curves = {}
+        for axis, values in zip(track.axes, track.positions.T):
+            color = AXIS_COLORS[axis]
+            plot.plot(track.t, values, pen=None, symbol="o", symbolSize=4, symbolPen=None, symbolBrush=color,
+                      name=f"track.{axis}")
+            self.track_curves[axis] = plot.plot(pen=pg.mkPen(color, width=1.5), skipFiniteCheck=True)
+        plot.setXRange(*self.plots[0].viewRange()[0], padding=0.0)
+        self.plots.append(plot)
+        self.cursors.append(self.track_cursor)
+        self.track_plot = plot   # (the four share the width the three had: the window grows no wider)
+        self.set_font_scale(self.scale)
+
+    def _show_track_run(self, buffer, picked: np.ndarray | None) -> None:
+        """The run's coordinates the track measures, at the rows ``picked`` (None: none)."""
+        if self.track_plot is None:
+            return
+        track, point = self.track
+        columns = CENTER if point == "center" else CONTACT
+        for k, axis in enumerate(("x", "y", "z")):
+            curve = self.track_curves.get(axis)
+            if curve is None:
+                continue
+            if picked is None or columns.start + k >= columns.stop:   # (no contact height in the rows)
+                curve.setData([], [])
+            else:
+                curve.setData(buffer.t[picked], buffer.rows[picked, columns.start + k])
+
     def show_run(self, buffer, index: int) -> None:
         """Plot rows 0..index of a ``RunBuffer`` (None or empty: clear)."""
         if buffer is None or len(buffer) == 0:
+            self._show_track_run(buffer, None)
             self.mode_spans.show(np.zeros(0), np.zeros(0))
             for curve in self.curves.values():
                 curve.setData([], [])
@@ -257,6 +316,7 @@ class LivePlots(QtWidgets.QWidget):
                 fit_decades(plot, np.array([FLOOR, 1.0]))
             return
         picked = thinned(index + 1)
+        self._show_track_run(buffer, picked)
         t = buffer.t[picked]
         drift = buffer.energy_error[picked]
         self.curves["energy_gain"].setData(t, np.where(drift > 0, np.maximum(drift, FLOOR), np.nan))

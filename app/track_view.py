@@ -134,6 +134,7 @@ class MeasuredTrack(QtCore.QObject):
         w.show_message(f"Imported {path.name}: {len(track)} positions ({', '.join(track.axes)}) from "
                        f"t = {track.t[0]:.4g} to {track.t[-1]:.4g} s{skipped}")
         self.scene_changed(w.scene)
+        w.plots.set_track(track, reading.point)
         self.changed.emit()
         return True
 
@@ -147,6 +148,7 @@ class MeasuredTrack(QtCore.QObject):
             item.setVisible(False)
         self.label.hide()
         self.close_action.setEnabled(False)
+        self.window.plots.set_track(None)
         self.changed.emit()
 
     # -- fitting -----------------------------------------------------------------------

@@ -71,9 +71,23 @@ def test_an_imported_track_is_drawn_on_the_surface_and_compared_with_the_scene(q
     assert 0 < up_to < 69
     assert measured.seen_count() == up_to and len(measured.ahead.pos) == 69 - up_to
 
+    # the plots: the track's x and y against time as dots, the run's centre beside them as lines,
+    # the playback cursor on the track's plot too
+    plot = w.plots.track_plot
+    assert plot is not None and plot in w.plots.plots
+    dots = {item.name(): item for item in plot.listDataItems() if item.name()}
+    for k, axis in enumerate(("x", "y")):
+        t, values = dots[f"track.{axis}"].getData()
+        np.testing.assert_array_equal(t, track.t)
+        np.testing.assert_array_equal(values, track.positions[:, k])
+        t, run = w.plots.track_curves[axis].getData()
+        assert len(t) > 10 and t[-1] == pytest.approx(w.scene.duration)   # (the computed run, as the other plots)
+    assert w.plots.track_cursor.isVisible() and w.plots.track_cursor.value() == pytest.approx(0.5, abs=0.02)
+
     w.measured.close_action.trigger()
     assert measured.track is None and not measured.seen.visible() and not measured.ahead.visible()
     assert not measured.label.isVisible() and not w.measured.close_action.isEnabled()
+    assert w.plots.track_plot is None and len(w.plots.plots) == 3
 
 
 def test_a_side_view_in_centimetres_is_drawn_as_measured(qtbot, billiard, monkeypatch, tmp_path):
@@ -151,14 +165,17 @@ def test_a_fit_finds_the_track_values_and_apply_is_one_undoable_change(qtbot, bi
 
 
 def test_cancel_stops_a_fit(qtbot, billiard, monkeypatch):
-    import time
+    import threading
 
     import rollball.fitting
 
     real = rollball.fitting.run_for
+    gate, calls = threading.Event(), []
 
-    def slow(scene, track):   # each run of the fit takes a while: there is time to cancel
-        time.sleep(0.05)
+    def slow(scene, track):   # the third run waits until Cancel was clicked: the count cannot run on
+        calls.append(scene)
+        if len(calls) > 2:
+            gate.wait(30)
         return real(scene, track)
 
     monkeypatch.setattr(rollball.fitting, "run_for", slow)
@@ -172,10 +189,11 @@ def test_cancel_stops_a_fit(qtbot, billiard, monkeypatch):
     qtbot.waitUntil(lambda: dialog.runs >= 2, timeout=30_000)
     assert dialog.cancel_button.isEnabled() and not dialog.fit_button.isEnabled()
     qtbot.mouseClick(dialog.cancel_button, QtCore.Qt.MouseButton.LeftButton)
+    gate.set()
     qtbot.waitUntil(lambda: dialog.thread is None, timeout=10_000)
     assert dialog.result is None and not dialog.apply_button.isEnabled()
     assert dialog.status.text().startswith(f"Cancelled after {dialog.runs} runs")
-    assert dialog.runs < 10   # a fit of two values takes more than that
+    assert dialog.runs <= 3   # stopped before its next run (a fit of two values takes more than that)
     assert w.scene == before and dialog.fit_button.isEnabled()
 
     qtbot.mouseClick(dialog.fit_button, QtCore.Qt.MouseButton.LeftButton)   # again, then closed meanwhile
