@@ -162,6 +162,9 @@ class TimeSlider(QtWidgets.QWidget):
         self.more = QtWidgets.QToolButton(objectName="eventsMenu")
         self.more.setPopupMode(QtWidgets.QToolButton.ToolButtonPopupMode.InstantPopup)
         self.more.setAutoRaise(True)
+        # as tall as the row the slider and the time make, no taller (a tool button's frame grew the
+        # time line by 6 px, which a 768-pixel screen in compare mode did not have)
+        self.more.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Ignored)
         self.more.setMenu(QtWidgets.QMenu(self.more))
         self.more.menu().triggered.connect(lambda action: self.seeked.emit(float(action.data())))
         self.more.hide()
