@@ -18,7 +18,7 @@ from . import kernel, sliding
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
 from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
-from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, onto_face, turn_over
+from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
 from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
                          VELOCITY, Failure, Liftoff, Reason, Status, Transition)
@@ -299,7 +299,8 @@ class ModeMachine:
             self.flight = self._new_flight(turn.state)
         else:   # on a face: rolling on from a little past the edge
             face = beyond if turn.how == END else ridge_line.near
-            on = onto_face(turn.state, face, radius=ball.radius, gravity=scene.gravity, scale=scale)
+            tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
+            on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
             foot = on.center - ball.radius * face
             state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated)
             run._start_kernel_run(state, on.t, slides=False, repeat=False)
@@ -327,7 +328,8 @@ class ModeMachine:
         moving in the tangent plane of ``normal`` as on that plane: rolling with acceleration
         (5/7) g_t and ω = N × ċ/r plus its spin about N (this keeps E exactly), sliding with
         g_t − μ g₀ N_z û (u the slip velocity) and the torque of that friction. Over the short
-        τ the surface's bending moves the centre off the plane by about κ|ċ|²τ²/2."""
+        τ the surface's bending moves the centre off the plane by about κ|ċ|²τ²/2. (Also the few
+        nanometres from a ridge's edge onto a face after a turn over it, ``ridge.past_edge``.)"""
         scene = self.run.scene
         tau = t - start.t
         r, g0 = scene.ball.radius, scene.gravity

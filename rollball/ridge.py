@@ -175,26 +175,13 @@ def _state(ridge: Ridge, y, t: float, r: float) -> FreeState:
     return FreeState(t, center, velocity, omega, u @ vt)
 
 
-def onto_face(state: FreeState, normal: np.ndarray, *, radius: float, gravity: float, scale: float) -> FreeState:
-    """The rolling state a little (NUDGE × scale) past the edge on the face of unit ``normal``,
-    from ``state`` at the edge: the ball rolls on that face's plane meanwhile (acceleration
-    (5/7) g_t, ω = N × ċ / r plus its spin about N, both kept by a plane), so that the rolling
-    run goes on off the edge line, where the face's own normal is the surface's."""
+def past_edge(state: FreeState, normal: np.ndarray, *, gravity: float, scale: float) -> float:
+    """How long the ball at ``state`` on the edge takes to roll NUDGE × scale onto the face of unit
+    ``normal`` (along that face's plane, accelerating at (5/7) g_t): the rolling run on the face
+    starts there, off the edge line, where the face's own normal is the surface's."""
     normal = np.asarray(normal, float)
     g = np.array([0.0, 0.0, -gravity])
     a = (5.0 / 7.0) * (g - float(np.dot(g, normal)) * normal)
     speed = float(np.linalg.norm(state.velocity))
     reach = NUDGE * scale
-    tau = reach / speed if speed > 0.0 else math.sqrt(2.0 * reach / max(float(np.linalg.norm(a)), 1e-300))
-    velocity = state.velocity + a * tau
-    spin = float(np.dot(state.omega, normal))
-    omega = np.cross(normal, velocity) / radius + spin * normal
-    center = state.center + state.velocity * tau + 0.5 * a * tau * tau
-    angle = 0.5 * (state.omega + omega) * tau
-    size = float(np.linalg.norm(angle))
-    R = state.R
-    if size > 0.0:
-        k = angle / size
-        K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-        R = (np.eye(3) + math.sin(size) * K + (1.0 - math.cos(size)) * K @ K) @ R
-    return FreeState(state.t + tau, center, velocity, omega, R)
+    return reach / speed if speed > 0.0 else math.sqrt(2.0 * reach / max(float(np.linalg.norm(a)), 1e-300))
