@@ -28,7 +28,7 @@ from .tableaus import METHODS, get_method
 from .text import shown
 
 FORMAT = "rollball-scene"
-VERSION = 3
+VERSION = 4
 MAX_FILE_SIZE = 1 << 20
 MIN_RTOL = 10 * sys.float_info.epsilon   # tighter relative tolerances are below round-off
 MAX_GRID_POINTS = 401   # per side of the drawn landscape (the app draws it; the core refuses more)
@@ -78,6 +78,23 @@ class Contact:
     friction: float | None = None
     restitution: float = 0.0
     after_liftoff: str = "fly"
+    # version 4 (docs/design.md §1, "Dissipation"): couples of size c_rr r F_n against the
+    # rolling part of ω and μ_s r F_n against its spin about N
+    rolling_resistance: float = 0.0
+    spin_friction: float = 0.0
+
+
+@dataclass(frozen=True)
+class Air:
+    """Air drag (version 4): a force −½ ρ C_d π r² |ċ| ċ on the centre, in flight too.
+    ``density`` ρ (kg/m³, air 1.2) and ``drag_coefficient`` C_d (a smooth sphere ≈ 0.47): both
+    0 (no air) or both given."""
+    density: float = 0.0
+    drag_coefficient: float = 0.0
+
+    def drag_factor(self, radius: float) -> float:
+        """k = ½ ρ C_d π r² (kg/m): the drag force is −k |ċ| ċ."""
+        return 0.5 * self.density * self.drag_coefficient * math.pi * radius * radius
 
 
 @dataclass(frozen=True)
@@ -163,6 +180,10 @@ CONSTRAINTS = {
     "contact.friction": _not_negative,
     "contact.restitution": _unit_interval,
     "contact.after_liftoff": _after_liftoff,
+    "contact.rolling_resistance": _not_negative,
+    "contact.spin_friction": _not_negative,
+    "air.density": _not_negative,
+    "air.drag_coefficient": _not_negative,
 }
 
 # Keys whose value may be null (None), and keys holding a fixed number of numbers (a JSON array).
@@ -182,6 +203,15 @@ class Scene:
     view: View = field(default_factory=View)
     parameters: tuple[Parameter, ...] = ()   # version 3; also given as a dict as in a file
     contact: Contact = field(default_factory=Contact)   # version 3
+    air: Air = field(default_factory=Air)   # version 4
+    stop_at_rest: bool = True   # version 4: a run ends where the ball comes to rest
+
+    @property
+    def dissipates(self) -> bool:
+        """Whether rolling resistance, spin friction or air take energy from a rolling ball
+        (version 4); without them a rolling ball keeps its energy (the 2011 model)."""
+        c = self.contact
+        return c.rolling_resistance > 0.0 or c.spin_friction > 0.0 or self.air.density > 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "parameters", _parameters(self.parameters))
@@ -307,18 +337,32 @@ def _v2_to_v3(body: dict) -> dict:
     return {**body, "contact": dict(V2_CONTACT)}
 
 
+def _v3_to_v4(body: dict) -> dict:
+    """Version 4 added rolling resistance, spin friction, air and ``stop_at_rest``; a
+    version-3 scene has none of them and runs as it did. Keys version 4 added are still
+    unknown in a version-3 file."""
+    for key in V4_KEYS:
+        group, _, name = key.rpartition(".")
+        holder = body.get(group) if group else body
+        if isinstance(holder, dict) and name in holder:
+            raise SceneError(key, "unknown key in a version-3 scene (it came with version 4)")
+    return body
+
+
+# The (dotted) keys version 4 added.
+V4_KEYS = ("contact.rolling_resistance", "contact.spin_friction", "air", "stop_at_rest")
 # The (dotted) keys version 3 added.
 V3_KEYS = ("parameters", "contact", "start.omega")
 # What a version-2 scene's contact is: the 2011 model.
 V2_CONTACT = {"friction": None, "restitution": 0.0, "after_liftoff": "glued"}
 
 # MIGRATIONS[k] takes version k + 1 to version k + 2; a file of version v runs MIGRATIONS[v - 1:].
-MIGRATIONS = [_v1_to_v2, _v2_to_v3]
+MIGRATIONS = [_v1_to_v2, _v2_to_v3, _v3_to_v4]
 assert len(MIGRATIONS) == VERSION - 1
 
 
 # Field types, resolved once: loading a scene evaluates nothing.
-_HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View, Contact)}
+_HINTS = {cls: typing.get_type_hints(cls) for cls in (Scene, Ball, Start, Integrator, View, Contact, Air)}
 
 
 def _number(key: str, value) -> float:
@@ -511,6 +555,13 @@ def _check_derived(scene: Scene) -> None:
         if not _finite(inertia, sum(w * w for w in s.omega), 2.0):
             raise SceneError("start.omega", "the kinetic energy m r² |ω|² overflows")
         _check_rolls(scene)
+    air = scene.air
+    if (air.density > 0.0) != (air.drag_coefficient > 0.0):
+        given, other = ("air.density", "air.drag_coefficient") if air.density > 0.0 else \
+            ("air.drag_coefficient", "air.density")
+        raise SceneError(other, f"must be given with {given} (air drags with both, or neither is given)")
+    if not _finite(air.density, air.drag_coefficient, r, r, math.pi):
+        raise SceneError("air.density", "the drag factor ½ ρ C_d π r² overflows")
     v = scene.view
     points = (v.max - v.min) / v.step + 1
     if not points <= MAX_GRID_POINTS:  # also catches an overflowing (infinite) span

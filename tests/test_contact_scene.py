@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from rollball.scene import Contact, Scene, SceneError, Start
+from rollball.scene import VERSION, Contact, Scene, SceneError, Start
 
 V3 = {"format": "rollball-scene", "version": 3, "landscape": "0.1*x*y"}
 V2 = {**V3, "version": 2}
@@ -40,7 +40,8 @@ def test_contact_and_omega_round_trip(tmp_path):
     path = tmp_path / "s.json"
     scene.save(path)
     data = json.loads(path.read_text(encoding="utf-8"))
-    assert data["contact"] == {"friction": 0.25, "restitution": 0.5, "after_liftoff": "fly"}
+    assert data["contact"] == {"friction": 0.25, "restitution": 0.5, "after_liftoff": "fly",
+                               "rolling_resistance": 0.0, "spin_friction": 0.0}
     assert data["start"]["omega"] == [1.0, 2.0, 3.0]
     assert Scene.load(path) == scene
 
@@ -49,7 +50,7 @@ def test_a_migrated_scene_is_written_as_glued_and_read_back_so(tmp_path):
     path = tmp_path / "s.json"
     Scene.from_dict(V2).save(path)
     data = json.loads(path.read_text(encoding="utf-8"))
-    assert data["version"] == 3 and data["contact"]["after_liftoff"] == "glued" and data["contact"]["friction"] is None
+    assert data["version"] == VERSION and data["contact"]["after_liftoff"] == "glued" and data["contact"]["friction"] is None
     assert "omega" not in data["start"]   # a default left out
     assert Scene.load(path) == Scene.from_dict(V2)
 

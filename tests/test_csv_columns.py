@@ -116,7 +116,7 @@ def test_the_command_line_to_standard_output_follows_the_scene(tmp_path, capsys)
     assert lines[0] == ",".join(OLD_COLUMNS) and all(len(line.split(",")) == 24 for line in lines[1:])
     flying = tmp_path / "flying.json"
     data = Scene.load(V2_EXAMPLES / "bump.json").to_dict()
-    flying.write_text(Scene.from_dict({**data, "version": 3, "contact": {"friction": 0.3}}).dumps())
+    flying.write_text(Scene.from_dict({**data, "contact": {"friction": 0.3}}).dumps())
     assert main(["simulate", str(flying), "--t-end", "0.05", "--csv", "-"]) == 0
     lines = [line for line in capsys.readouterr().out.splitlines() if not line.startswith("#")]
     assert lines[0] == ",".join(OLD_COLUMNS + MODE_COLUMNS)

@@ -11,7 +11,7 @@ from rollball.examples import EXAMPLES_DIR
 from rollball.kernel import KERNEL_STATUSES
 from rollball.formula import MAX_PARAMETERS, FormulaError, parse_formula
 from rollball.landscape import _COMPILED, landscape_of
-from rollball.scene import Parameter, SceneError
+from rollball.scene import VERSION, Parameter, SceneError
 from rollball.sweeps import Grid, sweep
 
 V3 = {"format": "rollball-scene", "version": 3, "landscape": "a*sin(k*x)*cos(y)",
@@ -30,11 +30,11 @@ def test_files_are_written_as_version_3_with_parameters_as_given(tmp_path):
     path = tmp_path / "p.json"
     scene.save(path)
     saved = json.loads(path.read_text(encoding="utf-8"))
-    assert saved["version"] == 3 and saved["parameters"] == V3["parameters"]
+    assert saved["version"] == VERSION and saved["parameters"] == V3["parameters"]
     assert list(saved)[:4] == ["format", "version", "landscape", "parameters"]
     assert Scene.load(path) == scene
     plain = Scene.load(EXAMPLES_DIR / "hills.json")   # a version-2 file: written as version 3, no parameters
-    assert plain.to_dict()["version"] == 3 and "parameters" not in plain.to_dict()
+    assert plain.to_dict()["version"] == VERSION and "parameters" not in plain.to_dict()
 
 
 @pytest.mark.parametrize("parameters, key, fragment", [

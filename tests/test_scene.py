@@ -5,7 +5,7 @@ import json
 import pytest
 
 from rollball.examples import EXAMPLES_DIR, example_scenes
-from rollball.scene import Ball, Scene, SceneError
+from rollball.scene import VERSION, Ball, Scene, SceneError
 
 MINIMAL = {"format": "rollball-scene", "version": 2, "landscape": "x*y"}
 
@@ -69,14 +69,19 @@ def test_version_1_files_are_migrated_and_saved_as_the_newest_version(tmp_path):
     path = tmp_path / "new.json"
     scene.save(path)
     saved = json.loads(path.read_text(encoding="utf-8"))
-    assert saved["version"] == 3 and saved["integrator"]["method"] == "dopri5" and "parameters" not in saved
+    assert saved["version"] == VERSION and saved["integrator"]["method"] == "dopri5" and "parameters" not in saved
     assert old["integrator"]["method"] == "adaptive"  # the migration does not change its input
 
 
 def test_the_migration_steps_cover_every_version():
-    from rollball.scene import MIGRATIONS, VERSION, _v1_to_v2, _v2_to_v3
+    from rollball.scene import MIGRATIONS, _v1_to_v2, _v2_to_v3, _v3_to_v4
 
-    assert VERSION == 3 and MIGRATIONS == [_v1_to_v2, _v2_to_v3]
+    assert VERSION == 4 and MIGRATIONS == [_v1_to_v2, _v2_to_v3, _v3_to_v4]
+    assert _v3_to_v4({"landscape": "x", "contact": {"friction": 0.1}}) == {"landscape": "x", "contact": {"friction": 0.1}}
+    for key, body in (("contact.rolling_resistance", {"contact": {"rolling_resistance": 0.1}}),
+                      ("air", {"air": {"density": 1.2}}), ("stop_at_rest", {"stop_at_rest": False})):
+        with pytest.raises(SceneError, match=f"^{key}: unknown key in a version-3 scene"):
+            _v3_to_v4({"landscape": "x", **body})
     assert _v2_to_v3({"landscape": "x", "gravity": 1}) == {
         "landscape": "x", "gravity": 1, "contact": {"friction": None, "restitution": 0.0, "after_liftoff": "glued"}}
     assert _v1_to_v2({"landscape": "x"}) == {"landscape": "x"}
@@ -84,8 +89,8 @@ def test_the_migration_steps_cover_every_version():
 
 
 def test_a_newer_version_is_refused_in_words():
-    with pytest.raises(SceneError, match="^version: 4 is newer than this RollBall understands"):
-        Scene.from_dict({**MINIMAL, "version": 4})
+    with pytest.raises(SceneError, match="^version: 5 is newer than this RollBall understands"):
+        Scene.from_dict({**MINIMAL, "version": 5})
 
 
 def test_the_alias_is_read_in_version_2_too():

@@ -10,7 +10,7 @@ import pytest
 from PySide6 import QtCore
 
 from rollball import Scene
-from rollball.scene import Parameter
+from rollball.scene import VERSION, Parameter
 from rollball import landscape as core_landscape
 from rollball.examples import EXAMPLES_DIR
 from rollball_app.parameters import (SLIDER_STEPS, ParameterRows, slider_position, slider_range,
@@ -53,7 +53,7 @@ def test_a_scene_with_parameters_is_drawn_with_its_values_runs_and_saves_them(qt
     assert window.scene.parameter_values == (0.25, 1.0)
     assert window.files.save_to(path)
     saved = json.loads(path.read_text())
-    assert saved["version"] == 3
+    assert saved["version"] == VERSION
     assert saved["parameters"] == {"a": {"value": 0.25, "min": 0.0, "max": 1.0},
                                    "k": {"value": 1.0, "min": 0.5, "max": 3.0}}
     assert Scene.load(path) == window.scene
