@@ -22,8 +22,8 @@ from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
-from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
-                         VELOCITY, Failure, Liftoff, Reason, Status, Transition)
+from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R,
+                         SLIP_SPEED, T, VELOCITY, Failure, Liftoff, Reason, Status, Transition)
 
 # A friction coefficient above this acts as this one: "always enough friction" as far as a double
 # can tell (μ F_n stays finite for F_n up to 10²⁰⁸ N; a slide on a plane grips after 2 v₀/(7 μ g),
@@ -56,7 +56,8 @@ def state_of(run, row: np.ndarray) -> sliding.BallState:
     x, y = (float(value) for value in row[CONTACT])
     normal = unit_normal(run.landscape.evaluate(x, y, run.scene.parameter_values))
     velocity = row[VELOCITY] - np.dot(row[VELOCITY], normal) * normal
-    return sliding.BallState(x, y, velocity, row[OMEGA].copy(), row[R].reshape(3, 3).copy(), float(row[DISSIPATED]))
+    return sliding.BallState(x, y, velocity, row[OMEGA].copy(), row[R].reshape(3, 3).copy(), float(row[DISSIPATED]),
+                             tuple(float(value) for value in row[CAUSES]))
 
 
 class ModeMachine:
@@ -82,6 +83,7 @@ class ModeMachine:
         self.surface = Surface(run.landscape, run.scene.parameter_values)
         self.first_liftoff: Liftoff | None = None
         self.dissipated = 0.0       # J: what a flight carries
+        self.causes = (0.0, 0.0, 0.0)   # J: the part of it rolling resistance, spin friction and air took
         self.off: Failure | None = None   # a flight found no surface below the ball, or a tip too slow to leave
         self.stall: str | None = None     # why the contact's modes could not go on
         self.stop_after = stop_after
@@ -216,7 +218,7 @@ class ModeMachine:
         state = sliding.stopped_state(run._z, run._R, run._p, run._probe_normal())
         # (a stop where the ball is not held: it rolls on from there, pulled by gravity, no time lost)
         self.mode = Mode.ROLLING if kind is Change.REST else AFTER[kind]
-        self.dissipated = state.dissipated
+        self.dissipated, self.causes = state.dissipated, state.dissipated_by
         run._start_kernel_run(state, t, slides=kind is Change.SLIP, repeat=True)
 
     # -- a ball that stops (docs/design.md §1, "Rest") --------------------------------------------
@@ -287,6 +289,16 @@ class ModeMachine:
         self.append(spin.rows(np.append(self.record_times(t_stop, t_end), t_end)))
         run.status = Status.OK
 
+    def carry(self, row: np.ndarray) -> None:
+        """Carry the energy dissipated in ``row``, and by which cause, into what comes next (a flight)."""
+        self.dissipated = float(row[DISSIPATED])
+        self.causes = tuple(float(value) for value in row[CAUSES])
+
+    def _carried(self, rows: np.ndarray) -> np.ndarray:
+        """A flight's rows with the energy the causes took before it added to what they take in it."""
+        rows[:, CAUSES] += self.causes
+        return rows
+
     def _enough(self) -> bool:
         """Whether the run has the transitions it was to look for (``stop_after``): it ends ok."""
         if self.stop_after is not None and len(self.transitions) >= self.stop_after:
@@ -298,7 +310,7 @@ class ModeMachine:
         """The ball leaves the surface at (x, y) at t: a flight from the kernel run's last state."""
         run, info = self.run, self.run._info
         last = self.out[self.count - 1]
-        self.dissipated = float(last[DISSIPATED])
+        self.carry(last)
         before = self.mode
         # the flight leaves along the tangent plane: a sliding state's c'.N is the integrator's
         # drift (0 in the exact motion), and a c' into the surface would land it at once
@@ -379,7 +391,8 @@ class ModeMachine:
             tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
             on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
             foot = on.center - ball.radius * face
-            state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated)
+            state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated,
+                                      self.causes)
             run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True
 
@@ -398,6 +411,7 @@ class ModeMachine:
             row[ENERGY] = energy(state.velocity, state.omega, state.center[2], m, r, g0)
             row[NORMAL_FORCE] = force
             row[DISSIPATED] = self.dissipated
+            row[CAUSES] = self.causes
         self.append(rows)
 
     def _to_kink(self, start: FreeState, t: float, normal: np.ndarray, mode: Mode) -> FreeState:
@@ -497,7 +511,8 @@ class ModeMachine:
             if mode is Mode.RESTING or self.rest is not None:   # held in the stretch: the stay goes on
                 self.hold(row, t)
                 return
-            self.mode, self.dissipated = mode, float(row[DISSIPATED])
+            self.mode = mode
+            self.carry(row)
             if free and mode is Mode.FLYING:
                 self.flight = self._new_flight(FreeState.from_row(row))
                 return
@@ -575,20 +590,20 @@ class ModeMachine:
         try:
             landing = flight.landing(run.t_end)
         except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
-            self.append(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
-                                    if off.time > flight.start.t else np.empty(0), dissipated))
+            self.append(self._carried(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
+                                                  if off.time > flight.start.t else np.empty(0), dissipated)))
             self.flight = None
             self.off = Failure(Reason(off.reason), off.time, *off.point, off.value)
             run.status = Status(FLIGHT_REASONS[off.reason][0]) if off.reason in FLIGHT_REASONS else Status.NONFINITE
             return
         if landing is None:
             times = np.append(self.record_times(flight.start.t, run.t_end), run.t_end)
-            self.append(flight.rows(times, dissipated))
+            self.append(self._carried(flight.rows(times, dissipated)))
             self.flight = None
             run.status = Status.OK
             return
         t, foot = landing
-        self.append(flight.rows(self.record_times(flight.start.t, t), dissipated))
+        self.append(self._carried(flight.rows(self.record_times(flight.start.t, t), dissipated)))
         s = flight.state(t)
         hit = impact(s.velocity, s.omega, foot.normal, mass=ball.mass, radius=ball.radius,
                      restitution=contact.restitution, friction=friction_of(contact))
@@ -601,11 +616,11 @@ class ModeMachine:
             return
         if bounces:   # off again: the state just after the impact is a row of the new flight
             self.flight = self._new_flight(FreeState(t, s.center, hit.velocity, hit.omega, s.R))
-            self.append(self.flight.rows(np.array([t]), dissipated))
+            self.append(self._carried(self.flight.rows(np.array([t]), dissipated)))
             if t >= run.t_end:
                 self.flight, run.status = None, Status.OK
             return
         self.flight = None
         self.mode = Mode.ROLLING if hit.sticking else Mode.SLIDING
-        state = sliding.BallState(foot.x, foot.y, hit.velocity, hit.omega, s.R, dissipated)
+        state = sliding.BallState(foot.x, foot.y, hit.velocity, hit.omega, s.R, dissipated, self.causes)
         run._start_kernel_run(state, t, slides=not hit.sticking, repeat=False)

@@ -514,7 +514,7 @@ class Simulation:
             return describe(failure, self.scene.ball.radius)
         rest = self.machine.rest
         if status is Status.OK and rest is not None and self.scene.stop_at_rest:
-            return f"the ball comes to rest at t = {rest.time:.6g} s, (x, y) = ({rest.x:.6g}, {rest.y:.6g})"
+            return kernel.transition_sentence("rest", rest.time, rest.x, rest.y)
         if status is Status.OK:
             rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
             flew = any(change.kind == "landing" for change in self.transitions)
