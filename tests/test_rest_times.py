@@ -149,3 +149,28 @@ def test_a_spin_that_outlasts_the_rolling_stops_in_place(method, steps):
         assert by["rolling"][-1] == pytest.approx(0.7 * M * V0 ** 2, rel=1e-8)
         tail = simulate(dataclasses.replace(scene, stop_at_rest=False))
         assert tail.t[-1] == 12.0 and tail.mode[-1] == "resting" and np.all(tail.velocity[-1] == 0.0)
+
+
+BOWL = "0.5*(x^2 + y^2)"
+ORDERS = [("euler", 1, (0.002, 0.001)), ("rk4", 4, (0.04, 0.02)), ("lawson5", 5, (0.08, 0.04)),
+          ("gauss4", 4, (0.04, 0.02))]
+
+
+def _bowl_rest(method, **options):
+    """Started still at x = 0.3 in a bowl z = (x² + y²)/2 (tan θ = x there, above c_rr = 0.08):
+    pulled down, it rolls to a stop where it is held; the rest's time and place."""
+    scene = _scene(BOWL, Start(x=0.3, y=0.0), method, options.get("dt", 1e-3), 4.0, rolling_resistance=0.08)
+    traj = simulate(scene, method=method, **options)
+    assert [c.kind for c in traj.transitions] == ["rest"]
+    rest = traj.transitions[0]
+    assert abs(rest.x) <= 0.08 * (1 + 1e-9)   # held: tan θ = |x| ≤ c_rr
+    return rest.time, rest.x
+
+
+@pytest.mark.parametrize("method, order, steps", ORDERS)
+def test_the_rest_time_on_a_bowl_converges_at_the_method_order(method, order, steps):
+    """No closed form on a bowl: against dop853 at tolerance 10⁻¹³, each halving of the step
+    shrinks the rest time's error about 2^p-fold (within a factor 3)."""
+    reference = _bowl_rest("dop853", rtol=1e-13, atol=1e-15, record_dt=0.1)
+    errors = [abs(_bowl_rest(method, dt=dt)[0] - reference[0]) for dt in steps]
+    assert 2 ** order / 3 < errors[0] / errors[1] < 2 ** order * 3
