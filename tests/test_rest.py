@@ -183,3 +183,17 @@ def test_a_scene_that_does_not_dissipate_keeps_its_columns(tmp_path):
     traj.to_csv(tmp_path / "roll.csv")
     header = _header(tmp_path / "roll.csv")
     assert header[-3:] == ["mode", "slip_speed", "dissipated"]
+
+
+def test_air_alone_takes_all_that_is_dissipated_rolling_down_an_incline():
+    """Air only (ρ = 1.2, C_d = 0.47), rolling down z = −0.3 x: it never rests (tan θ > c_rr = 0),
+    all the energy dissipated is the air's, k ∫ |ċ|³ dt by the rows (trapezoids), and E + ΣD stays."""
+    scene = dataclasses.replace(_scene("-0.3*x", duration=2.0, dt=1e-3), air=Air(1.2, 0.47))
+    traj = simulate(scene)
+    assert traj.transitions == () and set(traj.mode) == {"rolling"}
+    by = traj.dissipated_by
+    assert by["air"][-1] > 0.0 and all(np.all(by[c] == 0.0) for c in DISSIPATION_CAUSES if c != "air")
+    np.testing.assert_array_equal(by["air"], traj.dissipated)
+    power = Air(1.2, 0.47).drag_factor(R_BALL) * np.linalg.norm(traj.velocity, axis=1) ** 3
+    assert by["air"][-1] == pytest.approx(np.trapezoid(power, traj.t), rel=1e-6)
+    assert traj.energy_drift < 1e-10
