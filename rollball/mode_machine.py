@@ -108,8 +108,10 @@ class ModeMachine:
         return codes
 
     def restart(self, mode: Mode) -> None:
-        """Begin anew in ``mode`` (a run from a recorded state: no rows yet)."""
+        """Begin anew in ``mode`` (a run from a recorded state: no rows yet, nor a stay its
+        scene's start had, ``hold_at_start``)."""
         self.mode, self.starts = Mode(mode), [(0, Mode(mode))]
+        self.spin = self.rest = None
 
     def append(self, rows: np.ndarray) -> None:
         """Add rows to the run's rows (growing the buffer), in the current mode."""
@@ -258,7 +260,7 @@ class ModeMachine:
         row[OMEGA] = spin * normal
         row[R] = np.eye(3).ravel()
         if np.isfinite(row).all() and self.hold(row, 0.0):
-            self.restart(Mode.RESTING)
+            self.mode, self.starts = Mode.RESTING, [(0, Mode.RESTING)]
 
     def stay(self) -> None:
         """Take a held ball's stay whole (``hold``): rows at the run's recording times while it

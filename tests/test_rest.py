@@ -13,7 +13,8 @@ from rollball.examples import scene_path
 from rollball.modes import AFTER, MODES, TRANSITION_KINDS, Change, Mode
 from rollball.resting import holds
 from rollball.scene import Air, Ball, Contact, Integrator, Scene, Start
-from rollball.simulation import simulate
+from rollball.simulation import Simulation, simulate
+from rollball.sliding import BallState
 from rollball.transition_check import _invented
 from rollball.trajectory import DISSIPATION_CAUSES, Transition, read_csv
 
@@ -197,3 +198,14 @@ def test_air_alone_takes_all_that_is_dissipated_rolling_down_an_incline():
     power = Air(1.2, 0.47).drag_factor(R_BALL) * np.linalg.norm(traj.velocity, axis=1) ** 3
     assert by["air"][-1] == pytest.approx(np.trapezoid(power, traj.t), rel=1e-6)
     assert traj.energy_drift < 1e-10
+
+
+def test_a_run_from_a_state_of_a_scene_that_starts_held_goes_from_that_state():
+    """``Simulation.from_state`` (the checks' retakes) of a scene whose ball starts held: the run
+    is the state's, rolling on a plane to a stop after 7 v / (5 c_rr g), not the start's stay."""
+    scene = _scene(start=Start(x=0.0, y=0.0), rolling_resistance=0.05)
+    run = Simulation(scene)
+    state = BallState(0.0, 0.0, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0 / R_BALL, 0.0]), np.eye(3))
+    redo = run.from_state(state, 1.0, Mode.ROLLING, t_end=6.0)
+    assert [(c.kind, c.time) for c in redo.transitions] == [("rest", pytest.approx(1.0 + 7 / (5 * 0.05 * G)))]
+    assert redo.rows[0, 0] == 1.0
