@@ -20,6 +20,7 @@ from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
+from .tip import Tip, foot, onto_face, turn_about
 from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
                          VELOCITY, Failure, Liftoff, Reason, Status, Transition)
 
@@ -228,7 +229,9 @@ class ModeMachine:
         start = FreeState.from_row(last)
         if info[kernel.F_LIFT_KINK] == kernel.LIFT_TIP:
             force = self._pivot_force(start, x, y)
-            if force > 0.0:   # too slow to leave the tip: the ball would roll over it, pivoting
+            if force > 0.0 and before is Mode.ROLLING and self._turn_about_tip(start, x, y):
+                return
+            if force > 0.0:   # too slow to leave the tip, and sliding: the ball would slide over it
                 self._no_liftoff()
                 self.off = Failure(Reason.PIVOT, t, x, y, force)
                 run.status = Status.DOES_NOT_FIT
@@ -280,8 +283,23 @@ class ModeMachine:
         turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                          friction=friction_of(scene.contact), t_end=run.t_end,
                          times=self.record_times(start.t, run.t_end))
-        if turn is None:
-            return False
+        if turn is None or not self._end_turn(turn, Reason.RIDGE_SLIP):
+            return turn is not None
+        # on a face: rolling on from a little past the edge
+        face = beyond if turn.how == END else ridge_line.near
+        tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
+        on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
+        foot = on.center - ball.radius * face
+        state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated)
+        run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        return True
+
+    def _end_turn(self, turn, slip: Reason) -> bool:
+        """A turn over a ridge or a tip (``ridge.Turn``) as the run's rows and how it ends: at the
+        run's end, stopped where the friction cannot hold it (``slip`` the reason), or off the edge
+        or tip where holding it would need a pull (a flight from there); True where it ends on a
+        face (the caller starts the rolling run there)."""
+        run = self.run
         lift = self._no_liftoff()
         self.mode = Mode.ROLLING
         self._append_turn(turn)
@@ -289,21 +307,42 @@ class ModeMachine:
         if turn.how == TIME:
             run.status = Status.OK
         elif turn.how == SLIP:
-            self.off = Failure(Reason.RIDGE_SLIP, t, cx, cy, turn.force)
+            self.off = Failure(slip, t, cx, cy, turn.force)
             run.status = Status.DOES_NOT_FIT
-        elif turn.how == LIFTOFF:   # off the edge where holding it would need a pull
+        elif turn.how == LIFTOFF:   # off the edge or tip where holding it would need a pull
             self.transitions.append(dataclasses.replace(lift, time=t, x=cx, y=cy))
             if self.first_liftoff is None:
                 self.first_liftoff = Liftoff(t, cx, cy, True)
             self.mode = Mode.FLYING
             self.flight = self._new_flight(turn.state)
-        else:   # on a face: rolling on from a little past the edge
-            face = beyond if turn.how == END else ridge_line.near
-            tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
-            on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
-            foot = on.center - ball.radius * face
-            state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated)
-            run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        else:
+            return True
+        return False
+
+    def _turn_about_tip(self, start: FreeState, x: float, y: float) -> bool:
+        """A rolling ball at a tip near (x, y) at ``start``, too slow to leave it, turns over it
+        (``tip.turn_about``), and then rolls on a face of it, flies off it, or stops where the
+        friction cannot hold the turn (docs/design.md §1, "A tip"); False where no tip is found
+        there to turn about (the run stops, ``pivot``)."""
+        run = self.run
+        scene = run.scene
+        values = scene.parameter_values
+        found = Tip.near(x, y, lambda xs, ys: run.landscape.evaluate(xs, ys, values))
+        if found is None:
+            return False
+        if not any(np.array_equal(found.point, known) for known in self.surface.tips):
+            self.surface.tips.append(found.point)
+        ball = scene.ball
+        turn = turn_about(found, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
+                          friction=friction_of(scene.contact), t_end=run.t_end,
+                          times=self.record_times(start.t, run.t_end))
+        if turn is None or not self._end_turn(turn, Reason.TIP_SLIP):
+            return turn is not None
+        tau, face = onto_face(found, turn.state, gravity=scene.gravity)
+        on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
+        x, y = foot(found, on.center)[:2]
+        state = sliding.BallState(float(x), float(y), on.velocity, on.omega, on.R, self.dissipated)
+        run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True
 
     def _append_turn(self, turn) -> None:
