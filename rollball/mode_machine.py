@@ -340,7 +340,7 @@ class ModeMachine:
             return turn is not None
         tau, face = onto_face(found, turn.state, gravity=scene.gravity)
         on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
-        x, y = foot(found, on.center)[:2]
+        x, y = foot(found, on.center, lambda px, py: run.landscape.evaluate(px, py, values), radius=ball.radius)
         state = sliding.BallState(float(x), float(y), on.velocity, on.omega, on.R, self.dissipated)
         run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True

@@ -35,8 +35,9 @@ import numpy as np
 from .flight import FreeState
 from .ridge import LIFTOFF, NUDGE, SLIP, TIME, TOLERANCE, Turn
 
-REACH = 1e-7        # × (1 + |x| + |y|): the ring about the tip its faces are sampled on
-RING = 64           # points of the ring that find T
+REACH = 1e-7        # × (1 + |x| + |y|): the ring about the kernel's tip that finds T (its planes)
+NEAR = 1e-9         # × (1 + |x| + |y|): the ring about T the generators are sampled on
+RING = 64           # points of the ring that finds T
 AZIMUTHS = 4096     # generators sampled about T
 ONTO = 1e-8         # × (1 + |x| + |y|): a face is taken up this far from T (past the kernel's 4·10⁻⁹ of a tip)
 FACE = "face"   # (the other ends as a ridge's: LIFTOFF, SLIP, TIME)
@@ -63,10 +64,11 @@ class Tip:
         (tx, ty, tz), *_ = np.linalg.lstsq(planes, fx * px + fy * py - f, rcond=None)
         if not math.hypot(tx - x, ty - y) < 0.1 * reach:
             return None
-        px, py, d = _ring(tx, ty, reach, AZIMUTHS, evaluate)
+        near = NEAR * (1.0 + abs(x) + abs(y))
+        px, py, d = _ring(tx, ty, near, AZIMUTHS, evaluate)
         if not np.isfinite(d[:3]).all():
             return None
-        ux, uy = (px - tx) / reach, (py - ty) / reach
+        ux, uy = (px - tx) / near, (py - ty) / near
         generators = np.column_stack([ux, uy, d[1] * ux + d[2] * uy])
         generators /= np.linalg.norm(generators, axis=1)[:, None]
         return cls(np.array([tx, ty, tz]), generators)
@@ -197,10 +199,22 @@ def onto_face(tip: Tip, state: FreeState, *, gravity: float) -> tuple[float, np.
     return math.sqrt(2.0 * reach / max(pull, 1e-300)), e
 
 
-def foot(tip: Tip, center: np.ndarray) -> np.ndarray:
-    """The contact point of a ball whose centre is just past a face of the tip (off the sphere
-    about T): on the generator that touches the ball (``Tip.touching``), as far from T as the
-    centre is along it."""
+def foot(tip: Tip, center: np.ndarray, evaluate, *, radius: float) -> tuple[float, float]:
+    """The contact point (x, y) of a ball whose centre is just past a face of the tip (off the
+    sphere about T), ``evaluate(x, y)`` the landscape's f, f_x, f_y there: first on the generator
+    that touches the ball (``Tip.touching``), as far from T as the centre is along it, then moved
+    (Newton's method on c = p + r N(p), three times) until its own normal leads to the centre."""
     T = tip.point
     generator = tip.touching((center - T) / float(np.linalg.norm(center - T)))[1]
-    return T + float(np.dot(center - T, generator)) * generator
+    x, y = (T + float(np.dot(center - T, generator)) * generator)[:2]
+    for _ in range(3):
+        f, fx, fy, fxx, fxy, fyy = np.asarray(evaluate(x, y), dtype=float)[:6]
+        n = np.array([-fx, -fy, 1.0])
+        size = float(np.linalg.norm(n))
+        turns = [np.array([-fxx, -fxy, 0.0]), np.array([-fxy, -fyy, 0.0])]   # ∂n/∂x, ∂n/∂y
+        jacobian = np.column_stack([np.array([1.0, 0.0, fx]) + radius * (turns[0] / size - n * (n @ turns[0]) / size ** 3),
+                                    np.array([0.0, 1.0, fy]) + radius * (turns[1] / size - n * (n @ turns[1]) / size ** 3)])
+        miss = center - (np.array([x, y, f]) + radius * n / size)
+        step = np.linalg.lstsq(jacobian, miss, rcond=None)[0]
+        x, y = x + step[0], y + step[1]
+    return float(x), float(y)
