@@ -103,6 +103,29 @@ def test_a_slow_ball_turns_over_the_tip_and_rolls_down_the_far_side(method, opti
     assert np.max(np.abs(traj.energy - traj.energy[0])) < 1e-9   # nothing lost over the tip
 
 
+def test_a_ball_too_slow_to_climb_over_the_tip_turns_back_onto_the_near_face():
+    """Arriving at 0.2 m/s the ball cannot raise its centre the r (1 − cos β) over the top
+    (v² < (10/7) g r (1 − cos β)): it turns up to θ_m where θ̇ = 0, back to −β, and rolls down the
+    generator it came up, at 0.2 m/s again (by symmetry: the time out and back are equal)."""
+    v1, duration = 0.2, 1.2
+    v0 = math.sqrt(v1 * v1 + 2.0 * (5.0 / 7.0 * G * math.sin(BETA)) * 0.5 / math.cos(BETA))
+    vx = v0 * math.cos(BETA)
+    t_tip, arrived = at_tip(vx)
+    assert arrived == pytest.approx(v1, rel=1e-12)
+    # θ = θ_m − u²: θ̇² = k (cos θ_m − cos θ) = −2k sin(θ_m − u²/2) sin(u²/2), and 2u / θ̇ stays
+    # finite at the top
+    k = 10.0 / 7.0 * G / RADIUS
+    top = -math.acos(math.cos(BETA) + (v1 / RADIUS) ** 2 / k)
+    half = quad(lambda u: 2.0 * u / math.sqrt(-2.0 * k * math.sin(top - u * u / 2) * math.sin(u * u / 2)) if u > 0
+                else 2.0 / math.sqrt(-k * math.sin(top)), 0.0, math.sqrt(top + BETA), epsabs=1e-14, epsrel=1e-13)[0]
+    tau = duration - (t_tip + 2.0 * half)
+    back = v1 * tau + 0.5 * (5.0 / 7.0 * G * math.sin(BETA)) * tau * tau
+    traj = simulate(cone(vx, duration=duration), method="rk4", dt=1e-3)
+    assert traj.status == "ok" and traj.transitions == () and set(traj.mode) == {"rolling"}, traj.message
+    assert traj.contact[-1, 0] == pytest.approx(-back * math.cos(BETA), abs=1e-10)
+    assert np.max(np.abs(traj.energy - traj.energy[0])) < 1e-9
+
+
 def test_a_ball_that_speeds_up_in_the_turn_leaves_the_tip_where_holding_it_needs_a_pull():
     """On the oblique cone −0.3 ρ − 0.2 x (up a generator of slope 0.1 to the tip, down one of
     slope 0.5 beyond it) a ball arriving with r θ̇₀² = 9 < g cos β₁ = 9.76 m/s² turns, speeds up
