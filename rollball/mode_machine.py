@@ -20,7 +20,7 @@ from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
-from .tip import Tip, foot, onto_face, turn_about
+from .tip import Tip, foot_on_face, onto_face, turn_about
 from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
                          VELOCITY, Failure, Liftoff, Reason, Status, Transition)
 
@@ -323,7 +323,7 @@ class ModeMachine:
         """A rolling ball at a tip near (x, y) at ``start``, too slow to leave it, turns over it
         (``tip.turn_about``), and then rolls on a face of it, flies off it, or stops where the
         friction cannot hold the turn (docs/design.md §1, "A tip"); False where no tip is found
-        there to turn about (the run stops, ``pivot``)."""
+        there to turn about, or the turn cannot be integrated (the run stops, ``pivot``)."""
         run = self.run
         scene = run.scene
         values = scene.parameter_values
@@ -333,14 +333,14 @@ class ModeMachine:
         if not any(np.array_equal(found.point, known) for known in self.surface.tips):
             self.surface.tips.append(found.point)
         ball = scene.ball
-        turn = turn_about(found, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
+        turn = turn_about(found, start, run._probe_normal(), radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                           friction=friction_of(scene.contact), t_end=run.t_end,
                           times=self.record_times(start.t, run.t_end))
         if turn is None or not self._end_turn(turn, Reason.TIP_SLIP):
             return turn is not None
         tau, face = onto_face(found, turn.state, gravity=scene.gravity)
         on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
-        x, y = foot(found, on.center, lambda px, py: run.landscape.evaluate(px, py, values), radius=ball.radius)
+        x, y = foot_on_face(found, on.center, lambda px, py: run.landscape.evaluate(px, py, values), radius=ball.radius)
         state = sliding.BallState(float(x), float(y), on.velocity, on.omega, on.R, self.dissipated)
         run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True

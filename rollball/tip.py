@@ -18,11 +18,12 @@ the centre's distance to the surface near T, T excluded, reaches r: ê is then t
 along that generator (its one-sided limit at T) and the ball rolls on from that face. T itself is
 taken as the point the tangent planes of the faces about it meet in (least squares over a ring of
 radius REACH about the tip the kernel found: exact for a cone, the kernel's tip is known to only
-10⁻⁹ m), and d(φ) from the slopes on a ring of that radius about T.
+10⁻⁹ m), and d(φ) from the slopes on a ring of radius NEAR about T.
 
 The turn is integrated by DOP853 at rtol 10⁻¹² until max_φ ê·d(φ) reaches 0 (``FACE``), F·ê
 reaches 0 (``LIFTOFF``: the ball leaves T), |F_t| reaches μ F·ê (``SLIP``: the friction cannot hold
-the turn, the run stops, ``tip_slip``) or the run's end (``TIME``).
+the turn, the run stops, ``tip_slip``) or the run's end (``TIME``). From a face the rolling run
+starts ONTO down it (``onto_face``, ``foot_on_face``).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .flight import FreeState
-from .ridge import LIFTOFF, NUDGE, SLIP, TIME, TOLERANCE, Turn
+from .ridge import LIFTOFF, SLIP, TIME, TOLERANCE, Turn
 
 REACH = 1e-7        # × (1 + |x| + |y|): the ring about the kernel's tip that finds T (its planes)
 NEAR = 1e-9         # × (1 + |x| + |y|): the ring about T the generators are sampled on
@@ -98,11 +99,11 @@ def _omega(e: np.ndarray, ell: np.ndarray) -> np.ndarray:
     return (5.0 / 7.0) * ell + (25.0 / 14.0) * float(np.dot(e, ell)) * e
 
 
-def turn_about(tip: Tip, start: FreeState, *, radius: float, mass: float, gravity: float, friction: float,
-               t_end: float, times: np.ndarray) -> Turn | None:
-    """The ball at ``start`` (rolling, its contact point at T: c − T of length r) turned over
-    ``tip`` until the turn ends (``ridge.Turn``, its contact T throughout), with rows at ``times``
-    (within it); None where it does not turn (holding it at T needs a pull already: it flies)."""
+def turn_about(tip: Tip, start: FreeState, normal: np.ndarray, *, radius: float, mass: float, gravity: float,
+               friction: float, t_end: float, times: np.ndarray) -> Turn | None:
+    """The ball at ``start`` (rolling on the face of unit ``normal``, its contact point at T: c − T
+    of length r) turned over ``tip`` until the turn ends (``ridge.Turn``, its contact T
+    throughout), with rows at ``times`` (within it); None where the integration fails."""
     from scipy.integrate import solve_ivp   # (scipy loads with a turn, not with the program)
 
     r, g0, mu, T = radius, gravity, friction, tip.point
@@ -110,12 +111,10 @@ def turn_about(tip: Tip, start: FreeState, *, radius: float, mass: float, gravit
     arm = start.center - T
     e0 = arm / float(np.linalg.norm(arm))
     # the rolling state reached the tip (its contact point within nanometres of T, its normal that
-    # close to ê): ċ is taken across ê and ω = ê × ċ / r plus the spin it had about the normal
-    # (|ω|² = |ċ|²/r² + spin² rolling), which keeps E to second order in that distance
+    # close to ê): ċ is taken across ê and ω = ê × ċ / r plus the spin it had about the normal,
+    # which keeps E to second order in that distance
     velocity = start.velocity - float(np.dot(start.velocity, e0)) * e0
-    spin = math.sqrt(max(float(np.dot(start.omega, start.omega) - np.dot(start.velocity, start.velocity) / (r * r)),
-                         0.0))
-    omega = np.cross(e0, velocity) / r + math.copysign(spin, float(np.dot(start.omega, e0))) * e0
+    omega = np.cross(e0, velocity) / r + float(np.dot(start.omega, normal)) * e0
     ell0 = 1.4 * omega - float(np.dot(e0, omega)) * e0
 
     def rates(_, y):
@@ -149,8 +148,8 @@ def turn_about(tip: Tip, start: FreeState, *, radius: float, mass: float, gravit
     slips.terminal, slips.direction = True, -1.0
 
     y0 = np.concatenate([e0, ell0, start.R.ravel()])
-    if not forces(y0)[0] > 0.0:
-        return None
+    if not forces(y0)[0] > 0.0:   # (holding it at T needs a pull: it leaves T at once)
+        return _turn(LIFTOFF, tip, y0, start.t, r, forces, [], [])
     if slips(start.t, y0) < 0.0:   # (the friction cannot hold the turn from its start)
         return _turn(SLIP, tip, y0, start.t, r, forces, [], [])
     rate = float(np.linalg.norm(ell0)) + math.sqrt(g0 / r)
@@ -199,7 +198,7 @@ def onto_face(tip: Tip, state: FreeState, *, gravity: float) -> tuple[float, np.
     return math.sqrt(2.0 * reach / max(pull, 1e-300)), e
 
 
-def foot(tip: Tip, center: np.ndarray, evaluate, *, radius: float) -> tuple[float, float]:
+def foot_on_face(tip: Tip, center: np.ndarray, evaluate, *, radius: float) -> tuple[float, float]:
     """The contact point (x, y) of a ball whose centre is just past a face of the tip (off the
     sphere about T), ``evaluate(x, y)`` the landscape's f, f_x, f_y there: first on the generator
     that touches the ball (``Tip.touching``), as far from T as the centre is along it, then moved
@@ -211,9 +210,11 @@ def foot(tip: Tip, center: np.ndarray, evaluate, *, radius: float) -> tuple[floa
         f, fx, fy, fxx, fxy, fyy = np.asarray(evaluate(x, y), dtype=float)[:6]
         n = np.array([-fx, -fy, 1.0])
         size = float(np.linalg.norm(n))
-        turns = [np.array([-fxx, -fxy, 0.0]), np.array([-fxy, -fyy, 0.0])]   # ∂n/∂x, ∂n/∂y
-        jacobian = np.column_stack([np.array([1.0, 0.0, fx]) + radius * (turns[0] / size - n * (n @ turns[0]) / size ** 3),
-                                    np.array([0.0, 1.0, fy]) + radius * (turns[1] / size - n * (n @ turns[1]) / size ** 3)])
+        # ∂c/∂x and ∂c/∂y: the surface's tangents plus r ∂N, with ∂n = (−f_xx, −f_xy, 0), (−f_xy, −f_yy, 0)
+        columns = [np.array([1.0, 0.0, fx]), np.array([0.0, 1.0, fy])]
+        for column, turn in zip(columns, (np.array([-fxx, -fxy, 0.0]), np.array([-fxy, -fyy, 0.0]))):
+            column += radius * (turn / size - n * float(n @ turn) / size ** 3)
+        jacobian = np.column_stack(columns)
         miss = center - (np.array([x, y, f]) + radius * n / size)
         step = np.linalg.lstsq(jacobian, miss, rcond=None)[0]
         x, y = x + step[0], y + step[1]
