@@ -18,7 +18,6 @@ honest ones with air:
 
 from __future__ import annotations
 
-import bisect
 import math
 
 import numpy as np
@@ -27,6 +26,8 @@ from .flight import Flight, FreeState, Surface
 from .trajectory import DISSIPATED
 
 RTOL = 1e-13   # DOP853's relative tolerance for the centre's motion (its error measured: tests/test_drag_flight.py)
+SEEN_AT_ONCE = 64   # a call for at most this many times keeps what they gave (the search's looks)...
+SEEN_MOST = 1024    # ...up to this many times in all (then it starts again)
 
 
 class DragFlight(Flight):
@@ -51,7 +52,7 @@ class DragFlight(Flight):
         self._solver = DOP853(self._motion, start.t, self._start, t_bound=math.inf, rtol=RTOL, atol=RTOL * scale)
         self._ends = [start.t]   # the steps' ends so far...
         self._pieces = []        # ...and their dense outputs
-        self._last = (math.nan, self._start)   # the last single time asked about, and y there
+        self._seen: dict[float, np.ndarray] = {}   # y at the times asked about lately
 
     def _motion(self, t: float, y: np.ndarray) -> np.ndarray:
         """(ċ, g − (k/m)|ċ| ċ, k |ċ|³) for y = (c, ċ, D_air)."""
@@ -64,13 +65,24 @@ class DragFlight(Flight):
         return out
 
     def _states(self, times: np.ndarray) -> np.ndarray:
-        """y = (c, ċ, D_air) at ``times`` (≥ the start), (n, 7): the steps taken on as far as the
-        latest, each time read from the dense output of the step it falls in (the start's exactly).
-        The search asks about one time at a time, mostly the same one again (its look, ``sag``,
-        ``path_time``): the last one is kept."""
+        """y = (c, ċ, D_air) at ``times`` (≥ the start), (n, 7). The search asks about a few times
+        at a time, mostly ones it asked about before (a look's gap, then ``sag``, ``path_time`` and
+        ``clear`` there): what a few times gave is kept (up to SEEN_MOST of them)."""
         times = np.asarray(times, dtype=float)
-        if len(times) == 1 and times[0] == self._last[0]:
-            return self._last[1][None, :].copy()
+        if len(times) > SEEN_AT_ONCE:
+            return self._evaluate(times)
+        keys = times.tolist()
+        missing = [i for i, key in enumerate(keys) if key not in self._seen]
+        if missing:
+            if len(self._seen) + len(missing) > SEEN_MOST:
+                self._seen.clear()
+            for i, y in zip(missing, self._evaluate(times[missing])):
+                self._seen[keys[i]] = y
+        return np.array([self._seen[key] for key in keys]).reshape(-1, 7)
+
+    def _evaluate(self, times: np.ndarray) -> np.ndarray:
+        """y at ``times``: the steps taken on as far as the latest, each time read from the dense
+        output of the step it falls in (the start's exactly)."""
         out = np.empty((len(times), 7))
         if not len(times):
             return out
@@ -81,18 +93,12 @@ class DragFlight(Flight):
                 raise FloatingPointError(f"the flight through air cannot be integrated past t = {solver.t:.6g} s")
             self._pieces.append(solver.dense_output())
             self._ends.append(solver.t)
-        last = len(self._pieces) - 1
-        if len(times) == 1:
-            i = min(max(bisect.bisect_right(self._ends, times[0]) - 1, 0), last)
-            out[0] = self._pieces[i](times[0]) if self._pieces else self._start
-        else:
-            index = np.clip(np.searchsorted(self._ends, times, side="right") - 1, 0, max(last, 0))
-            for i in np.unique(index):
-                at = index == i
-                out[at] = self._pieces[i](times[at]).T if self._pieces else self._start
+        last = max(len(self._pieces) - 1, 0)
+        index = np.clip(np.searchsorted(self._ends, times, side="right") - 1, 0, last)
+        for i in np.unique(index):
+            at = index == i
+            out[at] = self._pieces[i](times[at]).T if self._pieces else self._start
         out[times == self.start.t] = self._start
-        if len(times) == 1:
-            self._last = (float(times[0]), out[0])
         return out
 
     def centers(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
