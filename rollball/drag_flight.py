@@ -26,6 +26,8 @@ from .flight import Flight, FreeState, Surface
 from .trajectory import DISSIPATED
 
 RTOL = 1e-13   # DOP853's relative tolerance for the centre's motion (its error measured: tests/test_drag_flight.py)
+MAX_STEPS = 50_000   # DOP853's steps a flight may take (a few seconds' CPU): in thick air the motion is stiff,
+#                      the steps ≲ 3/√(g k/m) (the drag's rate at v_t), and a flight of T s takes about T √(g k/m)/3
 SEEN_AT_ONCE = 64   # a call for at most this many times keeps what they gave (the search's looks)...
 SEEN_MOST = 1024    # ...up to this many times in all (then it starts again)
 
@@ -49,7 +51,8 @@ class DragFlight(Flight):
         length = max(radius, float(np.abs(start.center).max()))
         fast = max(float(np.linalg.norm(start.velocity)), self.terminal, math.sqrt(gravity * radius))
         scale = np.array([length] * 3 + [fast] * 3 + [mass * (fast * fast + gravity * length)])
-        self._solver = DOP853(self._motion, start.t, self._start, t_bound=math.inf, rtol=RTOL, atol=RTOL * scale)
+        with np.errstate(all="ignore"):   # (its first step's choice: an overflow fails the first step)
+            self._solver = DOP853(self._motion, start.t, self._start, t_bound=math.inf, rtol=RTOL, atol=RTOL * scale)
         self._ends = [start.t]   # the steps' ends so far...
         self._pieces = []        # ...and their dense outputs
         self._seen: dict[float, np.ndarray] = {}   # y at the times asked about lately
@@ -88,9 +91,17 @@ class DragFlight(Flight):
             return out
         solver, latest = self._solver, float(times.max())
         while self._ends[-1] < latest:
-            solver.step()
+            if len(self._pieces) >= MAX_STEPS:
+                raise FloatingPointError(
+                    f"the air's drag (k = {self.drag:.6g} kg/m) is so strong that the flight after "
+                    f"t = {solver.t:.6g} s takes more than {MAX_STEPS:,} steps to integrate (the drag makes its "
+                    f"motion stiff), so the run stops")
+            with np.errstate(all="ignore"):   # (an overflow is told below)
+                solver.step()
             if solver.status == "failed" or not np.isfinite(solver.y).all():
-                raise FloatingPointError(f"the flight through air cannot be integrated past t = {solver.t:.6g} s")
+                raise FloatingPointError(
+                    f"the air's drag (k = {self.drag:.6g} kg/m) slows the flying ball faster than its flight can "
+                    f"be integrated after t = {solver.t:.6g} s, so the run stops")
             self._pieces.append(solver.dense_output())
             self._ends.append(solver.t)
         last = max(len(self._pieces) - 1, 0)

@@ -494,6 +494,9 @@ class ModeMachine:
         dissipated = self.dissipated
         try:
             landing = flight.landing(run.t_end)
+        except FloatingPointError as stiff:   # (a flight through air too thick to integrate)
+            self.flight, self.stall, run.status = None, str(stiff), Status.NONFINITE
+            return
         except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
             self.append(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
                                     if off.time > flight.start.t else np.empty(0), dissipated))

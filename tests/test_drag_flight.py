@@ -252,3 +252,23 @@ def test_new_flight_is_the_closed_form_in_vacuum_and_refuses_a_bad_drag():
     for bad in (-1.0, math.nan, math.inf):
         with pytest.raises(ValueError, match="drag"):
             DragFlight(surface, start, radius=R, mass=M, gravity=G, drag=bad)
+
+
+
+def test_air_too_thick_to_integrate_stops_the_run_saying_so():
+    """Drag so strong that DOP853 cannot take a step (ρ = 10³⁰: the ball would stop within 10⁻²⁸ s):
+    the run stops at the lift-off, status nonfinite, and the message says why."""
+    traj = simulate(liftoff({"density": 1e30, "drag_coefficient": 0.47}))
+    assert traj.status is Status.NONFINITE and "faster than its flight can be integrated" in traj.message
+    assert [change.kind for change in traj.transitions] == ["liftoff"]
+
+
+def test_a_flight_too_stiff_to_integrate_in_its_steps_stops_saying_so(monkeypatch):
+    """In thick air (k = 10⁶ kg/m: v_t = 3 mm/s) the motion is stiff and DOP853's steps are ≲ 3/√(g k/m):
+    a fall from 2 m takes about √(g k/m)/3 ≈ 1000 steps a second; more than a flight may take (here
+    300) stops the landing search with the reason."""
+    from rollball import drag_flight
+    monkeypatch.setattr(drag_flight, "MAX_STEPS", 300)
+    fall = flight("0", (0.0, 0.0, 2.0), (5.0, 0.0, 3.0), drag=1e6)
+    with pytest.raises(FloatingPointError, match="takes more than 300 steps"):
+        fall.landing(5.0)
