@@ -232,6 +232,7 @@ def test_the_liftoff_example_through_air_flies_shorter_and_lower_and_keeps_e_plu
     the air's share; across the landing E + D goes on (the impact's loss and the air's are in D)."""
     vacuum, air = simulate(liftoff()), simulate(liftoff(AIR))
     assert vacuum.status is Status.OK and air.status is Status.OK
+    assert "a flight is exact" in vacuum.message and "a flight through air is integrated apart" in air.message
     landings = [next(c for c in traj.transitions if c.kind == "landing") for traj in (vacuum, air)]
     assert landings[1].time < landings[0].time and landings[1].x < landings[0].x - 0.01
     flying = [traj.modes == FLYING for traj in (vacuum, air)]
