@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from . import kernel, sliding
+from .drag_flight import new_flight
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
 from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
@@ -508,7 +509,8 @@ class ModeMachine:
 
     def _new_flight(self, start: FreeState) -> Flight:
         scene = self.run.scene
-        return Flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity)
+        return new_flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity,
+                          drag=scene.air.drag_factor(scene.ball.radius))
 
     def record_times(self, t0: float, t1: float) -> np.ndarray:
         """The run's recording times strictly between t0 and t1 (fixed steps: every
@@ -531,6 +533,9 @@ class ModeMachine:
         dissipated = self.dissipated
         try:
             landing = flight.landing(run.t_end)
+        except FloatingPointError as stiff:   # (a flight through air too thick to integrate)
+            self.flight, self.stall, run.status = None, str(stiff), Status.NONFINITE
+            return
         except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
             self.append(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
                                     if off.time > flight.start.t else np.empty(0), dissipated))
@@ -552,7 +557,7 @@ class ModeMachine:
         bounces = hit.rebound > rest_speed(ball.radius, scene.gravity)
         if not bounces:
             hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
-        self.dissipated = dissipated = dissipated + hit.energy_lost
+        self.dissipated = dissipated = dissipated + flight.air_dissipated(np.array([t]))[0] + hit.energy_lost
         self.transitions.append(Transition(t, Change.LANDING, foot.x, foot.y, hit.normal_speed, hit.energy_lost))
         if self._enough():
             return
