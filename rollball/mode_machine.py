@@ -16,12 +16,14 @@ import math
 import numpy as np
 
 from . import kernel, sliding
+from .drag_flight import new_flight
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
 from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
+from .tip import Tip, foot_on_face, onto_face, turn_about
 from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R,
                          SLIP_SPEED, T, VELOCITY, Failure, Liftoff, Reason, Status, Transition)
 
@@ -319,7 +321,9 @@ class ModeMachine:
         start = FreeState.from_row(last)
         if info[kernel.F_LIFT_KINK] == kernel.LIFT_TIP:
             force = self._pivot_force(start, x, y)
-            if force > 0.0:   # too slow to leave the tip: the ball would roll over it, pivoting
+            if force > 0.0 and before is Mode.ROLLING and self._turn_about_tip(start, x, y):
+                return
+            if force > 0.0:   # too slow to leave the tip, and sliding: the ball would slide over it
                 self._no_liftoff()
                 self.off = Failure(Reason.PIVOT, t, x, y, force)
                 run.status = Status.DOES_NOT_FIT
@@ -371,8 +375,24 @@ class ModeMachine:
         turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                          friction=friction_of(scene.contact), t_end=run.t_end,
                          times=self.record_times(start.t, run.t_end))
-        if turn is None:
-            return False
+        if turn is None or not self._end_turn(turn, Reason.RIDGE_SLIP):
+            return turn is not None
+        # on a face: rolling on from a little past the edge
+        face = beyond if turn.how == END else ridge_line.near
+        tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
+        on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
+        foot = on.center - ball.radius * face
+        state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated,
+                                  self.causes)
+        run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        return True
+
+    def _end_turn(self, turn, slip: Reason) -> bool:
+        """A turn over a ridge or a tip (``ridge.Turn``) as the run's rows and how it ends: at the
+        run's end, stopped where the friction cannot hold it (``slip`` the reason), or off the edge
+        or tip where holding it would need a pull (a flight from there); True where it ends on a
+        face (the caller starts the rolling run there)."""
+        run = self.run
         lift = self._no_liftoff()
         self.mode = Mode.ROLLING
         self._append_turn(turn)
@@ -380,22 +400,42 @@ class ModeMachine:
         if turn.how == TIME:
             run.status = Status.OK
         elif turn.how == SLIP:
-            self.off = Failure(Reason.RIDGE_SLIP, t, cx, cy, turn.force)
+            self.off = Failure(slip, t, cx, cy, turn.force)
             run.status = Status.DOES_NOT_FIT
-        elif turn.how == LIFTOFF:   # off the edge where holding it would need a pull
+        elif turn.how == LIFTOFF:   # off the edge or tip where holding it would need a pull
             self.transitions.append(dataclasses.replace(lift, time=t, x=cx, y=cy))
             if self.first_liftoff is None:
                 self.first_liftoff = Liftoff(t, cx, cy, True)
             self.mode = Mode.FLYING
             self.flight = self._new_flight(turn.state)
-        else:   # on a face: rolling on from a little past the edge
-            face = beyond if turn.how == END else ridge_line.near
-            tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
-            on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
-            foot = on.center - ball.radius * face
-            state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated,
-                                      self.causes)
-            run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        else:
+            return True
+        return False
+
+    def _turn_about_tip(self, start: FreeState, x: float, y: float) -> bool:
+        """A rolling ball at a tip near (x, y) at ``start``, too slow to leave it, turns over it
+        (``tip.turn_about``), and then rolls on a face of it, flies off it, or stops where the
+        friction cannot hold the turn (docs/design.md §1, "A tip"); False where no tip is found
+        there to turn about, or the turn cannot be integrated (the run stops, ``pivot``)."""
+        run = self.run
+        scene = run.scene
+        values = scene.parameter_values
+        found = Tip.near(x, y, lambda xs, ys: run.landscape.evaluate(xs, ys, values))
+        if found is None:
+            return False
+        if not any(np.array_equal(found.point, known) for known in self.surface.tips):
+            self.surface.tips.append(found.point)
+        ball = scene.ball
+        turn = turn_about(found, start, run._probe_normal(), radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
+                          friction=friction_of(scene.contact), t_end=run.t_end,
+                          times=self.record_times(start.t, run.t_end))
+        if turn is None or not self._end_turn(turn, Reason.TIP_SLIP):
+            return turn is not None
+        tau, face = onto_face(found, turn.state, gravity=scene.gravity)
+        on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
+        x, y = foot_on_face(found, on.center, lambda px, py: run.landscape.evaluate(px, py, values), radius=ball.radius)
+        state = sliding.BallState(float(x), float(y), on.velocity, on.omega, on.R, self.dissipated, self.causes)
+        run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True
 
     def _append_turn(self, turn) -> None:
@@ -568,7 +608,8 @@ class ModeMachine:
 
     def _new_flight(self, start: FreeState) -> Flight:
         scene = self.run.scene
-        return Flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity)
+        return new_flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity,
+                          drag=scene.air.drag_factor(scene.ball.radius))
 
     def record_times(self, t0: float, t1: float) -> np.ndarray:
         """The run's recording times strictly between t0 and t1 (fixed steps: every
@@ -591,6 +632,9 @@ class ModeMachine:
         dissipated = self.dissipated
         try:
             landing = flight.landing(run.t_end)
+        except FloatingPointError as stiff:   # (a flight through air too thick to integrate)
+            self.flight, self.stall, run.status = None, str(stiff), Status.NONFINITE
+            return
         except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
             self.append(self._carried(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
                                                   if off.time > flight.start.t else np.empty(0), dissipated)))
@@ -612,7 +656,7 @@ class ModeMachine:
         bounces = hit.rebound > rest_speed(ball.radius, scene.gravity)
         if not bounces:
             hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
-        self.dissipated = dissipated = dissipated + hit.energy_lost
+        self.dissipated = dissipated = dissipated + flight.air_dissipated(np.array([t]))[0] + hit.energy_lost
         self.transitions.append(Transition(t, Change.LANDING, foot.x, foot.y, hit.normal_speed, hit.energy_lost))
         if self._enough():
             return

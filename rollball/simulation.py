@@ -518,7 +518,9 @@ class Simulation:
         if status is Status.OK:
             rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
             flew = any(change.kind == "landing" for change in self.transitions)
-            where = " on the surface (a flight is exact: no steps)" if flew else ""
+            through_air = self.scene.air.drag_factor(self.scene.ball.radius) > 0.0
+            where = ("" if not flew else " on the surface (a flight is exact: no steps)" if not through_air else
+                     " on the surface (a flight through air is integrated apart, to 10⁻¹³: its steps are not counted)")
             return f"reached t = {self.t_end:g} s in {self.steps} steps{where}{rejected}"
         if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"

@@ -97,6 +97,10 @@ FLIGHT_REASONS = {
                    "the ball turning over a ridge at {where} would need more friction than μ F·N to roll over "
                    "its edge (F·N = {value:.3g} N): a real ball would slide over it, which the model does not "
                    "follow"),
+    "tip_slip": ("does_not_fit", "the normal force on the tip there (N)",
+                 "the ball turning over a tip of the surface at {where} (the tip of a cone, or a like point) would "
+                 "need more friction than μ F·N to roll over it (F·N = {value:.3g} N): a real ball would slide "
+                 "about it, which the model does not follow"),
 }
 Reason = _Named("Reason", [(name.upper(), name) for name in (*REASONS, *FLIGHT_REASONS)], module=__name__)
 
