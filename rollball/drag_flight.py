@@ -23,8 +23,9 @@ import math
 import numpy as np
 
 from .flight import Flight, FreeState, Surface
-from .trajectory import DISSIPATED
+from .trajectory import DISSIPATED, ROW_CAUSES
 
+ROW_AIR = ROW_CAUSES["air"]
 RTOL = 1e-13   # DOP853's relative tolerance for the centre's motion (its error measured: tests/test_drag_flight.py)
 MAX_STEPS = 50_000   # DOP853's steps a flight may take (a few seconds' CPU): in thick air the motion is stiff,
 #                      the steps ≲ 3/√(g k/m) (the drag's rate at v_t), and a flight of T s takes about T √(g k/m)/3
@@ -148,9 +149,12 @@ class DragFlight(Flight):
         return rise + (length - ramp) / top
 
     def rows(self, times: np.ndarray, dissipated: float, guess=None) -> np.ndarray:
-        """``Flight.rows``, the energy the air took since the start added to ``dissipated``."""
+        """``Flight.rows``, the energy the air took since the start added to ``dissipated`` and in
+        the air's column (what it took before the flight the mode machine adds there)."""
         rows = super().rows(times, dissipated, guess)
-        rows[:, DISSIPATED] += self.air_dissipated(times)
+        air = self.air_dissipated(times)
+        rows[:, DISSIPATED] += air
+        rows[:, ROW_AIR] = air
         return rows
 
 

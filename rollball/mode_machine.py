@@ -656,7 +656,9 @@ class ModeMachine:
         bounces = hit.rebound > rest_speed(ball.radius, scene.gravity)
         if not bounces:
             hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
-        self.dissipated = dissipated = dissipated + flight.air_dissipated(np.array([t]))[0] + hit.energy_lost
+        air = float(flight.air_dissipated(np.array([t]))[0])
+        self.dissipated = dissipated = dissipated + air + hit.energy_lost
+        self.causes = (*self.causes[:2], self.causes[2] + air)   # (rolling resistance, spin friction, air)
         self.transitions.append(Transition(t, Change.LANDING, foot.x, foot.y, hit.normal_speed, hit.energy_lost))
         if self._enough():
             return
