@@ -21,6 +21,7 @@ from rollball import Scene
 from rollball.geometry import unit_normal
 from rollball.trajectory import CENTER, CONTACT, R, SLIDING
 
+from .budget import causes_on, floor_energy
 from .closeup import inset_place
 from .contact_view import KIND_COLORS, beyond_2011, rgba, trail_colors
 from .controller import RUNNING
@@ -50,6 +51,8 @@ class Drawing:
         w.readouts.show_contact(scene is not None and beyond_2011(scene))
         w.plots.show_contact(scene is not None and beyond_2011(scene))
         w.plots.landings = []
+        causes = causes_on(scene) if scene is not None and w.landscape is not None else ()
+        w.plots.set_budget(causes, floor_energy(scene, w.landscape) if causes else 0.0)
         if scene is not None and w.landscape is not None:
             self.draw_start(scene)
         w.plots.show_run(None, 0)
@@ -119,13 +122,15 @@ class Drawing:
         self.plotted_at = time.perf_counter()
         runs, t = w.controller.runs, w.controller.play_time
         if w.compare.active:
-            w.compare.error_plots.show_time(t)
+            w.compare.error_plots.show_time(t, w.compare.followed)
         elif runs and len(runs[0].buffer):
             # while playing, the curves grow with the ball; otherwise they show all that is computed
             buffer = runs[0].buffer
             i = buffer.index_at(t)
             w.plots.landings = [c.time for c in runs[0].transitions if c.kind == "landing"]
-            w.plots.show_run(buffer, i if w.controller.state == RUNNING else len(buffer) - 1)
+            shown = i if w.controller.state == RUNNING else len(buffer) - 1
+            w.plots.show_run(buffer, shown)
+            w.plots.show_budget(runs[0].trajectory(), shown, i)
             w.plots.set_cursor(buffer.t[i])
         if runs:
             w.timeline.set_available(w.controller.end_time)
