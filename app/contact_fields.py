@@ -35,7 +35,7 @@ FIELDS = (
     (OMEGA, "Start ω", "rad/s", "empty: rolling",
      "The initial angular velocity wx, wy, wz (world frame). Empty: the ball starts rolling "
      "(ω = N × v / r + spin·N). Needs a friction coefficient unless it rolls; the spin must then be 0."),
-    (ROLLING, "Rolling resistance", "", "",
+    (ROLLING, "Rolling resist.", "", "",
      "The rolling-resistance coefficient c_rr ≥ 0: a couple c_rr·r·F·N against the rolling, so a ball on a "
      "plane slows down at (5/7)·c_rr·g and stops; on a slope it stays at rest where tan θ ≤ c_rr. 0: none"),
     (SPIN, "Spin friction", "", "",
@@ -48,7 +48,7 @@ FIELDS = (
      "The drag coefficient C_d ≥ 0 (a smooth sphere: about 0.47); given with the density, or both 0"),
 )
 # The air's choice: (text, density, drag coefficient) filled into both fields; other values: "as typed"
-AIR_CHOICES = (("none", 0.0, 0.0), ("air, smooth ball (1.2 kg/m³, 0.47)", 1.2, 0.47))
+AIR_CHOICES = (("none", 0.0, 0.0), ("air, smooth ball", 1.2, 0.47))
 AIR_TYPED = "as typed below"
 AIR_TIP = ("Air drag: none, or air at sea level (ρ = 1.2 kg/m³) around a smooth ball (C_d = 0.47); "
            "fills the two fields below, which take any other values")
@@ -161,6 +161,8 @@ class ContactFields(QtCore.QObject):
             self.air.addItem(text, (density, drag))
         self.air.addItem(AIR_TYPED, None)
         self.air.setToolTip(AIR_TIP)
+        self.air.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.air.setMinimumContentsLength(len(AIR_TYPED))   # the panel no wider than its other fields
         self.air.activated.connect(self._air_chosen)
         self._row(form, AIR, self.air, "")
         for key in (DENSITY, DRAG):

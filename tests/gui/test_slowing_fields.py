@@ -64,11 +64,11 @@ def test_refusals_are_explained_under_the_field_in_its_words(qtbot, window):
     _type(qtbot, window, "contact.rolling_resistance", "-0.1")
     assert panel.marked == "contact.rolling_resistance"
     message = panel.contact.messages["contact.rolling_resistance"]
-    assert message.isVisible() and message.text().startswith("Rolling resistance: must not be negative")
+    assert message.isVisible() and message.text().startswith("Rolling resist.: must not be negative")
     _type(qtbot, window, "contact.rolling_resistance", "x")
-    assert panel.error_text == "Rolling resistance: not a number"
+    assert panel.error_text == "Rolling resist.: not a number"
     _type(qtbot, window, "contact.rolling_resistance", "")
-    assert panel.error_text == "Rolling resistance: missing"
+    assert panel.error_text == "Rolling resist.: missing"
     _type(qtbot, window, "contact.rolling_resistance", "0")
     assert panel.error_text == ""
     # a density without a drag coefficient: the field typed into is marked, naming the other in words
@@ -126,3 +126,13 @@ def test_a_version_3_file_saved_unchanged_in_meaning(qtbot, window, tmp_path):
     assert Scene.load(path) == Scene.load(original)
     assert json.loads(path.read_text(encoding="utf-8"))["version"] == 4
 
+
+
+def test_help_on_the_new_fields_is_the_budget_section(window):
+    from rollball_app import help as helps
+    from rollball_app.help import page_html
+
+    for key in ("contact.rolling_resistance", "air", "stop_at_rest"):
+        assert helps.topic_at(window.panel.contact.edits[key]) == "plots.html#budget"
+    page = page_html("plots.html")
+    assert 'name="budget"' in page and "Rolling resist." in page and "Drag coeff. C_d" in page
