@@ -15,6 +15,7 @@ import dataclasses
 
 import numpy as np
 import pyqtgraph as pg
+from PySide6 import QtGui
 
 from rollball import Trajectory
 from rollball.trajectory import DISSIPATION_CAUSES, ENERGY, T
@@ -28,6 +29,7 @@ ENERGY_COLOR = "#009e73"                # the ball's own energy, kinetic + poten
 ENERGY_WORDS = "E"
 BAND_ALPHA = 170                        # of 255: bands opaque enough to tell apart on a projector
 TOP_PEN = pg.mkPen("#222", width=1.5)   # the stack's top: E + ΣD
+LABEL_PITCH = 1.4                       # text heights from one of the axis' labels to the next, at least
 TITLE = "Energy budget (J)"
 SHORT_TITLE = "Budget (J)"              # with a run's name (compare mode), where four plots share a row
 assert set(CAUSE_WORDS) == set(DISSIPATION_CAUSES) == set(CAUSE_COLORS)
@@ -58,6 +60,30 @@ def floor_energy(scene, landscape) -> float:
     return m * scene.gravity * (lowest + scene.ball.radius)
 
 
+class EnergyAxis(pg.AxisItem):
+    """The budget's joules: labels only at the finest of 1, 2, 5 × 10ⁿ J that leaves them
+    ``LABEL_PITCH`` text heights apart (a short plot in presentation's large text has room for
+    few: pyqtgraph's own choice there writes 1.5 over 1.0 over 0.5)."""
+
+    def __init__(self, orientation: str = "left", **options):
+        super().__init__(orientation, **options)
+        self.enableAutoSIPrefix(False)   # joules, not mJ
+        self.setStyle(maxTextLevel=0)
+
+    def tickSpacing(self, minVal, maxVal, size):  # noqa: N802 (pyqtgraph's names)
+        span = abs(maxVal - minVal)
+        if not (np.isfinite(span) and span > 0 and size > 0):
+            return super().tickSpacing(minVal, maxVal, size)
+        pitch = LABEL_PITCH * QtGui.QFontMetricsF(self.style["tickFont"] or QtGui.QFont()).height()
+        exponent = int(np.floor(np.log10(span))) - 3
+        while True:
+            for mantissa in (1, 2, 5):
+                spacing = mantissa * 10.0 ** exponent
+                if spacing / span * size >= pitch:
+                    return [(spacing, 0.0), (spacing / (5 if mantissa != 2 else 4), 0.0)]
+            exponent += 1
+
+
 class EnergyBudget:
     """The stacked bands on a pyqtgraph plot, and their key (``key``, a label the owner places
     beside the plot: a legend inside would hide a short plot's bands) that gives each band's value
@@ -68,6 +94,7 @@ class EnergyBudget:
         """``across``: the key on one line (above the plots), else a line per band (beside it)."""
         self.plot = plot
         self.across = across
+        plot.setAxisItems({"left": EnergyAxis()})
         self.causes: tuple[str, ...] = ()
         self.key = pg.LabelItem(justify="left")
         self.key.setObjectName("budget.key")

@@ -77,7 +77,6 @@ class ErrorPlots(QtWidgets.QWidget):
             self.budget_plot.setLabel("bottom", "t", units="s")
             self.budget_plot.showGrid(x=True, y=True, alpha=0.25)
             self.budget_plot.setMouseEnabled(x=False, y=False)
-            self.budget_plot.getAxis("left").enableAutoSIPrefix(False)
             self.budget_plot.setXRange(*self.plots["energy"].viewRange()[0], padding=0.0)
             cache_axes(self.budget_plot)
             self.budget = budget.EnergyBudget(self.budget_plot, across=True)

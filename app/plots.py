@@ -214,6 +214,7 @@ class LivePlots(QtWidgets.QWidget):
         self.track_plot: pg.PlotItem | None = None
         self.budget_plot: pg.PlotItem | None = None   # where the scene can lose energy (``set_budget``)
         self.budget: EnergyBudget | None = None
+        self.arranged = list(self.plots)              # the items side by side, left to right (``_arrange``)
         self.floor = 0.0                              # the budget's zero of energy (``budget.floor_energy``)
         self.show_run(None, 0)
 
@@ -246,6 +247,7 @@ class LivePlots(QtWidgets.QWidget):
             plot.getAxis("bottom").setHeight(None if normal else int(round(30 * scale)))
         if self.budget is not None:
             self.budget.set_text_size(8 * min(scale, 1.5))
+        self._arrange()   # (what fits the width)
 
     def show_contact(self, on: bool) -> None:
         """Title the energy plot for a scene whose ball can slide or fly (``on``: its error counts
@@ -262,15 +264,45 @@ class LivePlots(QtWidgets.QWidget):
 
     def _arrange(self) -> None:
         """The plots side by side: the energy error, its budget and the budget's key beside it,
-        ‖RᵀR − I‖, the normal force, the track."""
+        ‖RᵀR − I‖, the normal force, the track. Where the width cannot hold them all in their text
+        (presentation on a 1024-pixel projector), ‖RᵀR − I‖ folds away, then the normal force: for
+        a ball that slows down the budget tells more (they come back as soon as there is room)."""
         key = self.budget.key if self.budget is not None else None
-        order = [self.plots[0], self.budget_plot, key, *self.plots[1:3], self.track_plot]
-        shown = [item for item in order if item is not None]
-        for item in shown:
-            if item in self.graphics.ci.items:
-                self.graphics.ci.removeItem(item)
-        for col, item in enumerate(shown):
+        wanted = [item for item in (self.plots[0], self.budget_plot, key, *self.plots[1:3], self.track_plot)
+                  if item is not None]
+        for plot in self.plots[1:3] if self.budget is not None else ():   # ‖RᵀR − I‖, then the force
+            if self._least_width(wanted) <= self.graphics.width():
+                break
+            wanted.remove(plot)
+        if wanted == self.arranged:
+            return
+        for item in self.arranged:
+            self.graphics.ci.removeItem(item)
+        for item in self.plots:   # a plot folded away stays in the scene, hidden: deleted with the view
+            if item not in wanted:
+                if item.scene() is None:
+                    self.graphics.scene().addItem(item)
+                item.hide()
+        for col, item in enumerate(wanted):
             self.graphics.ci.addItem(item, row=0, col=col)
+            item.show()
+        self.arranged = wanted
+
+    def _least_width(self, items) -> float:
+        """The width the items need side by side, their titles and axes in their fonts."""
+        spacing = self.graphics.ci.layout.horizontalSpacing()
+        left, _, right, _ = self.graphics.ci.layout.getContentsMargins()
+        needed = sum(item.effectiveSizeHint(QtCore.Qt.SizeHint.MinimumSize).width() for item in items)
+        return needed + spacing * (len(items) - 1) + left + right
+
+    @property
+    def folded(self) -> list[pg.PlotItem]:
+        """The plots folded away for want of width."""
+        return [plot for plot in self.plots if plot not in self.arranged]
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        self._arrange()
 
     def _new_plot(self, name: str, title: str) -> pg.PlotItem:
         """A linear plot against time with the others' time range, a title and a playback cursor."""
@@ -297,15 +329,13 @@ class LivePlots(QtWidgets.QWidget):
         self.floor = floor
         if not causes:
             if self.budget_plot is not None:
-                self.graphics.removeItem(self.budget_plot)
-                self.graphics.removeItem(self.budget.key)
                 self.cursors.remove(self.budget_plot.cursor)
                 self.plots.remove(self.budget_plot)
                 self.budget_plot = self.budget = None
+                self._arrange()
             return
         if self.budget_plot is None:
             self.budget_plot = self._new_plot("budget", BUDGET_TITLE)
-            self.budget_plot.getAxis("left").enableAutoSIPrefix(False)   # joules, not mJ
             self.budget = EnergyBudget(self.budget_plot)
             self.plots.append(self.budget_plot)
             self.cursors.append(self.budget_plot.cursor)
@@ -324,12 +354,12 @@ class LivePlots(QtWidgets.QWidget):
         and the run's ``point`` ("center" or "contact") as lines beside them, with the playback
         cursor (None: the plot goes)."""
         if self.track_plot is not None:
-            self.graphics.removeItem(self.track_plot)
             self.cursors.remove(self.track_cursor)
             self.plots.remove(self.track_plot)
             self.track_plot = None
         self.track = None if track is None else (track, point)
         if track is None:
+            self._arrange()
             return
         plot = self._new_plot("track", TRACK_TITLE.format(", ".join(track.axes)))
         self.track_cursor = plot.cursor

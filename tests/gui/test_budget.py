@@ -12,6 +12,7 @@ from rollball.trajectory import DISSIPATION_CAUSES
 from rollball_app.budget import EnergyBudget, causes_on, floor_energy
 from rollball_app.compare_runs import CompareRun
 from rollball_app.parameters import valued
+from rollball_app.plots import LivePlots
 from rollball import parse_runs
 
 from .guitools import FASTEST, run_to_end
@@ -120,3 +121,25 @@ def test_the_budget_reads_each_cause_from_the_trajectory(qtbot, window, monkeypa
     budget = window.plots.budget
     assert budget.causes == ("sliding", "impacts", "rolling", "air")
     assert budget.values["rolling"] == pytest.approx(0.3) and budget.values["air"] == pytest.approx(0.1)
+
+
+@pytest.mark.parametrize(("width", "scale", "folded"), [(1920, 2.0, []), (1024, 2.0, ["plot.orthogonality", "plot.force"]),
+                                                         (1024, 1.0, [])])
+def test_what_the_width_cannot_hold_folds_away_the_budget_stays(qtbot, width, scale, folded):
+    """Presentation on a 1024-pixel projector: text twice as large, four plots and the key do not
+    fit side by side; ‖RᵀR − I‖ and then the normal force fold away, every plot left is whole."""
+    plots = LivePlots()
+    qtbot.addWidget(plots)
+    plots.resize(width, 190)
+    plots.show()
+    qtbot.waitExposed(plots)
+    plots.set_budget(("sliding", "impacts", "rolling", "spin", "air"), 0.0)
+    plots.set_font_scale(scale)
+    by = {cause: np.linspace(0.0, 0.123, 3) for cause in DISSIPATION_CAUSES}
+    plots.budget.show(np.array([0.0, 1.0, 2.0]), np.array([1.0, 0.5, 0.4]), by)   # the key at its widest
+    plots.resize(width + 1, 190)   # laid out again with the key's values
+    qtbot.wait(10)
+    assert [plot.objectName() for plot in plots.folded] == folded
+    assert plots.budget_plot in plots.arranged
+    for item in plots.arranged:
+        assert item.sceneBoundingRect().right() <= plots.graphics.width() + 1
