@@ -12,7 +12,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from . import budget
 from .readouts import distinct_names
-from .plots import FLOOR, DecadeAxis, TimeAxis, cache_axes, fit_decades, thinned
+from .plots import FLOOR, DecadeAxis, TimeAxis, cache_axes, fit_decades, place_row, thinned
 
 PANELS = (("contact", "Contact point error (m)"), ("energy", "Relative energy error"),
           ("orthogonality", "‖RᵀR − I‖"))
@@ -60,6 +60,7 @@ class ErrorPlots(QtWidgets.QWidget):
         self.budget: budget.EnergyBudget | None = None
         self.floor = 0.0
         self.followed = 0                             # the run whose budget is shown
+        self.arranged = list(self.plots.values())     # the panels side by side (``_arrange``)
         self.scale = self.words = 1.0                 # the text's scale, the titles' (``set_font_scale``)
 
     def set_budget(self, causes, floor: float = 0.0) -> None:
@@ -67,11 +68,11 @@ class ErrorPlots(QtWidgets.QWidget):
         energy counted from ``floor`` (J); none where no cause is on."""
         self.floor = floor
         if self.budget_plot is not None and not causes:
-            self.graphics.removeItem(self.budget_plot)
             self.graphics.removeItem(self.budget.key)
             self.graphics.ci.removeItem(self.legend)
             self.graphics.addItem(self.legend, row=0, col=0, colspan=len(PANELS))
             self.budget_plot = self.budget = None
+            self._arrange()
         if causes and self.budget_plot is None:
             self.budget_plot = pg.PlotItem(axisItems={"bottom": TimeAxis()})
             self.budget_plot.setLabel("bottom", "t", units="s")
@@ -80,18 +81,22 @@ class ErrorPlots(QtWidgets.QWidget):
             self.budget_plot.setXRange(*self.plots["energy"].viewRange()[0], padding=0.0)
             cache_axes(self.budget_plot)
             self.budget = budget.EnergyBudget(self.budget_plot, across=True)
-            order = [self.plots["contact"], self.plots["energy"], self.budget_plot, self.plots["orthogonality"]]
-            for plot in self.plots.values():
-                self.graphics.ci.removeItem(plot)
-            for col, item in enumerate(order):
-                self.graphics.ci.addItem(item, row=1, col=col)
             self.graphics.ci.removeItem(self.legend)   # the runs' legend over the errors, the key over the budget
             self.graphics.addItem(self.legend, row=0, col=0, colspan=2)
             self.graphics.addItem(self.budget.key, row=0, col=2, colspan=2)
+            self._arrange()
             self.set_font_scale(self.scale)
         if self.budget is not None and self.budget.causes != tuple(causes):
             self.budget.set_causes(causes)
         self._title_budget()
+
+    def _arrange(self) -> None:
+        """The panels side by side, the budget beside the energy error; where the width cannot
+        hold the four (presentation on a 1024-pixel projector), ‖RᵀR − I‖ folds away until there is room."""
+        plots = self.plots
+        wanted = [plots["contact"], plots["energy"], self.budget_plot, plots["orthogonality"]]
+        folding = [plots["orthogonality"]] if self.budget_plot is not None else []
+        self.arranged = place_row(self.graphics, self.arranged, [p for p in wanted if p is not None], folding, row=1)
 
     def _title_budget(self) -> None:
         """The budget's title names the run it shows (the one followed)."""
@@ -124,6 +129,7 @@ class ErrorPlots(QtWidgets.QWidget):
         self.legend.opts["labelTextSize"] = f"{8 * words:g}pt"
         for _, label in self.legend.items:
             label.setText(label.text, size=f"{8 * words:g}pt")
+        self._arrange()
         self._fit_legend()
 
     def set_runs(self, runs, t_end: float) -> None:
@@ -164,6 +170,7 @@ class ErrorPlots(QtWidgets.QWidget):
 
     def resizeEvent(self, event) -> None:
         super().resizeEvent(event)
+        self._arrange()
         self._fit_legend()
 
     def _fit_legend(self) -> None:

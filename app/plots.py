@@ -73,6 +73,36 @@ def thinned(n: int) -> np.ndarray:
     return np.r_[np.arange(0, n, stride), n - 1] if n else np.zeros(0, dtype=int)
 
 
+def least_width(graphics: pg.GraphicsLayoutWidget, items) -> float:
+    """The width ``items`` need side by side in the view's layout, their titles and axes in their fonts."""
+    layout = graphics.ci.layout
+    left, _, right, _ = layout.getContentsMargins()
+    needed = sum(item.effectiveSizeHint(QtCore.Qt.SizeHint.MinimumSize).width() for item in items)
+    return needed + layout.horizontalSpacing() * (len(items) - 1) + left + right
+
+
+def place_row(graphics: pg.GraphicsLayoutWidget, placed: list, wanted: list, folding, row: int) -> list:
+    """Lay ``wanted`` out side by side in ``row`` of the view's layout, in place of ``placed``,
+    leaving out those of ``folding`` in turn while the width cannot hold them; returns what is
+    placed. An item left out stays in the scene, hidden (it is deleted with the view)."""
+    wanted = list(wanted)
+    for item in folding:
+        if least_width(graphics, wanted) <= graphics.width():
+            break
+        wanted.remove(item)
+    if wanted == placed:
+        return placed
+    for item in placed:
+        graphics.ci.removeItem(item)
+        if item not in wanted:
+            graphics.scene().addItem(item)
+            item.hide()
+    for col, item in enumerate(wanted):
+        graphics.ci.addItem(item, row=row, col=col)
+        item.show()
+    return wanted
+
+
 class DecadeAxis(pg.AxisItem):
     """A log axis with labels only at powers of ten, spaced to fit: every decade, or every 2nd,
     3rd, 5th, … when the axis is short for its span; unlabelled ticks at the other decades and,
@@ -270,30 +300,8 @@ class LivePlots(QtWidgets.QWidget):
         key = self.budget.key if self.budget is not None else None
         wanted = [item for item in (self.plots[0], self.budget_plot, key, *self.plots[1:3], self.track_plot)
                   if item is not None]
-        for plot in self.plots[1:3] if self.budget is not None else ():   # ‖RᵀR − I‖, then the force
-            if self._least_width(wanted) <= self.graphics.width():
-                break
-            wanted.remove(plot)
-        if wanted == self.arranged:
-            return
-        for item in self.arranged:
-            self.graphics.ci.removeItem(item)
-        for item in self.plots:   # a plot folded away stays in the scene, hidden: deleted with the view
-            if item not in wanted:
-                if item.scene() is None:
-                    self.graphics.scene().addItem(item)
-                item.hide()
-        for col, item in enumerate(wanted):
-            self.graphics.ci.addItem(item, row=0, col=col)
-            item.show()
-        self.arranged = wanted
-
-    def _least_width(self, items) -> float:
-        """The width the items need side by side, their titles and axes in their fonts."""
-        spacing = self.graphics.ci.layout.horizontalSpacing()
-        left, _, right, _ = self.graphics.ci.layout.getContentsMargins()
-        needed = sum(item.effectiveSizeHint(QtCore.Qt.SizeHint.MinimumSize).width() for item in items)
-        return needed + spacing * (len(items) - 1) + left + right
+        folding = self.plots[1:3] if self.budget is not None else []   # ‖RᵀR − I‖, then the force
+        self.arranged = place_row(self.graphics, self.arranged, wanted, folding, row=0)
 
     @property
     def folded(self) -> list[pg.PlotItem]:

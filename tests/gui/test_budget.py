@@ -12,6 +12,7 @@ from rollball.trajectory import DISSIPATION_CAUSES
 from rollball_app.budget import EnergyBudget, causes_on, floor_energy
 from rollball_app.compare_runs import CompareRun
 from rollball_app.parameters import valued
+from rollball_app.error_plots import ErrorPlots
 from rollball_app.plots import LivePlots
 from rollball import parse_runs
 
@@ -141,5 +142,21 @@ def test_what_the_width_cannot_hold_folds_away_the_budget_stays(qtbot, width, sc
     qtbot.wait(10)
     assert [plot.objectName() for plot in plots.folded] == folded
     assert plots.budget_plot in plots.arranged
+    for item in plots.arranged:
+        assert item.sceneBoundingRect().right() <= plots.graphics.width() + 1
+
+
+@pytest.mark.parametrize(("width", "folded"), [(1920, False), (1024, True)])
+def test_compare_modes_plots_fold_their_orthogonality_for_the_budget_where_narrow(qtbot, width, folded):
+    plots = ErrorPlots()
+    qtbot.addWidget(plots)
+    plots.resize(width, 260)
+    plots.show()
+    qtbot.waitExposed(plots)
+    plots.set_budget(("sliding", "impacts"), 0.0)
+    plots.set_font_scale(2.0)
+    qtbot.wait(10)
+    assert (plots.plots["orthogonality"] not in plots.arranged) == folded
+    assert plots.budget_plot in plots.arranged and plots.plots["energy"] in plots.arranged
     for item in plots.arranged:
         assert item.sceneBoundingRect().right() <= plots.graphics.width() + 1
