@@ -139,9 +139,10 @@ class EnergyBudget:
         index = int(picked[-1])
         upto = dataclasses.replace(trajectory, data=trajectory.data[: index + 1])
         by = upto.dissipated_by   # over every row: a cause's share is found interval by interval
-        self.show(upto.data[picked, T], upto.data[picked, ENERGY] - floor,
-                  {cause: values[picked] for cause, values in by.items()},
-                  at=int(np.searchsorted(picked, min(at, index), side="right")) - 1)
+        energy = upto.data[:, ENERGY] - floor
+        self.show(upto.data[picked, T], energy[picked], {cause: values[picked] for cause, values in by.items()})
+        row = min(at, index)   # the key at the very row shown, not the nearest one drawn
+        self._say({"energy": float(energy[row]), **{cause: float(by[cause][row]) for cause in self.causes}})
 
     def show(self, t: np.ndarray, energy: np.ndarray, dissipated_by: dict[str, np.ndarray], at: int | None = None) -> None:
         """Rows' times, the ball's energy above the floor and the energy each cause has taken so

@@ -160,3 +160,42 @@ def test_compare_modes_plots_fold_their_orthogonality_for_the_budget_where_narro
     assert plots.budget_plot in plots.arranged and plots.plots["energy"] in plots.arranged
     for item in plots.arranged:
         assert item.sceneBoundingRect().right() <= plots.graphics.width() + 1
+
+
+def _spinning_top(tmp_path, stop_at_rest: bool):
+    """A ball spinning in place on a plane, ω₀ = 20 rad/s about the normal: spin friction μ_s = 0.1
+    stops it at t* = 2 r ω₀ / (5 μ_s g), having taken all of its energy ½ (2/5) m r² ω₀² = 0.8 J."""
+    scene = Scene.from_dict({
+        "format": "rollball-scene", "version": 4, "landscape": "0", "ball": {"radius": 0.1, "mass": 1.0},
+        "start": {"x": 0.0, "y": 0.0, "vx": 0.0, "vy": 0.0, "spin": 0.0, "omega": [0.0, 0.0, 20.0]},
+        "contact": {"friction": 0.3, "restitution": 0.0, "after_liftoff": "fly", "spin_friction": 0.1},
+        "stop_at_rest": stop_at_rest, "duration": 3.0, "view": {"min": -1.0, "max": 1.0, "step": 0.1}})
+    path = tmp_path / "top.json"
+    scene.save(path)
+    return path, 2 * 0.1 * 20.0 / (5 * 0.1 * scene.gravity)
+
+
+def test_a_top_stopped_by_spin_friction_the_budget_the_rest_marker_and_the_last_word(qtbot, window, tmp_path):
+    path, rest = _spinning_top(tmp_path, stop_at_rest=True)
+    window.files.open_scene(path, remember=False)
+    run_to_end(qtbot, window)
+    budget = window.plots.budget
+    assert budget.causes == ("sliding", "impacts", "spin")
+    assert budget.values["spin"] == pytest.approx(0.8, rel=1e-9) and budget.values["energy"] == pytest.approx(0.0, abs=1e-9)
+    assert np.ptp(budget.total.yData) < 1e-9
+    rests = [marker for marker in window.timeline.markers if marker.kind == "rest"]
+    assert len(rests) == 1 and rests[0].time == pytest.approx(rest, rel=1e-9)
+    assert "comes to rest" in window.message.text()
+
+
+def test_a_ball_held_spinning_and_then_still_reads_resting_to_the_end(qtbot, window, tmp_path):
+    path, rest = _spinning_top(tmp_path, stop_at_rest=False)
+    window.files.open_scene(path, remember=False)
+    run_to_end(qtbot, window)
+    assert window.controller.buffer.end_time == pytest.approx(3.0)   # on to its duration, the ball still
+    assert window.readouts["mode"].text() == "resting"
+    window.runs.seek(rest / 2)   # spinning in place, held: resting too, spin friction taking ½ I ω² as ω falls linearly
+    buffer = window.controller.buffer
+    t = buffer.t[buffer.index_at(rest / 2)]
+    assert window.readouts["mode"].text() == "resting"
+    assert window.plots.budget.values["spin"] == pytest.approx(0.8 * (1 - (1 - t / rest) ** 2), rel=1e-6)
