@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from rollball import Scene
+from rollball import Scene, Status
 from rollball.geometry import unit_normal
 from rollball.trajectory import CENTER, CONTACT, R, SLIDING
 
@@ -114,7 +114,10 @@ class Drawing:
         if force or time.perf_counter() - self.plotted_at >= PLOT_INTERVAL:
             self.plot()   # in the same frame as the 3-D view: the window is composed once
         shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
-        w.progress.setValue(int(round(1000 * min(1.0, shown / w.controller.t_end))))
+        span = w.controller.t_end
+        if w.controller.computed and all(run.simulation.status is Status.OK for run in runs):
+            span = w.controller.end_time   # a run that came to rest ended there: played to it is all of it
+        w.progress.setValue(int(round(1000 * min(1.0, shown / span))))
 
     def plot(self) -> None:
         """Bring the plots, and the time line's computed span and events, up to the shown time."""

@@ -186,6 +186,7 @@ def test_a_top_stopped_by_spin_friction_the_budget_the_rest_marker_and_the_last_
     rests = [marker for marker in window.timeline.markers if marker.kind == "rest"]
     assert len(rests) == 1 and rests[0].time == pytest.approx(rest, rel=1e-9)
     assert "comes to rest" in window.message.text()
+    assert window.progress.value() == window.progress.maximum()   # played to its end: the rest
 
 
 def test_a_ball_held_spinning_and_then_still_reads_resting_to_the_end(qtbot, window, tmp_path):
