@@ -144,7 +144,8 @@ class EnergyBudget:
         row = min(at, index)   # the key at the very row shown, not the nearest one drawn
         self._say({"energy": float(energy[row]), **{cause: float(by[cause][row]) for cause in self.causes}})
 
-    def show(self, t: np.ndarray, energy: np.ndarray, dissipated_by: dict[str, np.ndarray], at: int | None = None) -> None:
+    def show(self, t: np.ndarray, energy: np.ndarray, dissipated_by: dict[str, np.ndarray],
+             at: int | None = None) -> None:
         """Rows' times, the ball's energy above the floor and the energy each cause has taken so
         far (every cause of ``DISSIPATION_CAUSES``, zeros where it is off); the key's values
         at row ``at`` (None: the last)."""
@@ -177,7 +178,8 @@ class EnergyBudget:
             value = values.get(name)
             lines.append(f'<span style="color:{color}">■</span>&nbsp;{words}'
                          + ("" if value is None else f"&nbsp;{value:.3g}&nbsp;J"))
-        self.key.setText(("&nbsp;&nbsp; " if self.across else "<br>").join(lines), size=f"{self.text_size:g}pt", color="#222")
+        text = ("&nbsp;&nbsp; " if self.across else "<br>").join(lines)
+        self.key.setText(text, size=f"{self.text_size:g}pt", color="#222")
 
     def set_text_size(self, points: float) -> None:
         self.text_size = points

@@ -10,11 +10,10 @@ from rollball import Scene, Trajectory
 from rollball.examples import EXAMPLES_DIR
 from rollball.trajectory import DISSIPATION_CAUSES
 from rollball_app.budget import EnergyBudget, causes_on, floor_energy
-from rollball_app.compare_runs import CompareRun
+from rollball_app.controller import RUNNING
 from rollball_app.parameters import valued
 from rollball_app.error_plots import ErrorPlots
 from rollball_app.plots import LivePlots
-from rollball import parse_runs
 
 from .guitools import FASTEST, run_to_end
 from .test_compare import compare_to_end
@@ -124,8 +123,8 @@ def test_the_budget_reads_each_cause_from_the_trajectory(qtbot, window, monkeypa
     assert budget.values["rolling"] == pytest.approx(0.3) and budget.values["air"] == pytest.approx(0.1)
 
 
-@pytest.mark.parametrize(("width", "scale", "folded"), [(1920, 2.0, []), (1024, 2.0, ["plot.orthogonality", "plot.force"]),
-                                                         (1024, 1.0, [])])
+@pytest.mark.parametrize(("width", "scale", "folded"),
+                         [(1920, 2.0, []), (1024, 2.0, ["plot.orthogonality", "plot.force"]), (1024, 1.0, [])])
 def test_what_the_width_cannot_hold_folds_away_the_budget_stays(qtbot, width, scale, folded):
     """Presentation on a 1024-pixel projector: text twice as large, four plots and the key do not
     fit side by side; ‖RᵀR − I‖ and then the normal force fold away, every plot left is whole."""
@@ -181,7 +180,8 @@ def test_a_top_stopped_by_spin_friction_the_budget_the_rest_marker_and_the_last_
     run_to_end(qtbot, window)
     budget = window.plots.budget
     assert budget.causes == ("sliding", "impacts", "spin")
-    assert budget.values["spin"] == pytest.approx(0.8, rel=1e-9) and budget.values["energy"] == pytest.approx(0.0, abs=1e-9)
+    assert budget.values["spin"] == pytest.approx(0.8, rel=1e-9)
+    assert budget.values["energy"] == pytest.approx(0.0, abs=1e-9)
     assert np.ptp(budget.total.yData) < 1e-9
     rests = [marker for marker in window.timeline.markers if marker.kind == "rest"]
     assert len(rests) == 1 and rests[0].time == pytest.approx(rest, rel=1e-9)
@@ -200,3 +200,17 @@ def test_a_ball_held_spinning_and_then_still_reads_resting_to_the_end(qtbot, win
     t = buffer.t[buffer.index_at(rest / 2)]
     assert window.readouts["mode"].text() == "resting"
     assert window.plots.budget.values["spin"] == pytest.approx(0.8 * (1 - (1 - t / rest) ** 2), rel=1e-6)
+
+
+def test_the_budget_grows_with_the_ball_while_it_plays(qtbot, window):
+    window.files.open_scene(EXAMPLES_DIR / "billiard.json", remember=False)
+    controller = window.controller
+    window.speed.setCurrentIndex(window.speed.findText("Real time"))
+    window.runs.start()
+    qtbot.waitUntil(lambda: controller.state == RUNNING and controller.play_time > 0.3, timeout=60_000)
+    window.drawing.plot()   # as a frame does
+    buffer, budget = controller.buffer, window.plots.budget
+    shown = buffer.t[buffer.index_at(controller.play_time)]
+    assert budget.tops["energy"].xData[-1] == shown < 2.0   # up to the ball's moment, not the end
+    assert budget.values["sliding"] == pytest.approx(2 / 7 * 2.0, rel=1e-3)   # it rolls from t* = 0.29 s on
+    window.runs.stop()
