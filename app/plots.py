@@ -83,13 +83,19 @@ def least_width(graphics: pg.GraphicsLayoutWidget, items) -> float:
 
 def place_row(graphics: pg.GraphicsLayoutWidget, placed: list, wanted: list, folding, row: int) -> list:
     """Lay ``wanted`` out side by side in ``row`` of the view's layout, in place of ``placed``,
-    leaving out those of ``folding`` in turn while the width cannot hold them; returns what is
-    placed. An item left out stays in the scene, hidden (it is deleted with the view)."""
-    wanted = list(wanted)
+    leaving out those of ``folding`` in turn while the width cannot hold them (and taking back
+    one left out earlier where it fits alone); returns what is placed. An item left out stays in
+    the scene, hidden (it is deleted with the view)."""
+    every, wanted, left_out = list(wanted), list(wanted), []
     for item in folding:
         if least_width(graphics, wanted) <= graphics.width():
             break
         wanted.remove(item)
+        left_out.append(item)
+    for item in left_out[:-1]:   # one folded earlier may fit alone where the last one folded did not
+        trial = [other for other in every if other in wanted or other is item]
+        if least_width(graphics, trial) <= graphics.width():
+            wanted = trial
     if wanted == placed:
         return placed
     for item in placed:

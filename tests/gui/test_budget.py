@@ -13,7 +13,7 @@ from rollball_app.budget import EnergyBudget, causes_on, floor_energy
 from rollball_app.controller import RUNNING
 from rollball_app.parameters import valued
 from rollball_app.error_plots import ErrorPlots
-from rollball_app.plots import LivePlots
+from rollball_app.plots import LivePlots, least_width
 
 from .guitools import FASTEST, run_to_end
 from .test_compare import compare_to_end
@@ -214,3 +214,20 @@ def test_the_budget_grows_with_the_ball_while_it_plays(qtbot, window):
     assert budget.tops["energy"].xData[-1] == shown < 2.0   # up to the ball's moment, not the end
     assert budget.values["sliding"] == pytest.approx(2 / 7 * 2.0, rel=1e-3)   # it rolls from t* = 0.29 s on
     window.runs.stop()
+
+
+def test_a_plot_folded_first_comes_back_where_it_fits_alone(qtbot):
+    """‖RᵀR − I‖ folds first; where the normal force must fold too but ‖RᵀR − I‖ alone fits (a
+    1024-pixel window beside the Scene panel), ‖RᵀR − I‖ is shown."""
+    plots = LivePlots()
+    qtbot.addWidget(plots)
+    plots.resize(1920, 190)
+    plots.show()
+    qtbot.waitExposed(plots)
+    plots.set_budget(("sliding", "impacts", "spin"), 0.0)
+    energy, orthogonality, force = plots.plots[:3]
+    width = least_width(plots.graphics, [energy, plots.budget_plot, plots.budget.key, orthogonality]) + 4
+    assert least_width(plots.graphics, [energy, plots.budget_plot, plots.budget.key, force]) > width
+    plots.resize(round(width), 190)
+    qtbot.wait(10)
+    assert plots.folded == [force]
