@@ -185,7 +185,7 @@ def test_a_top_stopped_by_spin_friction_the_budget_the_rest_marker_and_the_last_
     assert np.ptp(budget.total.yData) < 1e-9
     rests = [marker for marker in window.timeline.markers if marker.kind == "rest"]
     assert len(rests) == 1 and rests[0].time == pytest.approx(rest, rel=1e-9)
-    assert "comes to rest" in window.message.text()
+    assert "comes to rest" in window.message.text() and "; rest at" not in window.message.text()   # said once
     assert window.progress.value() == window.progress.maximum()   # played to its end: the rest
 
 
@@ -195,6 +195,7 @@ def test_a_ball_held_spinning_and_then_still_reads_resting_to_the_end(qtbot, win
     run_to_end(qtbot, window)
     assert window.controller.buffer.end_time == pytest.approx(3.0)   # on to its duration, the ball still
     assert window.readouts["mode"].text() == "resting"
+    assert f"rest at t = {rest:.4g} s" in window.message.text()   # the run went on: its last word says when
     window.runs.seek(rest / 2)   # spinning in place, held: resting too, spin friction taking ½ I ω² as ω falls linearly
     buffer = window.controller.buffer
     t = buffer.t[buffer.index_at(rest / 2)]
