@@ -29,7 +29,7 @@ ENERGY_COLOR = "#009e73"                # the ball's own energy, kinetic + poten
 ENERGY_WORDS = "E"
 BAND_ALPHA = 170                        # of 255: bands opaque enough to tell apart on a projector
 TOP_PEN = pg.mkPen("#222", width=1.5)   # the stack's top: E + ΣD
-LABEL_PITCH = 1.4                       # text heights from one of the axis' labels to the next, at least
+LABEL_PITCH = 1.2                       # text heights from one of the axis' labels to the next, at least
 TITLE = "Energy budget (J)"
 SHORT_TITLE = "Budget (J)"              # with a run's name (compare mode), where four plots share a row
 assert set(CAUSE_WORDS) == set(DISSIPATION_CAUSES) == set(CAUSE_COLORS)
