@@ -91,7 +91,7 @@ class EnergyBudget:
     draws rows."""
 
     def __init__(self, plot: pg.PlotItem, across: bool = False):
-        """``across``: the key on one line (above the plots), else a line per band (beside it)."""
+        """``across``: the key two bands a line (above the plots), else a line per band (beside it)."""
         self.plot = plot
         self.across = across
         plot.setAxisItems({"left": EnergyAxis()})
@@ -178,7 +178,9 @@ class EnergyBudget:
             value = values.get(name)
             lines.append(f'<span style="color:{color}">■</span>&nbsp;{words}'
                          + ("" if value is None else f"&nbsp;{value:.3g}&nbsp;J"))
-        text = ("&nbsp;&nbsp; " if self.across else "<br>").join(lines)
+        if self.across:   # two bands a line: the key above the plots no wider than two of them
+            lines = ["&nbsp;&nbsp; ".join(lines[k:k + 2]) for k in range(0, len(lines), 2)]
+        text = "<br>".join(lines)
         self.key.setText(text, size=f"{self.text_size:g}pt", color="#222")
 
     def set_text_size(self, points: float) -> None:
