@@ -152,12 +152,15 @@ def test_compare_modes_plots_fold_their_orthogonality_for_the_budget_where_narro
     plots.resize(width, 260)
     plots.show()
     qtbot.waitExposed(plots)
-    plots.set_budget(("sliding", "impacts"), 0.0)
+    plots.set_budget(DISSIPATION_CAUSES, 0.0)
     plots.set_font_scale(2.0)
+    by = {cause: np.linspace(0.0, 0.123, 3) for cause in DISSIPATION_CAUSES}
+    plots.budget.show(np.array([0.0, 1.0, 2.0]), np.array([1.0, 0.5, 0.4]), by)   # the key at its widest
+    plots.resize(width + 1, 260)
     qtbot.wait(10)
     assert (plots.plots["orthogonality"] not in plots.arranged) == folded
     assert plots.budget_plot in plots.arranged and plots.plots["energy"] in plots.arranged
-    for item in plots.arranged:
+    for item in [*plots.arranged, plots.budget.key]:   # the key above them widens nothing
         assert item.sceneBoundingRect().right() <= plots.graphics.width() + 1
 
 
