@@ -49,6 +49,11 @@ def test_the_airs_choice_fills_both_fields_and_typing_shows_which_it_is(qtbot, w
     assert (window.scene.air.density, window.scene.air.drag_coefficient) == (1.2, 0.47)
     assert (contact.text("air.density"), contact.text("air.drag_coefficient")) == ("1.2", "0.47")
     assert window.undo_stack.undoText() == "Change air"
+    window.undo_stack.undo()   # one step: both values and the choice back
+    assert window.scene.air.density == 0.0 and contact.air.currentText() == "none"
+    assert contact.text("air.drag_coefficient") == "0.0"
+    window.undo_stack.redo()
+    assert contact.air.currentIndex() == 1 and window.scene.air.drag_coefficient == 0.47
     _type(qtbot, window, "air.drag_coefficient", "0.3")
     assert window.scene.air.drag_coefficient == 0.3 and contact.air.currentText().startswith("as typed")
     _type(qtbot, window, "air.drag_coefficient", "0.47")
