@@ -254,7 +254,7 @@ SCENE_TEXTS = {
         (_scene('"landscape": "x", "view": {"step": 0}'), "view.step"),
         (_scene('"landscape": "x", "integrator": {"method": "rk45"}'), "integrator.method"),
         (_scene('"landscape": "x", "integrator": {"method": "RK4"}'), "integrator.method"),
-        ('{"format": "rollball-scene", "version": 4, "landscape": "x"}', "version"),
+        ('{"format": "rollball-scene", "version": 5, "landscape": "x"}', "version"),
         ('{"format": "rollball-scene", "version": 0, "landscape": "x"}', "version"),
         ('{"format": "something-else", "version": 1, "landscape": "x"}', "format"),
     ],

@@ -138,7 +138,7 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
         table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel,
                                                float(connect_timeout), float(worker_timeout))
     table.seconds = time.perf_counter() - started
-    from ..bench.report import machine
+    from ..comparison import machine
     table.machine = machine()
     return table
 
