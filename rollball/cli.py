@@ -72,6 +72,19 @@ def _method(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+# Scene values ``simulate`` overrides (version 4): flag, dotted key, metavar, help. The text is
+# handed to the scene as it is given, so that the scene refuses a bad one naming its key.
+SCENE_FLAGS = (
+    ("--rolling-resistance", "contact.rolling_resistance", "C",
+     "rolling resistance c_rr >= 0: a couple c_rr r F_n against the rolling"),
+    ("--spin-friction", "contact.spin_friction", "M",
+     "spin friction mu_s >= 0: a couple mu_s r F_n against the spin about the normal"),
+    ("--air-density", "air.density", "RHO", "air density in kg/m3 (air 1.2), with --drag-coefficient"),
+    ("--drag-coefficient", "air.drag_coefficient", "CD",
+     "drag coefficient (a smooth sphere 0.47), with --air-density"),
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
@@ -105,6 +118,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--record-dt", type=_positive_float, metavar="T",
                      help="record at multiples of T seconds and at the end (adaptive; "
                           "default: every accepted step)")
+    for flag, key, metavar, text in SCENE_FLAGS:
+        sim.add_argument(flag, dest=key, metavar=metavar, help=f"{text} ({key})")
+    rest = sim.add_mutually_exclusive_group()
+    rest.add_argument("--stop-at-rest", dest="stop_at_rest", action="store_true", default=None,
+                      help="end the run where the ball comes to rest (stop_at_rest; by default the scene says)")
+    rest.add_argument("--no-stop-at-rest", dest="stop_at_rest", action="store_false",
+                      help="go on to the end time in mode resting once the ball is at rest")
     sim.add_argument("--csv", metavar="OUT.csv", type=_output_file,
                      help="write the trajectory as CSV (- for standard output; the summary then "
                           "goes to standard error)")
@@ -238,6 +258,9 @@ def _simulate(args) -> int:
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
+    scene = _overridden(scene, args)
+    if not isinstance(scene, Scene):
+        return scene
     to_stdout = args.csv == STDOUT
     if args.csv and not to_stdout:
         try:  # before the run: a refused target must not cost the run
@@ -272,6 +295,34 @@ def _simulate(args) -> int:
         except OSError as e:
             return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
+
+
+def _overridden(scene, args):
+    """The scene with the values its flags give (``SCENE_FLAGS``, --no-stop-at-rest), or (after a
+    one-line message naming the flag and the key) exit status 2."""
+    import dataclasses
+
+    from .scene import SceneError
+    from .sweeps.grid import with_values
+
+    given = {key: getattr(args, key) for _, key, _, _ in SCENE_FLAGS if getattr(args, key) is not None}
+    values = {key: _number_or_text(text) for key, text in given.items()}
+    try:
+        if args.stop_at_rest is not None:
+            scene = dataclasses.replace(scene, stop_at_rest=args.stop_at_rest)
+        return with_values(scene, list(values), list(values.values()))
+    except SceneError as e:
+        named = [flag for flag, key, _, _ in SCENE_FLAGS if key in given and key == e.key] or [
+            flag for flag, key, _, _ in SCENE_FLAGS if key in given]   # (air's other half: what was given)
+        return _fail(f"{' '.join(named)}: {e}")
+
+
+def _number_or_text(text: str):
+    """A flag's number, or its text as given (the scene refuses it naming the key)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def _sweep(args) -> int:

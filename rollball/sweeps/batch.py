@@ -59,7 +59,7 @@ class Result:
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
     """Every sweepable key's value per run: the varied column or the scene's own value."""
-    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX)]   # (the batch loop's runs roll)
+    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX) and key not in DISSIPATION_KEYS]   # (they roll)
     keys += [PARAMETER_PREFIX + name for name in scene.parameter_names]
     return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
             for key in keys}
@@ -117,11 +117,16 @@ def _landscape(scene: Scene):
 CONTACT_PREFIX = "contact."
 
 
+# Keys that give a rolling ball a loss of energy, and so a rest (scene version 4).
+DISSIPATION_KEYS = ("contact.rolling_resistance", "contact.spin_friction", "air.density", "air.drag_coefficient")
+
+
 def changes_mode(scene: Scene, keys=()) -> bool:
-    """Whether the scene's contact can change mode (else it is the 2011 model: the batch loop's),
-    or a sweep varying ``keys`` gives it a friction."""
+    """Whether the runs go through ``Simulation`` rather than the batch loop, which runs the 2011
+    model only (a ball rolling for ever): the scene's contact can change mode, or it dissipates
+    (it may come to rest), or a sweep varying ``keys`` gives it a friction or a dissipation."""
     return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued") or (
-        "contact.friction" in keys)
+        scene.dissipates or "contact.friction" in keys or any(key in DISSIPATION_KEYS for key in keys))
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
