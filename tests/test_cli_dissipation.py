@@ -4,6 +4,7 @@ and a scene that dissipates runs each point through ``Simulation`` (not the 2011
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 import rollball.simulation
