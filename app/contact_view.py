@@ -12,21 +12,23 @@ from __future__ import annotations
 import numpy as np
 import pyqtgraph as pg
 
-from rollball.trajectory import FLYING, MODES, ROLLING, SLIDING
+from rollball.trajectory import FLYING, MODES, RESTING, ROLLING, SLIDING
 
 from .timeline import Marker
 
 # The trail's colour by mode: told apart by lightness as well as hue (the Okabe–Ito colours
 # that colour-blind readers tell apart): vermillion rolling (the 2011 trail was red), sky blue sliding,
-# white flying; each drawn over a dark edge that keeps it readable on every colour of the surface.
-MODE_COLORS = {ROLLING: "#d55e00", SLIDING: "#56b4e9", FLYING: "#ffffff"}
-MODE_WORDS = {ROLLING: "rolling", SLIDING: "sliding", FLYING: "flying"}
-# The plots' spans (behind the curves): none rolling, sliding in the trail's sky blue, flight grey; pale.
-SPAN_COLORS = {SLIDING: (86, 180, 233, 60), FLYING: (120, 120, 120, 45)}
+# white flying, yellow resting; each drawn over a dark edge that keeps it readable on every colour of
+# the surface.
+MODE_COLORS = {ROLLING: "#d55e00", SLIDING: "#56b4e9", FLYING: "#ffffff", RESTING: "#f0e442"}
+MODE_WORDS = {ROLLING: "rolling", SLIDING: "sliding", FLYING: "flying", RESTING: "resting"}
+# The plots' spans (behind the curves): none rolling, sliding in the trail's sky blue, flight grey,
+# resting yellow; pale.
+SPAN_COLORS = {SLIDING: (86, 180, 233, 60), FLYING: (120, 120, 120, 45), RESTING: (240, 228, 66, 50)}
 # Markers by kind of transition (slider, 3-D view); lift-off keeps the orange it always had.
-KIND_COLORS = {"slip": "#0072b2", "grip": "#009e73", "liftoff": "#ff8c00", "landing": "#cc79a7"}
-KIND_WORDS = {"slip": "slip", "grip": "grip", "liftoff": "lift-off", "landing": "landing"}
-SHADES = {ROLLING: 1.0, SLIDING: 0.55, FLYING: None}   # compare mode: the run's colour, darker, pale
+KIND_COLORS = {"slip": "#0072b2", "grip": "#009e73", "liftoff": "#ff8c00", "landing": "#cc79a7", "rest": "#f0e442"}
+KIND_WORDS = {"slip": "slip", "grip": "grip", "liftoff": "lift-off", "landing": "landing", "rest": "rest"}
+SHADES = {ROLLING: 1.0, SLIDING: 0.55, FLYING: None, RESTING: 0.8}   # compare mode: the run's colour, darker, pale
 assert set(MODE_COLORS) == set(range(len(MODES)))
 
 
@@ -58,7 +60,8 @@ def sentence(kind: str, t: float, who: str = "") -> str:
     words = {"slip": "the ball slips: rolling would need more friction than μ F·N",
              "grip": "the slip has stopped: the ball rolls",
              "liftoff": "the ball leaves the surface and flies",
-             "landing": "the ball lands"}[kind]
+             "landing": "the ball lands",
+             "rest": "the ball comes to rest"}[kind]
     return f"{who}{KIND_WORDS[kind].capitalize()} at t = {t:.4g} s: {words}"
 
 

@@ -3,8 +3,9 @@ sequence of kernel runs, each in one mode, and flights between them. The machine
 they recorded and the mode of each, and decides at every stop of a kernel run what comes next:
 a slip or a grip (a kernel run in the new mode from the state where it happened), a lift-off (a
 flight, from a kink, a tip, or the tangent plane), a landing (the impact, then a bounce or
-contact), or a stretch where the slip is too stiff for fixed steps (an adaptive pair takes it,
-docs/design.md §8). ``Simulation`` runs the kernel and hands each stop to ``ModeMachine.stopped``.
+contact), a stop (the ball rests, spins in place, or is pulled on: ``resting``) or a stretch
+where the slip is too stiff for fixed steps (an adaptive pair takes it, docs/design.md §8).
+``Simulation`` runs the kernel and hands each stop to ``ModeMachine.stopped``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from . import kernel, sliding
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
 from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
+from .resting import Spin, holds
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
 from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
@@ -37,6 +39,7 @@ STIFF_METHOD = "dop853"
 STIFF_TOLERANCE = 1e-12
 STIFF_WINDOW = 16
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
+SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
 
 
 def friction_of(contact) -> float:
@@ -74,6 +77,8 @@ class ModeMachine:
         self.changes: list[Transition] = []       # every change the kernel runs stopped at
         self.transitions: list[Transition] = []   # the run's transitions (a slip turning about is none)
         self.flight: Flight | None = None
+        self.spin: Spin | None = None   # a held ball's stay (spinning in place, or still), taken whole
+        self.rest: Transition | None = None   # where the ball came to rest
         self.surface = Surface(run.landscape, run.scene.parameter_values)
         self.first_liftoff: Liftoff | None = None
         self.dissipated = 0.0       # J: what a flight carries
@@ -185,9 +190,10 @@ class ModeMachine:
         x, y = float(info[kernel.F_EVENT_X]), float(info[kernel.F_EVENT_Y])
         change = Transition(t, kind, x, y)
         self.changes.append(change)
-        if not (kind is Change.SLIP and self.mode is Mode.SLIDING):
+        if not (kind is Change.SLIP and self.mode is Mode.SLIDING) and kind is not Change.REST:
             # (a slip whose speed fell to zero where rolling needs more friction than μ F·N turns
-            # about and goes on: the same slip, no new transition)
+            # about and goes on: the same slip, no new transition; a stop is a rest only where
+            # the ball is held and does not spin, ``stay``)
             self.transitions.append(change)
         run._finish_kernel_run()
         at_once = self.changes[-MAX_AT_ONCE:]
@@ -205,10 +211,80 @@ class ModeMachine:
             return
         if self._enough():
             return
+        if kind is Change.REST and self.hold(self.out[self.count - 1], t):
+            return
         state = sliding.stopped_state(run._z, run._R, run._p, run._probe_normal())
-        self.mode = AFTER[kind]
+        # (a stop where the ball is not held: it rolls on from there, pulled by gravity, no time lost)
+        self.mode = Mode.ROLLING if kind is Change.REST else AFTER[kind]
         self.dissipated = state.dissipated
         run._start_kernel_run(state, t, slides=kind is Change.SLIP, repeat=True)
+
+    # -- a ball that stops (docs/design.md §1, "Rest") --------------------------------------------
+
+    def hold(self, row: np.ndarray, t: float) -> bool:
+        """Whether the ball, still in ``row`` at t (its centre's velocity 0, ω along the normal up
+        to the kernel's accuracy), is held there (``resting.holds``): then it stays, spinning in
+        place at ω·N, taken whole by ``stay``; False where it is pulled on."""
+        run = self.run
+        scene = run.scene
+        contact, ball = scene.contact, scene.ball
+        x, y = (float(value) for value in row[CONTACT])
+        normal = unit_normal(run.landscape.evaluate(x, y, scene.parameter_values))
+        if not holds(normal, rolling_resistance=contact.rolling_resistance, friction=friction_of(contact)):
+            return False
+        spin = float(np.dot(row[OMEGA], normal))
+        # (a spin the kernel's round-off of ω makes, not the motion: below that of the speeds)
+        scale = max(float(np.max(np.linalg.norm(self.rows[:, VELOCITY], axis=1))) if self.count else 0.0,
+                    math.sqrt(scene.gravity * ball.radius))
+        if abs(spin) * ball.radius <= SPIN_ROUND_OFF * scale:
+            spin = 0.0
+        self.spin = Spin(t, spin, normal, row[R].reshape(3, 3).copy(), row.copy(), ball.mass, ball.radius,
+                         scene.gravity, contact.spin_friction)
+        self.mode = Mode.RESTING
+        return True
+
+    def hold_at_start(self, x: float, y: float, spin: float) -> None:
+        """A run that starts with the ball still at (x, y), spinning at ``spin`` about the normal:
+        held there, it stays from t = 0 (``hold``); else the kernel run starts as armed."""
+        run = self.run
+        scene = run.scene
+        d = run.landscape.evaluate(x, y, scene.parameter_values)
+        normal = unit_normal(d)
+        row = np.zeros(kernel.ROW_SIZE)
+        row[CONTACT] = x, y
+        row[CENTER] = np.array([x, y, float(d[0])]) + scene.ball.radius * normal
+        row[OMEGA] = spin * normal
+        row[R] = np.eye(3).ravel()
+        if np.isfinite(row).all() and self.hold(row, 0.0):
+            self.restart(Mode.RESTING)
+
+    def stay(self) -> None:
+        """Take a held ball's stay whole (``hold``): rows at the run's recording times while it
+        spins in place, the rest where its spin reaches 0 (transition "rest"; with the scene's
+        ``stop_at_rest`` the run ends there, ok), then still rows to the run's end."""
+        run, spin = self.run, self.spin
+        self.spin = None
+        t_end, t_stop = run.t_end, spin.stop_time
+        if not self.count:   # (a run that starts held: its first row)
+            self.append(spin.rows(np.array([spin.t0])))
+        if t_stop > spin.t0:
+            self.append(spin.rows(self.record_times(spin.t0, min(t_stop, t_end))))
+        if t_stop > t_end:
+            self.append(spin.rows(np.array([t_end])))
+            run.status = Status.OK
+            return
+        if t_stop > spin.t0:
+            self.append(spin.rows(np.array([t_stop])))
+        x, y = spin.contact
+        self.rest = Transition(t_stop, Change.REST, x, y)
+        self.transitions.append(self.rest)
+        if self._enough():
+            return
+        if run.scene.stop_at_rest or not t_end > t_stop:
+            run.status = Status.OK
+            return
+        self.append(spin.rows(np.append(self.record_times(t_stop, t_end), t_end)))
+        run.status = Status.OK
 
     def _enough(self) -> bool:
         """Whether the run has the transitions it was to look for (``stop_after``): it ends ok."""

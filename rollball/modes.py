@@ -11,11 +11,13 @@ import enum
 
 
 class Mode(enum.IntEnum):
-    """The contact's mode: on the surface without slipping, slipping on it, or off it."""
+    """The contact's mode: on the surface without slipping, slipping on it, off it, or still on
+    it (resting: its centre does not move; it may still spin in place about the normal)."""
 
     ROLLING = 0
     SLIDING = 1
     FLYING = 2
+    RESTING = 3
 
     def __str__(self) -> str:
         return self.name.lower()
@@ -23,19 +25,22 @@ class Mode(enum.IntEnum):
 
 class Change(str, enum.Enum):
     """A change of mode: rolling turns into sliding (slip), sliding into rolling (grip), the ball
-    leaves the surface (liftoff) or comes back to it (landing)."""
+    leaves the surface (liftoff) or comes back to it (landing), or it comes to rest (rest: speed
+    and spin 0, and the couples and friction hold it there, docs/design.md §1, "Rest")."""
 
     SLIP = "slip"
     GRIP = "grip"
     LIFTOFF = "liftoff"
     LANDING = "landing"
+    REST = "rest"
 
     def __str__(self) -> str:
         return self.value
 
 
 MODES = tuple(str(mode) for mode in Mode)   # the names a CSV writes, at their modes' positions
-ROLLING, SLIDING, FLYING = Mode
+ROLLING, SLIDING, FLYING, RESTING = Mode
 TRANSITION_KINDS = tuple(str(change) for change in Change)
 # The mode a change leads to (a landing leads to rolling or sliding, as its impact decides).
-AFTER = {Change.SLIP: Mode.SLIDING, Change.GRIP: Mode.ROLLING, Change.LIFTOFF: Mode.FLYING}
+AFTER = {Change.SLIP: Mode.SLIDING, Change.GRIP: Mode.ROLLING, Change.LIFTOFF: Mode.FLYING,
+         Change.REST: Mode.RESTING}

@@ -195,10 +195,11 @@ class Simulation:
         self._fn = self._landscape_record.ctypes.data
         self._W, self._E, self._P = _kernel_arrays(self.tableau)
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
-        # The 2011 model (friction null, glued after a lift-off) is one kernel run, as before scene
-        # version 3; any other contact is a sequence of runs, each in one mode (``_advance``).
+        # The 2011 model (friction null, glued after a lift-off, nothing dissipated) is one kernel run,
+        # as before scene version 3; any other contact is a sequence of runs, each in one mode
+        # (``_advance``; a ball that dissipates may come to rest).
         contact = scene.contact
-        self.segmented = not (contact.friction is None and contact.after_liftoff == "glued")
+        self.segmented = not (contact.friction is None and contact.after_liftoff == "glued" and not scene.dissipates)
         self._p = self._parameters(0.0)
         slip = start_slip(scene)
         slips = slip is not None and bool(np.any(slip != 0.0)) and contact.friction is not None
@@ -226,6 +227,12 @@ class Simulation:
             self.machine.new_kernel_run(False, True)
         self._arm(arrays, 0.0)
         self.status: Status | None = None
+        s = scene.start
+        if self.segmented and scene.dissipates and not slips and s.vx == 0.0 and s.vy == 0.0:
+            # (a ball that starts still may be held where it is: it then stays, ``ModeMachine.hold``)
+            spin = s.spin if s.omega is None else float(np.dot(s.omega, unit_normal(
+                self.landscape.evaluate(s.x, s.y, scene.parameter_values))))
+            self.machine.hold_at_start(s.x, s.y, spin)
         self._energy_check: EnergyCheck | None = None
         self._transition_check: TransitionCheck | None = None
         self.judge_energy = True  # whether the finished run looks at whose its energy error is (and its transitions)
@@ -305,6 +312,8 @@ class Simulation:
                 return self.t_end
             if self.machine.flight is not None:
                 return self.machine.flight.start.t
+            if self.machine.spin is not None:
+                return self.machine.spin.t0
         if self.adaptive:
             t = self._info[kernel.F_TIME]
             return self._run_start if math.isnan(t) else float(t)
@@ -375,6 +384,10 @@ class Simulation:
         while (remaining > 0 or self._row_count() == 0) and not self.done:
             if self.machine.flight is not None:   # a flight is taken whole, as one step
                 self.machine.fly()
+                remaining -= 1
+                continue
+            if self.machine.spin is not None:   # and so is a held ball's stay
+                self.machine.stay()
                 remaining -= 1
                 continue
             chunk = int(min(remaining, CHUNK))
@@ -495,6 +508,9 @@ class Simulation:
             return self.machine.stall
         if failure is not None and status in (Status.DOES_NOT_FIT, Status.NONFINITE):
             return describe(failure, self.scene.ball.radius)
+        rest = self.machine.rest
+        if status is Status.OK and rest is not None and self.scene.stop_at_rest:
+            return f"the ball comes to rest at t = {rest.time:.6g} s, (x, y) = ({rest.x:.6g}, {rest.y:.6g})"
         if status is Status.OK:
             rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
             flew = any(change.kind == "landing" for change in self.transitions)
@@ -529,13 +545,19 @@ class Simulation:
             friction = "none (it always rolls)" if c.friction is None else repr(c.friction)
             provenance["contact"] = (f"friction {friction}, restitution {c.restitution!r}, "
                                      f"after_liftoff {c.after_liftoff}")
+        if scene.dissipates:
+            c, air = scene.contact, scene.air
+            provenance["dissipation"] = (f"rolling_resistance {c.rolling_resistance!r}, spin_friction "
+                                         f"{c.spin_friction!r}, air density {air.density!r} kg/m^3, drag_coefficient "
+                                         f"{air.drag_coefficient!r}, stop_at_rest {scene.stop_at_rest}")
         # rows are only ever appended: the trajectory can share them instead of copying
         return Trajectory(self.rows, status=status, message=message,
                           liftoff=self.liftoff, steps=self.steps, rejected=self.rejected,
                           evaluations=self.evaluations, failure=self.failure, mass=scene.ball.mass,
                           radius=scene.ball.radius, gravity=scene.gravity, provenance=provenance,
                           energy_check=self._energy_check, modes=self.modes if self.segmented else None,
-                          transitions=tuple(self.transitions), transition_check=self._transition_check)
+                          transitions=tuple(self.transitions), transition_check=self._transition_check,
+                          dissipates=scene.dissipates)
 
 
 def describe(failure: Failure, radius: float) -> str:

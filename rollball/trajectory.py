@@ -13,7 +13,8 @@ import numpy as np
 from .files import atomic_write
 from .kernel.interface import REASONS, ROW_ENERGY, ROW_FORCE, ROW_SLICES, ROW_T, STATUSES
 # the modes of the contact, one a row (``Trajectory.modes`` holds their positions in MODES)
-from .modes import FLYING, MODES, ROLLING, SLIDING, TRANSITION_KINDS, Change, Mode  # noqa: F401 (the row's interface)
+from .modes import (FLYING, MODES, RESTING, ROLLING, SLIDING, TRANSITION_KINDS, Change,  # noqa: F401 (the row's interface)
+                    Mode)
 
 if TYPE_CHECKING:
     from .transition_verdict import TransitionCheck
@@ -26,14 +27,19 @@ COLUMNS = ("t", "x", "y", "cx", "cy", "cz", "vx", "vy", "vz", "wx", "wy", "wz",
 # contact's mode, the slip speed (m/s) and the energy dissipated so far (J). ``csv_columns`` says
 # which a trajectory's CSV has.
 MODE_COLUMNS = ("mode", "slip_speed", "dissipated")
-EXTRA_COLUMNS = ("energy_error", *MODE_COLUMNS)
+# What took the energy dissipated (``Trajectory.dissipated_by``, J so far each; ``dissipated`` is
+# their sum): sliding friction, the landings' impacts, rolling resistance, spin friction and air.
+# A scene that dissipates (``Scene.dissipates``) has one CSV column each after ``dissipated``.
+DISSIPATION_CAUSES = ("sliding", "impacts", "rolling", "spin", "air")
+DISSIPATION_COLUMNS = tuple(f"dissipated_{cause}" for cause in DISSIPATION_CAUSES)
+EXTRA_COLUMNS = ("energy_error", *MODE_COLUMNS, *DISSIPATION_COLUMNS)
 ROLLING_CSV_COLUMNS = COLUMNS + ("energy_error",)   # numbers only, as before the contact of version 3
 CSV_COLUMNS = ROLLING_CSV_COLUMNS + MODE_COLUMNS
 UNITS = {"t": "s", "x": "m", "y": "m", "cx": "m", "cy": "m", "cz": "m",
          "vx": "m/s", "vy": "m/s", "vz": "m/s", "wx": "rad/s", "wy": "rad/s", "wz": "rad/s",
          **{f"r{i}{j}": "1" for i in (1, 2, 3) for j in (1, 2, 3)},
          "energy": "J", "normal_force": "N", "energy_error": "1", "mode": "-", "slip_speed": "m/s",
-         "dissipated": "J"}
+         "dissipated": "J", **{name: "J" for name in DISSIPATION_COLUMNS}}
 
 # Where a row keeps what (the kernel's interface declares it once; use these, never raw column numbers)
 T = ROW_T                          # time
@@ -46,6 +52,11 @@ ENERGY = ROW_ENERGY
 NORMAL_FORCE = ROW_FORCE
 SLIP_SPEED = ROW_SLICES["slip_speed"].start   # the speed of the ball's point at the contact
 DISSIPATED = ROW_SLICES["dissipated"].start   # the energy dissipated so far
+# the causes a row carries itself (the kernel's, J so far each); the others ``dissipated_by`` finds
+ROW_CAUSES = {cause: ROW_SLICES[f"dissipated_{cause}"].start for cause in DISSIPATION_CAUSES
+              if f"dissipated_{cause}" in ROW_SLICES}
+# the cause of the energy a row's mode takes beyond the row's own causes and the impacts
+MODE_CAUSES = {SLIDING: "sliding", ROLLING: "rolling", RESTING: "spin", FLYING: "air"}
 
 ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
 ORTHOGONALITY_WARNING = 1e-3   # likewise ||R^T R - I|| at the end of a run
@@ -99,7 +110,7 @@ class Liftoff:
 @dataclass(frozen=True)
 class Transition:
     """Where the contact changes mode: ``kind`` in TRANSITION_KINDS ("slip": rolling turns into
-    sliding, "grip": sliding into rolling, "liftoff", "landing"), at ``time`` and contact point
+    sliding, "grip": sliding into rolling, "liftoff", "landing", "rest"), at ``time`` and contact point
     (x, y). A landing also says how fast the ball hit the surface along its normal
     (``impact_speed``, m/s) and the kinetic energy the impact took (``energy_lost``, J)."""
 
@@ -117,7 +128,8 @@ class Transition:
                     f"{self.energy_lost:.4g} J lost")
         return {"slip": f"slip at {where}: rolling would need more friction than μ F·N",
                 "grip": f"grip at {where}: the slip ends, the ball rolls",
-                "liftoff": f"lift-off at {where}: the ball leaves the surface"}[self.kind]
+                "liftoff": f"lift-off at {where}: the ball leaves the surface",
+                "rest": f"rest at {where}: the ball comes to rest"}[self.kind]
 
 
 @dataclass(frozen=True)
@@ -173,6 +185,7 @@ class Trajectory:
     modes: np.ndarray | None = None
     transitions: tuple[Transition, ...] = ()   # the changes of mode, in time order
     transition_check: TransitionCheck | None = None   # set by the run: whether they are converged
+    dissipates: bool = False   # the scene's couples or air take energy (``Scene.dissipates``): the CSV splits it
 
     @property
     def mode(self) -> np.ndarray:
@@ -188,8 +201,30 @@ class Trajectory:
 
     @property
     def dissipated(self) -> np.ndarray:
-        """The energy dissipated so far by sliding friction and impacts (J), for every row."""
+        """The energy dissipated so far (J), for every row: the sum of ``dissipated_by``."""
         return self.data[:, DISSIPATED]
+
+    @property
+    def dissipated_by(self) -> dict[str, np.ndarray]:
+        """The energy dissipated so far by each of DISSIPATION_CAUSES (J, every row; zeros where a
+        cause is off): the impacts from the landings' ``energy_lost`` (a row at a landing's time
+        is the state after it), the row's own causes (ROW_CAUSES) as recorded, and what the total
+        gains beyond those over each recorded interval to the cause of the mode that interval
+        ends in (MODE_CAUSES: sliding friction while sliding, spin friction spinning in place)."""
+        t = self.t
+        by = {cause: np.zeros(len(self)) for cause in DISSIPATION_CAUSES}
+        for cause, column in ROW_CAUSES.items():
+            by[cause] = self.data[:, column].copy()
+        landings = [change for change in self.transitions if change.kind == "landing"]
+        if landings:
+            so_far = np.concatenate([[0.0], np.cumsum([change.energy_lost for change in landings])])
+            by["impacts"] = so_far[np.searchsorted([change.time for change in landings], t, side="right")]
+        rest = self.dissipated - sum(by.values())
+        gained = np.diff(rest, prepend=0.0)
+        codes = np.zeros(len(self), dtype=np.int8) if self.modes is None else self.modes[: len(self)]
+        for mode, cause in MODE_CAUSES.items():
+            by[cause] = by[cause] + np.cumsum(np.where(codes == mode, gained, 0.0))
+        return by
 
     @property
     def landings(self) -> int:
@@ -322,7 +357,8 @@ class Trajectory:
     def write_csv(self, stream) -> None:
         """Provenance and unit lines (``#``), the header, then the rows: the columns of
         ``csv_columns`` (the 23 columns and the energy error; then, where the run could change
-        mode, the mode, the slip speed and the energy dissipated)."""
+        mode, the mode, the slip speed and the energy dissipated, and by each cause where the
+        scene dissipates)."""
         columns = csv_columns(self)
         for key, value in self.provenance.items():
             stream.write(f"# {key}: {value}\n")
@@ -337,7 +373,10 @@ class Trajectory:
         before = io.StringIO()
         np.savetxt(before, numbers, fmt="%.17g", delimiter=",")
         after = io.StringIO()
-        np.savetxt(after, np.column_stack([self.slip_speed, self.dissipated]), fmt="%.17g", delimiter=",")
+        tail = [self.slip_speed, self.dissipated]
+        if self.dissipates:
+            tail += list(self.dissipated_by.values())
+        np.savetxt(after, np.column_stack(tail), fmt="%.17g", delimiter=",")
         for head, mode, tail in zip(before.getvalue().splitlines(), self.mode, after.getvalue().splitlines()):
             stream.write(f"{head},{mode},{tail}\n")
 
@@ -346,15 +385,18 @@ def csv_columns(trajectory: Trajectory) -> tuple[str, ...]:
     """The columns of a trajectory's CSV, the one choice every writer follows: the 23 columns and
     the energy error, numbers only, for a run that could not change mode (``modes`` None: the 2011
     model, friction null and glued after a lift-off, which every version 1-2 scene is), as written
-    before version 3; else those and the mode columns (mode, slip_speed, dissipated)."""
-    return ROLLING_CSV_COLUMNS if trajectory.modes is None else CSV_COLUMNS
+    before version 3; else those and the mode columns (mode, slip_speed, dissipated), and for a
+    scene that dissipates (``Trajectory.dissipates``) the energy dissipated by each cause."""
+    if trajectory.modes is None:
+        return ROLLING_CSV_COLUMNS
+    return CSV_COLUMNS + DISSIPATION_COLUMNS if trajectory.dissipates else CSV_COLUMNS
 
 
 def read_csv(path: str | os.PathLike, extra: bool = False):
     """Read a trajectory CSV back as an (n, 23) array of its first 23 columns (``#`` lines are
     skipped; files with only these 23 columns, as written before the energy error, read too).
     With ``extra``: (that array, {name: column} of the columns after them that the file has:
-    "energy_error", "mode" (strings), "slip_speed", "dissipated"))."""
+    "energy_error", "mode" (strings), "slip_speed", "dissipated", the DISSIPATION_COLUMNS))."""
     with open(path, encoding="utf-8") as stream:
         lines = [line for line in stream if not line.startswith("#")]
     header = tuple(lines[0].strip().split(",")) if lines else ()

@@ -1,4 +1,4 @@
-"""Whether a finished run's changes of contact mode are converged: each slip, grip and lift-off the
+"""Whether a finished run's changes of contact mode are converged: each slip, grip, lift-off and rest the
 kernel located is taken again from the last recorded row before it with shorter steps (tighter
 tolerances, adaptive), the way the energy check takes an interval again, and its time must move
 as the method's order says (docs/design.md §1, "Are the transitions converged?").
@@ -15,11 +15,13 @@ import math
 import numpy as np
 
 from .mode_machine import state_of
-from .trajectory import FLYING, SLIDING, SLIP_SPEED, T, Status, Transition
+from .trajectory import FLYING, RESTING, SLIDING, SLIP_SPEED, T, Status, Transition
 from .transition_verdict import (CHANGED, CONVERGED, GROWS, NAMES, NEGLIGIBLE, PLATEAU, TIGHTER, Retake,
                                  TransitionCheck)
 
-RETAKEN = ("slip", "grip", "liftoff")   # the kernel's changes; a landing is a flight's root (exact) and not retaken
+# the kernel's changes and the rest (where it comes to rest at the kernel's stop, or after a spin in place
+# from there); a landing is a flight's root (exact) and not retaken
+RETAKEN = ("slip", "grip", "liftoff", "rest")
 MAX_CHECKED = 8        # the first this many of them are checked (the rest are counted)
 HALVINGS = 2           # fixed steps: taken again with the run's dt, dt/2 and dt/4 (phase-aligned: on its grid)
 SLACK = 1.5            # a halving must shrink the move at least 2^(p - SLACK)-fold (rk4: 5.7; 16 expected)
@@ -70,13 +72,15 @@ def _retake(run, row: np.ndarray, t_row: float, mode: int, t_stop: float, wanted
 def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
     """Transitions the run's own sequence shows the motion does not have: one at the instant of the
     one before or earlier (a landing may be followed at once: the impact stuck where rolling needs
-    more friction than there is), and a slip that turns about (sliding on, no grip between) where
+    more friction than there is; a ball that grips or lands standing still comes to rest at that
+    instant), and a slip that turns about (sliding on, no grip between) where
     the slip had not stopped: its slip speed there above TURNED of its largest since it began."""
     notes = []
     changes = run.transitions
     t = rows[:, T]
     for before, change in zip(changes, changes[1:]):
-        if before.kind != "landing" and change.time <= before.time:
+        at_once_ok = before.kind == "landing" or (change.kind == "rest" and change.time == before.time)
+        if not at_once_ok and change.time <= before.time:
             when = "at the instant of" if change.time == before.time else "before"
             notes.append(f"the {NAMES.get(change.kind, change.kind)} at {change.time:.6g} s comes {when} "
                          f"the {NAMES.get(before.kind, before.kind)} before it")
@@ -100,7 +104,7 @@ def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
 
 def check_transitions(run) -> TransitionCheck | None:
     """The check of a finished run whose contact changed mode (None where it did not, or where the
-    run is the 2011 model's). Each of the first MAX_CHECKED slips, grips and lift-offs is taken
+    run is the 2011 model's). Each of the first MAX_CHECKED slips, grips, lift-offs and rests is taken
     again from a recorded row before it that is not itself at such a change: the last at least
     LEAD_STEPS of the run's steps before it, or its segment's first where that is later (its
     state by ``mode_machine.state_of``, in that row's mode), until the retake has it or is
@@ -134,7 +138,7 @@ def check_transitions(run) -> TransitionCheck | None:
         lead = segment[t[segment] <= change.time - LEAD_STEPS * average]
         i = (int(lead[-1]) if len(lead) else int(segment[0]) if len(segment) else
              int(before[-1]) if len(before) else -1)   # (else from its segment's first row, or the last before it)
-        if i < 0 or modes[i] == FLYING or (change.time - t[i]) > MAX_STRETCH_STEPS * average:
+        if i < 0 or modes[i] in (FLYING, RESTING) or (change.time - t[i]) > MAX_STRETCH_STEPS * average:
             skipped += 1
             continue
         t_row = float(t[i])

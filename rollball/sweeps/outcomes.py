@@ -11,7 +11,7 @@ from __future__ import annotations
 from .. import kernel
 
 # The kernel's outcomes, then the contact's: the mode at the end (its position in
-# trajectory.MODES: 0 rolling, 1 sliding, 2 flying; the CSV writes its name), the number of
+# trajectory.MODES: 0 rolling, 1 sliding, 2 flying, 3 resting; the CSV writes its name), the number of
 # landings, the time of the first slip (0 for a ball sliding from its start; NaN: none) and of
 # the first grip (the first slip's end; NaN: none).
 CONTACT_OUTCOMES = ("end_mode", "landings", "first_slip_time", "first_grip_time")
