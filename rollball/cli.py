@@ -135,8 +135,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "--vary varies fastest) and write sweep.csv (one row per run: the varied "
                     "values, status, then the outcomes t_reached, liftoff_time, x_end, y_end, "
                     "energy_drift, min_normal_force, max_speed, path_length and, of the contact, "
-                    "end_mode (rolling, sliding or flying), landings, first_slip_time and "
-                    "first_grip_time), sweep.json and sweep.png (a map coloured by one outcome, "
+                    "end_mode (rolling, sliding, flying or resting), landings, first_slip_time and "
+                    "first_grip_time, and of a ball that comes to rest rest_x, rest_y, rest_time and "
+                    "basin: the number of the landscape's local minimum its steepest descent from there "
+                    "reaches, 1 the lowest, 0 none), sweep.json (with the minima: number, x, y, f) and "
+                    "sweep.png (a map coloured by one outcome, --color basin a colour per minimum, "
                     "or each outcome against one varied key). "
                     "Local on every core by default; --scheduler sends the runs to a Dask "
                     "cluster. Ctrl-C stops and writes the runs finished so far.")
@@ -147,7 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
                             f"the scene's formula)")
     sweep.add_argument("--color", default="liftoff_time", metavar="OUTCOME",
                        help="the outcome the map of two varied keys is coloured by "
-                            "(default liftoff_time)")
+                            "(default liftoff_time; basin: a colour per minimum)")
     where = sweep.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_positive_int, metavar="N",
                        help="local threads (default: every core)")

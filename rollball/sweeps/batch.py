@@ -24,7 +24,8 @@ from ..simulation import Simulation, initial_momentum
 from ..tableaus import METHODS, MethodKind, get_method
 from ..trajectory import Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
-from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
+from .outcomes import (INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, O_REST_TIME, O_REST_X,
+                       O_REST_Y, OUTCOMES)
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -134,7 +135,8 @@ _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status
 
 def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     """A run of a scene whose contact changes mode, through ``Simulation`` (every step a row),
-    and its status code and outcomes: those of the batch loop, from the rows, then the contact's."""
+    and its status code and outcomes: those of the batch loop, from the rows, then the contact's
+    and where and when it came to rest (the basin is left NaN: ``runner.sweep`` gives it)."""
     simulation = Simulation(scene, record_every=1)
     simulation.judge_energy = False
     simulation.advance()
@@ -154,6 +156,9 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
     grips = [change.time for change in traj.transitions if change.kind is Change.GRIP]
     out[O_FIRST_GRIP] = grips[0] if grips else np.nan
+    rest = next((change for change in traj.transitions if change.kind == Change.REST), None)
+    if rest is not None:   # (the basin is the sweep's: from every run's resting point at once)
+        out[[O_REST_X, O_REST_Y, O_REST_TIME]] = rest.x, rest.y, rest.time
     return _CODES[traj.status], out
 
 
