@@ -275,11 +275,12 @@ class ModeMachine:
             return
         if t_stop > spin.t0:
             self.append(spin.rows(np.array([t_stop])))
-        x, y = spin.contact
-        self.rest = Transition(t_stop, Change.REST, x, y)
-        self.transitions.append(self.rest)
-        if self._enough():
-            return
+        if self.rest is None:   # (else it came to rest before, in a stretch taken apart)
+            x, y = spin.contact
+            self.rest = Transition(t_stop, Change.REST, x, y)
+            self.transitions.append(self.rest)
+            if self._enough():
+                return
         if run.scene.stop_at_rest or not t_end > t_stop:
             run.status = Status.OK
             return
@@ -488,10 +489,13 @@ class ModeMachine:
             end = free[0] if free else len(rows) - 1
             self._adopt(stretch, end)
             row, mode, t = rows[end], Mode(int(modes[end])), float(rows[end, T])
-            if not run.t_end - t > 1e-12 * run.t_end:
+            if not run.t_end - t > 1e-12 * run.t_end or (self.rest is not None and run.scene.stop_at_rest):
                 run.status = Status.OK
                 return
             if self._enough():
+                return
+            if mode is Mode.RESTING or self.rest is not None:   # held in the stretch: the stay goes on
+                self.hold(row, t)
                 return
             self.mode, self.dissipated = mode, float(row[DISSIPATED])
             if free and mode is Mode.FLYING:
@@ -535,6 +539,8 @@ class ModeMachine:
                 self.changes.append(change)
             if id(change) in transitions:
                 self.transitions.append(change)
+            if change.kind is Change.REST:
+                self.rest = change
         run._finished[0] += stretch.steps
         run._finished[1] += stretch.rejected
         run._finished[2] += stretch.evaluations

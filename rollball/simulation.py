@@ -195,9 +195,8 @@ class Simulation:
         self._fn = self._landscape_record.ctypes.data
         self._W, self._E, self._P = _kernel_arrays(self.tableau)
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
-        # The 2011 model (friction null, glued after a lift-off, nothing dissipated) is one kernel run,
-        # as before scene version 3; any other contact is a sequence of runs, each in one mode
-        # (``_advance``; a ball that dissipates may come to rest).
+        # The 2011 model (friction null, glued after a lift-off) is one kernel run, as before scene
+        # version 3; any other contact is a sequence of runs, each in one mode (``_advance``).
         contact = scene.contact
         self.segmented = not (contact.friction is None and contact.after_liftoff == "glued" and not scene.dissipates)
         self._p = self._parameters(0.0)
