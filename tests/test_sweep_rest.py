@@ -58,6 +58,7 @@ def test_the_files_name_the_basins_and_list_the_minima(table, tmp_path):
     rows = list(csv.DictReader(io.StringIO((tmp_path / "sweep.csv").read_text())))
     assert [r["basin"] for r in rows[:4]] == ["", "", "1", "1"]
     assert rows[0]["rest_x"] == "" and float(rows[2]["rest_x"]) == table["rest_x"][2]
+    assert rows[2]["end_mode"] == "resting" and rows[0]["end_mode"] != "resting"
     info = json.loads((tmp_path / "sweep.json").read_text())
     assert info["minima"] == [{"number": 1, "x": -1.0, "y": 0.0, "f": 0.0}, {"number": 2, "x": 1.0, "y": 0.0, "f": 0.0}]
     assert "rest_x" in info["outcomes"] and "basin" in info["outcomes"]
