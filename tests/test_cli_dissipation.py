@@ -118,3 +118,13 @@ def test_stop_at_rest_is_not_fitted():
     track = Track(t=np.array([0.0, 0.1]), positions=np.zeros((2, 2)), axes=("x", "y"))
     with pytest.raises(FitError, match="cannot fit stop_at_rest: it is true or false"):
         fit(Scene.load(HILLS), track, ["stop_at_rest"])
+
+
+def test_a_drag_that_overflows_is_a_refused_row_naming_the_key():
+    from rollball import sweep
+
+    scene = Scene.load(HILLS)
+    table = sweep(dataclasses.replace(scene, duration=0.01), {"air.density": [1.2, 1e300],
+                                                             "air.drag_coefficient": [1e300]}, workers=1)
+    assert list(table["status"]) == ["ok", "invalid"]
+    assert "air.density: the drag factor ½ ρ C_d π r² overflows" in table.messages[1]
