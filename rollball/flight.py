@@ -721,7 +721,7 @@ class Flight:
         tangential speed of the ball's point nearest the surface; ``dissipated`` as given."""
         times = np.asarray(times, dtype=float)
         n = len(times)
-        rows = np.empty((n, ROW_SIZE))
+        rows = np.zeros((n, ROW_SIZE))
         if n == 0:
             return rows
         centers, velocities = self.centers(times)

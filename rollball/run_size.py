@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 
 MAX_STEPS = 2 ** 53    # beyond this, step counts and k·dt are no longer exact in a double
-# kernel.ROW_SIZE (25) doubles a row: 1.0 GB at the limit, handed to the trajectory without a
+# kernel.ROW_SIZE (28) doubles a row: 1.1 GB at the limit, handed to the trajectory without a
 # copy. A run recording every adaptive step grows its buffer by doubling up to the limit,
-# holding the old and the new buffer for a moment (1.5 GB at the last doubling).
+# holding the old and the new buffer for a moment (1.7 GB at the last doubling).
 MAX_ROWS = 5_000_000
 
 

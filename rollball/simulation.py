@@ -208,13 +208,13 @@ class Simulation:
             velocity = np.array([s.vx, s.vy, d[1] * s.vx + d[2] * s.vy])
             state = sliding.BallState(s.x, s.y, velocity, np.array(s.omega), np.eye(3), 0.0)
             arrays = sliding.start_arrays(state, d, sliding=True, munthe_kaas=mk, stages=len(self._W), rows=n_rows,
-                                          radius=scene.ball.radius, mass=scene.ball.mass)
+                                          radius=scene.ball.radius, mass=scene.ball.mass, resisted=scene.dissipates)
         else:
-            arrays = kernel.run_arrays(kernel.state_size(mk), len(self._W), n_rows)
+            arrays = kernel.run_arrays(kernel.state_size(mk, resisted=scene.dissipates), len(self._W), n_rows)
             alpha, v = initial_state(self.landscape, scene)
             arrays["z"][:2], arrays["z"][2:5] = alpha, v
             if not mk:
-                arrays["z"][5:] = arrays["R"].ravel()
+                arrays["z"][5:14] = arrays["R"].ravel()
         arrays["info"][kernel.F_H] = self.dt
         self._finished = [0, 0, 0]   # steps, rejected tries and evaluations of the finished kernel runs
         # the runs after the first, where the contact changes mode (``stop_after``: the run ends
@@ -243,14 +243,18 @@ class Simulation:
         rows, which a buffer of their own would hold twice)."""
         return self.segmented and self.adaptive and self.record_dt is None
 
-    def _parameters(self, dissipated: float) -> np.ndarray:
+    def _parameters(self, dissipated: float, dissipated_by=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """The kernel's parameters for a run that starts with ``dissipated`` J lost, ``dissipated_by``
+        of it to rolling resistance, spin friction and air (``sliding.BallState``)."""
         scene = self.scene
         turn = kernel.TURN_SHARE * self.rtol if self.adaptive else 0.0
         if not self.segmented:
             return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn)
         contact = scene.contact
         return kernel.parameters(scene.ball.radius, scene.ball.mass, scene.gravity, turn, friction=friction_of(contact),
-                                 fly=contact.after_liftoff == "fly", dissipated=dissipated, stiff=True)
+                                 fly=contact.after_liftoff == "fly", dissipated=dissipated, stiff=True,
+                                 rolling_resistance=contact.rolling_resistance, spin_friction=contact.spin_friction,
+                                 air=scene.air.drag_factor(scene.ball.radius), causes=dissipated_by)
 
     def _arm(self, arrays: dict, t_start: float) -> None:
         """Make ``arrays`` the current kernel run, from t_start to t_end on the run's one clock (its
@@ -451,12 +455,13 @@ class Simulation:
         d = self.landscape.evaluate(state.x, state.y, self.scene.parameter_values)
         h = float(self._info[kernel.F_H]) if self.adaptive and math.isfinite(self._info[kernel.F_H]) else self.dt
         arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=len(self._W),
-                               rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass)
+                               rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass,
+                               resisted=self.scene.dissipates)
         arrays["info"][kernel.F_H] = h
         if self._shares_rows:
             arrays["rows"] = self.machine.shared_rows(repeat, SHARED_ROWS)
         self.machine.new_kernel_run(repeat, self._shares_rows)
-        self._p = self._parameters(state.dissipated)
+        self._p = self._parameters(state.dissipated, state.dissipated_by)
         self._arm(arrays, t)
 
     def from_state(self, state: sliding.BallState, t: float, mode: Mode, *, t_end: float, **options) -> "Simulation":

@@ -13,7 +13,10 @@ same in every mode, and ``start_arrays`` makes the arrays of a run in any mode f
   contact point (the kernel's v, ``interface``: T omega when the ball rolls, and kept by the
   impulse that stops a slip);
 - the orientation R and the energy dissipated D go on as they are (a rolling run carries D in
-  its parameters, ``kernel.parameters(..., dissipated=D)``, and records it in every row).
+  its parameters, ``kernel.parameters(..., dissipated=D)``, and records it in every row); so does
+  the part of D that rolling resistance, spin friction and air took (``BallState.dissipated_by``:
+  a run carries it in its parameters, ``causes``, and its state the energy they take in the run,
+  the quadratures of a state ``kernel.state_size(..., resisted=True)``).
 """
 
 from __future__ import annotations
@@ -37,6 +40,8 @@ class BallState:
     omega: np.ndarray       # angular velocity (3, rad/s)
     R: np.ndarray           # orientation (3, 3)
     dissipated: float = 0.0  # J
+    # the part of ``dissipated`` rolling resistance, spin friction and air took (J each)
+    dissipated_by: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def slip_velocity(self, normal: np.ndarray, radius: float) -> np.ndarray:
         """The velocity of the ball's material point at the contact, c' + omega x (-r N)."""
@@ -57,6 +62,10 @@ def stopped_state(z: np.ndarray, R: np.ndarray, p: np.ndarray, normal: np.ndarra
     the unit normal at z's contact point, ``probe[PROBE_N:PROBE_N + 3]``), in every layout."""
     r, m = float(p[0]), float(p[1])
     n = len(z)
+    resisted = n in _RESISTED
+    if resisted:   # (the quadratures: the energy rolling resistance, spin friction and air took in this run)
+        n -= kernel.QUADRATURES
+    taken = z[n:n + kernel.QUADRATURES] if resisted else np.zeros(kernel.QUADRATURES)
     if n in kernel.SLIDING_SIZES:
         o = z[kernel.S_OMEGA:kernel.S_OMEGA + 3].copy()
         velocity = z[kernel.S_VELOCITY:kernel.S_VELOCITY + 3].copy()
@@ -66,20 +75,27 @@ def stopped_state(z: np.ndarray, R: np.ndarray, p: np.ndarray, normal: np.ndarra
         velocity = r * np.cross(o, normal)
         dissipated = float(p[kernel.P_DISSIPATED])
     if n in (kernel.CLASSIC_SIZE, kernel.SLIDING_CLASSIC_SIZE):   # (the classic scheme holds R in z)
-        R = z[n - 9:].reshape(3, 3)
-    return BallState(float(z[0]), float(z[1]), velocity, o, np.array(R, dtype=float), dissipated)
+        R = z[n - 9:n].reshape(3, 3)
+    by = tuple(float(c) for c in p[kernel.P_CAUSES:kernel.P_CAUSES + kernel.QUADRATURES] + taken)
+    return BallState(float(z[0]), float(z[1]), velocity, o, np.array(R, dtype=float),
+                     dissipated + float(taken.sum()) if resisted else dissipated, by)
+
+
+_RESISTED = tuple(kernel.state_size(mk, slides, True) for mk in (True, False) for slides in (True, False))
 
 
 def start_arrays(state: BallState, d: np.ndarray, *, sliding: bool, munthe_kaas: bool, stages: int, rows: int,
-                 radius: float, mass: float) -> dict[str, np.ndarray]:
+                 radius: float, mass: float, resisted: bool = False) -> dict[str, np.ndarray]:
     """The arrays of a kernel run (``kernel.run_arrays``) starting from ``state`` in the mode
     ``sliding`` (else rolling), for a method whose W has ``stages`` rows and ``rows`` rows to
-    record; d: the landscape at the state's contact point (``Landscape.evaluate``).
+    record; d: the landscape at the state's contact point (``Landscape.evaluate``); ``resisted``:
+    the state carries the dissipation's quadratures (from 0; what came before is
+    ``state.dissipated_by``, the run's parameters' ``causes``).
 
     Rolling from a state that slips takes its angular momentum about the contact point (a grip);
     sliding from a rolling state slips from zero (a slip)."""
     normal = unit_normal(np.asarray(d, dtype=float))
-    arrays = kernel.run_arrays(kernel.state_size(munthe_kaas, sliding), stages, rows)
+    arrays = kernel.run_arrays(kernel.state_size(munthe_kaas, sliding, resisted), stages, rows)
     z, R = arrays["z"], arrays["R"]
     z[0], z[1] = state.x, state.y
     if sliding:
@@ -92,5 +108,5 @@ def start_arrays(state: BallState, d: np.ndarray, *, sliding: bool, munthe_kaas:
         motion = kernel.MOTION_SIZE
     R[:] = state.R
     if not munthe_kaas:
-        z[motion:] = R.ravel()
+        z[motion:motion + 9] = R.ravel()
     return arrays

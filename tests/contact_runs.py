@@ -41,13 +41,18 @@ def rolling_state(formula, x, y, vx, vy, spin=0.0, radius=0.1, mass=1.0) -> Ball
 
 def segment(formula, state, *, sliding, method="rk4", dt=1e-3, t_end=1.0, mu=None, fly=False, radius=0.1,
             mass=1.0, gravity=9.81, munthe_kaas=True, rtol=1e-10, atol=1e-12, record_dt=None, every=1,
-            max_rows=200_000):
+            max_rows=200_000, rolling_resistance=0.0, spin_friction=0.0, air=0.0):
+    """A kernel run in one mode from ``state`` (``sliding`` or rolling); with ``rolling_resistance``,
+    ``spin_friction`` or ``air`` (k, kg/m) its state carries the dissipation's quadratures."""
+    resisted = rolling_resistance > 0.0 or spin_friction > 0.0 or air > 0.0
     landscape = landscape_for(formula)
     record = landscape.record(())
     tableau = get_method(method)
     W, E, P = tableau.kernel_arrays()
     p = kernel.parameters(radius, mass, gravity, kernel.TURN_SHARE * rtol if tableau.adaptive else 0.0,
-                          friction=mu, fly=fly, dissipated=0.0 if sliding else state.dissipated)
+                          friction=mu, fly=fly, dissipated=0.0 if sliding else state.dissipated,
+                          rolling_resistance=rolling_resistance, spin_friction=spin_friction, air=air,
+                          causes=state.dissipated_by)
     d = landscape.evaluate(state.x, state.y)
     if tableau.adaptive:
         rows = max_rows if record_dt is None else int(t_end / record_dt) + 3
@@ -55,7 +60,7 @@ def segment(formula, state, *, sliding, method="rk4", dt=1e-3, t_end=1.0, mu=Non
         n_steps = max(1, math.ceil(t_end / dt - 1e-9))
         rows = 1 + n_steps // every + 1
     arrays = start_arrays(state, d, sliding=sliding, munthe_kaas=munthe_kaas, stages=len(W), rows=rows,
-                          radius=radius, mass=mass)
+                          radius=radius, mass=mass, resisted=resisted)
     arrays["info"][kernel.F_H] = dt
     if tableau.adaptive:
         run = machine_code.Arguments("advance_adaptive", fn=record.ctypes.data, W=W, E=E, P=P, p=p, t_start=0.0,

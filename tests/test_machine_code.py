@@ -84,11 +84,12 @@ def test_each_entry_point_unpacks_what_the_interface_declares_for_its_function()
 def test_the_scratch_views_tile_the_scratch_array_the_interface_sizes():
     scratch = unpacking._compile(unpacking.scratch_source(), "scratch", {})   # (the same source, run by Python)
     assert [name for name, _ in interface.SCRATCH] == ["d", "Y", "zn", "pn", "Rn", "Ye", "Re", "pe", "sa", "sb", "sm"]
-    for n in (kernel.MOTION_SIZE, kernel.MK_SIZE, kernel.CLASSIC_SIZE, *kernel.SLIDING_SIZES):
+    resisted = [kernel.state_size(mk, slides, True) for mk in (True, False) for slides in (True, False)]
+    for n in (kernel.MOTION_SIZE, kernel.MK_SIZE, kernel.CLASSIC_SIZE, *kernel.SLIDING_SIZES, *resisted):
         work = np.arange(float(kernel.work_size(n)))
         views = scratch(work, n)
         assert np.concatenate([v.ravel() for v in views]).tolist() == work.tolist()
-        assert [v.shape for v in views][:5] == [(kernel.D_SLIP + 4,), (n,), (n,), (kernel.PROBE_SIZE,), (3, 3)]
+        assert [v.shape for v in views][:5] == [(kernel.D_SIDE + 4,), (n,), (n,), (kernel.PROBE_SIZE,), (3, 3)]
 
 
 def test_run_arrays_are_the_arrays_every_loop_takes():
@@ -101,7 +102,9 @@ def test_row_columns_reasons_and_statuses_come_from_the_interface():
     from rollball import trajectory
     from rollball.simulation import describe
 
-    assert len(trajectory.COLUMNS) == 23 and kernel.ROW_SIZE == 25   # (the 2011 model's, then slip and dissipated)
+    assert len(trajectory.COLUMNS) == 23   # (the 2011 model's, then slip and dissipated)
+    # (and the energy rolling resistance, spin friction and air took)
+    assert kernel.ROW_SIZE == 28 and (kernel.ROW_ROLLING, kernel.ROW_SPIN, kernel.ROW_AIR) == (25, 26, 27)
     assert trajectory.R == slice(12, 21) and trajectory.CENTER == slice(3, 6) and trajectory.NORMAL_FORCE == 22
     assert trajectory.SLIP_SPEED == kernel.ROW_SLIP == 23 and trajectory.DISSIPATED == kernel.ROW_DISSIPATED == 24
     assert [str(s) for s in trajectory.Status] == [s for s in interface.STATUSES if s != "running"]

@@ -76,11 +76,14 @@ def test_on_an_incline_a_start_at_rest_slips_at_once_iff_mu_is_below_two_seventh
 def test_the_transition_is_declared_as_data():
     assert Status("transition") is Status.TRANSITION
     assert kernel.KERNEL_STATUSES[kernel.TRANSITION] == "transition"
-    assert [kernel.transition_name(code) for code in (kernel.T_LIFTOFF, kernel.T_SLIP, kernel.T_GRIP)] == [
-        "liftoff", "slip", "grip"]
+    assert [kernel.transition_name(code) for code in (kernel.T_LIFTOFF, kernel.T_SLIP, kernel.T_GRIP,
+                                                      kernel.T_REST)] == ["liftoff", "slip", "grip", "rest"]
     assert kernel.transition_name(kernel.T_NONE) is None
     assert "t = 1.5 s, (x, y) = (0.25, 0)" in kernel.transition_sentence("grip", 1.5, 0.25, 0.0)
-    assert [mode for mode, _ in kernel.TRANSITIONS.values()] == ["flying", "sliding", "rolling"]
+    assert [mode for mode, _ in kernel.TRANSITIONS.values()] == ["flying", "sliding", "rolling", "resting"]
+    assert kernel.transition_sentence("rest", 2.5, 1.0, 0.0) == "the ball comes to rest at t = 2.5 s, (x, y) = (1, 0)"
+    # (the kernel's own stops, which Python never sees as a change of mode)
+    assert kernel.transition_name(kernel.T_STIFF) is None and kernel.transition_name(kernel.T_SIDE) is None
 
 
 @pytest.mark.parametrize("method", METHODS)

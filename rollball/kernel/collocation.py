@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from .explicit import STEP_NOT_CONVERGED, end_of_step
-from .interface import I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE
+from .interface import (I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE,
+                        SLIDING_RESISTED_MK_SIZE)
 from .lowlevel import COLD, JIT
 from .physics import STAGE, dexpinv, dynamics, rodrigues, sliding_dynamics
 
@@ -32,15 +33,20 @@ MAX_ITERATIONS = 60
 @COLD  # compiled once (not into each loop): a call costs nothing beside its iterations
 def collocation_step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """One Gauss–Legendre step (``_collocation_step``) for z's layout: rolling or sliding."""
-    if z.shape[0] == SLIDING_MK_SIZE:
+    n = z.shape[0]
+    if n == SLIDING_MK_SIZE:
         return sliding_collocation(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == RESISTED_MK_SIZE:
+        return resisted_collocation(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == SLIDING_RESISTED_MK_SIZE:
+        return resisted_sliding_collocation(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
     return rolling_collocation(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
 def _collocation_step(n: int):
     """The Gauss step for one state layout (MK_SIZE rolling, SLIDING_MK_SIZE sliding): with its
     sizes constants of the compiled code, the loops over the motion unroll."""
-    m = SLIDING_MOTION_SIZE if n == SLIDING_MK_SIZE else MOTION_SIZE
+    m = SLIDING_MOTION_SIZE if n in (SLIDING_MK_SIZE, SLIDING_RESISTED_MK_SIZE) else MOTION_SIZE
 
     @JIT
     def step(fn, d, p, W, h, z, R, K, last, Y, zn, Rn, pn, ints):
@@ -81,6 +87,9 @@ def _collocation_step(n: int):
             code = _increments(s, m, h, K, W)
         if code != 0:
             return code
+        for i in range(s):   # (the dissipation's quadratures, after u: their rates at the stages)
+            for q in range(m + 3, n):
+                K[1 + i, q] = K[s + 1 + i, q]
         for q in range(n):
             zn[q] = z[q]
         for i in range(s):
@@ -95,6 +104,8 @@ def _collocation_step(n: int):
 
 rolling_collocation = _collocation_step(MK_SIZE)
 sliding_collocation = _collocation_step(SLIDING_MK_SIZE)
+resisted_collocation = _collocation_step(RESISTED_MK_SIZE)
+resisted_sliding_collocation = _collocation_step(SLIDING_RESISTED_MK_SIZE)
 
 
 @JIT

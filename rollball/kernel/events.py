@@ -11,11 +11,11 @@ from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
     F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION,
-    LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY, P_MU,
-    P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF,
-    T_SLIP)
+    D_SIDE, LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY,
+    P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE,
+    TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import copy_state, curvatures, shape_of, sliding_size
+from .physics import copy_state, curvatures, resisted_size, shape_of, sliding_size
 from .recording import _fail, hold, record, record_last
 from .steps import accept, search_step
 
@@ -57,8 +57,10 @@ FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it i
 LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's contact points
 # (kinds as floats: numba would compile a function once per integer constant passed to it)
 # FORCE_EVENT: F.N reaches 0; FIT_EVENT: r*kappa reaches 1; SLIP_EVENT: the friction rolling needs
-# reaches mu F.N; GRIP_EVENT: the slip velocity's component along the slip at the step's start reaches 0
-FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT = 0.0, 1.0, 2.0, 3.0
+# reaches mu F.N; GRIP_EVENT: the slip velocity's component along the slip at the step's start reaches 0;
+# TURN_EVENT: omega's tangential part's along its value at the step's start (s[4:7]) reaches 0 (the
+# rolling resistance's side); SPIN_EVENT: omega.N times its sign at the step's start (s[7]) reaches 0
+FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT, TURN_EVENT, SPIN_EVENT = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0
 KINK, JUMP, JOLT = 0.0, 1.0, 2.0   # what locate_break bisects towards (JOLT: the centre jumping)
 
 
@@ -81,7 +83,39 @@ def condition(kind, p, s, pe):
         return -pe[PROBE_FORCE]
     if kind == SLIP_EVENT:
         return pe[PROBE_NEED] - p[P_MU] * pe[PROBE_FORCE]
+    if kind == TURN_EVENT:
+        return -turn_along(pe, s[4], s[5], s[6])
+    if kind == SPIN_EVENT:
+        return -spin_of(pe) * s[7]
     return -(pe[PROBE_SLIP] * s[0] + pe[PROBE_SLIP + 1] * s[1] + pe[PROBE_SLIP + 2] * s[2])
+
+
+@JIT
+def spin_of(pe):
+    """omega.N of a state with probe pe."""
+    return pe[PROBE_OMEGA] * pe[0] + pe[PROBE_OMEGA + 1] * pe[1] + pe[PROBE_OMEGA + 2] * pe[2]
+
+
+@JIT
+def turn_along(pe, r1, r2, r3):
+    """omega's tangential part (omega - (omega.N) N) of a state with probe pe, along r."""
+    on = spin_of(pe)
+    return ((pe[PROBE_OMEGA] - on * pe[0]) * r1 + (pe[PROBE_OMEGA + 1] - on * pe[1]) * r2
+            + (pe[PROBE_OMEGA + 2] - on * pe[2]) * r3)
+
+
+@JIT
+def sides_turn(p, d, n, pn):
+    """Which couple's side the end of a step (probe pn) says turned inside it, for a state of
+    length n carrying the dissipation (``couple_reference``'s sides in d): T_REST where a rolling
+    ball's omega_t, against its rolling resistance (c_rr > 0), reached 0; T_SIDE where a sliding
+    ball's did, or the spin omega.N against a spin friction (mu_s > 0); 0 for none."""
+    if p[P_RESISTANCE] > 0.0 and (d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0):
+        if turn_along(pn, d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]) <= 0.0:
+            return T_SIDE if sliding_size(n) else T_REST
+    if p[P_SPIN] > 0.0 and d[D_SIDE + 3] != 0.0 and spin_of(pn) * d[D_SIDE + 3] <= 0.0:
+        return T_SIDE
+    return 0
 
 
 @COLD
@@ -311,7 +345,8 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     jolted = math.isnan(info[F_LIFTOFF]) and centre_jolted(p[0], h, z, probe, zn, pn)
-    turned = watch and mode_changes(p, n, probe, pn) != 0   # (watch: ``contact_watched``)
+    turned = watch and (mode_changes(p, n, probe, pn) != 0 or (resisted_size(n) and sides_turn(p, d, n, pn) != 0))
+    # (watch: ``contact_watched``)
     dips = dipping(p, n, h, probe, pn, info) if watch else 0
     turned |= dips != 0
     if not (fit_end or sharp or jumpy or raced or force_end or jolted or turned):
@@ -330,10 +365,11 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
 
 @JIT
 def contact_watched(p, n):
-    """Whether a run can change contact mode (a slip, grip or lift-off stop): a sliding ball, a
-    finite mu or a ball that flies. False for the 2011 model, whose loops then skip the looks
-    (decided once per call of a loop: a condition that does not change inside it)."""
-    return p[P_FLY] != 0.0 or p[P_MU] < math.inf or sliding_size(n)
+    """Whether a run can change contact mode (a slip, grip, lift-off or rest stop): a sliding ball,
+    a finite mu, a ball that flies or one that carries the dissipation. False for the 2011 model,
+    whose loops then skip the looks (decided once per call of a loop: a condition that does not
+    change inside it)."""
+    return p[P_FLY] != 0.0 or p[P_MU] < math.inf or sliding_size(n) or resisted_size(n)
 
 
 @JIT
@@ -558,6 +594,22 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
                 b_end, g_end = hi, pn[PROBE_NEED] - mu * pn[PROBE_FORCE] if hi == 1.0 else math.nan
         elif 0.0 < gb:   # at the limit already at the step's start (a grip there, within round-off)
             best, kind = 0.0, T_SLIP
+    if resisted_size(n):   # a couple's side turning (``sides_turn``): s[4:8] the sides at the step's start
+        s[4], s[5], s[6], s[7] = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3]
+        if p[P_RESISTANCE] > 0.0 and (s[4] != 0.0 or s[5] != 0.0 or s[6] != 0.0):
+            ga, gb = -turn_along(probe, s[4], s[5], s[6]), -turn_along(pn, s[4], s[5], s[6])
+            if ga < 0.0 <= gb:
+                a, b = locate(TURN_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+                if b < best:
+                    best, kind, event = b, T_SIDE if sliding_size(n) else T_REST, TURN_EVENT
+                    b_end, g_end = 1.0, gb
+        if p[P_SPIN] > 0.0 and s[7] != 0.0:
+            ga, gb = -spin_of(probe) * s[7], -spin_of(pn) * s[7]
+            if ga < 0.0 <= gb:
+                a, b = locate(SPIN_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+                if b < best:
+                    best, kind, event = b, T_SIDE, SPIN_EVENT
+                    b_end, g_end = 1.0, gb
     if kind == 0:
         return -1.0
     held = False

@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from .dense import omega_polynomial, turn
 from .interface import (
-    CLASSIC_SIZE, I_DENSE, I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, PROBE_SIZE, P_TURN, SLIDING_CLASSIC_SIZE,
-    SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
+    CLASSIC_SIZE, I_DENSE, I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, PROBE_SIZE, P_TURN, RESISTED_CLASSIC_SIZE,
+    RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE,
+    SLIDING_RESISTED_MK_SIZE, SLIDING_SIZES)
 from .lowlevel import COLD, JIT, STEP
 from .physics import (FULL, STAGE, _finite, _finite_matrix, _finite_row, dynamics, motion_size, rates, rodrigues,
-                      shape_of, sliding_dynamics)
+                      shape_of, sliding_dynamics, sliding_size)
 
 
 @JIT
@@ -29,7 +30,7 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
     its stage loops unroll as in hand-written C. ``defer``: carrying omega, leave R to the
     caller (``carry_orientation`` once the step is accepted: a rejected try does not pay
     for the dense-output stages). The layout's length says rolling or sliding (``interface``)."""
-    sliding = n in (SLIDING_MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE)
+    sliding = n in SLIDING_SIZES or n in (SLIDING_RESISTED_MK_SIZE, SLIDING_RESISTED_CLASSIC_SIZE)
     m = SLIDING_MOTION_SIZE if sliding else MOTION_SIZE   # the motion; the orientation after it
     orientation = n > m
     rhs = sliding_dynamics if sliding else dynamics
@@ -77,12 +78,20 @@ trial_step_motion = _trial_step(MOTION_SIZE, False)
 sliding_step_mk = _trial_step(SLIDING_MK_SIZE, True)
 sliding_step_pair = _trial_step(SLIDING_MK_SIZE, True, True)
 sliding_step_classic = _trial_step(SLIDING_CLASSIC_SIZE, False)
+# (the same with the dissipation's quadratures)
+resisted_step_mk = _trial_step(RESISTED_MK_SIZE, True)
+resisted_step_pair = _trial_step(RESISTED_MK_SIZE, True, True)
+resisted_step_classic = _trial_step(RESISTED_CLASSIC_SIZE, False)
+resisted_sliding_mk = _trial_step(SLIDING_RESISTED_MK_SIZE, True)
+resisted_sliding_pair = _trial_step(SLIDING_RESISTED_MK_SIZE, True, True)
+resisted_sliding_classic = _trial_step(SLIDING_RESISTED_CLASSIC_SIZE, False)
 
 
 @JIT
 def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """The explicit step (``_trial_step``) for z's layout: MK_SIZE, CLASSIC_SIZE or MOTION_SIZE
-    rolling, SLIDING_MK_SIZE or SLIDING_CLASSIC_SIZE sliding."""
+    rolling, SLIDING_MK_SIZE or SLIDING_CLASSIC_SIZE sliding, each of the first two with the
+    dissipation's quadratures or without."""
     n = z.shape[0]
     if n == MK_SIZE:
         return trial_step_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
@@ -92,7 +101,22 @@ def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
         return sliding_step_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
     if n == SLIDING_CLASSIC_SIZE:
         return sliding_step_classic(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
-    return trial_step_motion(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == MOTION_SIZE:
+        return trial_step_motion(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return resisted_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+
+
+@JIT
+def resisted_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """The explicit step for a layout with the dissipation's quadratures (``trial_step``)."""
+    n = z.shape[0]
+    if sliding_size(n):
+        if n == SLIDING_RESISTED_MK_SIZE:
+            return resisted_sliding_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+        return resisted_sliding_classic(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == RESISTED_MK_SIZE:
+        return resisted_step_mk(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return resisted_step_classic(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
 
 
 @JIT

@@ -89,19 +89,29 @@ def landscape_record(address: int, values=()) -> np.ndarray:
 # Sliding (the contact point slips): (x, y), the centre's velocity (3, world), omega (3, world) and the
 # energy dissipated by friction D (J). Either motion is followed by the orientation: u (3, the
 # Munthe-Kaas increment; the adaptive pairs carry omega there while rolling and nothing while
-# sliding, where omega is part of the motion) or R (9, the classic scheme). The state's length tells
-# the kernel which dynamics to use.
+# sliding, where omega is part of the motion) or R (9, the classic scheme). A ball that loses energy
+# to rolling resistance, spin friction or air (docs/design.md §1, "Dissipation") carries after the
+# orientation the energy each of the three has taken in this run (J, QUADRATURES: quadratures of the
+# motion, outside the error norm). The state's length tells the kernel which dynamics to use.
 MOTION_SIZE, MK_SIZE, CLASSIC_SIZE = 5, 8, 14            # rolling: motion only, + u (3), + R (9)
 SLIDING_MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE = 9, 12, 18   # sliding: the same
 SLIDING_SIZES = (SLIDING_MOTION_SIZE, SLIDING_MK_SIZE, SLIDING_CLASSIC_SIZE)
+QUADRATURES = 3   # the energy to rolling resistance, spin friction and air, after the orientation
+RESISTED_MK_SIZE, RESISTED_CLASSIC_SIZE = MK_SIZE + QUADRATURES, CLASSIC_SIZE + QUADRATURES   # 11, 17
+SLIDING_RESISTED_MK_SIZE = SLIDING_MK_SIZE + QUADRATURES             # 15
+SLIDING_RESISTED_CLASSIC_SIZE = SLIDING_CLASSIC_SIZE + QUADRATURES   # 21
 # where the sliding state keeps what
 S_VELOCITY, S_OMEGA, S_DISSIPATED = 2, 5, 8
 
 
-def state_size(munthe_kaas: bool, sliding: bool = False) -> int:
+def state_size(munthe_kaas: bool, sliding: bool = False, resisted: bool = False) -> int:
+    """The state's length: Munthe-Kaas or classic, rolling or sliding, with the quadratures of
+    the dissipation (``resisted``) or without."""
     if sliding:
-        return SLIDING_MK_SIZE if munthe_kaas else SLIDING_CLASSIC_SIZE
-    return MK_SIZE if munthe_kaas else CLASSIC_SIZE
+        n = SLIDING_MK_SIZE if munthe_kaas else SLIDING_CLASSIC_SIZE
+    else:
+        n = MK_SIZE if munthe_kaas else CLASSIC_SIZE
+    return n + QUADRATURES if resisted else n
 
 
 P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this tolerance (rad)
@@ -109,11 +119,16 @@ P_MU = 8    # the friction coefficient mu; inf: always enough friction to roll (
 P_FLY = 9   # 1: the run stops at a lift-off (the ball flies); 0: it goes on glued to the surface
 P_DISSIPATED = 10  # the energy dissipated before this run (J): what rolling rows record
 P_STIFF = 11  # 1: a fixed-step sliding run stops before a step whose slip is stiff (T_STIFF); 0: it steps on
-P_SIZE = 12
+P_RESISTANCE = 12  # the rolling resistance c_rr (a couple -c_rr r F_n along omega's tangential part)
+P_SPIN = 13        # the spin friction mu_s (a couple -mu_s r F_n along omega's normal part)
+P_AIR = 14         # the air's drag factor k (kg/m): a force -k |c'| c' on the centre
+P_CAUSES = 15      # the energy rolling resistance, spin friction and air took before this run (3, J)
+P_SIZE = 18
 
 
 def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, friction: float | None = None,
-               fly: bool = False, dissipated: float = 0.0, stiff: bool = False) -> np.ndarray:
+               fly: bool = False, dissipated: float = 0.0, stiff: bool = False, rolling_resistance: float = 0.0,
+               spin_friction: float = 0.0, air: float = 0.0, causes=(0.0, 0.0, 0.0)) -> np.ndarray:
     """The ball and gravity as the kernel reads them, with the constants it would otherwise
     recompute at every evaluation: r, m, g0, 5/(7 m r^2), m r, m r^2, m g0; then ``turn``:
     0 for the Munthe-Kaas increment u in the state, else the tolerance (rad) for the
@@ -122,12 +137,23 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, fr
     ever looked for), ``fly`` (stop the run at a lift-off instead of going on glued), the
     energy ``dissipated`` before this run (J, carried into its rows) and ``stiff`` (a fixed-step
     sliding run stops before a step whose slip is stiff, T_STIFF, for the caller to take that
-    stretch; without it the run steps on with the slip's own direction)."""
+    stretch; without it the run steps on with the slip's own direction); then the dissipation
+    (docs/design.md §1, "Dissipation"): ``rolling_resistance`` c_rr, ``spin_friction`` mu_s, ``air``
+    the drag factor k (kg/m) and the energy each of the three took before this run (``causes``, J,
+    which is part of ``dissipated``). A run whose state carries the quadratures (``state_size``,
+    ``resisted``) feels them; any other leaves them unread."""
     r, m, g0 = radius, mass, gravity
     zero = 0.0 * r   # (+ 0 r: a column like the others where r is an array, sweeps)
     mu = np.inf if friction is None else friction
+    for name, value in (("rolling_resistance", rolling_resistance), ("spin_friction", spin_friction), ("air", air)):
+        if not np.all(np.asarray(value) >= 0.0):
+            raise ValueError(f"{name} must be a number >= 0, not {value!r}")
+    if len(causes) != QUADRATURES:
+        raise ValueError(f"causes holds the energy to rolling resistance, spin friction and air (3), not {causes!r}")
     return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + zero, mu + zero,
-                     (1.0 if fly else 0.0) + zero, dissipated + zero, (1.0 if stiff else 0.0) + zero])
+                     (1.0 if fly else 0.0) + zero, dissipated + zero, (1.0 if stiff else 0.0) + zero,
+                     rolling_resistance + zero, spin_friction + zero, air + zero,
+                     *(float(c) + zero for c in causes)])
 
 
 # How a method steps (``take_step``). Floats: numba compiles a function anew for every
@@ -171,8 +197,10 @@ INTS_SIZE, INFO_SIZE = 12, 17
 
 # (slip_speed: the speed of the ball's material point at the contact, 0 rolling; dissipated: the
 # energy lost to friction and impacts so far, J; energy is kinetic + potential, without it)
+# dissipated_rolling, _spin, _air: the part of it rolling resistance, spin friction and air took)
 ROW_FIELDS = (("t", 1), ("contact", 2), ("center", 3), ("velocity", 3), ("omega", 3), ("R", 9), ("energy", 1),
-              ("normal_force", 1), ("slip_speed", 1), ("dissipated", 1))
+              ("normal_force", 1), ("slip_speed", 1), ("dissipated", 1), ("dissipated_rolling", 1),
+              ("dissipated_spin", 1), ("dissipated_air", 1))
 ROW_SLICES = {}   # field -> its slice of a row
 for _name, _width in ROW_FIELDS:
     _start = sum(c.stop - c.start for c in ROW_SLICES.values())
@@ -180,7 +208,7 @@ for _name, _width in ROW_FIELDS:
 del _name, _width, _start
 ROW_SIZE = sum(width for _, width in ROW_FIELDS)
 (ROW_T, ROW_CONTACT, ROW_CENTER, ROW_VELOCITY, ROW_OMEGA, ROW_R, ROW_ENERGY, ROW_FORCE, ROW_SLIP,
- ROW_DISSIPATED) = (ROW_SLICES[name].start for name, _ in ROW_FIELDS)
+ ROW_DISSIPATED, ROW_ROLLING, ROW_SPIN, ROW_AIR) = (ROW_SLICES[name].start for name, _ in ROW_FIELDS)
 
 # -- how a run ended ------------------------------------------------------------------------------
 
@@ -208,13 +236,17 @@ TRANSITIONS = {
     "liftoff": ("flying", "the ball leaves the surface at {where}: the normal force F·N reaches 0"),
     "slip": ("sliding", "the ball starts to slip at {where}: rolling would need a friction force beyond μ F·N"),
     "grip": ("rolling", "the slip ends at {where}: the ball rolls on"),
+    "rest": ("resting", "the ball comes to rest at {where}"),
 }
 T_NONE = 0
-T_LIFTOFF, T_SLIP, T_GRIP = range(1, len(TRANSITIONS) + 1)
+T_LIFTOFF, T_SLIP, T_GRIP, T_REST = range(1, len(TRANSITIONS) + 1)
 # Not a change of mode: a fixed-step sliding run stops before a step that starts where the slip's
 # direction is stiff (friction would stop the slip within the step, ``loops.slip_reference``); the
 # run in Python takes that stretch with an adaptive pair (``simulation``, docs/design.md §8).
 T_STIFF = len(TRANSITIONS) + 1
+# Inside the kernel only: a couple's side turns (the spin omega.N reaches 0, or a sliding ball's
+# omega_t does): the run holds the state there and goes on from it (``loops.resume``).
+T_SIDE = len(TRANSITIONS) + 2
 
 
 def transition_name(code: int) -> str | None:
@@ -299,8 +331,12 @@ SURFACE_SIZE = 8   # x, y, f, N (3), r * largest and smallest principal curvatur
 # ``sliding_dynamics``), stage state Y, trial state zn, probe pn and
 # orientation Rn, and for the dense output a state Ye, orientation Re, probe pe and three surface
 # points. "n": the state's size; (3, 3) a matrix.
+# From D_SIDE: omega's tangential part at the step's start (3), whose side the rolling resistance
+# keeps through the step, and the sign of omega.N there, the spin friction's (``couple_reference``;
+# zeros where the couple is static at the step's start).
 D_SLIP = LANDSCAPE_OUTPUTS
-SCRATCH = (("d", D_SLIP + 4), ("Y", "n"), ("zn", "n"), ("pn", PROBE_SIZE), ("Rn", (3, 3)), ("Ye", "n"), ("Re", (3, 3)),
+D_SIDE = D_SLIP + 4
+SCRATCH = (("d", D_SIDE + 4), ("Y", "n"), ("zn", "n"), ("pn", PROBE_SIZE), ("Rn", (3, 3)), ("Ye", "n"), ("Re", (3, 3)),
            ("pe", PROBE_SIZE), ("sa", SURFACE_SIZE), ("sb", SURFACE_SIZE), ("sm", SURFACE_SIZE))
 
 

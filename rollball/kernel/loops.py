@@ -9,18 +9,19 @@ import numpy as np
 
 from .dense import state_at
 from .events import TIP_REACH, contact_watched, fold_search, record_valid, step_events, tip_liftoff, tip_stop
-from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, sliding_step_pair, trial_step_pair
+from .explicit import (STEP_NOT_CONVERGED, carry_orientation, dense_stages, resisted_sliding_pair, resisted_step_pair,
+                       sliding_step_pair, trial_step_pair)
 from .interface import (
     BATCH_CHUNK, D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED,
     I_NONFINITE, I_REJECTED,
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
-    TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF,
-    grid_steps_before)
+    TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
+    P_RESISTANCE, P_SPIN, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import motion_size, shape_of, sliding_size
-from .recording import _fail, record, record_last, start
+from .physics import evaluate, motion_size, resisted_size, shape_of, sliding_size
+from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
 from .unpacking import scratch
@@ -59,6 +60,59 @@ def slip_reference(d, probe, p, h, cap):
     else:
         us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
         d[D_SLIP + 3] = math.inf if us * p[1] < 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) * h else 0.0
+
+
+# A couple's side counts as zero at a step's start (the couple static, ``couple_reference``) where the
+# couple would stop it within this fraction of the ball's time unit sqrt(r / g0): far below any step,
+# far above what is left of it where a step located its zero (``resume``).
+SIDE_ZERO = 1e-9
+SIDE_TURNS = 64   # sides turned inside one call's steps at most; then the couples are static throughout
+
+
+@JIT
+def couple_reference(fn, d, p, z, K, probe, ints, free):
+    """The sides of the couples at the step's start (probe: its state's), which the rolling
+    resistance and spin friction keep through the step (``rolling_couple``, ``spin_couple``), into
+    d[D_SIDE:D_SIDE + 4]: omega's tangential part and the sign of omega.N; each zero where the
+    couple would stop it within SIDE_ZERO of the ball's time unit (or ``free`` is false), and the
+    couple is then static (what holds it at 0, up to its limit). Where that changes a couple's
+    kind of side, K[0] and probe are evaluated anew (the step's first stage)."""
+    r, m, g0 = p[0], p[1], abs(p[2])
+    n, mk = shape_of(z)
+    n1, n2, n3 = probe[0], probe[1], probe[2]
+    o1, o2, o3 = probe[PROBE_OMEGA], probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2]
+    on = o1 * n1 + o2 * n2 + o3 * n3
+    t1, t2, t3 = o1 - on * n1, o2 - on * n2, o3 - on * n3
+    force = r * abs(probe[PROBE_FORCE]) * SIDE_ZERO * math.sqrt(r / g0) / (m * r * r)
+    # (the couples' largest rates of omega: c r F_n / I, I = 7/5 m r² rolling, 2/5 m r² sliding and for the spin)
+    turning = force * p[P_RESISTANCE] / (0.4 if sliding_size(n) else 1.4)
+    spinning = force * p[P_SPIN] / 0.4
+    if not (free and t1 * t1 + t2 * t2 + t3 * t3 > turning * turning):
+        t1, t2, t3 = 0.0, 0.0, 0.0
+    side = 0.0
+    if free and abs(on) > spinning:
+        side = 1.0 if on > 0.0 else -1.0
+    was = d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0
+    now = t1 != 0.0 or t2 != 0.0 or t3 != 0.0
+    changed = was != now or side != d[D_SIDE + 3]
+    d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3] = t1, t2, t3, side
+    if changed:
+        evaluate(fn, d, p, z, mk, K, np.int64(0), probe)
+        ints[I_EVALS] += 1
+
+
+@COLD
+def resume(fn, d, p, h, P, theta, z, R, K, probe, ints, zn, Rn, pn):
+    """A couple's side turned at theta inside the step from z of h (a kernel-internal stop,
+    T_SIDE, ``events.locate_transition``): make the state there (zn, Rn, pn where the stop holds it
+    already, else the step's dense output) the run's, and go on from it."""
+    if ints[I_HELD] == 0:
+        state_at(fn, d, p, z, R, h, P, K, 0.0, theta, zn, Rn, pn)
+    hold(p, z, R, probe, zn, Rn, pn)
+    n, mk = shape_of(z)
+    evaluate(fn, d, p, z, mk, K, np.int64(0), probe)
+    ints[I_EVALS] += 1
+    ints[I_HELD], ints[I_STATUS], ints[I_TRANSITION], ints[I_DENSE] = 0, RUNNING, 0, -1
 
 
 @JIT
@@ -101,6 +155,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             return
 
     watch = contact_watched(p, n)
+    resists = resisted_size(n)
     before = grid_before(t_start, dt)   # the grid's steps before this run (0 from t = 0)
     own = max(1, n_steps - before)      # this run's steps
     phase = before % every              # the first row after the start: at the step every - phase
@@ -112,38 +167,48 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         t0 = (g - 1) * dt if k > 1 else t_start
         h = t_end - t0 if final else dt if k > 1 else g * dt - t0
         t = t_end if final else g * dt
-        if watch:
-            slip_reference(d, probe, p, h, math.inf)
-            if d[D_SLIP + 3] == math.inf and p[P_STIFF] != 0.0 and sliding_size(n):   # (Python's: T_STIFF)
-                ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
-                info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
-                return
-        bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
-        if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
-            valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
-                                pe, stepping)
-            if valid >= 0.0:
-                record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
-                             Rn, pn, Ye, sa, sb, sm, stepping)
-                return
-        if bad:
-            if bad == STEP_NOT_CONVERGED:
-                # (unless the step would pass a tip of the surface: that is the landscape's)
-                if not tip_stop(fn, d, ints, info, t0, z[0], z[1], reach_of(K, h, z), speed_of(K), p[P_FLY]):
-                    _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
-                elif ints[I_STATUS] == TRANSITION:   # the ball flies off the tip: from the state there
-                    valid = tip_liftoff(fn, d, p, W, t0, h, 0.5, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, info,
-                                        info[F_EVENT_X], info[F_EVENT_Y], stepping)
+        turns = 0
+        while True:   # (again from where a couple's side turned inside the step, ``resume``)
+            if resists:
+                couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS)
+            if watch:
+                slip_reference(d, probe, p, h, math.inf)
+                if d[D_SLIP + 3] == math.inf and p[P_STIFF] != 0.0 and sliding_size(n):   # (Python's: T_STIFF)
+                    ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
+                    info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
+                    return
+            bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+            if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
+                valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
+                                    pe, stepping)
+                if valid >= 0.0:
                     record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                                  Rn, pn, Ye, sa, sb, sm, stepping)
                     return
-            else:
-                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
-                      0.0 if mk else 1.0)
-            record_last(rows, ints, t0, z, R, probe, p)
-            return
-        valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
-                            True, Ye, Re, pe, sa, sb, sm, stepping, watch)
+            if bad:
+                if bad == STEP_NOT_CONVERGED:
+                    # (unless the step would pass a tip of the surface: that is the landscape's)
+                    if not tip_stop(fn, d, ints, info, t0, z[0], z[1], reach_of(K, h, z), speed_of(K), p[P_FLY]):
+                        _fail(ints, info, NONFINITE, R_NOT_CONVERGED, t, z[0], z[1], h)
+                    elif ints[I_STATUS] == TRANSITION:   # the ball flies off the tip: from the state there
+                        valid = tip_liftoff(fn, d, p, W, t0, h, 0.5, z, R, K, last, P, probe, ints, Y, zn, Rn, pn,
+                                            info, info[F_EVENT_X], info[F_EVENT_Y], stepping)
+                        record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
+                                     Rn, pn, Ye, sa, sb, sm, stepping)
+                        return
+                else:
+                    _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1],
+                          0.0 if mk else 1.0)
+                record_last(rows, ints, t0, z, R, probe, p)
+                return
+            valid = step_events(fn, d, p, W, mk, n, t0, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
+                                True, Ye, Re, pe, sa, sb, sm, stepping, watch)
+            if not (valid >= 0.0 and ints[I_TRANSITION] == T_SIDE):
+                break
+            resume(fn, d, p, h, P, valid, z, R, K, probe, ints, zn, Rn, pn)
+            turns += 1
+            t0 += valid * h
+            h = t - t0
         if valid >= 0.0:
             record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                          Rn, pn, Ye, sa, sb, sm, stepping)
@@ -195,6 +260,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         if ints[I_STATUS] != RUNNING:
             return
     watch = contact_watched(p, n)
+    resists = resisted_size(n)
+    turns = 0   # (the couples' sides turned inside this call's steps: SIDE_TURNS at most, ``resume``)
     cap = slow_slip(p, rtol)
     skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
     t, h = info[F_TIME], info[F_H]
@@ -204,12 +271,18 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
+        if resists:
+            couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS)
         if watch:
             slip_reference(d, probe, p, hs, cap)
         if n == MK_SIZE:
             bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        else:
+        elif n == SLIDING_MK_SIZE:
             bad = sliding_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        elif n == RESISTED_MK_SIZE:
+            bad = resisted_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        else:
+            bad = resisted_sliding_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         err = math.inf if bad else error_norm(E, err_kind, K, last, motion, z, zn, hs, rtol, atol, p)
         if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
             bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
@@ -251,6 +324,11 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
                 theta = (t_row - t) / hs
                 record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
             ints[I_ROWS] += 1
+        if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there (its rows are recorded)
+            resume(fn, d, p, hs, P, valid, z, R, K, probe, ints, zn, Rn, pn)
+            turns += 1
+            t = t_stop
+            continue
         if valid >= 0.0:
             record_valid(fn, d, p, W, t, hs, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                          Rn, pn, Ye, sa, sb, sm, EXPLICIT)

@@ -7,8 +7,9 @@ from __future__ import annotations
 import math
 
 from .interface import (
-    D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_FLY, P_MU, P_TURN, SLIDING_CLASSIC_SIZE,
-    SLIDING_MK_SIZE, SLIDING_MOTION_SIZE)
+    D_SIDE, D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_AIR, P_FLY, P_MU, P_RESISTANCE,
+    P_SPIN, P_TURN, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE,
+    SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE)
 from .lowlevel import COLD, EXACT, JIT, STEP, data_pointer, landscape
 
 
@@ -37,7 +38,11 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 2] = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
     K[row, 3] = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
-    if K.shape[1] == MOTION_SIZE:  # no orientation carried
+    n = K.shape[1]
+    m1, m2, m3 = 0.0, 0.0, 0.0   # the rolling resistance's couple (for the friction rolling needs)
+    if resisted_size(n):
+        m1, m2, m3 = rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3)
+    if n == MOTION_SIZE:  # no orientation carried
         pass
     elif mk != 0.0 and p[P_TURN] > 0.0:
         # omega' = k (v' + nv' N + nv N'), N' = d: omega carried as a quadrature of the motion
@@ -63,10 +68,81 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
         need = 0.0
         if p[P_MU] < math.inf:  # (the 2011 model never asks)
             t1, t2, t3 = friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, K[row, 2],
-                                         K[row, 3], K[row, 4])
+                                         K[row, 3], K[row, 4], m1, m2, m3)
             need = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_NEED] = need
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = 0.0, 0.0, 0.0
+
+
+@JIT
+def resisted_size(n):
+    """Whether a state of length n carries the quadratures of the dissipation (``interface``)."""
+    return (n == RESISTED_MK_SIZE or n == RESISTED_CLASSIC_SIZE or n == SLIDING_RESISTED_MK_SIZE
+            or n == SLIDING_RESISTED_CLASSIC_SIZE)
+
+
+@JIT
+def rolling_couple(cap, t1, t2, t3, d, q1, q2, q3):
+    """The rolling resistance's couple for omega's tangential part t, at most ``cap`` = c_rr r F_n
+    (docs/design.md §1, "Dissipation"): -cap t/|t|, kept on the side of d[D_SIDE:D_SIDE + 3] (omega_t
+    at the step's start: past its zero inside the step the couple goes on smoothly, and the zero
+    is located on the step's dense output); where that is zero (the ball does not roll at the step's
+    start), the static couple -q that holds omega_t at 0 against the pull q (the rate the angular
+    momentum's tangential part would have without the couple), or -cap q/|q| where q exceeds cap:
+    the ball starts to roll the way it is pulled."""
+    r1, r2, r3 = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]
+    if r1 != 0.0 or r2 != 0.0 or r3 != 0.0:
+        ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+        if ts == 0.0:
+            return 0.0, 0.0, 0.0
+        side = ts if t1 * r1 + t2 * r2 + t3 * r3 >= 0.0 else -ts
+        return -cap * t1 / side, -cap * t2 / side, -cap * t3 / side
+    qs = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
+    if qs <= cap:
+        return -q1, -q2, -q3
+    return -cap * q1 / qs, -cap * q2 / qs, -cap * q3 / qs
+
+
+@JIT
+def spin_couple(cap, d, pull):
+    """The spin friction's couple along N, at most ``cap`` = mu_s r F_n: -cap sign(omega.N) with the
+    sign at the step's start (d[D_SIDE + 3], kept through the step like the rolling resistance's
+    side); where that is 0 (no spin at the step's start) the static couple -pull that holds
+    omega.N at 0, at most cap."""
+    side = d[D_SIDE + 3]
+    if side != 0.0:
+        return -cap * side
+    return -max(-cap, min(cap, pull))
+
+
+@JIT
+def rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3):
+    """Add to the rolling ball's v' = K[row, 2:5] the couples of rolling resistance and spin
+    friction and the moment r N x F_air of the air's drag about the contact point, and write the
+    rates of the energy each takes into K[row, n - 3:n]: -M_rr.omega, -M_s.omega and k |c'|^3
+    (docs/design.md §1, "Dissipation"). Returns the rolling resistance's couple."""
+    r, mr, mg, k = p[0], p[4], p[6], p[P_AIR]
+    fn_ = mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2 + (o1 * d2 - o2 * d1) * n3) + mg * n3
+    fa = fn_ if p[P_FLY] != 0.0 else abs(fn_)   # (as the sliding friction's: smooth through F.N = 0 where it flies)
+    # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F
+    speed = r * math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
+    a = -k * speed * r   # F = a w
+    e1 = K[row, 2] + r * a * (n2 * w3 - n3 * w2)
+    e2 = K[row, 3] + r * a * (n3 * w1 - n1 * w3)
+    e3 = K[row, 4] + r * a * (n1 * w2 - n2 * w1)
+    # spin friction: the pull on omega.N is that on v.N, (v.N)' = v'.N + v.N'
+    on = o1 * n1 + o2 * n2 + o3 * n3
+    ms = spin_couple(p[P_SPIN] * r * fa, d, e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3)
+    e1, e2, e3 = e1 + ms * n1, e2 + ms * n2, e3 + ms * n3
+    # rolling resistance against omega's tangential part, pulled by v''s
+    en = e1 * n1 + e2 * n2 + e3 * n3
+    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d,
+                                e1 - en * n1, e2 - en * n2, e3 - en * n3)
+    K[row, 2], K[row, 3], K[row, 4] = e1 + m1, e2 + m2, e3 + m3
+    K[row, n - 3] = -(m1 * o1 + m2 * o2 + m3 * o3)
+    K[row, n - 2] = -ms * on
+    K[row, n - 1] = k * speed * speed * speed
+    return m1, m2, m3
 
 
 @JIT
@@ -130,11 +206,12 @@ def rolling_rates(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3):
 
 
 @JIT
-def friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3):
+def friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3, m1, m2, m3):
     """F_t (3), the tangential force the surface must exert for the ball to roll: from the
-    torque about the centre, (2/5) m r² omega' = (-r N) x F, so F_t = (2/5) m r N x omega';
+    torque about the centre, (2/5) m r² omega' = (-r N) x F + M, so F_t = N x ((2/5) m r² omega' - M) / r;
     omega' = T^-1 (v' + 5/2 (N' alpha'.v + N.v') N + 5/2 (N.v) N' alpha'), for the rolling
-    state with normal N, omega, N' alpha' = d, angular momentum v and its rate v' = e."""
+    state with normal N, omega, N' alpha' = d, angular momentum v, its rate v' = e and the
+    rolling resistance's couple M (tangential; the spin friction's, along N, adds nothing)."""
     k, mr = p[3], p[4]
     nv = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
     nve = 2.5 * (d1 * v1 + d2 * v2 + d3 * v3 + n1 * e1 + n2 * e2 + n3 * e3)
@@ -142,7 +219,11 @@ def friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e
     q2 = k * (e2 + nve * n2 + nv * d2)
     q3 = k * (e3 + nve * n3 + nv * d3)
     c = 0.4 * mr
-    return c * (n2 * q3 - n3 * q2), c * (n3 * q1 - n1 * q3), c * (n1 * q2 - n2 * q1)
+    if m1 == 0.0 and m2 == 0.0 and m3 == 0.0:
+        return c * (n2 * q3 - n3 * q2), c * (n3 * q1 - n1 * q3), c * (n1 * q2 - n2 * q1)
+    ir = 1.0 / p[0]
+    return (c * (n2 * q3 - n3 * q2) - ir * (n2 * m3 - n3 * m2), c * (n3 * q1 - n1 * q3) - ir * (n3 * m1 - n1 * m3),
+            c * (n1 * q2 - n2 * q1) - ir * (n1 * m2 - n2 * m1))
 
 
 @JIT
@@ -156,7 +237,7 @@ def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3):
     e1 = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
     e2 = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     e3 = mr2 * (d1 * w2 - d2 * w1)
-    return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3)
+    return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3, 0.0, 0.0, 0.0)
 
 
 # A slip speed below this fraction of the ball's speeds (|c'|, r |omega|) is zero: the slip of a
@@ -196,6 +277,13 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     a2 = (E11 * b2 - E12 * b1) * idet
     d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
     fn_ = m * (g0 * n3 - (d1 * c1 + d2 * c2 + d3 * c3))   # F_n = m (-(N' alpha').c' - N.g)
+    n = K.shape[1]
+    resisted = resisted_size(n)
+    air = 0.0   # the air's drag F_air = air c' (docs/design.md §1, "Dissipation")
+    if resisted:
+        cs = math.sqrt(c1 * c1 + c2 * c2 + c3 * c3)
+        air = -p[P_AIR] * cs
+        fn_ -= air * (c1 * n1 + c2 * n2 + c3 * n3)   # (F_n = m (-(N' alpha').c' - N.g) - F_air.N)
     # the slip velocity u = c' + omega x (-r N)
     u1 = c1 - r * (o2 * n3 - o3 * n2)
     u2 = c2 - r * (o3 * n1 - o1 * n3)
@@ -218,6 +306,17 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     b1 = -r * (o2 * d3 - o3 * d2)
     b2 = -r * (o3 * d1 - o1 * d3)
     b3 = -g0 - r * (o1 * d2 - o2 * d1)
+    fa = fn_ if p[P_FLY] != 0.0 else abs(fn_)
+    on = o1 * n1 + o2 * n2 + o3 * n3
+    if resisted:   # B with the air's drag and the rolling resistance where it keeps its side (its part - r omega' x N)
+        b1, b2, b3 = b1 + air * c1 / m, b2 + air * c2 / m, b3 + air * c3 / m
+        if d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0:
+            m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d,
+                                        0.0, 0.0, 0.0)
+            w = 2.5 * r / p[5]
+            b1 -= w * (m2 * n3 - m3 * n2)
+            b2 -= w * (m3 * n1 - m1 * n3)
+            b3 -= w * (m1 * n2 - m2 * n1)
     bn = b1 * n1 + b2 * n2 + b3 * n3
     b1, b2, b3 = b1 - bn * n1, b2 - bn * n2, b3 - bn * n3
     bs = math.sqrt(b1 * b1 + b2 * b2 + b3 * b3)
@@ -251,7 +350,10 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 6] = q * (n3 * s1 - n1 * s3)
     K[row, 7] = q * (n1 * s2 - n2 * s1)
     K[row, 8] = f * us
-    if K.shape[1] == SLIDING_MOTION_SIZE:  # no orientation carried
+    if resisted:
+        sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2, n3, f * r * (n2 * s3 - n3 * s2),
+                       f * r * (n3 * s1 - n1 * s3), f * r * (n1 * s2 - n2 * s1))
+    if n == SLIDING_MOTION_SIZE:  # no orientation carried
         pass
     elif mk != 0.0 and p[P_TURN] > 0.0:  # the pairs: omega is the motion's, R follows it (``turn``)
         K[row, 9], K[row, 10], K[row, 11] = 0.0, 0.0, 0.0
@@ -273,9 +375,32 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
 
 
 @JIT
+def sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2, n3, f1, f2, f3):
+    """Add to the sliding ball's rates K[row] the air's drag F_air = air c' (on c'') and the couples
+    of rolling resistance and spin friction (on omega', ``rolling_couple`` and ``spin_couple``, F.N
+    as ``fa``; f = (2/5) m r² omega' of the sliding friction, the pull on omega's tangential part),
+    and write the rates of the energy each takes into K[row, n - 3:n] (docs/design.md §1, "Dissipation")."""
+    r, m, mr2 = p[0], p[1], p[5]
+    ms = spin_couple(p[P_SPIN] * r * fa, d, 0.0)   # (sliding friction pulls on omega.N not at all)
+    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d, f1, f2, f3)
+    a = air / m
+    K[row, 2] += a * c1
+    K[row, 3] += a * c2
+    K[row, 4] += a * c3
+    q = 2.5 / mr2
+    K[row, 5] += q * (m1 + ms * n1)
+    K[row, 6] += q * (m2 + ms * n2)
+    K[row, 7] += q * (m3 + ms * n3)
+    K[row, n - 3] = -(m1 * o1 + m2 * o2 + m3 * o3)
+    K[row, n - 2] = -ms * on
+    K[row, n - 1] = -air * (c1 * c1 + c2 * c2 + c3 * c3)
+
+
+@JIT
 def sliding_size(n):
     """Whether a state of length n is a sliding ball's."""
-    return n == SLIDING_MOTION_SIZE or n == SLIDING_MK_SIZE or n == SLIDING_CLASSIC_SIZE
+    return (n == SLIDING_MOTION_SIZE or n == SLIDING_MK_SIZE or n == SLIDING_CLASSIC_SIZE
+            or n == SLIDING_RESISTED_MK_SIZE or n == SLIDING_RESISTED_CLASSIC_SIZE)
 
 
 @JIT
@@ -429,7 +554,7 @@ def shape_of(z):
     (COLD) take them so, not as the constants of the loops, which would compile them anew
     for every loop."""
     n = z.shape[0]
-    return n, n == MK_SIZE or n == SLIDING_MK_SIZE
+    return n, n == MK_SIZE or n == SLIDING_MK_SIZE or n == RESISTED_MK_SIZE or n == SLIDING_RESISTED_MK_SIZE
 
 
 @JIT

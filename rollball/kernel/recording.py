@@ -11,11 +11,11 @@ from .interface import (
     DOES_NOT_FIT, D_SLIP, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_VALUE, F_FAIL_X, F_FAIL_Y, F_LIFTOFF,
     F_LIFT_KINK, F_LIFT_X, F_LIFT_Y, I_DENSE, I_EVALS, I_LAST_RECORDED, I_REASON, I_ROWS, I_STATUS, I_STEPS,
     I_TRANSITION, NONFINITE, PROBE_FIT, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SIZE, PROBE_SLIP,
-    P_DISSIPATED, P_FLY, P_MU, P_TURN, ROW_CENTER, ROW_CONTACT, ROW_DISSIPATED, ROW_ENERGY, ROW_FORCE, ROW_OMEGA,
-    ROW_R, ROW_SIZE, ROW_SLIP, ROW_T, ROW_VELOCITY, R_NO_FIT, R_START_OVERFLOW, R_START_UNDEFINED, S_DISSIPATED,
-    S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
+    D_SIDE, P_CAUSES, P_DISSIPATED, P_FLY, P_MU, P_TURN, ROW_AIR, ROW_CENTER, ROW_CONTACT, ROW_DISSIPATED,
+    ROW_ENERGY, ROW_FORCE, ROW_OMEGA, ROW_R, ROW_ROLLING, ROW_SIZE, ROW_SLIP, ROW_SPIN, ROW_T, ROW_VELOCITY, R_NO_FIT,
+    R_START_OVERFLOW, R_START_UNDEFINED, S_DISSIPATED, S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import FULL, _finite, _finite_row, copy_state, motion_size, rates, shape_of, sliding_size
+from .physics import FULL, _finite, _finite_row, copy_state, motion_size, rates, resisted_size, shape_of, sliding_size
 
 
 @JIT
@@ -51,6 +51,17 @@ def record(rows, i, t, z, R, probe, p):
         rows[i, ROW_SLIP] = 0.0
         rows[i, ROW_DISSIPATED] = p[P_DISSIPATED]
     rows[i, ROW_FORCE] = probe[PROBE_FORCE]
+    # the energy rolling resistance, spin friction and air took: before this run (p) and in it (the
+    # state's quadratures, part of the total too)
+    n = z.shape[0]
+    if resisted_size(n):
+        q1, q2, q3 = z[n - 3], z[n - 2], z[n - 1]
+        rows[i, ROW_DISSIPATED] += q1 + q2 + q3
+        rows[i, ROW_ROLLING] = p[P_CAUSES] + q1
+        rows[i, ROW_SPIN] = p[P_CAUSES + 1] + q2
+        rows[i, ROW_AIR] = p[P_CAUSES + 2] + q3
+    else:
+        rows[i, ROW_ROLLING], rows[i, ROW_SPIN], rows[i, ROW_AIR] = p[P_CAUSES], p[P_CAUSES + 1], p[P_CAUSES + 2]
 
 
 @JIT
@@ -95,6 +106,7 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info, t_start):
         return
     sliding = sliding_size(n)
     d[D_SLIP], d[D_SLIP + 1], d[D_SLIP + 2], d[D_SLIP + 3] = 0.0, 0.0, 0.0, 0.0   # (no step yet)
+    d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3] = 0.0, 0.0, 0.0, 0.0
     # (np.int64(0): a literal 0 would compile dynamics anew for it)
     rates(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
     ints[I_EVALS] += 1
