@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import math
+import textwrap
 import warnings
 
 import numpy as np
@@ -41,6 +42,7 @@ _NO_VALUE = {"liftoff_time": "no lift-off", "rest_x": "never rests", "rest_y": "
 BASIN_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
                  "#17becf")
 BASIN_NONE = "#7f7f7f"
+TITLE_CHARACTERS = 13   # characters of the figure's title a line holds per inch of its width
 
 
 def label(name: str) -> str:
@@ -92,14 +94,17 @@ def _figure_png(table, color):
     else:
         fig = _curves(plt, table, color)
     scene = table.scene
-    title = (f"z = {scene.landscape}, {len(table):,} runs of {scene.duration:g} s, "
-             f"{scene.integrator.method} dt {scene.integrator.dt:g} s{' (stopped early)' if table.partial else ''}\n"
-             f"{table.seconds:.1f} s wall on {table.workers} "
-             f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}")
+    runs = (f"{len(table):,} runs of {scene.duration:g} s, {scene.integrator.method} dt {scene.integrator.dt:g} s"
+            f"{' (stopped early)' if table.partial else ''}")
+    # (a long formula takes lines of its own rather than run off the figure)
+    lines = textwrap.wrap(f"z = {scene.landscape}, {runs}", int(TITLE_CHARACTERS * fig.get_figwidth()),
+                          break_long_words=True)
+    title = "\n".join(lines + [f"{table.seconds:.1f} s wall on {table.workers} "
+                               f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}"])
     fig.suptitle(title, fontsize=9, parse_math=False, usetex=False)
-    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.93))
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.035 * (len(lines) + 1)))
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=130)
+    fig.savefig(buffer, format="png", dpi=130, bbox_inches="tight", pad_inches=0.15)   # (legends below too)
     plt.close(fig)
     return buffer.getvalue()
 
@@ -136,7 +141,7 @@ def _map(plt, table, color):
                     colors="none", hatches=["////"])
         handles.append(Patch(facecolor="none", edgecolor="k", hatch="////", label="does not fit (stopped)"))
     if handles:
-        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=3 if color == "basin" else 4,
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=2 if color == "basin" else 4,
                   fontsize=8, frameon=False)
     ax.set_xlabel(label(kx))
     ax.set_ylabel(label(ky))
@@ -159,6 +164,8 @@ def _basins(ax, table, xe, ye, value) -> list:
     if (value == 0).any():
         handles.append(Patch(facecolor=BASIN_NONE, edgecolor="0.5", label="basin 0: rests in no minimum"))
     if table.keys == ("start.x", "start.y"):
+        ax.set_aspect("equal")   # (a map of the landscape's own square, in a figure to fit)
+        ax.figure.set_size_inches(6.4, 7.4)
         for m in minima:
             ax.plot(m.x, m.y, "o", markersize=7, markerfacecolor=colours[m.number], markeredgecolor="k")
     return handles
