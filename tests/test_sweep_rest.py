@@ -94,3 +94,17 @@ def test_the_command_line_colours_by_basin(tmp_path, capsys):
                  "--color", "basin", "--workers", "2", "--out", str(tmp_path)]) == 0
     assert "6 ok" in capsys.readouterr().out
     assert [r["basin"] for r in csv.DictReader(open(tmp_path / "sweep.csv"))] == ["2"] * 6
+
+
+def test_on_a_plane_the_rest_is_where_and_when_the_closed_form_puts_it():
+    """Rolling from v₀ against rolling resistance c: at rest after 7v₀/(5cg) s and 7v₀²/(10cg) m;
+    a plane has no minimum, so the basin is 0 (the steepest descent of a flat goes nowhere)."""
+    c, g = 0.05, 9.81
+    plane = Scene.from_dict({"format": "rollball-scene", "version": 4, "landscape": "0", "gravity": g,
+                             "contact": {"friction": 0.5, "rolling_resistance": c}, "start": {"x": -1.0, "y": 0.0},
+                             "duration": 5.0})
+    v0 = np.array([0.5, 1.0, 1.5])
+    table = sweep(plane, {"start.vx": v0}, workers=1)
+    np.testing.assert_allclose(table["rest_time"], 7 * v0 / (5 * c * g), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(table["rest_x"], -1.0 + 7 * v0 ** 2 / (10 * c * g), rtol=0, atol=1e-9)
+    assert (table["rest_y"] == 0.0).all() and (table["basin"] == 0.0).all() and table.minima == ()
