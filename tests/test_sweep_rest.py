@@ -108,3 +108,14 @@ def test_on_a_plane_the_rest_is_where_and_when_the_closed_form_puts_it():
     np.testing.assert_allclose(table["rest_time"], 7 * v0 / (5 * c * g), rtol=0, atol=1e-9)
     np.testing.assert_allclose(table["rest_x"], -1.0 + 7 * v0 ** 2 / (10 * c * g), rtol=0, atol=1e-9)
     assert (table["rest_y"] == 0.0).all() and (table["basin"] == 0.0).all() and table.minima == ()
+
+
+def test_a_start_velocity_grid_is_coloured_by_basin_too(tmp_path):
+    """Pushed left from the right well's bottom: slow starts stay in it, fast ones cross the saddle
+    into the left well (spin friction ends the spin a stop leaves, so that each comes to rest)."""
+    from rollball.sweeps.plot import figure
+
+    scene = dataclasses.replace(WELLS, duration=20.0, contact=dataclasses.replace(WELLS.contact, spin_friction=0.05))
+    table = sweep(scene, {"start.vx": [-0.2, -4.5], "start.vy": [0.0, 0.2]}, workers=2)
+    assert table["basin"].reshape(2, 2).tolist() == [[2.0, 2.0], [1.0, 1.0]]
+    assert figure(table, tmp_path / "velocity.png", color="basin")
