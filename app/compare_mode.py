@@ -12,6 +12,7 @@ from PySide6 import QtCore, QtWidgets
 from rollball import METHODS, Scene, Status
 
 from . import compare_runs
+from .budget import causes_on, floor_energy
 from .contact_view import beyond_2011
 from .compare_panel import ComparePanel
 from .controller import Run
@@ -88,6 +89,8 @@ class CompareMode:
         w.view.set_runs([run.color for run in runs])
         w.readouts.set_runs([(run.label, run.color) for run in runs])
         w.readouts.show_contact(beyond_2011(scene), columns=False)   # a row per run: slip and dissipation would not fit
+        causes = causes_on(scene)
+        self.error_plots.set_budget(causes, floor_energy(scene, w.landscape) if causes else 0.0)
         self.error_plots.set_runs(runs, scene.duration)
         self.summary.set_runs(runs)
         w.timeline.set_span(max(sim.t_end for sim in simulations))
@@ -128,7 +131,7 @@ class CompareMode:
         controller = self.window.controller
         _, estimate = controller.reference
         self.error_plots.set_reference(f"{METHODS[reference_method()].label} at rtol {REFERENCE_RTOL:g}", estimate)
-        self.error_plots.show_time(controller.play_time)
+        self.error_plots.show_time(controller.play_time, self.followed)
         self.summary.fill()
         if controller.runs and all(run.ended for run in controller.runs):
             self.finished()   # the last word no longer says the reference is being computed

@@ -1,6 +1,9 @@
 """The scene panel's contact fields (scene version 3, docs/design.md §1): friction μ (empty:
 always enough friction to roll, the 2011 model), restitution e, what the ball does after a
-lift-off, and the start's angular velocity ω (empty: the rolling one).
+lift-off, and the start's angular velocity ω (empty: the rolling one); and what slows a ball
+down (version 4): rolling resistance c_rr, spin friction μ_s, the air (density ρ and drag
+coefficient C_d, both or neither, with a choice that fills both: none, or air at sea level
+around a smooth ball) and whether a run ends where the ball comes to rest.
 
 Declared once as data (``FIELDS``); the panel (``inputs.ScenePanel``) reads them into the
 scene's dictionary and lets the core's validation judge them, as it does every other field.
@@ -19,6 +22,9 @@ from .help import set_topic
 
 FRICTION, RESTITUTION, AFTER_LIFTOFF, OMEGA = ("contact.friction", "contact.restitution",
                                                 "contact.after_liftoff", "start.omega")
+ROLLING, SPIN, DENSITY, DRAG = ("contact.rolling_resistance", "contact.spin_friction", "air.density",
+                                "air.drag_coefficient")
+AIR, STOP_AT_REST = "air", "stop_at_rest"   # the air's choice (fills DENSITY and DRAG), the check box
 # (dotted scene key, label, unit, placeholder shown while empty, tooltip)
 FIELDS = (
     (FRICTION, "Friction μ", "", "empty: always rolls (2011)",
@@ -29,15 +35,39 @@ FIELDS = (
     (OMEGA, "Start ω", "rad/s", "empty: rolling",
      "The initial angular velocity wx, wy, wz (world frame). Empty: the ball starts rolling "
      "(ω = N × v / r + spin·N). Needs a friction coefficient unless it rolls; the spin must then be 0."),
+    (ROLLING, "Rolling resist.", "", "",
+     "The rolling-resistance coefficient c_rr ≥ 0: a couple c_rr·r·F·N against the rolling, so a ball on a "
+     "plane slows down at (5/7)·c_rr·g and stops; on a slope it stays at rest where tan θ ≤ c_rr. 0: none"),
+    (SPIN, "Spin friction", "", "",
+     "The spin-friction coefficient μ_s ≥ 0: a couple μ_s·r·F·N against the spin about the normal, which "
+     "then falls at (5/2)·μ_s·g/r. 0: none"),
+    (DENSITY, "Air density ρ", "kg/m³", "",
+     "The air's density ρ ≥ 0 (air at sea level: 1.2 kg/m³): a drag force ½·ρ·C_d·π·r²·|ċ|² against the "
+     "centre's velocity, in flight too. 0 (with C_d 0): no air"),
+    (DRAG, "Drag coeff. C_d", "", "",
+     "The drag coefficient C_d ≥ 0 (a smooth sphere: about 0.47); given with the density, or both 0"),
 )
+# The air's choice: (text, density, drag coefficient) filled into both fields; other values: "as typed"
+AIR_CHOICES = (("none", 0.0, 0.0), ("air, smooth ball", 1.2, 0.47))
+AIR_TYPED = "as typed below"
+AIR_TIP = ("Air drag: none, or air at sea level (ρ = 1.2 kg/m³) around a smooth ball (C_d = 0.47); "
+           "fills the two fields below, which take any other values")
+STOP_AT_REST_TEXT = "end the run there"
+STOP_AT_REST_TIP = ("Where the speed and the spin reach 0 and rolling resistance and friction can hold the ball "
+                    "(on a slope: tan θ ≤ c_rr and tan θ ≤ μ), the run ends there. Off: it goes on to its "
+                    "duration, the ball resting")
 AFTER_LIFTOFF_CHOICES = (("fly", "flies, lands again"), ("glued", "stays on the surface (2011)"))
 AFTER_LIFTOFF_TIP = ("Where the surface would have to pull the ball (lift-off): it flies the exact parabola and "
                      "lands with an impact, or it stays glued to the surface as in 2011 (lift-off reported, "
                      "what follows not physical)")
 HELP_TOPIC = "model.html#contact"
-LABELS = {key: label for key, label, *_ in FIELDS} | {AFTER_LIFTOFF: "After lift-off"}
+SLOWING_TOPIC = "plots.html#budget"   # what slows the ball down, and where its energy goes
+SLOWING = (ROLLING, SPIN, AIR, DENSITY, DRAG, STOP_AT_REST)
+LABELS = {key: label for key, label, *_ in FIELDS} | {AFTER_LIFTOFF: "After lift-off", AIR: "Air",
+                                                     STOP_AT_REST: "At rest"}
 UNITS = {key: unit for key, _, unit, *_ in FIELDS}
-KEYS = (FRICTION, RESTITUTION, AFTER_LIFTOFF, OMEGA)
+KEYS = (FRICTION, RESTITUTION, AFTER_LIFTOFF, OMEGA, ROLLING, SPIN, AIR, DENSITY, DRAG, STOP_AT_REST)
+NUMBERS = (FRICTION, RESTITUTION, OMEGA, ROLLING, SPIN, DENSITY, DRAG)   # the fields read as numbers
 _SEPARATOR = re.compile(r"[,;\s]+")
 
 
@@ -94,8 +124,8 @@ class ContactFields(QtCore.QObject):
         self.labels[key] = QtWidgets.QLabel(LABELS[key])
         self.edits[key] = field
         form.addRow(self.labels[key], row)
-        for widget in (self.labels[key], row, field):
-            set_topic(widget, HELP_TOPIC)   # F1 over a contact field: what it does
+        for widget in (self.labels[key], row, field):   # F1 over a contact field: what it does
+            set_topic(widget, SLOWING_TOPIC if key in SLOWING else HELP_TOPIC)
 
     def _edit(self, key: str) -> QtWidgets.QLineEdit:
         _, _, unit, placeholder, tip = next(f for f in FIELDS if f[0] == key)
@@ -110,7 +140,8 @@ class ContactFields(QtCore.QObject):
         self._row(form, OMEGA, self._edit(OMEGA), UNITS[OMEGA])
 
     def group(self) -> QtWidgets.QGroupBox:
-        """The Contact group: friction, restitution, after lift-off."""
+        """The Contact group: friction, restitution, after lift-off, rolling resistance, spin
+        friction, the air and whether a run stops at rest."""
         box = QtWidgets.QGroupBox("Contact")
         set_topic(box, HELP_TOPIC)
         form = QtWidgets.QFormLayout(box)
@@ -123,17 +154,59 @@ class ContactFields(QtCore.QObject):
         self.after_liftoff.setToolTip(AFTER_LIFTOFF_TIP)
         self.after_liftoff.activated.connect(lambda _i: self.edited.emit(AFTER_LIFTOFF))   # the user's choice only
         self._row(form, AFTER_LIFTOFF, self.after_liftoff, "")
+        for key in (ROLLING, SPIN):
+            self._row(form, key, self._edit(key), UNITS[key])
+        self.air = QtWidgets.QComboBox(objectName=AIR)
+        for text, density, drag in AIR_CHOICES:
+            self.air.addItem(text, (density, drag))
+        self.air.addItem(AIR_TYPED, None)
+        self.air.setToolTip(AIR_TIP)
+        self.air.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.air.setMinimumContentsLength(len(AIR_TYPED))   # the panel no wider than its other fields
+        self.air.activated.connect(self._air_chosen)
+        self._row(form, AIR, self.air, "")
+        for key in (DENSITY, DRAG):
+            self._row(form, key, self._edit(key), UNITS[key])
+            self.edits[key].textEdited.connect(self._show_air)
+        self.stop_at_rest = QtWidgets.QCheckBox(STOP_AT_REST_TEXT, objectName=STOP_AT_REST)
+        self.stop_at_rest.setToolTip(STOP_AT_REST_TIP)
+        self.stop_at_rest.clicked.connect(lambda _on: self.edited.emit(STOP_AT_REST))
+        self._row(form, STOP_AT_REST, self.stop_at_rest, "")
         return box
+
+    def _air_chosen(self, index: int) -> None:
+        """A choice of air fills the density and the drag coefficient (as typed: left as they are)."""
+        values = self.air.itemData(index)
+        if values is None:
+            return
+        for key, value in zip((DENSITY, DRAG), values):
+            self.edits[key].setText(format_number(value))
+        self.edited.emit(DENSITY)
+        self.edited.emit(DRAG)
+
+    def _show_air(self) -> None:
+        """The air's choice that the two fields hold (or "as typed")."""
+        try:
+            typed = (_number(self.text(DENSITY)), _number(self.text(DRAG)))
+        except ValueError:
+            typed = None
+        found = next((i for i in range(self.air.count() - 1) if self.air.itemData(i) == typed), self.air.count() - 1)
+        self.air.setCurrentIndex(found)
 
     # -- scene <-> fields ------------------------------------------------------------
 
     def fill(self, scene: Scene) -> None:
-        """Show a scene's contact and start ω (no ``edited``)."""
+        """Show a scene's contact, air, stop at rest and start ω (no ``edited``)."""
         contact = scene.contact
         self.edits[FRICTION].setText("" if contact.friction is None else format_number(contact.friction))
-        self.edits[RESTITUTION].setText(format_number(contact.restitution))
+        values = {RESTITUTION: contact.restitution, ROLLING: contact.rolling_resistance,
+                  SPIN: contact.spin_friction, DENSITY: scene.air.density, DRAG: scene.air.drag_coefficient}
+        for key, value in values.items():
+            self.edits[key].setText(format_number(value))
         self.edits[OMEGA].setText(omega_text(scene.start.omega))
         self.after_liftoff.setCurrentIndex(self.after_liftoff.findData(contact.after_liftoff))
+        self.stop_at_rest.setChecked(scene.stop_at_rest)
+        self._show_air()
 
     def text(self, key: str) -> str:
         return self.edits[key].text()
@@ -141,16 +214,16 @@ class ContactFields(QtCore.QObject):
     def read(self, data: dict) -> tuple[str, str] | None:
         """Put the fields' values into a scene's dictionary (``Scene.to_dict``'s); (key, message)
         of a field that holds no value of its kind (the core judges the rest)."""
-        contact = data.setdefault("contact", {})
-        for key in (FRICTION, RESTITUTION, OMEGA):
+        for key in NUMBERS:
             value, problem = parse(key, self.text(key))
             if problem is not None:
                 return key, f"{LABELS[key]}: {problem}"
             group, name = key.split(".")
-            holder = contact if group == "contact" else data["start"]
+            holder = data.setdefault(group, {})
             if key == OMEGA and value is None:
                 holder.pop("omega", None)
             else:
                 holder[name] = value
-        contact["after_liftoff"] = self.after_liftoff.currentData()
+        data["contact"]["after_liftoff"] = self.after_liftoff.currentData()
+        data[STOP_AT_REST] = self.stop_at_rest.isChecked()
         return None

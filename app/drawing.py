@@ -17,10 +17,11 @@ import time
 
 import numpy as np
 
-from rollball import Scene
+from rollball import Scene, Status
 from rollball.geometry import unit_normal
 from rollball.trajectory import CENTER, CONTACT, R, SLIDING
 
+from .budget import causes_on, floor_energy
 from .closeup import inset_place
 from .contact_view import KIND_COLORS, beyond_2011, rgba, trail_colors
 from .controller import RUNNING
@@ -50,6 +51,8 @@ class Drawing:
         w.readouts.show_contact(scene is not None and beyond_2011(scene))
         w.plots.show_contact(scene is not None and beyond_2011(scene))
         w.plots.landings = []
+        causes = causes_on(scene) if scene is not None and w.landscape is not None else ()
+        w.plots.set_budget(causes, floor_energy(scene, w.landscape) if causes else 0.0)
         if scene is not None and w.landscape is not None:
             self.draw_start(scene)
         w.plots.show_run(None, 0)
@@ -111,7 +114,10 @@ class Drawing:
         if force or time.perf_counter() - self.plotted_at >= PLOT_INTERVAL:
             self.plot()   # in the same frame as the 3-D view: the window is composed once
         shown = min(float(run.buffer.t[i]) for run, i in zip(runs, indices) if len(run.buffer))
-        w.progress.setValue(int(round(1000 * min(1.0, shown / w.controller.t_end))))
+        span = w.controller.t_end
+        if w.controller.computed and all(run.simulation.status is Status.OK for run in runs):
+            span = w.controller.end_time   # a run that came to rest ended there: played to it is all of it
+        w.progress.setValue(int(round(1000 * min(1.0, shown / span))))
 
     def plot(self) -> None:
         """Bring the plots, and the time line's computed span and events, up to the shown time."""
@@ -119,13 +125,15 @@ class Drawing:
         self.plotted_at = time.perf_counter()
         runs, t = w.controller.runs, w.controller.play_time
         if w.compare.active:
-            w.compare.error_plots.show_time(t)
+            w.compare.error_plots.show_time(t, w.compare.followed)
         elif runs and len(runs[0].buffer):
             # while playing, the curves grow with the ball; otherwise they show all that is computed
             buffer = runs[0].buffer
             i = buffer.index_at(t)
             w.plots.landings = [c.time for c in runs[0].transitions if c.kind == "landing"]
-            w.plots.show_run(buffer, i if w.controller.state == RUNNING else len(buffer) - 1)
+            shown = i if w.controller.state == RUNNING else len(buffer) - 1
+            w.plots.show_run(buffer, shown)
+            w.plots.show_budget(runs[0].trajectory(), shown, i)
             w.plots.set_cursor(buffer.t[i])
         if runs:
             w.timeline.set_available(w.controller.end_time)

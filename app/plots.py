@@ -1,4 +1,5 @@
-"""Small live plots against time: relative energy error and ‖RᵀR − I‖ (log scale), normal force.
+"""Small live plots against time: relative energy error and ‖RᵀR − I‖ (log scale), normal force,
+and beside the energy error, where something can take the ball's energy, its budget (``budget``).
 
 Log scales show whole decades, labelled only at powers of ten (10⁻⁸) and only as many as fit the
 axis' length in its font: pyqtgraph's own log ticks label every 2·10ⁿ … 9·10ⁿ when the data span
@@ -15,6 +16,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from rollball.trajectory import CENTER, CONTACT, FLYING, NORMAL_FORCE
 
+from .budget import TITLE as BUDGET_TITLE, EnergyBudget
 from .contact_view import ModeSpans
 from .help import TOPIC
 
@@ -69,6 +71,42 @@ def thinned(n: int) -> np.ndarray:
     """Indices of at most about MAX_POINTS of n rows, the last one included."""
     stride = max(1, -(-n // MAX_POINTS))
     return np.r_[np.arange(0, n, stride), n - 1] if n else np.zeros(0, dtype=int)
+
+
+def least_width(graphics: pg.GraphicsLayoutWidget, items) -> float:
+    """The width ``items`` need side by side in the view's layout, their titles and axes in their fonts."""
+    layout = graphics.ci.layout
+    left, _, right, _ = layout.getContentsMargins()
+    needed = sum(item.effectiveSizeHint(QtCore.Qt.SizeHint.MinimumSize).width() for item in items)
+    return needed + layout.horizontalSpacing() * (len(items) - 1) + left + right
+
+
+def place_row(graphics: pg.GraphicsLayoutWidget, placed: list, wanted: list, folding, row: int) -> list:
+    """Lay ``wanted`` out side by side in ``row`` of the view's layout, in place of ``placed``,
+    leaving out those of ``folding`` in turn while the width cannot hold them (and taking back
+    one left out earlier where it fits alone); returns what is placed. An item left out stays in
+    the scene, hidden (it is deleted with the view)."""
+    every, wanted, left_out = list(wanted), list(wanted), []
+    for item in folding:
+        if least_width(graphics, wanted) <= graphics.width():
+            break
+        wanted.remove(item)
+        left_out.append(item)
+    for item in left_out[:-1]:   # one folded earlier may fit alone where the last one folded did not
+        trial = [other for other in every if other in wanted or other is item]
+        if least_width(graphics, trial) <= graphics.width():
+            wanted = trial
+    if wanted == placed:
+        return placed
+    for item in placed:
+        graphics.ci.removeItem(item)
+        if item not in wanted:
+            graphics.scene().addItem(item)
+            item.hide()
+    for col, item in enumerate(wanted):
+        graphics.ci.addItem(item, row=row, col=col)
+        item.show()
+    return wanted
 
 
 class DecadeAxis(pg.AxisItem):
@@ -210,6 +248,10 @@ class LivePlots(QtWidgets.QWidget):
         self.landings: list[float] = []   # the times of the shown run's landings (set with its transitions)
         self.track = None                 # (track, point) shown in a fourth plot (``set_track``)
         self.track_plot: pg.PlotItem | None = None
+        self.budget_plot: pg.PlotItem | None = None   # where the scene can lose energy (``set_budget``)
+        self.budget: EnergyBudget | None = None
+        self.arranged = list(self.plots)              # the items side by side, left to right (``_arrange``)
+        self.floor = 0.0                              # the budget's zero of energy (``budget.floor_energy``)
         self.show_run(None, 0)
 
     def _hovered(self, pos: QtCore.QPointF) -> None:
@@ -239,6 +281,9 @@ class LivePlots(QtWidgets.QWidget):
                 axis.label.setFont(font)
             plot.getAxis("left").setWidth(None if normal else int(round(40 * scale)))
             plot.getAxis("bottom").setHeight(None if normal else int(round(30 * scale)))
+        if self.budget is not None:
+            self.budget.set_text_size(8 * min(scale, 1.5))
+        self._arrange()   # (what fits the width)
 
     def show_contact(self, on: bool) -> None:
         """Title the energy plot for a scene whose ball can slide or fly (``on``: its error counts
@@ -253,41 +298,95 @@ class LivePlots(QtWidgets.QWidget):
         for plot in self.plots:
             plot.setXRange(0.0, t_end, padding=0.02)
 
-    def set_track(self, track, point: str = "center") -> None:
-        """A fourth plot of the measured ``track``'s coordinates against time, its points as dots
-        and the run's ``point`` ("center" or "contact") as lines beside them, with the playback
-        cursor (None: the plot goes)."""
-        if self.track_plot is not None:
-            self.graphics.removeItem(self.track_plot)
-            self.cursors.remove(self.track_cursor)
-            self.plots.remove(self.track_plot)
-            self.track_plot = None
-        self.track = None if track is None else (track, point)
-        if track is None:
-            return
-        plot = self.graphics.addPlot(row=0, col=3, axisItems={"bottom": TimeAxis()})
-        plot.setObjectName("plot.track")
-        title = TRACK_TITLE.format(", ".join(track.axes))
+    def _arrange(self) -> None:
+        """The plots side by side: the energy error, its budget and the budget's key beside it,
+        ‖RᵀR − I‖, the normal force, the track. Where the width cannot hold them all in their text
+        (presentation on a 1024-pixel projector), ‖RᵀR − I‖ folds away, then the normal force: for
+        a ball that slows down the budget tells more (they come back as soon as there is room)."""
+        key = self.budget.key if self.budget is not None else None
+        wanted = [item for item in (self.plots[0], self.budget_plot, key, *self.plots[1:3], self.track_plot)
+                  if item is not None]
+        folding = self.plots[1:3] if self.budget is not None else []   # ‖RᵀR − I‖, then the force
+        self.arranged = place_row(self.graphics, self.arranged, wanted, folding, row=0)
+
+    @property
+    def folded(self) -> list[pg.PlotItem]:
+        """The plots folded away for want of width."""
+        return [plot for plot in self.plots if plot not in self.arranged]
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        self._arrange()
+
+    def _new_plot(self, name: str, title: str) -> pg.PlotItem:
+        """A linear plot against time with the others' time range, a title and a playback cursor."""
+        plot = pg.PlotItem(axisItems={"bottom": TimeAxis()})
+        plot.setObjectName(f"plot.{name}")
         plot.setProperty("plotTitle", title)
         plot.setTitle(title, size=f"{TITLE_POINTS * self.scale:g}pt", color="#333")
         plot.setLabel("bottom", "t", units="s")
         plot.showGrid(x=True, y=True, alpha=0.25)
         plot.setMouseEnabled(x=False, y=False)
         cache_axes(plot)
-        self.track_cursor = pg.InfiniteLine(pos=0.0, angle=90, pen=pg.mkPen("#555", width=1))
-        self.track_cursor.setVisible(self.cursors[0].isVisible())
-        self.track_cursor.setValue(self.cursors[0].value())
-        plot.addItem(self.track_cursor, ignoreBounds=True)
+        cursor = pg.InfiniteLine(pos=0.0, angle=90, pen=pg.mkPen("#555", width=1))
+        cursor.setVisible(self.cursors[0].isVisible())
+        cursor.setValue(self.cursors[0].value())
+        plot.addItem(cursor, ignoreBounds=True)
+        plot.setXRange(*self.plots[0].viewRange()[0], padding=0.0)
+        plot.cursor = cursor
+        return plot
+
+    def set_budget(self, causes, floor: float = 0.0) -> None:
+        """The energy budget beside the energy error, with a band per cause in ``causes`` (the
+        scene's ``budget.causes_on``) and the ball's energy counted from ``floor`` (J); none
+        where no cause is on (the 2011 model: the energy error says it all)."""
+        self.floor = floor
+        if not causes:
+            if self.budget_plot is not None:
+                self.cursors.remove(self.budget_plot.cursor)
+                self.plots.remove(self.budget_plot)
+                self.budget_plot = self.budget = None
+                self._arrange()
+            return
+        if self.budget_plot is None:
+            self.budget_plot = self._new_plot("budget", BUDGET_TITLE)
+            self.budget = EnergyBudget(self.budget_plot)
+            self.plots.append(self.budget_plot)
+            self.cursors.append(self.budget_plot.cursor)
+            self._arrange()
+            self.set_font_scale(self.scale)
+        if self.budget.causes != tuple(causes):
+            self.budget.set_causes(causes)
+
+    def show_budget(self, trajectory, index: int, at: int) -> None:
+        """The budget of a ``Trajectory``'s rows 0..index, its legend's values at row ``at``."""
+        if self.budget is not None:
+            self.budget.show_rows(trajectory, thinned(index + 1), at, self.floor)
+
+    def set_track(self, track, point: str = "center") -> None:
+        """A fourth plot of the measured ``track``'s coordinates against time, its points as dots
+        and the run's ``point`` ("center" or "contact") as lines beside them, with the playback
+        cursor (None: the plot goes)."""
+        if self.track_plot is not None:
+            self.cursors.remove(self.track_cursor)
+            self.plots.remove(self.track_plot)
+            self.track_plot = None
+        self.track = None if track is None else (track, point)
+        if track is None:
+            self._arrange()
+            return
+        plot = self._new_plot("track", TRACK_TITLE.format(", ".join(track.axes)))
+        self.track_cursor = plot.cursor
         self.track_curves = {}
         for axis, values in zip(track.axes, track.positions.T):
             color = AXIS_COLORS[axis]
             plot.plot(track.t, values, pen=None, symbol="o", symbolSize=4, symbolPen=None, symbolBrush=color,
                       name=f"track.{axis}")
             self.track_curves[axis] = plot.plot(pen=pg.mkPen(color, width=1.5), skipFiniteCheck=True)
-        plot.setXRange(*self.plots[0].viewRange()[0], padding=0.0)
         self.plots.append(plot)
         self.cursors.append(self.track_cursor)
         self.track_plot = plot   # (the four share the width the three had: the window grows no wider)
+        self._arrange()
         self.set_font_scale(self.scale)
 
     def _show_track_run(self, buffer, picked: np.ndarray | None) -> None:

@@ -31,14 +31,15 @@ FORMATS = {"t": "{:.4f} s", "mode": "{}", "energy": "{:.8g} J", "drift": "{:.2e}
            "force": "{:.5g} N", "speed": "{:.5g} m/s", "slip": "{:.3g} m/s", "dissipated": "{:.5g} J"}
 WIDEST = {"t": 99.0, "mode": "sliding", "energy": -0.12345678, "drift": -1e-10, "orth": 1e-10, "force": -0.12345,
           "speed": 0.12345, "slip": 0.123, "dissipated": 0.12345}   # a value as wide as each readout usually shows
-TIPS = {"mode": "The contact's mode: rolling (no slip), sliding (slipping against friction) or flying "
-                 "(off the surface)",
+TIPS = {"mode": "The contact's mode: rolling (no slip), sliding (slipping against friction), flying "
+                 "(off the surface) or resting (at rest, held by rolling resistance and friction)",
         "force": "The normal force F·N the surface pushes the ball with (0 in flight)",
         "drift": "The energy's change since the start, what sliding friction and landings dissipated (D) counted "
                  "as accounted for: the integrator's error alone",
         "slip": "Slip speed: how fast the ball's point at the contact moves over the surface (0 while it rolls; in "
                 "flight, its point nearest the surface)",
-        "dissipated": "Energy dissipated so far by sliding friction and by landings"}
+        "dissipated": "Energy dissipated so far by sliding friction, landings, rolling resistance, spin friction and "
+                      "air (each cause's share: the energy budget's key)"}
 
 
 def distinct_names(names: list[str]) -> list[tuple[str, int]]:

@@ -232,7 +232,10 @@ class RunCommands:
     def _liftoff_note(self) -> str:
         run = self.controller.runs[0]
         if not run.glued:
-            return contact_view.summary(run.transitions)
+            changes = run.transitions
+            if run.simulation.scene.stop_at_rest and changes and changes[-1].kind == "rest":
+                changes = changes[:-1]   # the run ended there: its message says where and when
+            return contact_view.summary(changes)
         t = self.controller.simulation.liftoff_time
         return "" if t is None else f"; lift-off at t = {t:.4g} s (not physical from there on)"
 

@@ -20,7 +20,10 @@ LABELS = {key: f"{group.lower()} {label}" if group in ("Start", "Grid") else lab
 LABELS.update({"landscape": "landscape", "description": "description", "parameters": "parameters",
                "integrator.method": "method", "integrator.munthe_kaas": "Munthe-Kaas",
                "contact.friction": "friction", "contact.restitution": "restitution",
-               "contact.after_liftoff": "after lift-off", "start.omega": "start ω"})
+               "contact.after_liftoff": "after lift-off", "start.omega": "start ω",
+               "contact.rolling_resistance": "rolling resistance", "contact.spin_friction": "spin friction",
+               "air.density": "air density", "air.drag_coefficient": "drag coefficient",
+               "stop_at_rest": "stop at rest"})
 
 
 def _flat(data: dict, prefix: str = "") -> dict:
@@ -47,6 +50,8 @@ def describe(old: Scene, new: Scene) -> str:
     keys = changed_keys(old, new)
     if keys in (["start.x", "start.y"], ["start.vx", "start.vy"]):   # a handle dragged in the view
         return "Move start point" if keys[0] == "start.x" else "Change start velocity"
+    if keys == ["air.density", "air.drag_coefficient"]:   # the air's choice fills both
+        return "Change air"
     if len(keys) == 1:
         key = keys[0]
         if key.startswith("parameters.") and key not in LABELS:   # parameters.k or parameters.k.value

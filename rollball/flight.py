@@ -413,18 +413,32 @@ class Flight:
 
     def state(self, t: float) -> FreeState:
         s = self.start
-        tau = t - s.t
         from scipy.spatial.transform import Rotation   # (scipy loads with a flight, not with the program)
 
-        rotation = Rotation.from_rotvec(s.omega * tau).as_matrix()
-        return FreeState(t, s.center + s.velocity * tau + 0.5 * self.g * tau * tau, s.velocity + self.g * tau,
-                         s.omega.copy(), rotation @ s.R)
+        rotation = Rotation.from_rotvec(s.omega * (t - s.t)).as_matrix()
+        centers, velocities = self.centers(np.array([t]))
+        return FreeState(t, centers[0], velocities[0], s.omega.copy(), rotation @ s.R)
 
     def centers(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Centre positions and velocities (n, 3) at ``times``."""
         tau = (np.asarray(times, dtype=float) - self.start.t)[:, None]
         return (self.start.center + self.start.velocity * tau + 0.5 * self.g * tau * tau,
                 self.start.velocity + self.g * tau)
+
+    def air_dissipated(self, times: np.ndarray) -> np.ndarray:
+        """The energy the air took from the flight's start to each of ``times`` (J): none in vacuum
+        (``drag_flight.DragFlight`` has air)."""
+        return np.zeros(len(np.asarray(times)))
+
+    def pull(self, speed: float) -> float:
+        """A bound on the centre's acceleration |c̈| from a time its speed is ``speed`` on: g."""
+        return self.gravity
+
+    def sag(self, t: float, s: float) -> float:
+        """The farthest the centre's path between t and s departs from its chord: g (s − t)²/8
+        (the most the parabola lies off its chord, the second derivative g bounding it)."""
+        delta = s - t
+        return self.gravity * delta * delta / 8.0
 
     def gap(self, t: float, guess=None) -> tuple[float, Foot]:
         """The centre's distance to the surface minus r at time t, and the foot."""
@@ -475,12 +489,11 @@ class Flight:
         point (h is the distance to the nearest), and so no ball of radius r + e about a point of
         their chord is outside both while L²/4 + (r + e)² < (r + h)² (L the chord, h the smaller
         gap; a point of that ball u along the chord and ρ across it from where x of L is behind:
-        min(|·−c(t)|², |·−c(s)|²) ≤ x(L − x) + (r + e)²). The centre's parabola is within
-        e = g (s − t)²/8 of the chord at every time, so the ball of radius r is inside that
+        min(|·−c(t)|², |·−c(s)|²) ≤ x(L − x) + (r + e)²). The centre's path is within
+        e = ``sag`` of the chord at every time, so the ball of radius r is inside that
         ball. CLEAR_MARGIN × r of the gap is kept for round-off."""
         h = min(h_t, h_s) - CLEAR_MARGIN * self.radius
-        delta = s - t
-        e = self.gravity * delta * delta / 8.0
+        e = self.sag(t, s)
         if not h > e:
             return False
         a, b = self.centers(np.array([t, s]))[0]
@@ -522,12 +535,15 @@ class Flight:
         """The first of the surface samples under the centre's path between t and s (every TRACK
         × r of its length, at most TRACK_MOST × ⌈(s − t)/…⌉ in all) whose height is within r of
         the centre below it, as (time, x, y, c_z − f), or None. Such a surface point is inside the
-        ball: the ball touched the surface by then (the vertical distance bounds the distance)."""
+        ball: the ball touched the surface by then (the vertical distance bounds the distance). The
+        speed is largest at an end of the interval: along a parabola it falls to the apex and then
+        grows; with air too (the path bends ever further down, and once the speed grows
+        d|ċ|/dt = g sin γ − (k/m)|ċ|² stays ≥ 0: where it is 0 its derivative is g cos γ γ̇ ≥ 0)."""
         if not s > t:
             return None
         r = self.radius
         speeds = np.linalg.norm(self.centers(np.array([t, s]))[1], axis=1)
-        length = float(speeds.max()) * (s - t)   # (the speed along a parabola is largest at an end)
+        length = float(speeds.max()) * (s - t)   # (the speed is largest at an end: see ``track``)
         count = int(min(math.ceil(length / (TRACK * r)), 100 * TRACK_MOST)) + 1
         for first in range(1, count + 1, TRACK_MOST):
             k = np.arange(first, min(first + TRACK_MOST, count + 1))
@@ -642,10 +658,10 @@ class Flight:
 
     def _leaves_clear(self, h: float, rate: float, bend: float, speed: float) -> float:
         """The step after which a gap h falling as h + rate Δ − ½ bend Δ² leaves what ``clear``
-        needs for a chord speed Δ ((speed Δ)²/4 ≤ 2 r (gap − e), e = g Δ²/8), with the quadratic
+        needs for a chord speed Δ ((speed Δ)²/4 ≤ 2 r (gap − e), e = A Δ²/8, A = ``pull``), with the quadratic
         terms doubled for safety: close to the surface the gap left is of order h² (the approach
         converges quadratically)."""
-        r, g = self.radius, self.gravity
+        r, g = self.radius, self.pull(speed)
         a = 2.0 * (0.25 * speed * speed + r * bend + 0.25 * r * g)
         b, c = 2.0 * r * rate, 2.0 * r * h
         if not a > 0:
@@ -655,9 +671,9 @@ class Flight:
     def _proposal(self, h: float, foot: Foot, speed: float, rate: float) -> float:
         """A step to try from a look with gap h > 0 falling at ``rate`` (``landing``): the one
         ``clear`` would certify if the gap fell no faster than the local model h + D′Δ − ½ A Δ²,
-        A twice the bound of D″ ≥ −(g + |ċ|² κ/(1 − Dκ)), κ the largest principal curvature
+        A twice the bound of D″ ≥ −(|c̈| + |ċ|² κ/(1 − Dκ)) (|c̈| ≤ ``pull``), κ the largest principal curvature
         towards the ball at the foot."""
-        r, g = self.radius, self.gravity
+        r, g = self.radius, self.pull(speed)
         kappa = max(float(fit_ratio(self.surface.evaluate(foot.x, foot.y), 1.0)), 0.0)
         room = 1.0 - (h + r) * kappa
         bend = 2.0 * (g + speed * speed * kappa / room) if room > 0 else math.inf

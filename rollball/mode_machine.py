@@ -16,14 +16,16 @@ import math
 import numpy as np
 
 from . import kernel, sliding
+from .drag_flight import new_flight
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
 from .geometry import unit_normal
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
 from .run_size import MAX_ROWS
-from .trajectory import (CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R, SLIP_SPEED, T,
-                         VELOCITY, Failure, Liftoff, Reason, Status, Transition)
+from .tip import Tip, foot_on_face, onto_face, turn_about
+from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R,
+                         SLIP_SPEED, T, VELOCITY, Failure, Liftoff, Reason, Status, Transition)
 
 # A friction coefficient above this acts as this one: "always enough friction" as far as a double
 # can tell (μ F_n stays finite for F_n up to 10²⁰⁸ N; a slide on a plane grips after 2 v₀/(7 μ g),
@@ -56,7 +58,8 @@ def state_of(run, row: np.ndarray) -> sliding.BallState:
     x, y = (float(value) for value in row[CONTACT])
     normal = unit_normal(run.landscape.evaluate(x, y, run.scene.parameter_values))
     velocity = row[VELOCITY] - np.dot(row[VELOCITY], normal) * normal
-    return sliding.BallState(x, y, velocity, row[OMEGA].copy(), row[R].reshape(3, 3).copy(), float(row[DISSIPATED]))
+    return sliding.BallState(x, y, velocity, row[OMEGA].copy(), row[R].reshape(3, 3).copy(), float(row[DISSIPATED]),
+                             tuple(float(value) for value in row[CAUSES]))
 
 
 class ModeMachine:
@@ -82,6 +85,7 @@ class ModeMachine:
         self.surface = Surface(run.landscape, run.scene.parameter_values)
         self.first_liftoff: Liftoff | None = None
         self.dissipated = 0.0       # J: what a flight carries
+        self.causes = (0.0, 0.0, 0.0)   # J: the part of it rolling resistance, spin friction and air took
         self.off: Failure | None = None   # a flight found no surface below the ball, or a tip too slow to leave
         self.stall: str | None = None     # why the contact's modes could not go on
         self.stop_after = stop_after
@@ -106,8 +110,10 @@ class ModeMachine:
         return codes
 
     def restart(self, mode: Mode) -> None:
-        """Begin anew in ``mode`` (a run from a recorded state: no rows yet)."""
+        """Begin anew in ``mode`` (a run from a recorded state: no rows yet, nor a stay its
+        scene's start had, ``hold_at_start``)."""
         self.mode, self.starts = Mode(mode), [(0, Mode(mode))]
+        self.spin = self.rest = None
 
     def append(self, rows: np.ndarray) -> None:
         """Add rows to the run's rows (growing the buffer), in the current mode."""
@@ -216,7 +222,7 @@ class ModeMachine:
         state = sliding.stopped_state(run._z, run._R, run._p, run._probe_normal())
         # (a stop where the ball is not held: it rolls on from there, pulled by gravity, no time lost)
         self.mode = Mode.ROLLING if kind is Change.REST else AFTER[kind]
-        self.dissipated = state.dissipated
+        self.dissipated, self.causes = state.dissipated, state.dissipated_by
         run._start_kernel_run(state, t, slides=kind is Change.SLIP, repeat=True)
 
     # -- a ball that stops (docs/design.md §1, "Rest") --------------------------------------------
@@ -256,7 +262,7 @@ class ModeMachine:
         row[OMEGA] = spin * normal
         row[R] = np.eye(3).ravel()
         if np.isfinite(row).all() and self.hold(row, 0.0):
-            self.restart(Mode.RESTING)
+            self.mode, self.starts = Mode.RESTING, [(0, Mode.RESTING)]
 
     def stay(self) -> None:
         """Take a held ball's stay whole (``hold``): rows at the run's recording times while it
@@ -287,6 +293,16 @@ class ModeMachine:
         self.append(spin.rows(np.append(self.record_times(t_stop, t_end), t_end)))
         run.status = Status.OK
 
+    def carry(self, row: np.ndarray) -> None:
+        """Carry the energy dissipated in ``row``, and by which cause, into what comes next (a flight)."""
+        self.dissipated = float(row[DISSIPATED])
+        self.causes = tuple(float(value) for value in row[CAUSES])
+
+    def _carried(self, rows: np.ndarray) -> np.ndarray:
+        """A flight's rows with the energy the causes took before it added to what they take in it."""
+        rows[:, CAUSES] += self.causes
+        return rows
+
     def _enough(self) -> bool:
         """Whether the run has the transitions it was to look for (``stop_after``): it ends ok."""
         if self.stop_after is not None and len(self.transitions) >= self.stop_after:
@@ -298,14 +314,16 @@ class ModeMachine:
         """The ball leaves the surface at (x, y) at t: a flight from the kernel run's last state."""
         run, info = self.run, self.run._info
         last = self.out[self.count - 1]
-        self.dissipated = float(last[DISSIPATED])
+        self.carry(last)
         before = self.mode
         # the flight leaves along the tangent plane: a sliding state's c'.N is the integrator's
         # drift (0 in the exact motion), and a c' into the surface would land it at once
         start = FreeState.from_row(last)
         if info[kernel.F_LIFT_KINK] == kernel.LIFT_TIP:
             force = self._pivot_force(start, x, y)
-            if force > 0.0:   # too slow to leave the tip: the ball would roll over it, pivoting
+            if force > 0.0 and before is Mode.ROLLING and self._turn_about_tip(start, x, y):
+                return
+            if force > 0.0:   # too slow to leave the tip, and sliding: the ball would slide over it
                 self._no_liftoff()
                 self.off = Failure(Reason.PIVOT, t, x, y, force)
                 run.status = Status.DOES_NOT_FIT
@@ -357,8 +375,24 @@ class ModeMachine:
         turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                          friction=friction_of(scene.contact), t_end=run.t_end,
                          times=self.record_times(start.t, run.t_end))
-        if turn is None:
-            return False
+        if turn is None or not self._end_turn(turn, Reason.RIDGE_SLIP):
+            return turn is not None
+        # on a face: rolling on from a little past the edge
+        face = beyond if turn.how == END else ridge_line.near
+        tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
+        on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
+        foot = on.center - ball.radius * face
+        state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated,
+                                  self.causes)
+        run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        return True
+
+    def _end_turn(self, turn, slip: Reason) -> bool:
+        """A turn over a ridge or a tip (``ridge.Turn``) as the run's rows and how it ends: at the
+        run's end, stopped where the friction cannot hold it (``slip`` the reason), or off the edge
+        or tip where holding it would need a pull (a flight from there); True where it ends on a
+        face (the caller starts the rolling run there)."""
+        run = self.run
         lift = self._no_liftoff()
         self.mode = Mode.ROLLING
         self._append_turn(turn)
@@ -366,21 +400,42 @@ class ModeMachine:
         if turn.how == TIME:
             run.status = Status.OK
         elif turn.how == SLIP:
-            self.off = Failure(Reason.RIDGE_SLIP, t, cx, cy, turn.force)
+            self.off = Failure(slip, t, cx, cy, turn.force)
             run.status = Status.DOES_NOT_FIT
-        elif turn.how == LIFTOFF:   # off the edge where holding it would need a pull
+        elif turn.how == LIFTOFF:   # off the edge or tip where holding it would need a pull
             self.transitions.append(dataclasses.replace(lift, time=t, x=cx, y=cy))
             if self.first_liftoff is None:
                 self.first_liftoff = Liftoff(t, cx, cy, True)
             self.mode = Mode.FLYING
             self.flight = self._new_flight(turn.state)
-        else:   # on a face: rolling on from a little past the edge
-            face = beyond if turn.how == END else ridge_line.near
-            tau = past_edge(turn.state, face, gravity=scene.gravity, scale=scale)
-            on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
-            foot = on.center - ball.radius * face
-            state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated)
-            run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        else:
+            return True
+        return False
+
+    def _turn_about_tip(self, start: FreeState, x: float, y: float) -> bool:
+        """A rolling ball at a tip near (x, y) at ``start``, too slow to leave it, turns over it
+        (``tip.turn_about``), and then rolls on a face of it, flies off it, or stops where the
+        friction cannot hold the turn (docs/design.md §1, "A tip"); False where no tip is found
+        there to turn about, or the turn cannot be integrated (the run stops, ``pivot``)."""
+        run = self.run
+        scene = run.scene
+        values = scene.parameter_values
+        found = Tip.near(x, y, lambda xs, ys: run.landscape.evaluate(xs, ys, values))
+        if found is None:
+            return False
+        if not any(np.array_equal(found.point, known) for known in self.surface.tips):
+            self.surface.tips.append(found.point)
+        ball = scene.ball
+        turn = turn_about(found, start, run._probe_normal(), radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
+                          friction=friction_of(scene.contact), t_end=run.t_end,
+                          times=self.record_times(start.t, run.t_end))
+        if turn is None or not self._end_turn(turn, Reason.TIP_SLIP):
+            return turn is not None
+        tau, face = onto_face(found, turn.state, gravity=scene.gravity)
+        on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
+        x, y = foot_on_face(found, on.center, lambda px, py: run.landscape.evaluate(px, py, values), radius=ball.radius)
+        state = sliding.BallState(float(x), float(y), on.velocity, on.omega, on.R, self.dissipated, self.causes)
+        run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True
 
     def _append_turn(self, turn) -> None:
@@ -398,6 +453,7 @@ class ModeMachine:
             row[ENERGY] = energy(state.velocity, state.omega, state.center[2], m, r, g0)
             row[NORMAL_FORCE] = force
             row[DISSIPATED] = self.dissipated
+            row[CAUSES] = self.causes
         self.append(rows)
 
     def _to_kink(self, start: FreeState, t: float, normal: np.ndarray, mode: Mode) -> FreeState:
@@ -497,7 +553,8 @@ class ModeMachine:
             if mode is Mode.RESTING or self.rest is not None:   # held in the stretch: the stay goes on
                 self.hold(row, t)
                 return
-            self.mode, self.dissipated = mode, float(row[DISSIPATED])
+            self.mode = mode
+            self.carry(row)
             if free and mode is Mode.FLYING:
                 self.flight = self._new_flight(FreeState.from_row(row))
                 return
@@ -551,7 +608,8 @@ class ModeMachine:
 
     def _new_flight(self, start: FreeState) -> Flight:
         scene = self.run.scene
-        return Flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity)
+        return new_flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity,
+                          drag=scene.air.drag_factor(scene.ball.radius))
 
     def record_times(self, t0: float, t1: float) -> np.ndarray:
         """The run's recording times strictly between t0 and t1 (fixed steps: every
@@ -574,38 +632,43 @@ class ModeMachine:
         dissipated = self.dissipated
         try:
             landing = flight.landing(run.t_end)
+        except FloatingPointError as stiff:   # (a flight through air too thick to integrate)
+            self.flight, self.stall, run.status = None, str(stiff), Status.NONFINITE
+            return
         except OffLandscape as off:   # nothing to land on: the run ends at the last time there was
-            self.append(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
-                                    if off.time > flight.start.t else np.empty(0), dissipated))
+            self.append(self._carried(flight.rows(np.append(self.record_times(flight.start.t, off.time), off.time)
+                                                  if off.time > flight.start.t else np.empty(0), dissipated)))
             self.flight = None
             self.off = Failure(Reason(off.reason), off.time, *off.point, off.value)
             run.status = Status(FLIGHT_REASONS[off.reason][0]) if off.reason in FLIGHT_REASONS else Status.NONFINITE
             return
         if landing is None:
             times = np.append(self.record_times(flight.start.t, run.t_end), run.t_end)
-            self.append(flight.rows(times, dissipated))
+            self.append(self._carried(flight.rows(times, dissipated)))
             self.flight = None
             run.status = Status.OK
             return
         t, foot = landing
-        self.append(flight.rows(self.record_times(flight.start.t, t), dissipated))
+        self.append(self._carried(flight.rows(self.record_times(flight.start.t, t), dissipated)))
         s = flight.state(t)
         hit = impact(s.velocity, s.omega, foot.normal, mass=ball.mass, radius=ball.radius,
                      restitution=contact.restitution, friction=friction_of(contact))
         bounces = hit.rebound > rest_speed(ball.radius, scene.gravity)
         if not bounces:
             hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
-        self.dissipated = dissipated = dissipated + hit.energy_lost
+        air = float(flight.air_dissipated(np.array([t]))[0])
+        self.dissipated = dissipated = dissipated + air + hit.energy_lost
+        self.causes = (*self.causes[:2], self.causes[2] + air)   # (rolling resistance, spin friction, air)
         self.transitions.append(Transition(t, Change.LANDING, foot.x, foot.y, hit.normal_speed, hit.energy_lost))
         if self._enough():
             return
         if bounces:   # off again: the state just after the impact is a row of the new flight
             self.flight = self._new_flight(FreeState(t, s.center, hit.velocity, hit.omega, s.R))
-            self.append(self.flight.rows(np.array([t]), dissipated))
+            self.append(self._carried(self.flight.rows(np.array([t]), dissipated)))
             if t >= run.t_end:
                 self.flight, run.status = None, Status.OK
             return
         self.flight = None
         self.mode = Mode.ROLLING if hit.sticking else Mode.SLIDING
-        state = sliding.BallState(foot.x, foot.y, hit.velocity, hit.omega, s.R, dissipated)
+        state = sliding.BallState(foot.x, foot.y, hit.velocity, hit.omega, s.R, dissipated, self.causes)
         run._start_kernel_run(state, t, slides=not hit.sticking, repeat=False)

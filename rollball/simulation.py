@@ -514,11 +514,13 @@ class Simulation:
             return describe(failure, self.scene.ball.radius)
         rest = self.machine.rest
         if status is Status.OK and rest is not None and self.scene.stop_at_rest:
-            return f"the ball comes to rest at t = {rest.time:.6g} s, (x, y) = ({rest.x:.6g}, {rest.y:.6g})"
+            return kernel.transition_sentence("rest", rest.time, rest.x, rest.y)
         if status is Status.OK:
             rejected = f" ({self.rejected} rejected)" if self.adaptive else ""
             flew = any(change.kind == "landing" for change in self.transitions)
-            where = " on the surface (a flight is exact: no steps)" if flew else ""
+            through_air = self.scene.air.drag_factor(self.scene.ball.radius) > 0.0
+            where = ("" if not flew else " on the surface (a flight is exact: no steps)" if not through_air else
+                     " on the surface (a flight through air is integrated apart, to 10⁻¹³: its steps are not counted)")
             return f"reached t = {self.t_end:g} s in {self.steps} steps{where}{rejected}"
         if status is Status.ABORTED:
             return f"stopped at t = {self.time:.6g} s after {self.steps} steps"

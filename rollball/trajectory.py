@@ -52,11 +52,15 @@ ENERGY = ROW_ENERGY
 NORMAL_FORCE = ROW_FORCE
 SLIP_SPEED = ROW_SLICES["slip_speed"].start   # the speed of the ball's point at the contact
 DISSIPATED = ROW_SLICES["dissipated"].start   # the energy dissipated so far
-# the causes a row carries itself (the kernel's, J so far each); the others ``dissipated_by`` finds
+# the causes a row carries itself (the kernel's quadratures, J so far each: rolling resistance, spin
+# friction, air, in the order of ``sliding.BallState.dissipated_by``); the others ``dissipated_by`` finds
 ROW_CAUSES = {cause: ROW_SLICES[f"dissipated_{cause}"].start for cause in DISSIPATION_CAUSES
               if f"dissipated_{cause}" in ROW_SLICES}
-# the cause of the energy a row's mode takes beyond the row's own causes and the impacts
-MODE_CAUSES = {SLIDING: "sliding", ROLLING: "rolling", RESTING: "spin", FLYING: "air"}
+CAUSES = slice(min(ROW_CAUSES.values()), max(ROW_CAUSES.values()) + 1)
+# the cause of the energy the total gains beyond the row's own causes and the impacts over an interval
+# that ends in each mode: a flight's rows carry what the causes took (air in flight in its column),
+# so all a flight's first row adds is the slide to a kink it left from (``ModeMachine._to_kink``)
+MODE_CAUSES = {SLIDING: "sliding", ROLLING: "rolling", RESTING: "spin", FLYING: "sliding"}
 
 ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
 ORTHOGONALITY_WARNING = 1e-3   # likewise ||R^T R - I|| at the end of a run
@@ -93,6 +97,10 @@ FLIGHT_REASONS = {
                    "the ball turning over a ridge at {where} would need more friction than μ F·N to roll over "
                    "its edge (F·N = {value:.3g} N): a real ball would slide over it, which the model does not "
                    "follow"),
+    "tip_slip": ("does_not_fit", "the normal force on the tip there (N)",
+                 "the ball turning over a tip of the surface at {where} (the tip of a cone, or a like point) would "
+                 "need more friction than μ F·N to roll over it (F·N = {value:.3g} N): a real ball would slide "
+                 "about it, which the model does not follow"),
 }
 Reason = _Named("Reason", [(name.upper(), name) for name in (*REASONS, *FLIGHT_REASONS)], module=__name__)
 

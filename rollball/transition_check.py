@@ -123,7 +123,8 @@ def check_transitions(run) -> TransitionCheck | None:
     t = rows[:, T]
     located = {change.time for change in run.transitions if change.kind in RETAKEN}
     usable = ~np.isin(t, list(located))
-    end = float(t[-1])
+    # (a run that ended ok before t_end came to rest: its retakes may look past that)
+    end = run.t_end if run.status is Status.OK else float(t[-1])
     average = (end / run.steps) if run.adaptive and run.steps else run.dt
     retakes, unchecked, skipped = [], 0, 0
     for index, change in enumerate(run.transitions):

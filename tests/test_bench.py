@@ -79,7 +79,8 @@ def test_the_report_marks_each_figure_that_misses_its_goal():
                         ({"c": {"ratio": 1.3, "ns_ours": 300.0, "ns_c": 230.0, "same_step": 1e-15}}, "against C"),
                         ({"latency": 0.045}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory"),
                         ({"hybrid": {"liftoff": {"hybrid_ms": 30.0, "glued_ms": 0.4, "ratio": 75.0},
-                                     "cylinder": {"hybrid_ms": 3.0, "glued_ms": 1.0, "ratio": 3.0}}}, "| liftoff |")]:
+                                     "cylinder": {"hybrid_ms": 3.0, "glued_ms": 1.0, "ratio": 3.0}}}, "| liftoff |"),
+                        ({"sweep": {"runs": 400, "one_s": 1.3, "two_s": 1.0, "ratio": 1.3}}, "| 1.30 s | 1.00 s |")]:
         missed = [line for line in _targets(**change).splitlines() if "missed" in line]
         assert len(missed) == 1 and row in missed[0], (change, missed)
 
@@ -112,3 +113,13 @@ def test_a_run_that_changes_mode_is_timed_against_the_same_scene_glued(monkeypat
     assert set(costs) == {"cylinder", "bowl, slip and grip"}
     for figures in costs.values():
         assert figures["hybrid_ms"] > 0.0 and figures["glued_ms"] > 0.0 and figures["ratio"] > 0.0
+
+
+def test_a_sweep_is_timed_on_one_worker_against_two(monkeypatch):
+    monkeypatch.setattr(targets.os, "cpu_count", lambda: 2)
+    figures = targets.sweep_speedup(1, runs=16)
+    assert figures["runs"] == 16 and figures["one_s"] > 0.0 and figures["two_s"] > 0.0
+    assert figures["ratio"] == figures["one_s"] / figures["two_s"]
+    assert "**" in _targets(sweep=figures) and "two workers" in _targets(sweep=figures)
+    monkeypatch.setattr(targets.os, "cpu_count", lambda: 1)
+    assert targets.sweep_speedup(1) is None and "two workers" not in _targets(sweep=None)

@@ -12,8 +12,9 @@ import pytest
 from rollball.examples import scene_path
 from rollball.modes import AFTER, MODES, TRANSITION_KINDS, Change, Mode
 from rollball.resting import holds
-from rollball.scene import Ball, Contact, Integrator, Scene, Start
-from rollball.simulation import simulate
+from rollball.scene import Air, Ball, Contact, Integrator, Scene, Start
+from rollball.simulation import Simulation, simulate
+from rollball.sliding import BallState
 from rollball.transition_check import _invented
 from rollball.trajectory import DISSIPATION_CAUSES, Transition, read_csv
 
@@ -117,8 +118,10 @@ def test_a_still_ball_is_held_iff_the_slope_allows():
     assert [(c.kind, c.time) for c in held.transitions] == [("rest", 0.0)] and len(held) == 1
     assert held.message.startswith("the ball comes to rest at t = 0 s")
     pulled = simulate(_scene("-0.05*x", rolling_resistance=0.04, duration=0.5))
-    assert pulled.t[-1] == 0.5 and pulled.center[-1, 0] > 0.01
-    assert "rest" not in {c.kind for c in pulled.transitions[:1]} or pulled.transitions[0].time > 0.0
+    assert pulled.t[-1] == 0.5 and pulled.transitions == () and set(pulled.mode) == {"rolling"}
+    theta = math.atan(0.05)   # down the slope at (5/7) g (sin θ − c_rr cos θ)
+    a = 5 / 7 * G * (math.sin(theta) - 0.04 * math.cos(theta))
+    np.testing.assert_allclose(pulled.contact[:, 0], 0.5 * a * pulled.t ** 2 * math.cos(theta), rtol=1e-9, atol=1e-15)
 
 
 def test_dissipated_by_splits_sliding_and_impacts():
@@ -143,8 +146,34 @@ def _header(path):
     return next(line for line in path.read_text().splitlines() if not line.startswith("#")).split(",")
 
 
+def test_the_causes_carry_across_a_flight():
+    """The lift-off example with rolling resistance and air: what rolling resistance took before
+    the flight is kept through it (the flight's rows carry it), the landings' impacts are their
+    own, and the causes sum to the total in every row; E + ΣD stays."""
+    scene = Scene.load(scene_path("liftoff"))
+    scene = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, rolling_resistance=0.01),
+                                air=Air(1.2, 0.47))
+    traj = simulate(scene)
+    assert traj.landings > 0
+    by = traj.dissipated_by
+    flying = traj.mode == "flying"
+    first = np.flatnonzero(flying)[0]
+    assert by["rolling"][first - 1] > 0.0 and np.all(np.diff(by["rolling"]) >= 0.0)
+    # the air takes its share in flight too, in its own column; a flight takes nothing else
+    air = by["air"]
+    assert air[first] > air[first - 1] and by["spin"][-1] == 0.0
+    steps = np.flatnonzero(flying[1:] & flying[:-1]) + 1   # intervals within a flight
+    assert np.all(np.diff(air)[steps - 1] > 0.0) and np.all(np.diff(by["rolling"])[steps - 1] == 0.0)
+    np.testing.assert_allclose(np.diff(by["sliding"])[steps - 1], 0.0, atol=1e-12)   # (round-off of the sums)
+    lost = sum(c.energy_lost for c in traj.transitions if c.kind == "landing")
+    assert by["impacts"][-1] == pytest.approx(lost, rel=1e-15)
+    np.testing.assert_allclose(sum(by.values()), traj.dissipated, rtol=0, atol=1e-12)
+
+
 def test_the_csv_has_each_cause_for_a_scene_that_dissipates(tmp_path):
-    traj = simulate(_spin_scene(False))
+    traj = simulate(dataclasses.replace(_scene(start=Start(x=0.0, y=0.0, vx=1.0, spin=20.0), rolling_resistance=0.1,
+                                               spin_friction=0.02), stop_at_rest=False))
+    assert set(traj.mode) == {"rolling", "resting"}
     traj.to_csv(tmp_path / "spin.csv")
     header = _header(tmp_path / "spin.csv")
     columns = [f"dissipated_{cause}" for cause in DISSIPATION_CAUSES]
@@ -160,3 +189,28 @@ def test_a_scene_that_does_not_dissipate_keeps_its_columns(tmp_path):
     traj.to_csv(tmp_path / "roll.csv")
     header = _header(tmp_path / "roll.csv")
     assert header[-3:] == ["mode", "slip_speed", "dissipated"]
+
+
+def test_air_alone_takes_all_that_is_dissipated_rolling_down_an_incline():
+    """Air only (ρ = 1.2, C_d = 0.47), rolling down z = −0.3 x: it never rests (tan θ > c_rr = 0),
+    all the energy dissipated is the air's, k ∫ |ċ|³ dt by the rows (trapezoids), and E + ΣD stays."""
+    scene = dataclasses.replace(_scene("-0.3*x", duration=2.0, dt=1e-3), air=Air(1.2, 0.47))
+    traj = simulate(scene)
+    assert traj.transitions == () and set(traj.mode) == {"rolling"}
+    by = traj.dissipated_by
+    assert by["air"][-1] > 0.0 and all(np.all(by[c] == 0.0) for c in DISSIPATION_CAUSES if c != "air")
+    np.testing.assert_array_equal(by["air"], traj.dissipated)
+    power = Air(1.2, 0.47).drag_factor(R_BALL) * np.linalg.norm(traj.velocity, axis=1) ** 3
+    assert by["air"][-1] == pytest.approx(np.trapezoid(power, traj.t), rel=1e-6)
+    assert traj.energy_drift < 1e-10
+
+
+def test_a_run_from_a_state_of_a_scene_that_starts_held_goes_from_that_state():
+    """``Simulation.from_state`` (the checks' retakes) of a scene whose ball starts held: the run
+    is the state's, rolling on a plane to a stop after 7 v / (5 c_rr g), not the start's stay."""
+    scene = _scene(start=Start(x=0.0, y=0.0), rolling_resistance=0.05)
+    run = Simulation(scene)
+    state = BallState(0.0, 0.0, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0 / R_BALL, 0.0]), np.eye(3))
+    redo = run.from_state(state, 1.0, Mode.ROLLING, t_end=6.0)
+    assert [(c.kind, c.time) for c in redo.transitions] == [("rest", pytest.approx(1.0 + 7 / (5 * 0.05 * G)))]
+    assert redo.rows[0, 0] == 1.0

@@ -77,7 +77,8 @@ def test_the_migration_steps_cover_every_version():
     from rollball.scene import MIGRATIONS, _v1_to_v2, _v2_to_v3, _v3_to_v4
 
     assert VERSION == 4 and MIGRATIONS == [_v1_to_v2, _v2_to_v3, _v3_to_v4]
-    assert _v3_to_v4({"landscape": "x", "contact": {"friction": 0.1}}) == {"landscape": "x", "contact": {"friction": 0.1}}
+    v3 = {"landscape": "x", "contact": {"friction": 0.1}}
+    assert _v3_to_v4(v3) == v3
     for key, body in (("contact.rolling_resistance", {"contact": {"rolling_resistance": 0.1}}),
                       ("air", {"air": {"density": 1.2}}), ("stop_at_rest", {"stop_at_rest": False})):
         with pytest.raises(SceneError, match=f"^{key}: unknown key in a version-3 scene"):

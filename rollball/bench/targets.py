@@ -238,6 +238,33 @@ def hybrid_costs(repeats: int) -> dict:
     return out
 
 
+SWEEP_GOAL = 1.6   # a sweep on two workers against one: wall time, the same runs
+
+
+def sweep_speedup(repeats: int, runs: int = 400) -> dict | None:
+    """Wall time of a sweep of ``runs`` runs of the hills example (glued: the compiled batch path)
+    over its start point, on one worker and on two, the two in turn: medians and the median of the
+    ratios (one over two). None on a machine with one core."""
+    if (os.cpu_count() or 1) < 2:
+        return None
+    from ..sweeps import sweep   # (sweeps load on demand)
+
+    scene = Scene.load(HILLS)
+    side = int(round(runs ** 0.5))
+    vary = {"start.x": np.linspace(-1.0, 1.0, side), "start.y": np.linspace(-1.0, 1.0, runs // side)}
+
+    def wall(workers: int) -> float:
+        started = time.perf_counter()
+        sweep(scene, vary, workers=workers)
+        return time.perf_counter() - started
+
+    wall(2)   # (compiled, the landscape too)
+    pairs = [(wall(1), wall(2)) for _ in range(repeats)]
+    one, two = (np.array(column) for column in zip(*pairs))
+    return {"runs": side * (runs // side), "one_s": float(np.median(one)), "two_s": float(np.median(two)),
+            "ratio": float(np.median(one / two))}
+
+
 def measure(quick: bool) -> dict:
     repeats = 3 if quick else 7
     return {
@@ -249,4 +276,5 @@ def measure(quick: bool) -> dict:
         "memory": peak_memory(10_000_000),
         "app": app_responsiveness(),
         "hybrid": hybrid_costs(3 if quick else 9),
+        "sweep": sweep_speedup(3 if quick else 5),
     }
