@@ -72,6 +72,19 @@ def _method(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+# Scene values ``simulate`` overrides (version 4): flag, dotted key, metavar, help. The text is
+# handed to the scene as it is given, so that the scene refuses a bad one naming its key.
+SCENE_FLAGS = (
+    ("--rolling-resistance", "contact.rolling_resistance", "C",
+     "rolling resistance c_rr >= 0: a couple c_rr r F_n against the rolling"),
+    ("--spin-friction", "contact.spin_friction", "M",
+     "spin friction mu_s >= 0: a couple mu_s r F_n against the spin about the normal"),
+    ("--air-density", "air.density", "RHO", "air density in kg/m3 (air 1.2), with --drag-coefficient"),
+    ("--drag-coefficient", "air.drag_coefficient", "CD",
+     "drag coefficient (a smooth sphere 0.47), with --air-density"),
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rollball",
@@ -105,6 +118,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--record-dt", type=_positive_float, metavar="T",
                      help="record at multiples of T seconds and at the end (adaptive; "
                           "default: every accepted step)")
+    for flag, key, metavar, text in SCENE_FLAGS:
+        sim.add_argument(flag, dest=key, metavar=metavar, help=f"{text} ({key})")
+    rest = sim.add_mutually_exclusive_group()
+    rest.add_argument("--stop-at-rest", dest="stop_at_rest", action="store_true", default=None,
+                      help="end the run where the ball comes to rest (stop_at_rest; by default the scene says)")
+    rest.add_argument("--no-stop-at-rest", dest="stop_at_rest", action="store_false",
+                      help="go on to the end time in mode resting once the ball is at rest")
     sim.add_argument("--csv", metavar="OUT.csv", type=_output_file,
                      help="write the trajectory as CSV (- for standard output; the summary then "
                           "goes to standard error)")
@@ -115,8 +135,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "--vary varies fastest) and write sweep.csv (one row per run: the varied "
                     "values, status, then the outcomes t_reached, liftoff_time, x_end, y_end, "
                     "energy_drift, min_normal_force, max_speed, path_length and, of the contact, "
-                    "end_mode (rolling, sliding or flying), landings, first_slip_time and "
-                    "first_grip_time), sweep.json and sweep.png (a map coloured by one outcome, "
+                    "end_mode (rolling, sliding, flying or resting), landings, first_slip_time and "
+                    "first_grip_time, and of a ball that comes to rest rest_x, rest_y, rest_time and "
+                    "basin: the number of the landscape's local minimum its steepest descent from there "
+                    "reaches, 1 the lowest, 0 none), sweep.json (with the minima: number, x, y, f) and "
+                    "sweep.png (a map coloured by one outcome, --color basin a colour per minimum, "
                     "or each outcome against one varied key). "
                     "Local on every core by default; --scheduler sends the runs to a Dask "
                     "cluster. Ctrl-C stops and writes the runs finished so far.")
@@ -127,7 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
                             f"the scene's formula)")
     sweep.add_argument("--color", default="liftoff_time", metavar="OUTCOME",
                        help="the outcome the map of two varied keys is coloured by "
-                            "(default liftoff_time)")
+                            "(default liftoff_time; basin: a colour per minimum)")
     where = sweep.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_positive_int, metavar="N",
                        help="local threads (default: every core)")
@@ -238,6 +261,9 @@ def _simulate(args) -> int:
     scene = _load_scene(args.scene)
     if not isinstance(scene, Scene):
         return scene
+    scene = _overridden(scene, args)
+    if not isinstance(scene, Scene):
+        return scene
     to_stdout = args.csv == STDOUT
     if args.csv and not to_stdout:
         try:  # before the run: a refused target must not cost the run
@@ -272,6 +298,34 @@ def _simulate(args) -> int:
         except OSError as e:
             return _fail(f"cannot write {shown(args.csv)}: {e.strerror or e}")
     return EXIT_OK if traj.status is Status.OK else EXIT_STOPPED
+
+
+def _overridden(scene, args):
+    """The scene with the values its flags give (``SCENE_FLAGS``, --no-stop-at-rest), or (after a
+    one-line message naming the flag and the key) exit status 2."""
+    import dataclasses
+
+    from .scene import SceneError
+    from .sweeps.grid import with_values
+
+    given = {key: getattr(args, key) for _, key, _, _ in SCENE_FLAGS if getattr(args, key) is not None}
+    values = {key: _number_or_text(text) for key, text in given.items()}
+    try:
+        if args.stop_at_rest is not None:
+            scene = dataclasses.replace(scene, stop_at_rest=args.stop_at_rest)
+        return with_values(scene, list(values), list(values.values()))
+    except SceneError as e:
+        named = [flag for flag, key, _, _ in SCENE_FLAGS if key in given and key == e.key] or [
+            flag for flag, key, _, _ in SCENE_FLAGS if key in given]   # (air's other half: what was given)
+        return _fail(f"{' '.join(named)}: {e}")
+
+
+def _number_or_text(text: str):
+    """A flag's number, or its text as given (the scene refuses it naming the key)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def _sweep(args) -> int:

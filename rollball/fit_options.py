@@ -8,4 +8,5 @@ POINTS = ("center", "contact")                         # the point of the ball a
 LOSSES = ("linear", "soft_l1", "huber", "cauchy", "arctan")   # scipy's least_squares losses
 # sweep keys a fit does not vary, and why
 NOT_FITTED = {"integrator.dt": "the step is the method's, not the ball's",
-              "duration": "the track's last time sets how long each run is"}
+              "duration": "the track's last time sets how long each run is",
+              "stop_at_rest": "it is true or false, not a number to fit"}

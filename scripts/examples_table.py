@@ -22,10 +22,12 @@ END = "<!-- examples end -->"
 
 
 def contact(scene) -> str:
-    """What the ball can do in this scene: always roll (the 2011 model), slide, fly."""
+    """What the ball can do in this scene: always roll (the 2011 model), slide, fly, come to rest."""
     modes = ["rolls"] if scene.contact.friction is None else ["slides", "rolls"]
     if scene.contact.after_liftoff == "fly":
         modes.append("flies")
+    if scene.dissipates:
+        modes.append("comes to rest")
     return ", ".join(modes)
 
 

@@ -16,7 +16,8 @@ def _script(name):
     return module
 
 
-@pytest.mark.parametrize("name, long_work", [("accuracy", "pairs"), ("sweep_liftoff", "sweep")])
+@pytest.mark.parametrize("name, long_work", [("accuracy", "pairs"), ("sweep_liftoff", "sweep"),
+                                             ("sweep_basins", "sweep")])
 def test_an_output_that_cannot_be_written_is_refused_before_any_run(name, long_work, tmp_path, monkeypatch):
     module = _script(name)
     (tmp_path / "docs").mkdir()

@@ -169,7 +169,7 @@ def test_save_writes_csv_json_and_a_map(tmp_path):
     rows = list(csv.reader(open(tmp_path / "sweep.csv", encoding="utf-8")))
     assert rows[0] == ["start.vx", "start.spin", "status", "t_reached", "liftoff_time", "x_end", "y_end",
                        "energy_drift", "min_normal_force", "max_speed", "path_length", "end_mode", "landings",
-                       "first_slip_time", "first_grip_time", "message"]
+                       "first_slip_time", "first_grip_time", "rest_x", "rest_y", "rest_time", "basin", "message"]
     assert len(rows) == 7 and rows[1][:3] == ["3.0", "-1.0", "ok"] and rows[1][4] == ""   # no lift-off
     assert float(rows[5][4]) == table["liftoff_time"][4]                                  # full precision
     info = json.loads((tmp_path / "sweep.json").read_text())

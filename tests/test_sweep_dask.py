@@ -195,3 +195,18 @@ def test_unsupported_addresses_are_refused_up_front(address, words, tmp_path, ca
                  "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
     assert words in err and "\n" not in err and list(tmp_path.iterdir()) == []
+
+
+def test_a_dask_sweep_of_a_scene_that_comes_to_rest_equals_the_local_one(scheduler):
+    """Runs through Simulation (a scene that dissipates), their rests and basins: the same table
+    on Dask as on one thread and on two."""
+    scene = Scene.from_dict({"format": "rollball-scene", "version": 4, "landscape": "(x**2 - 1)**2 + y**2",
+                             "contact": {"friction": 0.5, "rolling_resistance": 0.05}, "ball": {"radius": 0.05},
+                             "duration": 0.2, "view": {"min": -2.0, "max": 2.0, "step": 0.1}})
+    vary = {"start.x": [-1.5, -1.004, 0.0, 0.01, 0.997], "start.y": [0.0, 0.01]}
+    remote = sweep(scene, vary, scheduler=scheduler)
+    for local in (sweep(scene, vary, workers=1), sweep(scene, vary, workers=2)):
+        np.testing.assert_array_equal(remote.codes, local.codes)
+        np.testing.assert_array_equal(remote.outcomes, local.outcomes)
+        assert remote.minima == local.minima
+    assert sorted(set(remote["basin"][np.isfinite(remote["basin"])])) == [0.0, 1.0, 2.0]

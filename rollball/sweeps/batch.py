@@ -24,7 +24,8 @@ from ..simulation import Simulation, initial_momentum
 from ..tableaus import METHODS, MethodKind, get_method
 from ..trajectory import Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
-from .outcomes import INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
+from .outcomes import (INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, O_REST_TIME, O_REST_X,
+                       O_REST_Y, OUTCOMES)
 
 _COMPILE_LOCK = threading.Lock()  # threads of one process compile a landscape once
 
@@ -59,7 +60,7 @@ class Result:
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
     """Every sweepable key's value per run: the varied column or the scene's own value."""
-    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX)]   # (the batch loop's runs roll)
+    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX) and key not in DISSIPATION_KEYS]   # (they roll)
     keys += [PARAMETER_PREFIX + name for name in scene.parameter_names]
     return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
             for key in keys}
@@ -117,11 +118,16 @@ def _landscape(scene: Scene):
 CONTACT_PREFIX = "contact."
 
 
+# Keys that give a rolling ball a loss of energy, and so a rest (scene version 4).
+DISSIPATION_KEYS = ("contact.rolling_resistance", "contact.spin_friction", "air.density", "air.drag_coefficient")
+
+
 def changes_mode(scene: Scene, keys=()) -> bool:
-    """Whether the scene's contact can change mode (else it is the 2011 model: the batch loop's),
-    or a sweep varying ``keys`` gives it a friction."""
+    """Whether the runs go through ``Simulation`` rather than the batch loop, which runs the 2011
+    model only (a ball rolling for ever): the scene's contact can change mode, or it dissipates
+    (it may come to rest), or a sweep varying ``keys`` gives it a friction or a dissipation."""
     return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued") or (
-        "contact.friction" in keys)
+        scene.dissipates or "contact.friction" in keys or any(key in DISSIPATION_KEYS for key in keys))
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
@@ -129,7 +135,8 @@ _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status
 
 def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     """A run of a scene whose contact changes mode, through ``Simulation`` (every step a row),
-    and its status code and outcomes: those of the batch loop, from the rows, then the contact's."""
+    and its status code and outcomes: those of the batch loop, from the rows, then the contact's
+    and where and when it came to rest (the basin is left NaN: ``runner.sweep`` gives it)."""
     simulation = Simulation(scene, record_every=1)
     simulation.judge_energy = False
     simulation.advance()
@@ -149,6 +156,9 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
     grips = [change.time for change in traj.transitions if change.kind is Change.GRIP]
     out[O_FIRST_GRIP] = grips[0] if grips else np.nan
+    rest = next((change for change in traj.transitions if change.kind == Change.REST), None)
+    if rest is not None:   # (the basin is the sweep's: from every run's resting point at once)
+        out[[O_REST_X, O_REST_Y, O_REST_TIME]] = rest.x, rest.y, rest.time
     return _CODES[traj.status], out
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..formula import parameter_problem
 from ..scene import Parameter, Scene
-from .options import KEYS
+from .options import KEYS, SWITCHES
 
 MAX_RUNS = 10_000_000  # a larger grid is refused (its outcomes alone would fill gigabytes)
 
@@ -95,7 +95,10 @@ class Grid:
                 raise ValueError(f"{key}: needs a flat, non-empty list of values")
             if not np.all(np.isfinite(array)):
                 raise ValueError(f"{key}: the values must be finite numbers")
-            if any(isinstance(v, bool) for v in np.asarray(values, dtype=object).ravel()):
+            if key in SWITCHES:
+                if not np.all((array == 0.0) | (array == 1.0)):
+                    raise ValueError(f"{key}: the values must be 0 (false) or 1 (true)")
+            elif any(isinstance(v, bool) for v in np.asarray(values, dtype=object).ravel()):
                 raise ValueError(f"{key}: the values must be numbers, not true/false")
             keys.append(key)
             axes.append(array)
@@ -140,9 +143,18 @@ def with_value(scene: Scene, key: str, value: float) -> Scene:
         return dataclasses.replace(scene, parameters=tuple(
             Parameter(p.name, value, p.min, p.max) if p.name == name else p for p in scene.parameters))
     group, _, name = key.rpartition(".")
+    value = _scene_value(key, value)
     if not group:
         return dataclasses.replace(scene, **{name: value})
     return dataclasses.replace(scene, **{group: dataclasses.replace(getattr(scene, group), **{name: value})})
+
+
+def _scene_value(key: str, value):
+    """A swept number as the scene holds it: a switch's 0 or 1 as false or true (others refused
+    as the scene refuses a number there)."""
+    if key in SWITCHES and value in (0, 1):
+        return bool(value)
+    return value
 
 
 def with_values(scene: Scene, keys, values) -> Scene:
@@ -155,7 +167,7 @@ def with_values(scene: Scene, keys, values) -> Scene:
             scene = with_value(scene, key, float(value))
             continue
         group, _, name = key.rpartition(".")
-        parts.setdefault(group, {})[name] = float(value)
+        parts.setdefault(group, {})[name] = _scene_value(key, value)
     if not parts:
         return scene
     changes = parts.pop("", {})

@@ -15,8 +15,13 @@ from .. import kernel
 # landings, the time of the first slip (0 for a ball sliding from its start; NaN: none) and of
 # the first grip (the first slip's end; NaN: none).
 CONTACT_OUTCOMES = ("end_mode", "landings", "first_slip_time", "first_grip_time")
-OUTCOMES = kernel.OUTCOMES + CONTACT_OUTCOMES
+# Then the rest's (scene version 4): where (contact point) and when the ball came to rest, from the
+# run's "rest" transition (NaN: it never rests), and its basin: the number of the landscape's
+# local minimum that the steepest descent from there reaches (``rollball.basins``; 0: none).
+REST_OUTCOMES = ("rest_x", "rest_y", "rest_time", "basin")
+OUTCOMES = kernel.OUTCOMES + CONTACT_OUTCOMES + REST_OUTCOMES
 O_END_MODE, O_LANDINGS, O_FIRST_SLIP, O_FIRST_GRIP = (OUTCOMES.index(name) for name in CONTACT_OUTCOMES)
+O_REST_X, O_REST_Y, O_REST_TIME, O_BASIN = (OUTCOMES.index(name) for name in REST_OUTCOMES)
 
 # Status codes beyond the kernel's: a run whose varied scene was refused, and one not run yet.
 INVALID, NOT_RUN = 10, kernel.NOT_RUN

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import math
+import textwrap
 import warnings
 
 import numpy as np
@@ -17,11 +18,12 @@ from .. import kernel
 from ..files import atomic_write_bytes
 from .grid import KEYS
 from ..modes import MODES, ROLLING
-from .outcomes import CONTACT_OUTCOMES, INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, OUTCOMES
+from .outcomes import (CONTACT_OUTCOMES, INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS,
+                       O_REST_TIME, OUTCOMES, REST_OUTCOMES)
 
 UNITS = {"t_reached": "s", "liftoff_time": "s", "x_end": "m", "y_end": "m", "energy_drift": "relative",
          "min_normal_force": "N", "max_speed": "m/s", "path_length": "m", "first_slip_time": "s",
-         "first_grip_time": "s"}
+         "first_grip_time": "s", "rest_x": "m", "rest_y": "m", "rest_time": "s"}
 
 # Colours of the runs that have no value to colour by, with their legend text.
 _CATEGORY = {
@@ -31,6 +33,16 @@ _CATEGORY = {
     INVALID: ("#ffffff", "scene refused"),
     NOT_RUN: ("#f4f4f4", "not run (stopped)"),
 }
+
+
+# What a run without a value of the outcome coloured by did (when it ran to its end).
+_NO_VALUE = {"liftoff_time": "no lift-off", "rest_x": "never rests", "rest_y": "never rests",
+             "rest_time": "never rests", "basin": "never rests"}
+# The basins' colours, minimum by minimum (matplotlib's tab10 without its grey), and basin 0's.
+BASIN_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
+                 "#17becf")
+BASIN_NONE = "#7f7f7f"
+TITLE_CHARACTERS = 13   # characters of the figure's title a line holds per inch of its width
 
 
 def label(name: str) -> str:
@@ -82,14 +94,17 @@ def _figure_png(table, color):
     else:
         fig = _curves(plt, table, color)
     scene = table.scene
-    title = (f"z = {scene.landscape}, {len(table):,} runs of {scene.duration:g} s, "
-             f"{scene.integrator.method} dt {scene.integrator.dt:g} s{' (stopped early)' if table.partial else ''}\n"
-             f"{table.seconds:.1f} s wall on {table.workers} "
-             f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}")
+    runs = (f"{len(table):,} runs of {scene.duration:g} s, {scene.integrator.method} dt {scene.integrator.dt:g} s"
+            f"{' (stopped early)' if table.partial else ''}")
+    # (a long formula takes lines of its own rather than run off the figure)
+    lines = textwrap.wrap(f"z = {scene.landscape}, {runs}", int(TITLE_CHARACTERS * fig.get_figwidth()),
+                          break_long_words=True)
+    title = "\n".join(lines + [f"{table.seconds:.1f} s wall on {table.workers} "
+                               f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}"])
     fig.suptitle(title, fontsize=9, parse_math=False, usetex=False)
-    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.93))
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.035 * (len(lines) + 1)))
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=130)
+    fig.savefig(buffer, format="png", dpi=130, bbox_inches="tight", pad_inches=0.15)   # (legends below too)
     plt.close(fig)
     return buffer.getvalue()
 
@@ -105,15 +120,18 @@ def _map(plt, table, color):
     codes = table.codes.reshape(shape)[np.ix_(order_x, order_y)].T
     xe, ye = _edges(ax_x[order_x]), _edges(ax_y[order_y])
     fig, ax = plt.subplots(figsize=(8.0, 6.0))
-    mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(value), cmap="viridis", shading="flat")
-    fig.colorbar(mesh, ax=ax, label=label(color))
     handles = []
+    if color == "basin":
+        handles += _basins(ax, table, xe, ye, value)
+    else:
+        mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(value), cmap="viridis", shading="flat")
+        fig.colorbar(mesh, ax=ax, label=label(color))
     missing = np.isnan(value)
     for code, (colour, text) in _CATEGORY.items():
         cells = missing & (codes == code)
         if not cells.any():
             continue
-        text = text or ("no lift-off" if color == "liftoff_time" else f"no {color}")
+        text = text or _NO_VALUE.get(color, f"no {color}")
         ax.pcolormesh(xe, ye, np.ma.masked_where(~cells, np.zeros_like(value)),
                       cmap=ListedColormap([colour]), shading="flat")
         handles.append(Patch(facecolor=colour, edgecolor="0.5", label=text))
@@ -123,11 +141,34 @@ def _map(plt, table, color):
                     colors="none", hatches=["////"])
         handles.append(Patch(facecolor="none", edgecolor="k", hatch="////", label="does not fit (stopped)"))
     if handles:
-        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=4, fontsize=8,
-                  frameon=False)
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=2 if color == "basin" else 4,
+                  fontsize=8, frameon=False)
     ax.set_xlabel(label(kx))
     ax.set_ylabel(label(ky))
     return fig
+
+
+def _basins(ax, table, xe, ye, value) -> list:
+    """The map of basins: a colour for each minimum, grey for basin 0; with start.x × start.y
+    the minima are marked too. Returns the legend's entries: each minimum's number, place and
+    height, and basin 0's."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    minima = table.minima or ()
+    colours = [BASIN_NONE] + [BASIN_COLOURS[k % len(BASIN_COLOURS)] for k in range(len(minima))]
+    ax.pcolormesh(xe, ye, np.ma.masked_invalid(value), cmap=ListedColormap(colours), vmin=-0.5,
+                  vmax=len(minima) + 0.5, shading="flat")
+    handles = [Patch(facecolor=colours[m.number], edgecolor="0.5",
+                     label=f"basin {m.number}: ({m.x:.4g}, {m.y:.4g}), f = {m.f:.4g}") for m in minima]
+    if (value == 0).any():
+        handles.append(Patch(facecolor=BASIN_NONE, edgecolor="0.5", label="basin 0: rests in no minimum"))
+    if table.keys == ("start.x", "start.y"):
+        ax.set_aspect("equal")   # (a map of the landscape's own square, in a figure to fit)
+        ax.figure.set_size_inches(6.4, 7.4)
+        for m in minima:
+            ax.plot(m.x, m.y, "o", markersize=7, markerfacecolor=colours[m.number], markeredgecolor="k")
+    return handles
 
 
 def _contact_changes(table) -> bool:
@@ -143,7 +184,8 @@ def _curves(plt, table, color):
     (key,) = table.keys
     x = table.grid.axes[0]
     order = np.argsort(x)
-    shown = OUTCOMES if _contact_changes(table) else tuple(o for o in OUTCOMES if o not in CONTACT_OUTCOMES)
+    contact, rested = _contact_changes(table), bool(np.isfinite(table.outcomes[:, O_REST_TIME]).any())
+    shown = tuple(o for o in OUTCOMES if (contact or o not in CONTACT_OUTCOMES) and (rested or o not in REST_OUTCOMES))
     names = (color,) + tuple(o for o in shown if o != color)
     rows = math.ceil(len(names) / 4)
     fig, axes = plt.subplots(rows, 4, figsize=(12.0, 3.0 * rows), sharex=True)

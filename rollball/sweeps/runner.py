@@ -19,12 +19,13 @@ from typing import Callable
 
 import numpy as np
 
+from ..basins import Basins
 from ..scene import Scene
 from ..run_size import MAX_STEPS, step_count
 from . import batch
-from .grid import Grid, check_keys
+from .grid import PARAMETER_PREFIX, Grid, check_keys
 from .options import CONNECT_TIMEOUT, WORKER_TIMEOUT
-from .outcomes import NOT_RUN, OUTCOMES
+from .outcomes import NOT_RUN, O_BASIN, O_REST_X, O_REST_Y, OUTCOMES
 from .table import SweepTable
 
 # Landscape evaluations per batch: about 0.2 s on a 2020s core for a small formula.
@@ -137,10 +138,23 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
         table.scheduler = str(scheduler)
         table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel,
                                                float(connect_timeout), float(worker_timeout))
+    _give_basins(scene, grid, table)
     table.seconds = time.perf_counter() - started
     from ..comparison import machine
     table.machine = machine()
     return table
+
+
+def _give_basins(scene: Scene, grid: Grid, table: SweepTable) -> None:
+    """The basin of every run that came to rest, and the minima they are numbered by
+    (``table.minima``): those of the scene's landscape over its view square. A sweep over a
+    parameter of the landscape moves its minima from run to run: its basins are left empty."""
+    rested = np.isfinite(table.outcomes[:, O_REST_X])
+    if not rested.any() or any(key.startswith(PARAMETER_PREFIX) for key in grid.keys):
+        return
+    basins = Basins.of(scene)
+    table.minima = basins.minima
+    table.outcomes[rested, O_BASIN] = basins.basin(table.outcomes[rested, O_REST_X], table.outcomes[rested, O_REST_Y])
 
 
 def _tasks(scene: Scene, grid: Grid, workers: int) -> list[batch.Task]:

@@ -16,7 +16,7 @@ from ..files import atomic_write, check_outputs, replace_together
 from ..scene import Scene
 from ..trajectory import MODES, Status
 from .grid import Grid
-from .outcomes import INVALID, NOT_RUN, O_END_MODE, OUTCOMES
+from .outcomes import INVALID, NOT_RUN, O_BASIN, O_END_MODE, OUTCOMES
 
 # Status codes by name, as the CSV writes them.
 STATUS_NAMES = {kernel.OK: str(Status.OK), kernel.DOES_NOT_FIT: str(Status.DOES_NOT_FIT),
@@ -51,6 +51,7 @@ class SweepTable:
     scheduler: str | None = None       # Dask scheduler address, or None for a local sweep
     machine: str = ""
     error: str | None = None           # why a sweep on a cluster stopped early
+    minima: tuple | None = None        # the landscape's minima the basins are numbered by (basins.Minimum)
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -90,15 +91,16 @@ class SweepTable:
 
     def write_csv(self, stream) -> None:
         """The finished runs: varied keys, status, outcomes (full precision, empty where a run
-        has no value; the mode at the end by name), and a message for refused scenes."""
+        has no value; the mode at the end by name, the basin by number), and a message for refused scenes."""
         writer = csv.writer(stream, lineterminator="\n")
         writer.writerow(self.columns + ("message",))
         values = self.grid.values()
         status = self["status"]
         for i in np.flatnonzero(self.done):
             cells = ["" if math.isnan(v) else repr(float(v)) for v in self.outcomes[i]]
-            mode = self.outcomes[i, O_END_MODE]
+            mode, basin = self.outcomes[i, O_END_MODE], self.outcomes[i, O_BASIN]
             cells[O_END_MODE] = "" if math.isnan(mode) else MODES[int(mode)]
+            cells[O_BASIN] = "" if math.isnan(basin) else str(int(basin))
             writer.writerow([repr(float(v)) for v in values[i]] + [status[i]] + cells
                             + [self.messages.get(int(i), "")])
 
@@ -117,6 +119,7 @@ class SweepTable:
             "machine": self.machine, "workers": self.workers, "scheduler": self.scheduler,
             "seconds": self.seconds,
             "runs_per_second": done / self.seconds if self.seconds > 0 else None,
+            **({} if self.minima is None else {"minima": [m.to_dict() for m in self.minima]}),
         }
 
     def save(self, directory, color: str = "liftoff_time") -> list[Path]:
