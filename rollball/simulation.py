@@ -22,7 +22,8 @@ from .modes import Mode
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
 from .transition_check import check_transitions
-from .trajectory import CONTACT, FLIGHT_REASONS, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition
+from .trajectory import (CONTACT, FLIGHT_REASONS, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status,
+                         Trajectory, Transition)
 from .transition_verdict import TransitionCheck
 
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
