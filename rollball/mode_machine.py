@@ -4,7 +4,8 @@ they recorded and the mode of each, and decides at every stop of a kernel run wh
 a slip or a grip (a kernel run in the new mode from the state where it happened), a lift-off (a
 flight, from a kink, a tip, or the tangent plane), a landing (the impact, then a bounce or
 contact), a stop (the ball rests, spins in place, or is pulled on: ``resting``) or a stretch
-where the slip is too stiff for fixed steps (an adaptive pair takes it, docs/design.md §8).
+where the slip, or a rolling ball's ω_t near a stop, is too stiff for fixed steps (an adaptive
+pair takes it, docs/design.md §8 and §1 "Dissipation").
 ``Simulation`` runs the kernel and hands each stop to ``ModeMachine.stopped``.
 """
 
@@ -34,7 +35,8 @@ from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REA
 FRICTION_CAP = 1e100
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
 # A fixed-step run takes the stretch where a slip's direction is stiff (kernel.T_STIFF: friction
-# would stop the slip within a step, at its start or its end) with this adaptive pair at this
+# would stop the slip within a step, at its start or its end), or a rolling ball's ω_t's (rolling
+# resistance would stop it within a step), with this adaptive pair at this
 # tolerance, far below the fixed steps' own error, to the first step on its grid where it can go
 # on (docs/design.md §8); STIFF_WINDOW steps of the grid at a time, twice as many while it cannot.
 STIFF_METHOD = "dop853"
