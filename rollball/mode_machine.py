@@ -4,7 +4,8 @@ they recorded and the mode of each, and decides at every stop of a kernel run wh
 a slip or a grip (a kernel run in the new mode from the state where it happened), a lift-off (a
 flight, from a kink, a tip, or the tangent plane), a landing (the impact, then a bounce or
 contact), a stop (the ball rests, spins in place, or is pulled on: ``resting``) or a stretch
-where the slip is too stiff for fixed steps (an adaptive pair takes it, docs/design.md §8).
+where the slip, or a rolling ball's ω_t near a stop, is too stiff for fixed steps (an adaptive
+pair takes it, docs/design.md §8 and §1 "Dissipation").
 ``Simulation`` runs the kernel and hands each stop to ``ModeMachine.stopped``.
 """
 
@@ -34,7 +35,8 @@ from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REA
 FRICTION_CAP = 1e100
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
 # A fixed-step run takes the stretch where a slip's direction is stiff (kernel.T_STIFF: friction
-# would stop the slip within a step, at its start or its end) with this adaptive pair at this
+# would stop the slip within a step, at its start or its end), or a rolling ball's ω_t's (rolling
+# resistance would stop it within a step), with this adaptive pair at this
 # tolerance, far below the fixed steps' own error, to the first step on its grid where it can go
 # on (docs/design.md §8); STIFF_WINDOW steps of the grid at a time, twice as many while it cannot.
 STIFF_METHOD = "dop853"
@@ -518,16 +520,17 @@ class ModeMachine:
     # -- a stretch where the slip is stiff (docs/design.md §8) ------------------------------------
 
     def _stiff_stretch(self) -> None:
-        """The fixed-step kernel run stopped before a step where the slip's direction is stiff
-        (kernel.T_STIFF): its direction relaxes at the rate |B| / |u| and turns with B, which no
-        fixed step can follow at its order. That stretch is taken by STIFF_METHOD at
-        STIFF_TOLERANCE (every transition in it too), recording every step of the run's grid; the
-        fixed steps go on from the first grid time where the ball no longer slides, or its slip
-        is no longer stiff: its rows and transitions up to there are the run's."""
+        """The fixed-step kernel run stopped before a step where the slip's direction is stiff, or
+        a rolling ball's ω_t's against rolling resistance (kernel.T_STIFF): that direction relaxes
+        at the rate |B| / |u| (the pull's |G| / |ω_t|) and turns with B (G), which no fixed step can
+        follow at its order. That stretch is taken by STIFF_METHOD at STIFF_TOLERANCE (every
+        transition in it too, a rest where ω_t reaches 0), recording every step of the run's grid;
+        the fixed steps go on from the first grid time where the ball is in another mode, or its
+        direction is no longer stiff: its rows and transitions up to there are the run's."""
         run = self.run
         t = float(run._info[kernel.F_EVENT_T])
         state = sliding.stopped_state(run._z, run._R, run._p, run._probe_normal())
-        mode, window = Mode.SLIDING, STIFF_WINDOW
+        mode, window = self.mode, STIFF_WINDOW
         while True:
             t1 = (kernel.grid_steps_before(t, run.dt) + window) * run.dt
             if not run.t_end - t1 > kernel.GRID_SLIVER * run.dt:
@@ -541,7 +544,7 @@ class ModeMachine:
                 return
             _, on_grid = self._grid(rows[:, T])
             free = [i for i in range(1, len(rows))
-                    if on_grid[i] and (modes[i] != Mode.SLIDING or not self._stiff(rows[i]))]
+                    if on_grid[i] and not self._stiff(rows[i], Mode(int(modes[i])))]
             end = free[0] if free else len(rows) - 1
             self._adopt(stretch, end)
             row, mode, t = rows[end], Mode(int(modes[end])), float(rows[end, T])
@@ -568,12 +571,20 @@ class ModeMachine:
         k = np.round(times / self.run.dt)
         return k, np.abs(times / self.run.dt - k) < 1e-9
 
-    def _stiff(self, row: np.ndarray) -> bool:
-        """Whether a sliding row's slip is stiff for the fixed steps: friction would stop it within
-        a step (the kernel's ``slip_reference``)."""
+    def _stiff(self, row: np.ndarray, mode: Mode) -> bool:
+        """Whether a row's direction is stiff for the fixed steps: sliding, friction would stop its
+        slip within a step (the kernel's ``slip_reference``); rolling, rolling resistance its ω_t
+        (``turn_stiff``). Any other mode: not."""
         run = self.run
-        return (row[SLIP_SPEED] * run.scene.ball.mass
-                < 3.5 * float(run._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) * run.dt)
+        ball, force = run.scene.ball, abs(row[NORMAL_FORCE]) * run.dt
+        if mode is Mode.SLIDING:
+            return row[SLIP_SPEED] * ball.mass < 3.5 * float(run._p[kernel.P_MU]) * force
+        if mode is not Mode.ROLLING:
+            return False
+        omega = row[OMEGA]
+        normal = unit_normal(run.landscape.evaluate(*row[CONTACT], run.scene.parameter_values))
+        turn = float(np.linalg.norm(omega - np.dot(omega, normal) * normal))
+        return 0.0 < 1.4 * ball.mass * ball.radius * turn < float(run._p[kernel.P_RESISTANCE]) * force
 
     def _adopt(self, stretch, end: int) -> None:
         """A stretch's rows 1 to ``end`` (those at the run's recording times, at its transitions or
@@ -596,8 +607,8 @@ class ModeMachine:
                 self.changes.append(change)
             if id(change) in transitions:
                 self.transitions.append(change)
-            if change.kind is Change.REST:
-                self.rest = change
+                if change.kind is Change.REST:   # (a stop where the ball is pulled on is a change only)
+                    self.rest = change
         run._finished[0] += stretch.steps
         run._finished[1] += stretch.rejected
         run._finished[2] += stretch.evaluations

@@ -22,13 +22,21 @@ from .modes import Mode
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
 from .transition_check import check_transitions
-from .trajectory import FLIGHT_REASONS, EnergyCheck, Failure, Liftoff, Reason, Status, Trajectory, Transition
+from .trajectory import (CONTACT, FLIGHT_REASONS, T, VELOCITY, EnergyCheck, Failure, Liftoff, Reason, Status,
+                         Trajectory, Transition)
 from .transition_verdict import TransitionCheck
 
 CHUNK = 1 << 20        # steps between returns to Python (cancellation, Ctrl-C)
 FIRST_ROWS = 4096      # adaptive runs recording every step start with this many rows, then grow
 AUTO_ROWS = 200_000    # a run recorded for display keeps at most about this many rows...
 ADAPTIVE_ROWS = 10_000  # ...and an adaptive one this many, evenly spaced in time
+# A non-finite stop is the air's where its drag's rate k|ċ|/m times the step exceeds this: beyond the
+# stability interval of every explicit method here on the negative axis (Euler's 2, rk4's 2.8, the
+# pairs' ≲ 6), where Gauss's stage iteration (a contraction for a rate times step below about 1) fails too
+DRAG_STIFF = 10.0
+# the kernel's reasons an unstable step through such air shows as (its state or rotation blowing up, no
+# stage iteration converging, no adaptive step small enough)
+STIFF_DRAG_SIGNS = (Reason.UNDEFINED, Reason.ORIENTATION_OVERFLOW, Reason.NOT_CONVERGED, Reason.STEP_UNDERFLOW)
 SHARED_ROWS = 4        # rows a kernel run writing into the mode machine's rows finds free at its start (it grows them)
 
 _STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES)
@@ -304,8 +312,30 @@ class Simulation:
         if reason is None:
             return None
         info = self._info
-        return Failure(Reason(reason), float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
-                       float(info[kernel.F_FAIL_Y]), float(info[kernel.F_FAIL_VALUE]))
+        failure = Failure(Reason(reason), float(info[kernel.F_FAIL_T]), float(info[kernel.F_FAIL_X]),
+                          float(info[kernel.F_FAIL_Y]), float(info[kernel.F_FAIL_VALUE]))
+        return self._stiff_drag(failure) or failure
+
+    def _stiff_drag(self, failure: Failure) -> Failure | None:
+        """A kernel run's non-finite stop put down to the air where its drag is stiff beyond what
+        the steps can take: the drag's rate k|ċ|/m times the step (fixed: dt; adaptive: the step
+        that failed) above DRAG_STIFF in a recorded row, where no explicit method is stable and an
+        implicit one's stage equations do not converge; the failure at the first such row (the
+        rows after it are the unstable steps' own). None otherwise."""
+        rows = self.rows
+        if failure.reason not in STIFF_DRAG_SIGNS or not len(rows):
+            return None
+        scene = self.scene
+        step = failure.value if self.adaptive else self.dt
+        with np.errstate(all="ignore"):
+            stiffness = (scene.air.drag_factor(scene.ball.radius) / scene.ball.mass * step
+                         * np.linalg.norm(rows[:, VELOCITY], axis=1))
+        beyond = np.flatnonzero(stiffness > DRAG_STIFF)
+        if not len(beyond):
+            return None
+        row = rows[beyond[0]]
+        return Failure(Reason.STIFF_DRAG, float(row[T]), float(row[CONTACT][0]), float(row[CONTACT][1]),
+                       float(stiffness[beyond[0]]))
 
     @property
     def time(self) -> float:

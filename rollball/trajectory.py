@@ -75,9 +75,14 @@ class _Named(str, enum.Enum):
 # the physics stopped a run (``Failure.reason``; ``Failure.value`` says how far): members named
 # from the kernel interface's tables (STATUSES, REASONS), which say what each means.
 Status = _Named("Status", [(name.upper(), name) for name in STATUSES if name != "running"], module=__name__)
-# Why a flight's landing search stopped a run (set in Python, not by the kernel): like REASONS,
-# each with the status it gives, what ``Failure.value`` holds and its sentence.
+# Why a flight's landing search stopped a run, or what a kernel run's non-finite stop comes from
+# (set in Python, not by the kernel): like REASONS, each with the status it gives, what
+# ``Failure.value`` holds and its sentence.
 FLIGHT_REASONS = {
+    "stiff_drag": ("nonfinite", "the drag's rate k|ċ|/m times the step, at the last state",
+                   "the air's drag slows the ball faster than the steps can follow after {where}: its rate k|ċ|/m "
+                   "times the step is {value:.3g} (a motion this stiff needs steps below 1/(k|ċ|/m)), so the run "
+                   "stops; use a smaller step, or less air"),
     "off_domain": ("nonfinite", "nothing",
                    "the flying ball leaves the landscape's domain after {where} (the landscape cannot be evaluated "
                    "below it): there is no surface to land on, so the run stops"),

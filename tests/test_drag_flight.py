@@ -257,11 +257,34 @@ def test_new_flight_is_the_closed_form_in_vacuum_and_refuses_a_bad_drag():
 
 
 def test_air_too_thick_to_integrate_stops_the_run_saying_so():
-    """Drag so strong that DOP853 cannot take a step (ρ = 10³⁰: the ball would stop within 10⁻²⁸ s):
-    the run stops at the lift-off, status nonfinite, and the message says why."""
+    """Drag so strong that no step can follow it (ρ = 10³⁰: k|ċ|/m ≈ 10²⁸/s, the ball would stop within
+    10⁻²⁸ s): the rolling run stops in its first step, status nonfinite, and the failure and message
+    name the drag, not the landscape."""
     traj = simulate(liftoff({"density": 1e30, "drag_coefficient": 0.47}))
-    assert traj.status is Status.NONFINITE and "faster than its flight can be integrated" in traj.message
-    assert [change.kind for change in traj.transitions] == ["liftoff"]
+    assert traj.status is Status.NONFINITE and traj.failure.reason is Reason.STIFF_DRAG
+    assert traj.failure.value > 1e20 and traj.failure.time == 0.0
+    assert "the air's drag slows the ball faster than the steps can follow" in traj.message
+    assert "landscape" not in traj.message and traj.transitions == ()
+
+
+@pytest.mark.parametrize("density, method", [(1e30, "euler"), (1e30, "dopri5"), (1e30, "gauss4"), (1e6, "rk4")])
+def test_air_too_thick_for_the_method_names_the_drag(density, method):
+    """However the unstable steps show (the state or the rotation overflowing, no stage iteration
+    converging, no adaptive step small enough), the stop is the drag's, at the start where it was."""
+    traj = simulate(liftoff({"density": density, "drag_coefficient": 0.47}), method=method)
+    assert traj.status is Status.NONFINITE and traj.failure.reason is Reason.STIFF_DRAG
+    assert (traj.failure.time, traj.failure.x, traj.failure.y) == (0.0, -2.5, 0.0)
+
+
+def test_a_landscape_that_cannot_be_evaluated_stops_a_run_through_air_saying_so():
+    """Ordinary air (k|ċ|/m · dt ≈ 10⁻⁴) leaves a non-finite stop where the landscape is undefined its
+    own reason: the ball, glued on, rolls up to the rim of the bowl −sqrt(1 − x²) and past it."""
+    data = liftoff(AIR).to_dict()
+    data.update(landscape="-sqrt(1 - x^2)", duration=3.0)
+    data["start"]["x"], data["contact"]["after_liftoff"] = 0.0, "glued"
+    traj = simulate(Scene.from_dict(data))
+    assert traj.status is Status.NONFINITE and traj.failure.reason is Reason.UNDEFINED
+    assert "the landscape cannot be evaluated there" in traj.message
 
 
 def test_a_flight_too_stiff_to_integrate_in_its_steps_stops_saying_so(monkeypatch):

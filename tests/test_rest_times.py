@@ -4,10 +4,12 @@ that skids first, and a spin that outlasts the rolling; each at two step sizes p
 method (the pair: two tolerances), and the energy each cause took."""
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from rollball.scene import Ball, Contact, Integrator, Scene, Start
 from rollball.simulation import simulate
@@ -174,3 +176,125 @@ def test_the_rest_time_on_a_bowl_converges_at_the_method_order(method, order, st
     reference = _bowl_rest("dop853", rtol=1e-13, atol=1e-15, record_dt=0.1)
     errors = [abs(_bowl_rest(method, dt=dt)[0] - reference[0]) for dt in steps]
     assert 2 ** order / 3 < errors[0] / errors[1] < 2 ** order * 3
+
+
+# A 2-D path to rest: a tilted trough z = (x² + 0.6 y²)/2 + 0.05 x, the ball started off its axis with
+# a sideways velocity, so that its path curves all the way to the stop; c_rr = 0.08 holds it where it
+# stops (tan θ ≈ 0.053 there), and spin friction μ_s = 0.05 holds ω·N at 0 all along (static: the
+# reference's couple about N stays within 5 % of μ_s r F_n).
+TROUGH, TROUGH_C_RR, TROUGH_SPIN = (1.0, 0.6, 0.05), 0.08, 0.05
+TROUGH_START = (0.35, 0.1, -0.1, 0.45)   # x, y, vx, vy
+TROUGH_ORDERS = [("euler", 1, (2e-3, 1e-3, 5e-4)), ("rk4", 4, (2e-2, 1e-2, 5e-3)), ("lawson5", 5, (4e-2, 2e-2, 1e-2)),
+                 ("gauss4", 4, (4e-2, 2e-2, 1e-2))]
+
+
+def _trough_surface(x, y):
+    """The trough's unit normal N at (x, y), the columns of ∂c/∂(x, y) for the centre c = P + r N
+    over the contact point P = (x, y, f), and ∂N/∂x, ∂N/∂y."""
+    a, b, s = TROUGH
+    fx, fy = a * x + s, b * y
+    w = math.sqrt(1.0 + fx * fx + fy * fy)
+    n = np.array([-fx, -fy, 1.0]) / w
+    nx = np.array([-a, 0.0, 0.0]) / w - n * (fx * a) / w ** 2
+    ny = np.array([0.0, -b, 0.0]) / w - n * (fy * b) / w ** 2
+    return n, np.array([1.0, 0.0, fx]) + R_BALL * nx, np.array([0.0, 1.0, fy]) + R_BALL * ny, nx, ny
+
+
+def _trough_rates(_, state):
+    """Newton–Euler for the rolling ball in the world frame, state (x, y, ω) — not the kernel's
+    angular momentum about the contact point: ċ = r ω × N, m c̈ = m g + F, I ω̇ = −r N × F + M_rr + s N,
+    with the rolling constraint c̈ = r ω̇ × N + r ω × Ṅ, the rolling resistance's couple
+    M_rr = −c_rr r F_n ω̂_t and the static spin couple s N that keeps ω·N at 0 ((ω·N)˙ = 0)."""
+    w = state[2:5]
+    n, cx, cy, nx, ny = _trough_surface(state[0], state[1])
+    jac = np.column_stack([cx, cy])
+    contact_rate = np.linalg.solve(jac.T @ jac, jac.T @ (R_BALL * np.cross(w, n)))
+    n_rate = nx * contact_rate[0] + ny * contact_rate[1]
+    g = np.array([0.0, 0.0, -G])
+    normal_force = M * R_BALL * np.dot(np.cross(w, n_rate), n) - M * np.dot(g, n)
+    turn = w - np.dot(w, n) * n
+    couple = -TROUGH_C_RR * R_BALL * normal_force * turn / np.linalg.norm(turn)
+    system = np.zeros((4, 4))
+    system[:3, :3] = 0.4 * M * R_BALL ** 2 * np.eye(3) + M * R_BALL ** 2 * (np.eye(3) - np.outer(n, n))
+    system[:3, 3], system[3, :3] = -n, n
+    right = np.append(-M * R_BALL ** 2 * np.cross(n, np.cross(w, n_rate)) + M * R_BALL * np.cross(n, g) + couple,
+                      -np.dot(w, n_rate))
+    solved = np.linalg.solve(system, right)
+    assert abs(solved[3]) <= 0.06 * TROUGH_SPIN * R_BALL * normal_force   # the spin couple static throughout
+    return np.concatenate([contact_rate, solved[:3]])
+
+
+def _trough_turn(state):
+    n = _trough_surface(state[0], state[1])[0]
+    w = state[2:5]
+    return float(np.linalg.norm(w - np.dot(w, n) * n))
+
+
+@functools.lru_cache(maxsize=1)
+def _trough_reference():
+    """The rest (t, x, y) by scipy's DOP853 at rtol 10⁻¹³ on ``_trough_rates`` to |ω_t| = ε = 10⁻¹⁰,
+    an event solve_ivp locates with brentq on its dense output: |ω_t| falls at a rate a there that
+    varies little, and the rest is ε / a later (the centre moving r ε² / (2a) on, nothing)."""
+    x0, y0, vx, vy = TROUGH_START
+    n = _trough_surface(x0, y0)[0]
+    velocity = np.array([vx, vy, -(n[0] * vx + n[1] * vy) / n[2]])
+    eps = 1e-10
+    stops = lambda t, s: _trough_turn(s) - eps   # noqa: E731
+    stops.terminal, stops.direction = True, -1
+    run = solve_ivp(_trough_rates, (0.0, 10.0), np.concatenate([[x0, y0], np.cross(n, velocity) / R_BALL]),
+                    method="DOP853", rtol=1e-13, atol=1e-16, events=stops, dense_output=True)
+    t_eps = float(run.t_events[0][0])
+    rate = (_trough_turn(run.sol(t_eps - 1e-8)) - eps) / 1e-8
+    x, y = run.y_events[0][0][:2]
+    return t_eps + eps / rate, float(x), float(y)
+
+
+def _trough_rest(scheme, step, **options):
+    """The rest's (t, x, y) with ``scheme`` at ``step`` (dt, or rtol for dopri5), the run checked
+    (one transition, a rest, no warning); ``options``: simulate's, overriding the scene's."""
+    x0, y0, vx, vy = TROUGH_START
+    scene = _scene("0.5*(x^2 + 0.6*y^2) + 0.05*x", Start(x=x0, y=y0, vx=vx, vy=vy), scheme, step, 8.0,
+                   rolling_resistance=TROUGH_C_RR, spin_friction=TROUGH_SPIN)
+    traj = simulate(scene, **options)
+    assert [c.kind for c in traj.transitions] == ["rest"] and str(traj.status) == "ok", (scheme, step)
+    assert traj.warnings() == [], (scheme, step)
+    rest = traj.transitions[0]
+    speed = np.linalg.norm(traj.velocity, axis=1)
+    moving = traj.velocity[speed > 1e-3 * speed.max()]
+    heading = np.unwrap(np.arctan2(moving[:, 1], moving[:, 0]))
+    assert abs(heading[-1] - heading[0]) > 2 * math.pi   # a 2-D path: its heading turns by more than a turn
+    # where the rolling stopped ω_t is 0 up to a share of the speeds (the zero located on a step's
+    # dense output along ω_t at the step's start; 1.4·10⁻⁸ for dopri5 at rtol 10⁻⁸, 2·10⁻⁹ at most else)
+    last = np.flatnonzero(traj.mode == "rolling")[-1]
+    normal = _trough_surface(*traj.contact[last])[0]
+    turn = traj.omega[last] - np.dot(traj.omega[last], normal) * normal
+    assert np.linalg.norm(turn) * R_BALL <= 3e-8 * speed.max()
+    assert traj.t[last] <= rest.time and np.all(traj.velocity[last + 1:] == 0.0)
+    return np.array([rest.time, rest.x, rest.y])
+
+
+def test_the_trough_reference_agrees_with_the_kernel_at_a_tight_tolerance():
+    """Two formulations (the test's Newton–Euler in ω, the kernel's angular momentum about the contact
+    point) and two integrations agree on the rest to 10⁻¹¹ s and m."""
+    np.testing.assert_allclose(_trough_rest("dopri5", 1e-13, method="dop853", rtol=1e-13, atol=1e-15, record_dt=0.01),
+                               _trough_reference(), rtol=0, atol=1e-11)
+
+
+@pytest.mark.parametrize("method, order, steps", TROUGH_ORDERS)
+def test_on_a_curved_path_the_rest_converges_at_the_method_order(method, order, steps):
+    """Near the stop the direction of ω_t relaxes towards the pull's at the rate |G| / |ω_t|, stiff
+    for a fixed step: the rest's time and place, at three steps, each halving shrinking the error
+    about 2^p-fold (within a factor 3), with no warning."""
+    reference = np.array(_trough_reference())
+    errors = [np.abs(_trough_rest(method, dt) - reference) for dt in steps]
+    for coarse, fine in zip(errors, errors[1:]):
+        assert 2 ** order / 3 < coarse[0] / fine[0] < 2 ** order * 3, errors
+        assert np.max(fine[1:]) < np.max(coarse[1:]) / 2 ** order * 3, errors
+
+
+def test_on_a_curved_path_dopri5_meets_the_rest_within_its_tolerance():
+    """The pair's error control resolves the stiff direction itself: the rest within 100 rtol
+    (s and m) at rtol 10⁻⁸ and 10⁻¹⁰."""
+    reference = np.array(_trough_reference())
+    errors = [np.max(np.abs(_trough_rest("dopri5", rtol) - reference)) for rtol in (1e-8, 1e-10)]
+    assert errors[0] < 1e-6 and errors[1] < 1e-8 and errors[1] < errors[0] / 10

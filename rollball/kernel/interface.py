@@ -118,7 +118,7 @@ P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this
 P_MU = 8    # the friction coefficient mu; inf: always enough friction to roll (the 2011 model)
 P_FLY = 9   # 1: the run stops at a lift-off (the ball flies); 0: it goes on glued to the surface
 P_DISSIPATED = 10  # the energy dissipated before this run (J): what rolling rows record
-P_STIFF = 11  # 1: a fixed-step sliding run stops before a step whose slip is stiff (T_STIFF); 0: it steps on
+P_STIFF = 11  # 1: a fixed-step run stops before a step whose slip or rolling omega_t is stiff (T_STIFF); 0: steps on
 P_RESISTANCE = 12  # the rolling resistance c_rr (a couple -c_rr r F_n along omega's tangential part)
 P_SPIN = 13        # the spin friction mu_s (a couple -mu_s r F_n along omega's normal part)
 P_AIR = 14         # the air's drag factor k (kg/m): a force -k |c'| c' on the centre
@@ -136,8 +136,9 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, fr
     then the contact: ``friction`` mu (None: always enough to roll, the 2011 model: no slip is
     ever looked for), ``fly`` (stop the run at a lift-off instead of going on glued), the
     energy ``dissipated`` before this run (J, carried into its rows) and ``stiff`` (a fixed-step
-    sliding run stops before a step whose slip is stiff, T_STIFF, for the caller to take that
-    stretch; without it the run steps on with the slip's own direction); then the dissipation
+    run stops before a step whose slip, or whose rolling omega_t against rolling resistance, is
+    stiff, T_STIFF, for the caller to take that stretch; without it the run steps on with the
+    direction at the step's start); then the dissipation
     (docs/design.md §1, "Dissipation"): ``rolling_resistance`` c_rr, ``spin_friction`` mu_s, ``air``
     the drag factor k (kg/m) and the energy each of the three took before this run (``causes``, J,
     which is part of ``dissipated``). A run whose state carries the quadratures (``state_size``,
@@ -240,9 +241,10 @@ TRANSITIONS = {
 }
 T_NONE = 0
 T_LIFTOFF, T_SLIP, T_GRIP, T_REST = range(1, len(TRANSITIONS) + 1)
-# Not a change of mode: a fixed-step sliding run stops before a step that starts where the slip's
-# direction is stiff (friction would stop the slip within the step, ``loops.slip_reference``); the
-# run in Python takes that stretch with an adaptive pair (``simulation``, docs/design.md §8).
+# Not a change of mode: a fixed-step run stops before a step that starts where the slip's direction
+# is stiff (friction would stop the slip within the step, ``loops.slip_reference``), or a rolling
+# ball's omega_t's (rolling resistance would stop it within the step, ``loops.turn_stiff``); the
+# run in Python takes that stretch with an adaptive pair (``mode_machine``, docs/design.md §8).
 T_STIFF = len(TRANSITIONS) + 1
 # Inside the kernel only: a couple's side turns (the spin omega.N reaches 0, or a sliding ball's
 # omega_t does): the run holds the state there and goes on from it (``loops.resume``).

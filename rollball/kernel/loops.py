@@ -62,6 +62,21 @@ def slip_reference(d, probe, p, h, cap):
         d[D_SLIP + 3] = math.inf if us * p[1] < 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) * h else 0.0
 
 
+@JIT
+def turn_stiff(d, p, probe, h, n):
+    """Whether a rolling ball's omega_t at the step's start (d[D_SIDE:D_SIDE + 3], ``couple_reference``'s)
+    is stiff for a fixed step of h: its rolling resistance would stop it within the step,
+    |omega_t| < c_rr r F_n h / (7/5 m r^2). Its direction then relaxes towards the pull's at the rate
+    |pull| / |omega_t|, as a starting slip's does (``slip_reference``), which no fixed step follows:
+    ``advance`` stops there (T_STIFF) for the run in Python to take that stretch with an adaptive pair
+    (docs/design.md §1, "Dissipation")."""
+    if sliding_size(n) or p[P_RESISTANCE] == 0.0:
+        return False
+    t1, t2, t3 = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]
+    ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+    return ts > 0.0 and 1.4 * p[1] * p[0] * ts < p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) * h
+
+
 # A couple's side counts as zero at a step's start (the couple static, ``couple_reference``) where the
 # couple would stop it within this fraction of the ball's time unit sqrt(r / g0): far below any step,
 # far above what is left of it where a step located its zero (``resume``).
@@ -173,7 +188,8 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
                 couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS)
             if watch:
                 slip_reference(d, probe, p, h, math.inf)
-                if d[D_SLIP + 3] == math.inf and p[P_STIFF] != 0.0 and sliding_size(n):   # (Python's: T_STIFF)
+                if p[P_STIFF] != 0.0 and (d[D_SLIP + 3] == math.inf and sliding_size(n)
+                                          or resists and turn_stiff(d, p, probe, h, n)):   # (Python's: T_STIFF)
                     ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
                     info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
                     return
