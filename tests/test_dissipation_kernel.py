@@ -347,6 +347,24 @@ def test_huge_rolling_resistance_holds_the_spin_and_the_ball_slides_to_rest():
     assert np.abs(traj.dissipated_by["rolling"]).max() < 1e-12   # (held: the static couple does no work)
 
 
+@pytest.mark.parametrize("method, steps", RUNS)
+def test_slid_uphill_against_a_couple_friction_cannot_turn_it_rests_where_it_stops(method, steps):
+    """mu < c_rr: friction's torque mu r F_n never overcomes the couple's c_rr r F_n, so omega stays 0
+    and a ball sent up the incline without spin slides, slowing at g (sin(theta) + mu cos(theta)),
+    and stops at v0 / that; there tan(theta) <= mu and <= c_rr hold it: a rest."""
+    mu, c, v0 = 0.35, 0.5, 1.0
+    a = G * (math.sin(THETA) + mu * math.cos(THETA))
+    scene = Scene(landscape=INCLINE, gravity=G, ball=Ball(radius=R_BALL, mass=M), duration=1.0,
+                  start=Start(x=0.0, y=0.0, vx=-v0 * math.cos(THETA), omega=(0.0, 0.0, 0.0)),
+                  contact=Contact(friction=mu, rolling_resistance=c))
+    for step in steps:
+        traj = _simulate(scene, method, step)
+        assert traj.status == "ok" and [str(t.kind) for t in traj.transitions] == ["rest"]
+        rest = traj.transitions[0]
+        assert rest.time == pytest.approx(v0 / a, abs=1e-9)
+        assert rest.x == pytest.approx(-v0 ** 2 / (2.0 * a) * math.cos(THETA), abs=1e-9 if method != "euler" else step)
+
+
 def test_rolling_resistance_no_longer_stalls_a_slip_into_a_grip():
     """The wells with a steeper bowl, from rest at (-2.5, 2.5), c_rr 0.05: where the normal force
     falls the ball slips, grips later and flies; it comes to rest in a well, without the slip and
