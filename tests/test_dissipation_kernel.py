@@ -282,7 +282,9 @@ def test_a_slip_stopping_on_an_incline_grips_iff_mu_covers_what_rolling_with_c_r
                   contact=Contact(friction=mu, rolling_resistance=c))
     t0 = delta / (G * math.cos(THETA) * (math.tan(THETA) + 3.5 * mu + 2.5 * c))
     v_grip = v0 + G * (math.sin(THETA) + mu * math.cos(THETA)) * t0
-    a = 5.0 / 7.0 * G * (math.sin(THETA) - c * math.cos(THETA)) if above else G * (math.sin(THETA) - mu * math.cos(THETA))
+    rolling = 5.0 / 7.0 * G * (math.sin(THETA) - c * math.cos(THETA))
+    sliding = G * (math.sin(THETA) - mu * math.cos(THETA))
+    a = rolling if above else sliding
     for step in steps:
         traj = _simulate(scene, method, step)
         assert traj.status == "ok" and traj.data[-1, 0] == t_end
