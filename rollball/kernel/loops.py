@@ -81,7 +81,7 @@ def turn_stiff(d, p, probe, h, n):
 # couple would stop it within this fraction of the ball's time unit sqrt(r / g0): far below any step,
 # far above what is left of it where a step located its zero (``resume``).
 SIDE_ZERO = 1e-9
-SIDE_TURNS = 64   # sides turned inside one call's steps at most; then the couples are static throughout
+SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static
 
 
 @JIT
@@ -277,7 +277,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             return
     watch = contact_watched(p, n)
     resists = resisted_size(n)
-    turns = 0   # (the couples' sides turned inside this call's steps: SIDE_TURNS at most, ``resume``)
+    turns = 0   # (the couples' sides turned since the last step that ended whole: SIDE_TURNS at most, ``resume``)
     cap = slow_slip(p, rtol)
     skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
     t, h = info[F_TIME], info[F_H]
@@ -356,6 +356,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         t = t_new
         accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] += 1
+        turns = 0   # (a count per call made the couples static for the rest of it: energy gained, docs/design.md §1)
         grown = hs * min(1.0 if retry else MAX_FACTOR, next_step_factor(err, err_kind, err_exp, info))
         h = max(h, grown) if land else grown
         retry = False
