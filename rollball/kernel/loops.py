@@ -89,9 +89,10 @@ def couple_reference(fn, d, p, z, K, probe, ints, free):
     """The sides of the couples at the step's start (probe: its state's), which the rolling
     resistance and spin friction keep through the step (``rolling_couple``, ``spin_couple``), into
     d[D_SIDE:D_SIDE + 4]: omega's tangential part and the sign of omega.N; each zero where the
-    couple would stop it within SIDE_ZERO of the ball's time unit (or ``free`` is false), and the
-    couple is then static (what holds it at 0, up to its limit). Where that changes a couple's
-    kind of side, K[0] and probe are evaluated anew (the step's first stage)."""
+    couple would stop it within SIDE_ZERO of the ball's time unit (or ``free`` is false: the spin's,
+    and a sliding ball's omega_t), and the couple is then static (what holds it at 0, up to its
+    limit). Where that changes a couple's kind of side, K[0] and probe are evaluated anew (the
+    step's first stage)."""
     r, m, g0 = p[0], p[1], abs(p[2])
     n, mk = shape_of(z)
     n1, n2, n3 = probe[0], probe[1], probe[2]
@@ -102,7 +103,9 @@ def couple_reference(fn, d, p, z, K, probe, ints, free):
     # (the couples' largest rates of omega: c r F_n / I, I = 7/5 m r² rolling, 2/5 m r² sliding and for the spin)
     turning = force * p[P_RESISTANCE] / (0.4 if sliding_size(n) else 1.4)
     spinning = force * p[P_SPIN] / 0.4
-    if not (free and t1 * t1 + t2 * t2 + t3 * t3 > turning * turning):
+    # (a rolling ball's omega_t reaching 0 is a rest, which ends the run, never a turn in a row:
+    # made static while it rolls, the couple would push along the motion)
+    if not ((free or not sliding_size(n)) and t1 * t1 + t2 * t2 + t3 * t3 > turning * turning):
         t1, t2, t3 = 0.0, 0.0, 0.0
     side = 0.0
     if free and abs(on) > spinning:
