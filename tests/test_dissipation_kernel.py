@@ -3,6 +3,7 @@
 each for the fixed-step methods at two steps and the adaptive pairs at two tolerances, and the
 energy each cause took (the state's quadratures, the rows' dissipated_rolling, _spin, _air)."""
 
+import dataclasses
 import math
 import sys
 
@@ -10,7 +11,8 @@ import numpy as np
 import pytest
 
 from rollball import kernel, simulate
-from rollball.scene import Air, Contact, Scene, Start
+from rollball.examples import scene_path
+from rollball.scene import Air, Ball, Contact, Scene, Start
 from rollball.sliding import BallState
 
 from contact_runs import rolling_state, segment
@@ -242,6 +244,144 @@ def test_a_billiard_shot_against_rolling_resistance_grips_at_2_v0_over_7mu_minus
     assert roll.rows[0, kernel.ROW_ROLLING] == slide.rows[-1, kernel.ROW_ROLLING]
     assert roll.rows[0, kernel.ROW_DISSIPATED] == pytest.approx(slide.rows[-1, kernel.ROW_DISSIPATED], abs=1e-15)
 
+
+
+# -- grips and slips with the couples (docs/design.md §1, "Dissipation") -------------------------
+
+def _billiard(c, mu=0.2, v0=2.0, backspin=0.0, duration=6.0):
+    return Scene(landscape=PLANE, gravity=G, ball=Ball(radius=R_BALL, mass=M), duration=duration,
+                 start=Start(x=0.0, y=0.0, vx=v0, omega=(0.0, -backspin, 0.0)),
+                 contact=Contact(friction=mu, rolling_resistance=c))
+
+
+# (method, its two steps: dt, or rtol for the pairs) through the whole run, the mode machine's too
+RUNS = [("euler", (2e-3, 1e-3)), ("rk4", (1e-2, 5e-3)), ("lawson5", (1e-2, 5e-3)), ("gauss4", (1e-2, 5e-3)),
+        ("dopri5", (1e-6, 1e-9))]
+
+
+def _simulate(scene, method, step):
+    if method == "dopri5":
+        return simulate(scene, method=method, rtol=step, atol=step * 1e-3)
+    return simulate(scene, method=method, dt=step)
+
+
+@pytest.mark.parametrize("method, steps", RUNS)
+@pytest.mark.parametrize("above", [True, False])
+def test_a_slip_stopping_on_an_incline_grips_iff_mu_covers_what_rolling_with_c_rr_needs(method, steps, above):
+    """Thrown down the incline with topspin (r omega = v0 + delta), the slip u = v - r omega < 0 grows
+    at g cos(theta) (tan(theta) + 7/2 mu + 5/2 c) and reaches 0 at t0. Rolling down against the couple,
+    (2/5) m r² omega' = r F - c r F_n and a = r omega' give a = (5/7) g (sin(theta) - c cos(theta)) and
+    F = (2/7) m g sin(theta) + (5/7) c m g cos(theta): the ball grips iff mu >= (2/7) tan(theta) + (5/7) c
+    and rolls on at that a; else the slip turns about (no transition) and it slides on at
+    g (sin(theta) - mu cos(theta))."""
+    c, v0, delta, t_end = 0.05, 1.0, 0.2, 0.5
+    need = 2.0 / 7.0 * math.tan(THETA) + 5.0 / 7.0 * c
+    mu = need * (1.01 if above else 0.99)
+    start = Start(x=0.0, y=0.0, vx=v0 * math.cos(THETA), omega=(0.0, (v0 + delta) / R_BALL, 0.0))
+    scene = Scene(landscape=INCLINE, gravity=G, ball=Ball(radius=R_BALL, mass=M), duration=t_end, start=start,
+                  contact=Contact(friction=mu, rolling_resistance=c))
+    t0 = delta / (G * math.cos(THETA) * (math.tan(THETA) + 3.5 * mu + 2.5 * c))
+    v_grip = v0 + G * (math.sin(THETA) + mu * math.cos(THETA)) * t0
+    rolling = 5.0 / 7.0 * G * (math.sin(THETA) - c * math.cos(THETA))
+    sliding = G * (math.sin(THETA) - mu * math.cos(THETA))
+    a = rolling if above else sliding
+    for step in steps:
+        traj = _simulate(scene, method, step)
+        assert traj.status == "ok" and traj.data[-1, 0] == t_end
+        if above:
+            assert [str(t.kind) for t in traj.transitions] == ["grip"]
+            assert traj.transitions[0].time == pytest.approx(t0, abs=1e-9)
+        else:
+            assert not traj.transitions and set(traj.modes) == {1}
+        assert _speed(traj.data)[-1] == pytest.approx(v_grip + a * (t_end - t0), abs=1e-9)
+
+
+@pytest.mark.parametrize("method, steps", RUNS)
+@pytest.mark.parametrize("backspin", [0.0, 10.0])
+def test_a_billiard_shot_against_rolling_resistance_grips_rolls_and_comes_to_rest(method, steps, backspin):
+    """A shot from v0 with backspin w0 (omega_y = -w0) on cloth with mu > c: friction and the couple
+    both spin the ball forward until omega_y = 0 at t1 = w0 r / ((5/2)(mu + c) g) (the couple's side
+    turns while the ball still slides); then omega_y' = (5/2)(mu - c) g / r, and the slip v - r omega_y
+    ends at t* = (2 v0 + 5 (mu - c) g t1) / ((7 mu - 5 c) g) (t* = 2 v0 / ((7 mu - 5 c) g) without
+    spin); it rolls on at v* = v0 - mu g t*, slowing at (5/7) c g, and rests 7 v* / (5 c g) later,
+    7 v*² / (10 c g) further on. All of it polynomial: each method meets it to round-off at both steps
+    (Euler the distance to its first order); the rolling resistance took c m g r ∫|omega_y|."""
+    mu, c, v0 = 0.2, 0.05, 2.0
+    t1 = backspin * R_BALL / (2.5 * (mu + c) * G)
+    t_grip = (2.0 * v0 + 5.0 * (mu - c) * G * t1) / ((7.0 * mu - 5.0 * c) * G)
+    v_grip = v0 - mu * G * t_grip
+    t_rest = t_grip + 7.0 * v_grip / (5.0 * c * G)
+    x_rest = v0 * t_grip - 0.5 * mu * G * t_grip ** 2 + 7.0 * v_grip ** 2 / (10.0 * c * G)
+    rolled = backspin * t1 / 2.0 + 2.5 * (mu - c) * G / R_BALL * (t_grip - t1) ** 2 / 2.0   # ∫|omega_y| to t*
+    errors = []
+    for step in steps:
+        traj = _simulate(_billiard(c, mu, v0, backspin), method, step)
+        assert traj.status == "ok" and "comes to rest" in traj.message
+        assert [str(t.kind) for t in traj.transitions] == ["grip", "rest"]
+        grip, rest = traj.transitions
+        assert grip.time == pytest.approx(t_grip, abs=1e-9) and rest.time == pytest.approx(t_rest, abs=1e-9)
+        assert traj.data[-1, 0] == rest.time and _speed(traj.data)[-1] < 1e-9
+        errors.append(abs(rest.x - x_rest))
+        by = traj.dissipated_by
+        assert by["rolling"][-1] == pytest.approx(c * M * G * R_BALL * rolled + 0.7 * M * v_grip ** 2,
+                                                  abs=_tol(method))
+        energy = 0.5 * M * v0 ** 2 + 0.2 * M * (R_BALL * backspin) ** 2
+        assert by["rolling"][-1] + by["sliding"][-1] == pytest.approx(energy, abs=_tol(method))
+    if method == "euler":   # its distance to first order
+        assert errors[0] < 1.5 * steps[0] and 1.8 < errors[0] / errors[1] < 2.2
+    else:
+        assert max(errors) < 1e-9
+
+
+def test_huge_rolling_resistance_holds_the_spin_and_the_ball_slides_to_rest():
+    """c_rr 1e300: the couple holds omega at 0, the ball slides to a stop at v0 / (mu g),
+    v0² / (2 mu g) on, and rests there (the slip and the rolling stop at once), friction having
+    taken all its energy."""
+    mu, v0 = 0.2, 2.0
+    traj = simulate(_billiard(1e300, mu, v0), method="rk4", dt=1e-3)
+    assert traj.status == "ok" and "comes to rest" in traj.message
+    assert [str(t.kind) for t in traj.transitions] == ["rest"]
+    rest = traj.transitions[0]
+    assert rest.time == pytest.approx(v0 / (mu * G), abs=1e-12)
+    assert rest.x == pytest.approx(v0 ** 2 / (2.0 * mu * G), abs=1e-12)
+    assert traj.data[-1, 0] == rest.time
+    assert traj.dissipated_by["sliding"][-1] == pytest.approx(0.5 * M * v0 ** 2, abs=1e-12)
+    assert np.abs(traj.dissipated_by["rolling"]).max() < 1e-12   # (held: the static couple does no work)
+
+
+@pytest.mark.parametrize("method, steps", RUNS)
+def test_slid_uphill_against_a_couple_friction_cannot_turn_it_rests_where_it_stops(method, steps):
+    """mu < c_rr: friction's torque mu r F_n never overcomes the couple's c_rr r F_n, so omega stays 0
+    and a ball sent up the incline without spin slides, slowing at g (sin(theta) + mu cos(theta)),
+    and stops at v0 / that; there tan(theta) <= mu and <= c_rr hold it: a rest."""
+    mu, c, v0 = 0.35, 0.5, 1.0
+    a = G * (math.sin(THETA) + mu * math.cos(THETA))
+    scene = Scene(landscape=INCLINE, gravity=G, ball=Ball(radius=R_BALL, mass=M), duration=1.0,
+                  start=Start(x=0.0, y=0.0, vx=-v0 * math.cos(THETA), omega=(0.0, 0.0, 0.0)),
+                  contact=Contact(friction=mu, rolling_resistance=c))
+    for step in steps:
+        traj = _simulate(scene, method, step)
+        assert traj.status == "ok" and [str(t.kind) for t in traj.transitions] == ["rest"]
+        rest = traj.transitions[0]
+        assert rest.time == pytest.approx(v0 / a, abs=1e-9)
+        assert rest.x == pytest.approx(-v0 ** 2 / (2.0 * a) * math.cos(THETA), abs=1e-9 if method != "euler" else step)
+
+
+def test_rolling_resistance_no_longer_stalls_a_slip_into_a_grip():
+    """The wells with a steeper bowl, from rest at (-2.5, 2.5), c_rr 0.05: where the normal force
+    falls the ball slips, grips later and flies; it comes to rest in a well, without the slip and
+    the grip undoing each other at one instant (before, 16 of them at t = 1.094 s ended the run)."""
+    scene = Scene.load(scene_path("wells"))
+    scene = dataclasses.replace(scene, landscape=scene.landscape.replace("0.05*(x^2", "0.1*(x^2"),
+                                start=Start(x=-2.5, y=2.5),
+                                contact=dataclasses.replace(scene.contact, rolling_resistance=0.05, friction=1.0))
+    traj = simulate(scene)
+    assert traj.status == "ok" and "comes to rest" in traj.message
+    kinds = [str(t.kind) for t in traj.transitions]
+    assert kinds == ["slip", "grip", "slip", "liftoff", "landing", "rest"]
+    times = [t.time for t in traj.transitions]
+    assert all(b - a > 1e-3 for a, b in zip(times, times[1:]))
+    assert times[0] == pytest.approx(1.0941, abs=1e-4)
 
 # -- the layouts, the parameters and a whole run --------------------------------------------------
 

@@ -15,7 +15,7 @@ from .interface import (
     P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE,
     TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import copy_state, curvatures, resisted_size, shape_of, sliding_size
+from .physics import copy_state, couple_sides, curvatures, resisted_size, shape_of, sliding_size
 from .recording import _fail, hold, record, record_last
 from .steps import accept, search_step
 
@@ -102,6 +102,16 @@ def turn_along(pe, r1, r2, r3):
     on = spin_of(pe)
     return ((pe[PROBE_OMEGA] - on * pe[0]) * r1 + (pe[PROBE_OMEGA + 1] - on * pe[1]) * r2
             + (pe[PROBE_OMEGA + 2] - on * pe[2]) * r3)
+
+
+@JIT
+def stands(p, pe):
+    """Whether a ball with zero slip (probe pe) does not roll either: omega's tangential part is
+    zero (``couple_sides``, rolling), so the centre stands still and the rolling resistance's couple
+    is static there."""
+    t1, t2, t3, _ = couple_sides(p, pe[PROBE_FORCE], pe[0], pe[1], pe[2], pe[PROBE_OMEGA], pe[PROBE_OMEGA + 1],
+                                 pe[PROBE_OMEGA + 2], 1.4)
+    return t1 == 0.0 and t2 == 0.0 and t3 == 0.0
 
 
 @JIT
@@ -628,6 +638,8 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
         state_at(fn, d, p, z, R, h, P, K, 0.0, best, Ye, Re, pe)
     if kind == T_GRIP and pe[PROBE_NEED] > mu * pe[PROBE_FORCE]:
         kind = T_SLIP
+    elif kind == T_GRIP and p[P_RESISTANCE] > 0.0 and resisted_size(n) and stands(p, pe):
+        kind = T_REST   # the slip and the rolling stop at once: the rolling resistance holds omega_t at 0
     # (the first lift-off, or this step's, which ``examine_step`` put on the dense output)
     if kind == T_LIFTOFF and (math.isnan(info[F_LIFTOFF]) or (info[F_LIFTOFF] >= t and info[F_LIFT_KINK] == 0.0)):
         info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + best * h, Ye[0], Ye[1], 0.0

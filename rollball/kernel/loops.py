@@ -18,9 +18,9 @@ from .interface import (
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
-    P_RESISTANCE, P_SPIN, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, grid_steps_before)
+    P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import evaluate, motion_size, resisted_size, shape_of, sliding_size
+from .physics import couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size
 from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -77,10 +77,6 @@ def turn_stiff(d, p, probe, h, n):
     return ts > 0.0 and 1.4 * p[1] * p[0] * ts < p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) * h
 
 
-# A couple's side counts as zero at a step's start (the couple static, ``couple_reference``) where the
-# couple would stop it within this fraction of the ball's time unit sqrt(r / g0): far below any step,
-# far above what is left of it where a step located its zero (``resume``).
-SIDE_ZERO = 1e-9
 SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static
 
 
@@ -88,28 +84,19 @@ SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since
 def couple_reference(fn, d, p, z, K, probe, ints, free):
     """The sides of the couples at the step's start (probe: its state's), which the rolling
     resistance and spin friction keep through the step (``rolling_couple``, ``spin_couple``), into
-    d[D_SIDE:D_SIDE + 4]: omega's tangential part and the sign of omega.N; each zero where the
-    couple would stop it within SIDE_ZERO of the ball's time unit (or ``free`` is false: the spin's,
-    and a sliding ball's omega_t), and the couple is then static (what holds it at 0, up to its
+    d[D_SIDE:D_SIDE + 4]: omega's tangential part and the sign of omega.N (``couple_sides``); where
+    ``free`` is false the spin's side is zero, and a sliding ball's omega_t's (a rolling ball's omega_t
+    reaching 0 is a rest, which ends the run, never a turn in a row: made static while it rolls, the
+    couple would push along the motion), and the couple is then static (what holds it at 0, up to its
     limit). Where that changes a couple's kind of side, K[0] and probe are evaluated anew (the
     step's first stage)."""
-    r, m, g0 = p[0], p[1], abs(p[2])
     n, mk = shape_of(z)
-    n1, n2, n3 = probe[0], probe[1], probe[2]
-    o1, o2, o3 = probe[PROBE_OMEGA], probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2]
-    on = o1 * n1 + o2 * n2 + o3 * n3
-    t1, t2, t3 = o1 - on * n1, o2 - on * n2, o3 - on * n3
-    force = r * abs(probe[PROBE_FORCE]) * SIDE_ZERO * math.sqrt(r / g0) / (m * r * r)
-    # (the couples' largest rates of omega: c r F_n / I, I = 7/5 m r² rolling, 2/5 m r² sliding and for the spin)
-    turning = force * p[P_RESISTANCE] / (0.4 if sliding_size(n) else 1.4)
-    spinning = force * p[P_SPIN] / 0.4
-    # (a rolling ball's omega_t reaching 0 is a rest, which ends the run, never a turn in a row:
-    # made static while it rolls, the couple would push along the motion)
-    if not ((free or not sliding_size(n)) and t1 * t1 + t2 * t2 + t3 * t3 > turning * turning):
-        t1, t2, t3 = 0.0, 0.0, 0.0
-    side = 0.0
-    if free and abs(on) > spinning:
-        side = 1.0 if on > 0.0 else -1.0
+    t1, t2, t3, side = couple_sides(p, probe[PROBE_FORCE], probe[0], probe[1], probe[2], probe[PROBE_OMEGA],
+                                    probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2], 0.4 if sliding_size(n) else 1.4)
+    if not free:
+        side = 0.0
+        if sliding_size(n):
+            t1, t2, t3 = 0.0, 0.0, 0.0
     was = d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0
     now = t1 != 0.0 or t2 != 0.0 or t3 != 0.0
     changed = was != now or side != d[D_SIDE + 3]

@@ -81,16 +81,44 @@ def resisted_size(n):
             or n == SLIDING_RESISTED_CLASSIC_SIZE)
 
 
+# A couple's side counts as zero at a state (the couple static, ``couple_sides``) where the couple
+# would stop it within this fraction of the ball's time unit sqrt(r / g0): far below any step, far
+# above what is left of it where a step located its zero (``loops.resume``).
+SIDE_ZERO = 1e-9
+
+
 @JIT
-def rolling_couple(cap, t1, t2, t3, d, q1, q2, q3):
+def couple_sides(p, fn_, n1, n2, n3, o1, o2, o3, inertia):
+    """The couples' sides at a state with normal N, omega and F.N = fn_: omega's tangential part (3)
+    and the sign of omega.N, each zero where its couple would stop it within SIDE_ZERO of the ball's
+    time unit (the couple is then static: what holds it at 0, up to its limit). ``inertia``: the
+    moment the rolling resistance turns, over m r² (7/5 rolling, about the contact point; 2/5
+    sliding). What a step keeps (``loops.couple_reference``), what a run starts with
+    (``recording.start``) and what the friction rolling needs is taken with (``rolling_need``)."""
+    r, m, g0 = p[0], p[1], abs(p[2])
+    on = o1 * n1 + o2 * n2 + o3 * n3
+    t1, t2, t3 = o1 - on * n1, o2 - on * n2, o3 - on * n3
+    force = r * abs(fn_) * SIDE_ZERO * math.sqrt(r / g0) / (m * r * r)
+    # (the couples' largest rates of omega: c r F_n / I)
+    turning = force * p[P_RESISTANCE] / inertia
+    spinning = force * p[P_SPIN] / 0.4
+    if not t1 * t1 + t2 * t2 + t3 * t3 > turning * turning:
+        t1, t2, t3 = 0.0, 0.0, 0.0
+    side = 0.0
+    if abs(on) > spinning:
+        side = 1.0 if on > 0.0 else -1.0
+    return t1, t2, t3, side
+
+
+@JIT
+def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3):
     """The rolling resistance's couple for omega's tangential part t, at most ``cap`` = c_rr r F_n
-    (docs/design.md §1, "Dissipation"): -cap t/|t|, kept on the side of d[D_SIDE:D_SIDE + 3] (omega_t
-    at the step's start: past its zero inside the step the couple goes on smoothly, and the zero
-    is located on the step's dense output); where that is zero (the ball does not roll at the step's
+    (docs/design.md §1, "Dissipation"): -cap t/|t|, kept on the side of r (omega_t at the step's
+    start, ``couple_sides``: past its zero inside the step the couple goes on smoothly, and the zero
+    is located on the step's dense output); where r is zero (the ball does not roll at the step's
     start), the static couple -q that holds omega_t at 0 against the pull q (the rate the angular
     momentum's tangential part would have without the couple), or -cap q/|q| where q exceeds cap:
     the ball starts to roll the way it is pulled."""
-    r1, r2, r3 = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]
     if r1 != 0.0 or r2 != 0.0 or r3 != 0.0:
         ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         if ts == 0.0:
@@ -104,44 +132,64 @@ def rolling_couple(cap, t1, t2, t3, d, q1, q2, q3):
 
 
 @JIT
-def spin_couple(cap, d, pull):
+def spin_couple(cap, side, pull):
     """The spin friction's couple along N, at most ``cap`` = mu_s r F_n: -cap sign(omega.N) with the
-    sign at the step's start (d[D_SIDE + 3], kept through the step like the rolling resistance's
-    side); where that is 0 (no spin at the step's start) the static couple -pull that holds
-    omega.N at 0, at most cap."""
-    side = d[D_SIDE + 3]
+    sign ``side`` at the step's start (``couple_sides``, kept through the step like the rolling
+    resistance's side); where that is 0 (no spin at the step's start) the static couple -pull that
+    holds omega.N at 0, at most cap."""
     if side != 0.0:
         return -cap * side
     return -max(-cap, min(cap, pull))
 
 
 @JIT
-def rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3):
-    """Add to the rolling ball's v' = K[row, 2:5] the couples of rolling resistance and spin
-    friction and the moment r N x F_air of the air's drag about the contact point, and write the
-    rates of the energy each takes into K[row, n - 3:n]: -M_rr.omega, -M_s.omega and k |c'|^3
-    (docs/design.md §1, "Dissipation"). Returns the rolling resistance's couple."""
-    r, mr, mg, k = p[0], p[4], p[6], p[P_AIR]
-    fn_ = mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2 + (o1 * d2 - o2 * d1) * n3) + mg * n3
-    fa = fn_ if p[P_FLY] != 0.0 else abs(fn_)   # (as the sliding friction's: smooth through F.N = 0 where it flies)
+def rolling_force(mr, mg, n1, n2, n3, o1, o2, o3, d1, d2, d3):
+    """F.N of a rolling ball: m (c'' - g).N with c''.N = r (omega x N' alpha').N, N' alpha' = d."""
+    return mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2 + (o1 * d2 - o2 * d1) * n3) + mg * n3
+
+
+@JIT
+def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3, e1, e2,
+                    e3):
+    """A rolling ball's v' = e with the couples of rolling resistance and spin friction and the
+    moment r N x F_air of the air's drag about the contact point added (docs/design.md §1,
+    "Dissipation"), for |F.N| = fa and the couples' sides s (omega_t's) and ``spin_side``
+    (``couple_sides``). Returns that v' (3), the rolling resistance's couple (3), the spin
+    friction's (along N), omega.N and the centre's speed."""
+    r, k = p[0], p[P_AIR]
     # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F
     speed = r * math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
     a = -k * speed * r   # F = a w
-    e1 = K[row, 2] + r * a * (n2 * w3 - n3 * w2)
-    e2 = K[row, 3] + r * a * (n3 * w1 - n1 * w3)
-    e3 = K[row, 4] + r * a * (n1 * w2 - n2 * w1)
+    e1 = e1 + r * a * (n2 * w3 - n3 * w2)
+    e2 = e2 + r * a * (n3 * w1 - n1 * w3)
+    e3 = e3 + r * a * (n1 * w2 - n2 * w1)
     # spin friction: the pull on omega.N is that on v.N, (v.N)' = v'.N + v.N'
     on = o1 * n1 + o2 * n2 + o3 * n3
-    ms = spin_couple(p[P_SPIN] * r * fa, d, e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3)
+    ms = spin_couple(p[P_SPIN] * r * fa, spin_side, e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3)
     e1, e2, e3 = e1 + ms * n1, e2 + ms * n2, e3 + ms * n3
     # rolling resistance against omega's tangential part, pulled by v''s
     en = e1 * n1 + e2 * n2 + e3 * n3
-    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d,
+    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, s1, s2, s3,
                                 e1 - en * n1, e2 - en * n2, e3 - en * n3)
-    K[row, 2], K[row, 3], K[row, 4] = e1 + m1, e2 + m2, e3 + m3
+    return e1 + m1, e2 + m2, e3 + m3, m1, m2, m3, ms, on, speed
+
+
+@JIT
+def rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3):
+    """Add to the rolling ball's v' = K[row, 2:5] the couples of rolling resistance and spin
+    friction and the moment of the air's drag (``rolling_couples``, on the sides of the step's start
+    in d[D_SIDE:D_SIDE + 4]), and write the rates of the energy each takes into K[row, n - 3:n]:
+    -M_rr.omega, -M_s.omega and k |c'|^3 (docs/design.md §1, "Dissipation"). Returns the rolling
+    resistance's couple."""
+    fn_ = rolling_force(p[4], p[6], n1, n2, n3, o1, o2, o3, d1, d2, d3)
+    fa = fn_ if p[P_FLY] != 0.0 else abs(fn_)   # (as the sliding friction's: smooth through F.N = 0 where it flies)
+    e1, e2, e3, m1, m2, m3, ms, on, speed = rolling_couples(
+        p, fa, d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3], n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3,
+        w1, w2, w3, K[row, 2], K[row, 3], K[row, 4])
+    K[row, 2], K[row, 3], K[row, 4] = e1, e2, e3
     K[row, n - 3] = -(m1 * o1 + m2 * o2 + m3 * o3)
     K[row, n - 2] = -ms * on
-    K[row, n - 1] = k * speed * speed * speed
+    K[row, n - 1] = p[P_AIR] * speed * speed * speed
     return m1, m2, m3
 
 
@@ -227,17 +275,28 @@ def friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e
 
 
 @JIT
-def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3):
+def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3, resisted):
     """F_t (3) a ball rolling at this contact point with angular velocity omega needs
-    (``friction_needed``): what a sliding ball whose slip has stopped is held to."""
-    r, mr2, mg = p[0], p[5], p[6]
+    (``friction_needed``): what a sliding ball whose slip has stopped is held to. Where the scene
+    dissipates (``resisted``), with the couples and the air a rolling run started at this state has
+    (``rolling_couples`` on the sides ``couple_sides`` gives it, as ``recording.start`` does): the
+    same need the rolling run then finds, so that a grip is not undone by a slip at once, nor the
+    other way about (docs/design.md §1, "Dissipation")."""
+    r, mr, mr2, mg = p[0], p[4], p[5], p[6]
     no = n1 * o1 + n2 * o2 + n3 * o3
     v1, v2, v3 = mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)  # v = T omega
     a1, a2, d1, d2, d3, w1, w2, w3 = rolling_rates(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
     e1 = -mg * r * n2 + mr2 * (d2 * w3 - d3 * w2)
     e2 = mg * r * n1 + mr2 * (d3 * w1 - d1 * w3)
     e3 = mr2 * (d1 * w2 - d2 * w1)
-    return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3, 0.0, 0.0, 0.0)
+    m1, m2, m3 = 0.0, 0.0, 0.0
+    if resisted:
+        fn_ = rolling_force(mr, mg, n1, n2, n3, o1, o2, o3, d1, d2, d3)
+        s1, s2, s3, side = couple_sides(p, fn_, n1, n2, n3, o1, o2, o3, 1.4)
+        e1, e2, e3, m1, m2, m3, _, _, _ = rolling_couples(
+            p, fn_ if p[P_FLY] != 0.0 else abs(fn_), s1, s2, s3, side, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2,
+            d3, w1, w2, w3, e1, e2, e3)
+    return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3, m1, m2, m3)
 
 
 # A slip speed below this fraction of the ball's speeds (|c'|, r |omega|) is zero: the slip of a
@@ -311,8 +370,8 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     if resisted:   # B with the air's drag and the rolling resistance where it keeps its side (its part - r omega' x N)
         b1, b2, b3 = b1 + air * c1 / m, b2 + air * c2 / m, b3 + air * c3 / m
         if d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0:
-            m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d,
-                                        0.0, 0.0, 0.0)
+            m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3,
+                                        d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], 0.0, 0.0, 0.0)
             w = 2.5 * r / p[5]
             b1 -= w * (m2 * n3 - m3 * n2)
             b2 -= w * (m3 * n1 - m1 * n3)
@@ -369,7 +428,7 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
         probe[7] = r * hi
         probe[8] = d[0]
         probe[9] = r * lo
-        t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3)
+        t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3, resisted)
         probe[PROBE_NEED] = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = u1, u2, u3
 
@@ -381,8 +440,9 @@ def sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2,
     as ``fa``; f = (2/5) m r² omega' of the sliding friction, the pull on omega's tangential part),
     and write the rates of the energy each takes into K[row, n - 3:n] (docs/design.md §1, "Dissipation")."""
     r, m, mr2 = p[0], p[1], p[5]
-    ms = spin_couple(p[P_SPIN] * r * fa, d, 0.0)   # (sliding friction pulls on omega.N not at all)
-    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d, f1, f2, f3)
+    ms = spin_couple(p[P_SPIN] * r * fa, d[D_SIDE + 3], 0.0)   # (sliding friction pulls on omega.N not at all)
+    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d[D_SIDE],
+                                d[D_SIDE + 1], d[D_SIDE + 2], f1, f2, f3)
     a = air / m
     K[row, 2] += a * c1
     K[row, 3] += a * c2

@@ -15,7 +15,8 @@ from .interface import (
     ROW_ENERGY, ROW_FORCE, ROW_OMEGA, ROW_R, ROW_ROLLING, ROW_SIZE, ROW_SLIP, ROW_SPIN, ROW_T, ROW_VELOCITY, R_NO_FIT,
     R_START_OVERFLOW, R_START_UNDEFINED, S_DISSIPATED, S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import FULL, _finite, _finite_row, copy_state, motion_size, rates, resisted_size, shape_of, sliding_size
+from .physics import (FULL, _finite, _finite_row, copy_state, couple_sides, motion_size, rates, resisted_size, shape_of,
+                      sliding_size)
 
 
 @JIT
@@ -110,6 +111,13 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info, t_start):
     # (np.int64(0): a literal 0 would compile dynamics anew for it)
     rates(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
     ints[I_EVALS] += 1
+    if resisted_size(n):   # the couples' sides at the start (``couple_sides``), as its first step takes them
+        t1, t2, t3, side = couple_sides(p, probe[PROBE_FORCE], probe[0], probe[1], probe[2], probe[PROBE_OMEGA],
+                                        probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2], 0.4 if sliding else 1.4)
+        if t1 != 0.0 or t2 != 0.0 or t3 != 0.0 or side != 0.0:
+            d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3] = t1, t2, t3, side
+            rates(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
+            ints[I_EVALS] += 1
     ints[I_DENSE] = -1
     if mk and p[P_TURN] > 0.0 and not sliding:
         for q in range(3):
