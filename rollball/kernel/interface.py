@@ -302,8 +302,9 @@ REASONS = {
             "model cannot step across it"),
     "pivot": ("does_not_fit", "the normal force the ball would need there (N)",
               "the ball reaches a point of the surface at {where} where the normal turns at once (the tip of a "
-              "cone, or a like point) too slowly to leave it: a real ball would roll over it, turning about it "
-              "with F·N = {value:.3g} N, which the model does not follow"),
+              "cone, or a like point) too slowly to leave it, sliding (or where the tip's faces cannot be found): a "
+              "real ball would turn about it with F·N = {value:.3g} N, rubbing on it, which the model does not "
+              "follow"),
 }
 R_NONE = 0
 (R_NO_FIT, R_SECANT_NO_FIT, R_START_UNDEFINED, R_START_OVERFLOW, R_UNDEFINED, R_ORIENTATION, R_STEP_UNDERFLOW,

@@ -77,22 +77,26 @@ def turn_stiff(d, p, probe, h, n):
     return ts > 0.0 and 1.4 * p[1] * p[0] * ts < p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) * h
 
 
-SIDE_TURNS = 64   # sides turned inside one call's steps at most; then the couples are static throughout
+SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static
 
 
 @JIT
 def couple_reference(fn, d, p, z, K, probe, ints, free):
     """The sides of the couples at the step's start (probe: its state's), which the rolling
     resistance and spin friction keep through the step (``rolling_couple``, ``spin_couple``), into
-    d[D_SIDE:D_SIDE + 4]: omega's tangential part and the sign of omega.N (``couple_sides``; each
-    zero where ``free`` is false), and the couple is then static (what holds it at 0, up to its
+    d[D_SIDE:D_SIDE + 4]: omega's tangential part and the sign of omega.N (``couple_sides``); where
+    ``free`` is false the spin's side is zero, and a sliding ball's omega_t's (a rolling ball's omega_t
+    reaching 0 is a rest, which ends the run, never a turn in a row: made static while it rolls, the
+    couple would push along the motion), and the couple is then static (what holds it at 0, up to its
     limit). Where that changes a couple's kind of side, K[0] and probe are evaluated anew (the
     step's first stage)."""
     n, mk = shape_of(z)
     t1, t2, t3, side = couple_sides(p, probe[PROBE_FORCE], probe[0], probe[1], probe[2], probe[PROBE_OMEGA],
                                     probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2], 0.4 if sliding_size(n) else 1.4)
     if not free:
-        t1, t2, t3, side = 0.0, 0.0, 0.0, 0.0
+        side = 0.0
+        if sliding_size(n):
+            t1, t2, t3 = 0.0, 0.0, 0.0
     was = d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0
     now = t1 != 0.0 or t2 != 0.0 or t3 != 0.0
     changed = was != now or side != d[D_SIDE + 3]
@@ -263,7 +267,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             return
     watch = contact_watched(p, n)
     resists = resisted_size(n)
-    turns = 0   # (the couples' sides turned inside this call's steps: SIDE_TURNS at most, ``resume``)
+    turns = 0   # (the couples' sides turned since the last step that ended whole: SIDE_TURNS at most, ``resume``)
     cap = slow_slip(p, rtol)
     skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
     t, h = info[F_TIME], info[F_H]
@@ -342,6 +346,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         t = t_new
         accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] += 1
+        turns = 0   # (a count per call made the couples static for the rest of it: energy gained, docs/design.md §1)
         grown = hs * min(1.0 if retry else MAX_FACTOR, next_step_factor(err, err_kind, err_exp, info))
         h = max(h, grown) if land else grown
         retry = False
