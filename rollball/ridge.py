@@ -86,6 +86,21 @@ def _parts(y, ridge: Ridge, r: float):
     return s, ds, theta, dtheta, beta, e, e1, omega
 
 
+def contact_events(forces, mu: float):
+    """The events that end a turn about an edge or a tip, for scipy's solve_ivp: the normal force
+    reaching 0 (a lift-off) and the tangential force reaching μ times it (a slip; never with μ
+    inf), from ``forces(y)`` = (F·e, |F_t|)."""
+    def lifts(_, y):
+        return forces(y)[0]
+    lifts.terminal, lifts.direction = True, -1.0
+
+    def slips(_, y):
+        normal, tangential = forces(y)
+        return mu * normal - tangential if mu < math.inf else 1.0
+    slips.terminal, slips.direction = True, -1.0
+    return lifts, slips
+
+
 def turn_over(ridge: Ridge, start: FreeState, *, radius: float, mass: float, gravity: float,
               friction: float, t_end: float, times: np.ndarray) -> Turn | None:
     """The ball at ``start`` (on the near face's circle about the edge: c − P along N₁ at distance
@@ -127,15 +142,7 @@ def turn_over(ridge: Ridge, start: FreeState, *, radius: float, mass: float, gra
         return y[2]
     back.terminal, back.direction = True, -1.0
 
-    def lifts(_, y):
-        return forces(y)[0]
-    lifts.terminal, lifts.direction = True, -1.0
-
-    def slips(_, y):
-        normal, tangential = forces(y)
-        return mu * normal - tangential if mu < math.inf else 1.0
-    slips.terminal, slips.direction = True, -1.0
-
+    lifts, slips = contact_events(forces, mu)
     y0 = np.concatenate([[s0, ds0, 0.0, dtheta0, beta0], start.R.ravel()])
     if mu < math.inf and slips(start.t, y0) < 0.0:   # (the friction cannot hold the turn from its start)
         return _turn(SLIP, ridge, y0, start.t, r, forces, [], [])

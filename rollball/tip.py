@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .flight import FreeState
-from .ridge import LIFTOFF, SLIP, TIME, TOLERANCE, Turn
+from .ridge import LIFTOFF, SLIP, TIME, TOLERANCE, Turn, contact_events
 
 REACH = 1e-7        # × (1 + |x| + |y|): the ring about the kernel's tip that finds T (its planes)
 NEAR = 1e-9         # × (1 + |x| + |y|): the ring about T the generators are sampled on
@@ -138,15 +138,7 @@ def turn_about(tip: Tip, start: FreeState, normal: np.ndarray, *, radius: float,
         return tip.touching(y[:3] / float(np.linalg.norm(y[:3])))[0]
     lands.terminal, lands.direction = True, 1.0
 
-    def lifts(_, y):
-        return forces(y)[0]
-    lifts.terminal, lifts.direction = True, -1.0
-
-    def slips(_, y):
-        normal, tangential = forces(y)
-        return mu * normal - tangential if mu < math.inf else 1.0
-    slips.terminal, slips.direction = True, -1.0
-
+    lifts, slips = contact_events(forces, mu)
     y0 = np.concatenate([e0, ell0, start.R.ravel()])
     if not forces(y0)[0] > 0.0:   # (holding it at T needs a pull: it leaves T at once)
         return _turn(LIFTOFF, tip, y0, start.t, r, forces, [], [])

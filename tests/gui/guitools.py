@@ -88,3 +88,14 @@ def assert_legible(qtbot, axis) -> list[str]:
     assert [s for _, _, s in drawn] == expected, (axis.range, drawn)
     assert all(b - a >= (da + db) / 2 for (a, da, _), (b, db, _) in itertools.pairwise(drawn)), drawn
     return strings
+
+
+def type_contact(qtbot, window, key, text):
+    """Type ``text`` into the scene panel's contact field ``key`` (empty: clear it) and apply the fields."""
+    edit = window.panel.contact.edits[key]
+    edit.selectAll()
+    if text:
+        qtbot.keyClicks(edit, text)
+    else:
+        qtbot.keyClick(edit, QtCore.Qt.Key.Key_Delete)
+    apply_fields(qtbot, window)

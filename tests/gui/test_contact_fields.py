@@ -1,21 +1,9 @@
 """The scene panel's contact fields: friction μ, restitution e, after lift-off and the start's ω,
 validated as the scene format is (the message under the field), undoable, saved and loaded."""
 
-from PySide6 import QtCore
-
 from rollball import Scene
 
-from .guitools import apply_fields
-
-
-def _type(qtbot, window, key, text):
-    edit = window.panel.contact.edits[key]
-    edit.selectAll()
-    if text:
-        qtbot.keyClicks(edit, text)
-    else:
-        qtbot.keyClick(edit, QtCore.Qt.Key.Key_Delete)
-    apply_fields(qtbot, window)
+from .guitools import apply_fields, type_contact as _type
 
 
 def test_the_fields_show_the_scene_and_make_it(qtbot, window):

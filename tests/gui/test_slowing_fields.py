@@ -9,17 +9,7 @@ from PySide6 import QtCore
 from rollball import Scene
 from rollball.examples import EXAMPLES_DIR
 
-from .guitools import apply_fields
-
-
-def _type(qtbot, window, key, text):
-    edit = window.panel.contact.edits[key]
-    edit.selectAll()
-    if text:
-        qtbot.keyClicks(edit, text)
-    else:
-        qtbot.keyClick(edit, QtCore.Qt.Key.Key_Delete)
-    apply_fields(qtbot, window)
+from .guitools import apply_fields, type_contact as _type
 
 
 def _choose_air(qtbot, window, index):
