@@ -13,7 +13,7 @@ import numpy as np
 
 from .geometry import unit_normal
 from .mode_machine import state_of
-from .modes import FLYING, RESTING, ROLLING, Change, Mode
+from .modes import FLYING, RESTING, ROLLING, Change, Mode, interval_modes
 from .run_size import MAX_STEPS
 from .tableaus import get_method
 from .trajectory import CONTACT, DISSIPATED, ENERGY, ENERGY_WARNING, OMEGA, T, VELOCITY, EnergyCheck, Status
@@ -97,11 +97,11 @@ def _interval_change(run, row: np.ndarray, mode: Mode, duration: float, delay: f
 def _judged(run, rows: np.ndarray) -> np.ndarray:
     """Which recorded intervals (rows i to i + 1) the energy check may take again: those the
     contact integrated in one mode, rolling or sliding. A flight and a held ball's stay are
-    exact, so an interval that ends in one, or that holds a landing (its impact is counted in D),
-    is not the step's."""
+    exact, so an interval in one (``modes.interval_modes``: the stop that begins a stay ends the
+    motion before it), or that holds a landing (its impact is counted in D), is not the step's."""
     if not run.segmented:
         return np.ones(len(rows) - 1, dtype=bool)
-    contact = ~np.isin(run.modes[1: len(rows)], (FLYING, RESTING))
+    contact = ~np.isin(interval_modes(run.modes[: len(rows)])[1:], (FLYING, RESTING))
     t = rows[:, T]
     for change in run.transitions:
         if change.kind is Change.LANDING:

@@ -249,7 +249,17 @@ class ModeMachine:
         self.spin = Spin(t, spin, normal, row[R].reshape(3, 3).copy(), row.copy(), ball.mass, ball.radius,
                          scene.gravity, contact.spin_friction)
         self.mode = Mode.RESTING
+        if self.count and self.out[self.count - 1, T] == t:   # the row at the stop is the stay's first
+            self._last_row_in(Mode.RESTING)
         return True
+
+    def _last_row_in(self, mode: Mode) -> None:
+        """Put the last row recorded in ``mode`` (the rows after it follow in ``self.mode``)."""
+        last = self.count - 1
+        if self.starts[-1][0] == last:
+            self.starts.pop()
+        if self.starts[-1][1] != mode:
+            self.starts.append((last, mode))
 
     def hold_at_start(self, x: float, y: float, spin: float) -> None:
         """A run that starts with the ball still at (x, y), spinning at ``spin`` about the normal:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import enum
 
+import numpy as np
+
 
 class Mode(enum.IntEnum):
     """The contact's mode: on the surface without slipping, slipping on it, off it, or still on
@@ -44,3 +46,15 @@ TRANSITION_KINDS = tuple(str(change) for change in Change)
 # The mode a change leads to (a landing leads to rolling or sliding, as its impact decides).
 AFTER = {Change.SLIP: Mode.SLIDING, Change.GRIP: Mode.ROLLING, Change.LIFTOFF: Mode.FLYING,
          Change.REST: Mode.RESTING}
+
+
+def interval_modes(codes: np.ndarray) -> np.ndarray:
+    """The mode of the motion over each recorded interval (rows i − 1 to i), given at the row i it
+    ends in, from the rows' modes ``codes`` (positions in MODES; the first row's is its own): the
+    mode of that row, but the row where a moving ball comes to be held (a resting row after one
+    that is not, the first of its stay) ends the motion that stopped there, the mode of the row
+    before."""
+    codes = np.array(codes, dtype=np.int8)
+    held = np.flatnonzero((codes[1:] == Mode.RESTING) & (codes[:-1] != Mode.RESTING)) + 1
+    codes[held] = codes[held - 1]
+    return codes

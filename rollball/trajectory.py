@@ -14,7 +14,7 @@ from .files import atomic_write
 from .kernel.interface import REASONS, ROW_ENERGY, ROW_FORCE, ROW_SLICES, ROW_T, STATUSES
 # the modes of the contact, one a row (``Trajectory.modes`` holds their positions in MODES)
 from .modes import (FLYING, MODES, RESTING, ROLLING, SLIDING, TRANSITION_KINDS, Change,  # noqa: F401 (the row's interface)
-                    Mode)
+                    Mode, interval_modes)
 
 if TYPE_CHECKING:
     from .transition_verdict import TransitionCheck
@@ -59,7 +59,9 @@ ROW_CAUSES = {cause: ROW_SLICES[f"dissipated_{cause}"].start for cause in DISSIP
 CAUSES = slice(min(ROW_CAUSES.values()), max(ROW_CAUSES.values()) + 1)
 # the cause of the energy the total gains beyond the row's own causes and the impacts over an interval
 # that ends in each mode: a flight's rows carry what the causes took (air in flight in its column),
-# so all a flight's first row adds is the slide to a kink it left from (``ModeMachine._to_kink``)
+# so all a flight's first row adds is the slide to a kink it left from (``ModeMachine._to_kink``).
+# The row where a moving ball is held (the first of a stay, resting) ends the motion that stopped
+# there: its interval is the mode's of the row before (``modes.interval_modes``).
 MODE_CAUSES = {SLIDING: "sliding", ROLLING: "rolling", RESTING: "spin", FLYING: "sliding"}
 
 ENERGY_WARNING = 1e-2          # a relative energy error above this gets a warning
@@ -222,8 +224,10 @@ class Trajectory:
         """The energy dissipated so far by each of DISSIPATION_CAUSES (J, every row; zeros where a
         cause is off): the impacts from the landings' ``energy_lost`` (a row at a landing's time
         is the state after it), the row's own causes (ROW_CAUSES) as recorded, and what the total
-        gains beyond those over each recorded interval to the cause of the mode that interval
-        ends in (MODE_CAUSES: sliding friction while sliding, spin friction spinning in place)."""
+        gains beyond those over each recorded interval to the cause of the mode of its motion
+        (MODE_CAUSES, by ``modes.interval_modes``: the mode of the row it ends in, but the stopping
+        motion's at the row where the ball comes to be held; sliding friction while sliding, spin
+        friction spinning in place)."""
         t = self.t
         by = {cause: np.zeros(len(self)) for cause in DISSIPATION_CAUSES}
         for cause, column in ROW_CAUSES.items():
@@ -234,7 +238,7 @@ class Trajectory:
             by["impacts"] = so_far[np.searchsorted([change.time for change in landings], t, side="right")]
         rest = self.dissipated - sum(by.values())
         gained = np.diff(rest, prepend=0.0)
-        codes = np.zeros(len(self), dtype=np.int8) if self.modes is None else self.modes[: len(self)]
+        codes = interval_modes(np.zeros(len(self), dtype=np.int8) if self.modes is None else self.modes[: len(self)])
         for mode, cause in MODE_CAUSES.items():
             by[cause] = by[cause] + np.cumsum(np.where(codes == mode, gained, 0.0))
         return by

@@ -124,6 +124,48 @@ def test_a_still_ball_is_held_iff_the_slope_allows():
     np.testing.assert_allclose(pulled.contact[:, 0], 0.5 * a * pulled.t ** 2 * math.cos(theta), rtol=1e-9, atol=1e-15)
 
 
+@pytest.mark.parametrize("method", ["rk4", "dopri5"])
+@pytest.mark.parametrize("stop_at_rest", [True, False])
+def test_the_row_at_a_rolling_balls_rest_is_resting(tmp_path, method, stop_at_rest):
+    """Rolling at v₀ on a plane against c_rr: the row at the rest instant, 7 v₀ / (5 c_rr g), is the
+    first resting one (in the CSV too), every row before it rolling; rolling resistance took all
+    of ½ (7/5) m v₀², and the causes sum to the total in every row."""
+    v0, c_rr = 1.5, 0.05
+    scene = dataclasses.replace(_scene(start=Start(x=0.0, y=0.0, vx=v0), duration=6.0, method=method,
+                                       rolling_resistance=c_rr), stop_at_rest=stop_at_rest)
+    traj = simulate(scene)
+    [rest] = traj.transitions
+    assert rest.kind == "rest" and rest.time == pytest.approx(7 * v0 / (5 * c_rr * G), abs=1e-9)
+    at = int(np.flatnonzero(traj.t == rest.time)[0])
+    assert set(traj.mode[:at]) == {"rolling"} and set(traj.mode[at:]) == {"resting"}
+    assert (len(traj) == at + 1) is stop_at_rest
+    traj.to_csv(tmp_path / "rest.csv")
+    _, extra = read_csv(tmp_path / "rest.csv", extra=True)
+    np.testing.assert_array_equal(extra["mode"], traj.mode)
+    by = traj.dissipated_by
+    assert by["rolling"][-1] == pytest.approx(0.7 * M * v0 ** 2, rel=1e-12)
+    assert all(np.all(by[cause] == 0.0) for cause in DISSIPATION_CAUSES if cause != "rolling")
+    np.testing.assert_allclose(sum(by.values()), traj.dissipated, rtol=1e-15, atol=0)
+
+
+def test_a_ball_sliding_to_rest_gives_its_last_interval_to_sliding():
+    """μ = 0.35 < c_rr = 0.5 on a plane, sent without spin: friction's torque never overcomes the
+    couple, so ω stays 0 and the ball slides to a stop at v₀ / (μ g), where it rests (its row there
+    resting). Sliding friction took all of ½ m v₀², the stopping interval's share too (the
+    interval's motion is the slide, not the rest it ends in)."""
+    v0, mu = 1.0, 0.35
+    traj = simulate(_scene(start=Start(x=0.0, y=0.0, vx=v0, omega=(0.0, 0.0, 0.0)), friction=mu,
+                           rolling_resistance=0.5))
+    [rest] = traj.transitions
+    assert rest.kind == "rest" and rest.time == pytest.approx(v0 / (mu * G), abs=1e-12)
+    assert traj.t[-1] == rest.time and traj.mode[-1] == "resting" and set(traj.mode[:-1]) == {"sliding"}
+    by = traj.dissipated_by
+    assert by["sliding"][-1] == pytest.approx(0.5 * M * v0 ** 2, rel=1e-12)
+    # (held at 0, the static couple does no work: its quadrature is round-off)
+    assert all(np.abs(by[cause]).max() < 1e-15 for cause in DISSIPATION_CAUSES if cause != "sliding")
+    np.testing.assert_allclose(sum(by.values()), traj.dissipated, rtol=1e-15, atol=0)
+
+
 def test_dissipated_by_splits_sliding_and_impacts():
     """Each cause's energy: a billiard shot (μ = 0.2, v₀ = 2 m/s, no spin) loses m v₀²/7 to
     sliding; the lift-off example's landings lose what their impacts say. The causes sum to the

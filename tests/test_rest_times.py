@@ -263,13 +263,15 @@ def _trough_rest(scheme, step, **options):
     moving = traj.velocity[speed > 1e-3 * speed.max()]
     heading = np.unwrap(np.arctan2(moving[:, 1], moving[:, 0]))
     assert abs(heading[-1] - heading[0]) > 2 * math.pi   # a 2-D path: its heading turns by more than a turn
-    # where the rolling stopped ω_t is 0 up to a share of the speeds (the zero located on a step's
-    # dense output along ω_t at the step's start; 1.4·10⁻⁸ for dopri5 at rtol 10⁻⁸, 2·10⁻⁹ at most else)
-    last = np.flatnonzero(traj.mode == "rolling")[-1]
-    normal = _trough_surface(*traj.contact[last])[0]
-    turn = traj.omega[last] - np.dot(traj.omega[last], normal) * normal
+    # where the rolling stopped (the first row resting) ω_t is 0 up to a share of the speeds (the zero
+    # located on a step's dense output along ω_t at the step's start; 1.4·10⁻⁸ for dopri5 at rtol
+    # 10⁻⁸, 2·10⁻⁹ at most else)
+    stop = np.flatnonzero(traj.mode == "resting")[0]
+    assert set(traj.mode[:stop]) == {"rolling"} and set(traj.mode[stop:]) == {"resting"}
+    normal = _trough_surface(*traj.contact[stop])[0]
+    turn = traj.omega[stop] - np.dot(traj.omega[stop], normal) * normal
     assert np.linalg.norm(turn) * R_BALL <= 3e-8 * speed.max()
-    assert traj.t[last] <= rest.time and np.all(traj.velocity[last + 1:] == 0.0)
+    assert traj.t[stop] <= rest.time and np.all(traj.velocity[stop + 1:] == 0.0)
     return np.array([rest.time, rest.x, rest.y])
 
 
