@@ -2,8 +2,8 @@
 
 The lowest band is the ball's energy E, kinetic and potential (the potential counted from the
 lowest point of the drawn landscape, where a ball at rest there has none); above it, one band
-per cause that is on in the scene, the energy it has taken so far (``Trajectory.dissipated_by``:
-sliding friction, impacts, rolling resistance, spin friction, air). The stack's top is
+per cause that acts in the run, the energy it has taken so far (``Trajectory.dissipated_by``:
+sliding friction, impacts, rolling resistance, spin friction, air; ``acting`` says which). The stack's top is
 E + ΣD, what the energy check holds constant: a flat top is the check at a glance, and where
 the ball comes to rest the bands say what took its energy. The key beside the plot gives each band's
 value at the moment shown.
@@ -12,6 +12,7 @@ value at the moment shown.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 import pyqtgraph as pg
@@ -44,6 +45,17 @@ def causes_on(scene) -> tuple[str, ...]:
           "rolling": contact.rolling_resistance > 0.0, "spin": contact.spin_friction > 0.0,
           "air": scene.air.density > 0.0}
     return tuple(cause for cause in DISSIPATION_CAUSES if on[cause])
+
+
+def acting(causes, trajectory: Trajectory | None) -> tuple[str, ...]:
+    """Of a scene's ``causes`` (``causes_on``), those whose mechanism is on in a run
+    (``trajectory``, as far as it has been computed; None: none yet), the budget's bands: each
+    cause with a coefficient (sliding's μ, c_rr, μ_s, the air's density) acts wherever the ball
+    moves so and is listed from the start, at 0 J until it takes some; impacts have none, a
+    landing is what takes them: listed once the run has landed (not where it never flies, flies
+    to its end or is cut short before it lands)."""
+    landed = trajectory is not None and trajectory.landings > 0
+    return tuple(cause for cause in causes if cause != "impacts" or landed)
 
 
 def floor_energy(scene, landscape) -> float:
@@ -87,15 +99,18 @@ class EnergyAxis(pg.AxisItem):
 class EnergyBudget:
     """The stacked bands on a pyqtgraph plot, and their key (``key``, a label the owner places
     beside the plot: a legend inside would hide a short plot's bands) that gives each band's value
-    at the moment shown, top band first. ``set_causes`` says which causes get a band; ``show``
-    draws rows."""
+    at the moment shown, top band first. ``set_causes`` says which causes the scene has on; a band
+    each gets those of them acting in the run shown (``acting``; ``causes``); ``show`` draws rows."""
 
-    def __init__(self, plot: pg.PlotItem, across: bool = False):
-        """``across``: the key two bands a line (above the plots), else a line per band (beside it)."""
+    def __init__(self, plot: pg.PlotItem, across: bool = False, relayout: Callable[[], None] | None = None):
+        """``across``: the key two bands a line (above the plots), else a line per band (beside it);
+        ``relayout``: the owner's, called where a band comes or goes (the key's size with it)."""
         self.plot = plot
         self.across = across
+        self.relayout: Callable[[], None] | None = None
         plot.setAxisItems({"left": EnergyAxis()})
-        self.causes: tuple[str, ...] = ()
+        self.possible: tuple[str, ...] = ()   # the scene's causes (``causes_on``)
+        self.causes: tuple[str, ...] = ()     # those with a band: acting in the run shown
         self.key = pg.LabelItem(justify="left")
         self.key.setObjectName("budget.key")
         self.values: dict[str, float] = {}   # each band's value at the moment shown (J), by name
@@ -107,14 +122,23 @@ class EnergyBudget:
         self.total.setZValue(2)
         plot.addItem(self.total)
         self.set_causes(())
+        self.relayout = relayout   # (from here on: the owner places the key once it has it)
 
     def _bands(self) -> list[tuple[str, str, str]]:
         """(name, colour, words) of each band, bottom to top."""
         return [("energy", ENERGY_COLOR, ENERGY_WORDS)] + [(c, CAUSE_COLORS[c], CAUSE_WORDS[c]) for c in self.causes]
 
     def set_causes(self, causes) -> None:
-        """A band for the ball's energy and for each of ``causes`` (those on in the scene)."""
-        self.causes = tuple(causes)
+        """The scene's ``causes`` (``causes_on``), before a run: a band for the ball's energy and
+        for each of them acting in a run not yet started (``acting``)."""
+        self.possible = tuple(causes)
+        self._set_bands(acting(self.possible, None))
+
+    def _set_bands(self, causes: tuple[str, ...]) -> None:
+        """A band for the ball's energy and for each of ``causes`` (kept where they are those)."""
+        if causes == self.causes and self.tops:
+            return
+        self.causes = causes
         for item in [*self.bands, *self.tops.values()]:
             self.plot.removeItem(item)
         self.tops, self.bands = {}, []
@@ -129,10 +153,13 @@ class EnergyBudget:
             self.tops[name], below = top, top
             self.bands.append(band)
         self._say({})
+        if self.relayout is not None:
+            self.relayout()
 
     def show_rows(self, trajectory: Trajectory, picked: np.ndarray, at: int, floor: float) -> None:
         """A ``Trajectory``'s rows ``picked`` (increasing: 0 to the last shown, thinned for
         drawing), the ball's energy counted from ``floor`` (J), the key's values at row ``at``."""
+        self._set_bands(acting(self.possible, trajectory))
         if not len(trajectory) or not len(picked):
             self.show(np.zeros(0), np.zeros(0), {})
             return

@@ -86,7 +86,7 @@ class ErrorPlots(QtWidgets.QWidget):
             self.graphics.addItem(self.budget.key, row=0, col=2, colspan=2)
             self._arrange()
             self.set_font_scale(self.scale)
-        if self.budget is not None and self.budget.causes != tuple(causes):
+        if self.budget is not None:
             self.budget.set_causes(causes)
         self._title_budget()
 

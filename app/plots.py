@@ -337,9 +337,10 @@ class LivePlots(QtWidgets.QWidget):
         return plot
 
     def set_budget(self, causes, floor: float = 0.0) -> None:
-        """The energy budget beside the energy error, with a band per cause in ``causes`` (the
-        scene's ``budget.causes_on``) and the ball's energy counted from ``floor`` (J); none
-        where no cause is on (the 2011 model: the energy error says it all)."""
+        """The energy budget beside the energy error, with a band per cause of ``causes`` (the
+        scene's ``budget.causes_on``) acting in the run shown (``budget.acting``) and the ball's
+        energy counted from ``floor`` (J); none where no cause is on (the 2011 model: the energy
+        error says it all)."""
         self.floor = floor
         if not causes:
             if self.budget_plot is not None:
@@ -350,13 +351,12 @@ class LivePlots(QtWidgets.QWidget):
             return
         if self.budget_plot is None:
             self.budget_plot = self._new_plot("budget", BUDGET_TITLE)
-            self.budget = EnergyBudget(self.budget_plot)
+            self.budget = EnergyBudget(self.budget_plot, relayout=self._arrange)
             self.plots.append(self.budget_plot)
             self.cursors.append(self.budget_plot.cursor)
             self._arrange()
             self.set_font_scale(self.scale)
-        if self.budget.causes != tuple(causes):
-            self.budget.set_causes(causes)
+        self.budget.set_causes(causes)
 
     def show_budget(self, trajectory, index: int, at: int) -> None:
         """The budget of a ``Trajectory``'s rows 0..index, its legend's values at row ``at``."""

@@ -8,8 +8,9 @@ import pytest
 
 from rollball import Scene, Trajectory
 from rollball.examples import EXAMPLES_DIR
-from rollball.trajectory import DISSIPATION_CAUSES
-from rollball_app.budget import EnergyBudget, causes_on, floor_energy
+from rollball.kernel import ROW_SIZE
+from rollball.trajectory import DISSIPATION_CAUSES, Transition
+from rollball_app.budget import EnergyBudget, acting, causes_on, floor_energy
 from rollball_app.controller import RUNNING
 from rollball_app.parameters import valued
 from rollball_app.error_plots import ErrorPlots
@@ -38,6 +39,73 @@ def test_the_causes_on_are_those_the_scene_has():
                       "contact.rolling_resistance": 0.05, "air": {"density": 1.2, "drag_coefficient": 0.47}})
     assert causes_on(scene) == ("rolling", "air")
     assert causes_on(_scene(**{"contact.spin_friction": 0.1})) == ("sliding", "impacts", "spin")
+
+
+def test_a_cause_is_listed_where_its_mechanism_is_on_in_the_run():
+    """The coefficients' causes from the start; impacts, which have none, once the run has landed."""
+    causes = ("sliding", "impacts", "rolling")
+    assert acting(causes, None) == ("sliding", "rolling")
+    assert acting(causes, Trajectory(np.zeros((2, ROW_SIZE)))) == ("sliding", "rolling")
+    assert acting(causes, _landed()) == causes
+
+
+def _landed() -> Trajectory:
+    """Three rows, t = 0, 1, 2, a landing at t = 1 that took 3.35 J."""
+    rows = np.zeros((3, ROW_SIZE))
+    rows[:, 0] = [0.0, 1.0, 2.0]
+    return Trajectory(rows, transitions=(Transition(1.0, "landing", 0.0, 0.0, 2.0, 3.35),))
+
+
+def test_a_band_that_comes_lays_the_plots_out_again(qtbot):
+    """Where a landing brings the impacts' line to the key beside the budget, the plots are laid out
+    again for the wider key: none runs off the right edge (the normal force folds)."""
+    plots = LivePlots()
+    qtbot.addWidget(plots)
+    plots.resize(1920, 190)
+    plots.show()
+    qtbot.waitExposed(plots)
+    plots.set_budget(("impacts",), 0.0)
+    assert plots.budget.causes == ()
+    energy, orthogonality, force = plots.plots[:3]
+    width = round(least_width(plots.graphics, [energy, plots.budget_plot, plots.budget.key, orthogonality, force])) + 2
+    plots.resize(width, 190)
+    qtbot.wait(10)
+    assert plots.folded == []
+    plots.show_budget(_landed(), 2, 2)
+    qtbot.wait(10)
+    assert plots.budget.causes == ("impacts",) and plots.budget.values["impacts"] == pytest.approx(3.35)
+    assert plots.folded
+    for item in plots.arranged:
+        assert item.sceneBoundingRect().right() <= plots.graphics.width() + 1
+
+
+def _liftoff(tmp_path, duration: float):
+    """The lift-off example (no friction: impacts are all that can take its energy; it leaves the
+    hill at 0.45 s and lands at 0.89 s) to ``duration``."""
+    scene = Scene.load(EXAMPLES_DIR / "liftoff.json")
+    data = scene.to_dict() | {"duration": duration}
+    path = tmp_path / "flight.json"
+    Scene.from_dict(data).save(path)
+    return path
+
+
+def test_a_run_that_flies_but_has_not_landed_lists_no_impacts(qtbot, window, tmp_path):
+    """Cut short in flight, the run has had no impact: the key says the ball's energy alone, no
+    "impacts 0 J"; run on past its landing, the impacts are listed with what the landing took."""
+    window.files.open_scene(_liftoff(tmp_path, 0.8), remember=False)
+    budget = window.plots.budget
+    assert budget.possible == ("impacts",) and budget.causes == ()   # before the run: nothing has landed
+    run_to_end(qtbot, window)
+    trajectory = window.controller.runs[0].trajectory()
+    assert "flying" in trajectory.mode and trajectory.landings == 0
+    assert budget.causes == () and set(budget.tops) == {"energy"} and "impacts" not in budget.key.text
+    assert set(budget.values) == {"energy"}
+    window.files.open_scene(_liftoff(tmp_path, 1.0), remember=False)
+    run_to_end(qtbot, window)
+    trajectory = window.controller.runs[0].trajectory()
+    [landing] = [change for change in trajectory.transitions if change.kind == "landing"]
+    assert budget.causes == ("impacts",) and "impacts" in budget.key.text
+    assert budget.values["impacts"] == pytest.approx(landing.energy_lost, rel=1e-12) and landing.energy_lost > 0.0
 
 
 def test_the_floor_is_a_ball_at_rest_at_the_lowest_point_drawn():
@@ -70,7 +138,7 @@ def test_no_budget_for_the_2011_model_one_for_a_scene_that_loses_energy(qtbot, w
     assert window.plots.budget_plot is None   # hills: nothing takes the ball's energy
     window.files.open_scene(EXAMPLES_DIR / "billiard.json", remember=False)
     plots = window.plots
-    assert plots.budget_plot is not None and plots.budget.causes == ("sliding", "impacts")
+    assert plots.budget_plot is not None and plots.budget.possible == ("sliding", "impacts")
     columns = sorted((plots.graphics.ci.items[p][0][1], p.objectName()) for p in plots.plots)
     assert [name for _, name in columns][:2] == ["plot.energy", "plot.budget"]   # beside the energy error
     window.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
@@ -84,7 +152,7 @@ def test_the_billiard_shot_gives_two_sevenths_of_its_energy_to_sliding(qtbot, wi
     run_to_end(qtbot, window)
     budget = window.plots.budget
     assert budget.values["sliding"] == pytest.approx(2 / 7 * 2.0, rel=1e-3)
-    assert budget.values["impacts"] == 0.0
+    assert "impacts" not in budget.values   # it never flew: no landing, no impacts listed
     assert np.ptp(budget.total.yData) < 1e-9    # E + ΣD: flat
     window.runs.seek(0.1)   # the key follows the moment shown: less so far
     window.drawing.plot()
@@ -119,7 +187,7 @@ def test_the_budget_reads_each_cause_from_the_trajectory(qtbot, window, monkeypa
     monkeypatch.setattr(Trajectory, "dissipated_by", property(by))
     run_to_end(qtbot, window)
     budget = window.plots.budget
-    assert budget.causes == ("sliding", "impacts", "rolling", "air")
+    assert budget.causes == ("sliding", "rolling", "air")
     assert budget.values["rolling"] == pytest.approx(0.3) and budget.values["air"] == pytest.approx(0.1)
 
 
@@ -182,7 +250,7 @@ def test_a_top_stopped_by_spin_friction_the_budget_the_rest_marker_and_the_last_
     window.files.open_scene(path, remember=False)
     run_to_end(qtbot, window)
     budget = window.plots.budget
-    assert budget.causes == ("sliding", "impacts", "spin")
+    assert budget.causes == ("sliding", "spin")
     assert budget.values["spin"] == pytest.approx(0.8, rel=1e-9)
     assert budget.values["energy"] == pytest.approx(0.0, abs=1e-9)
     assert np.ptp(budget.total.yData) < 1e-9
@@ -204,6 +272,31 @@ def test_a_ball_held_spinning_and_then_still_reads_resting_to_the_end(qtbot, win
     t = buffer.t[buffer.index_at(rest / 2)]
     assert window.readouts["mode"].text() == "resting"
     assert window.plots.budget.values["spin"] == pytest.approx(0.8 * (1 - (1 - t / rest) ** 2), rel=1e-6)
+
+
+@pytest.mark.parametrize("stop_at_rest", [True, False])
+def test_a_ball_rolled_to_rest_reads_resting_from_the_rest_on(qtbot, window, tmp_path, stop_at_rest):
+    """Rolled at 1 m/s on a plane against c_rr = 0.1, the ball stops at 7 v₀ / (5 c_rr g) = 1.43 s:
+    the readout says resting at that instant's frame (the last, with stop at rest) and after it,
+    rolling before; rolling resistance took all of ½ (7/5) m v₀² = 0.7 J."""
+    scene = Scene.from_dict({
+        "format": "rollball-scene", "version": 4, "landscape": "0", "ball": {"radius": 0.1, "mass": 1.0},
+        "start": {"x": 0.0, "y": 0.0, "vx": 1.0, "vy": 0.0, "spin": 0.0},
+        "contact": {"friction": 0.3, "restitution": 0.0, "after_liftoff": "fly", "rolling_resistance": 0.1},
+        "stop_at_rest": stop_at_rest, "duration": 2.0, "view": {"min": -1.0, "max": 3.0, "step": 0.1}})
+    path = tmp_path / "roll.json"
+    scene.save(path)
+    window.files.open_scene(path, remember=False)
+    run_to_end(qtbot, window)
+    [rest] = window.controller.runs[0].transitions
+    assert rest.kind == "rest" and rest.time == pytest.approx(7 * 1.0 / (5 * 0.1 * scene.gravity), abs=1e-9)
+    buffer = window.controller.buffer
+    assert buffer.t[-1] == (rest.time if stop_at_rest else 2.0)
+    assert window.readouts["mode"].text() == "resting"
+    assert window.plots.budget.values["rolling"] == pytest.approx(0.7, rel=1e-9)
+    for moment, mode in ((rest.time, "resting"), (rest.time - 0.05, "rolling")):
+        window.runs.seek(moment)
+        assert window.readouts["mode"].text() == mode
 
 
 def test_the_budget_grows_with_the_ball_while_it_plays(qtbot, window):
