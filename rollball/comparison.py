@@ -121,13 +121,21 @@ def error_series(traj: Trajectory, ref_traj: Trajectory) -> dict[str, np.ndarray
     found = index >= 0
     at = np.where(found, index, 0)
     series = {
-        "contact": np.linalg.norm(traj.contact - ref_traj.contact[at], axis=1),
-        "velocity": np.linalg.norm(traj.velocity - ref_traj.velocity[at], axis=1),
-        "omega": np.linalg.norm(traj.omega - ref_traj.omega[at], axis=1),
-        "orientation": np.linalg.norm((traj.R - ref_traj.R[at]).reshape(-1, 9), axis=1),
+        "contact": _row_norms(traj.contact - ref_traj.contact[at]),
+        "velocity": _row_norms(traj.velocity - ref_traj.velocity[at]),
+        "omega": _row_norms(traj.omega - ref_traj.omega[at]),
+        "orientation": _row_norms((traj.R - ref_traj.R[at]).reshape(-1, 9)),
         "energy": np.abs(traj.energy - ref_traj.energy[at]) / ref_traj.energy_scale,
     }
     return {key: np.where(found, value, np.nan) for key, value in series.items()}
+
+
+def _row_norms(values: np.ndarray) -> np.ndarray:
+    """Each row's Euclidean norm, by hypot: no square overflows where a run that blew up holds
+    entries beyond 10¹⁵⁴ (a classic update's R before it is reported overflowed); a norm beyond
+    the largest double is inf, as it is."""
+    with np.errstate(over="ignore"):   # (only the norm itself can overflow, to its true inf)
+        return np.hypot.reduce(values, axis=1)
 
 
 def _max_errors(traj: Trajectory, ref_traj: Trajectory) -> dict[str, float]:

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from conftest import make_scene
 
-from rollball import METHODS, compare, simulate
+from rollball import METHODS, Scene, compare, simulate
 from rollball.cli import main
-from rollball.comparison import asymptotic_range
+from rollball.comparison import asymptotic_range, error_series, reference_run
 from rollball.examples import EXAMPLES_DIR
 
 HILLS = str(EXAMPLES_DIR / "hills.json")
@@ -240,3 +240,22 @@ def test_comparison_imports_nothing_from_its_report():
                 for alias in node.names} | {node.module or "" for node in ast.walk(tree)
                                              if isinstance(node, ast.ImportFrom)}
     assert not any("comparison_report" in name for name in imported), imported
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_a_run_that_blew_up_is_measured_without_overflow():
+    """Classic Euler at dt 1.2 s on the hills: R grows past 10¹⁶⁰ until the run stops, its message
+    saying so. Its errors against the reference are measured without a numpy overflow (R's
+    entries squared would be beyond a double): ‖R − R_ref‖ is the finite norm it is."""
+    scene = Scene.load(HILLS)
+    ref, _ = reference_run(scene, t_end=48.0, record_dt=1.2)
+    traj = simulate(scene, method="euler", munthe_kaas=False, dt=1.2, t_end=48.0)
+    assert traj.status == "nonfinite" and "the orientation R overflowed" in traj.message
+    assert np.abs(traj.R).max() > 1e160
+    series = error_series(traj, ref)
+    assert np.isfinite(series["orientation"]).all()
+    for i in (1, len(traj) - 1):   # against the norm scaled by the largest entry (no square overflows)
+        j = int(np.argmin(np.abs(ref.t - traj.t[i])))
+        difference = (traj.R[i] - ref.R[j]).ravel()
+        largest = np.abs(difference).max()
+        assert series["orientation"][i] == pytest.approx(largest * np.linalg.norm(difference / largest), rel=1e-14)
