@@ -76,6 +76,24 @@ def test_the_basin_map_has_a_colour_per_minimum(table, tmp_path):
     assert tuple(int(BASIN_COLOURS[2][k:k + 2], 16) for k in (1, 3, 5)) not in pixels   # two minima only
 
 
+def test_the_basin_maps_title_sits_on_the_square_map_its_key_just_below():
+    """start.x × start.y: a square map, the title's last line within a quarter inch above it (no
+    white band between them), the key below the x axis' label as closely."""
+    from rollball.sweeps.plot import _figure
+
+    square = sweep(WELLS, {"start.x": [-1.004, 1.004], "start.y": [-1.004, 1.004]}, workers=1)
+    fig = _figure(square, "basin")
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    [title] = [text for text in fig.texts if text.get_text() == fig.get_suptitle()]
+    inch = fig.dpi
+    drawn, heading = ax.get_window_extent(), title.get_window_extent()   # (the map as drawn: square)
+    assert drawn.width == pytest.approx(drawn.height, rel=1e-3)
+    assert 0.0 < (heading.y0 - drawn.y1) / inch < 0.25
+    key, axis = ax.get_legend().get_window_extent(), ax.xaxis.get_tightbbox()
+    assert 0.0 < (axis.y0 - key.y1) / inch < 0.25
+
+
 def test_without_a_rest_there_are_no_minima():
     still = sweep(WELLS, {"start.x": [1.5]}, workers=1)
     assert still.minima is None and "minima" not in still.to_dict() and np.isnan(still["basin"]).all()

@@ -43,6 +43,7 @@ BASIN_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b
                  "#17becf")
 BASIN_NONE = "#7f7f7f"
 TITLE_CHARACTERS = 13   # characters of the figure's title a line holds per inch of its width
+LAYOUT_PAD = 0.4        # font sizes between the title, the plots and their labels
 
 
 def label(name: str) -> str:
@@ -79,6 +80,18 @@ def figure_png(table, color: str = "liftoff_time") -> bytes | None:
 
 
 def _figure_png(table, color):
+    fig = _figure(table, color)
+    if fig is None:
+        return None
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=130, bbox_inches="tight", pad_inches=0.15)   # (legends below too)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def _figure(table, color):
+    """The table's figure, laid out (a matplotlib Figure); None as for ``figure_png``."""
     if color not in OUTCOMES:
         raise ValueError(f"cannot colour by {color!r}; the outcomes: {', '.join(OUTCOMES)}")
     if len(table.keys) > 2:
@@ -101,12 +114,11 @@ def _figure_png(table, color):
                           break_long_words=True)
     title = "\n".join(lines + [f"{table.seconds:.1f} s wall on {table.workers} "
                                f"{'Dask workers' if table.scheduler else 'local threads'}, {table.machine}"])
-    fig.suptitle(title, fontsize=9, parse_math=False, usetex=False)
-    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.035 * (len(lines) + 1)))
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=130, bbox_inches="tight", pad_inches=0.15)   # (legends below too)
-    plt.close(fig)
-    return buffer.getvalue()
+    # the title at the figure's top edge; the layout makes room for it as drawn, LAYOUT_PAD above
+    # and below it (a rect kept for its lines counted them twice: a white band under the title)
+    fig.suptitle(title, y=1.0, va="top", fontsize=9, parse_math=False, usetex=False)
+    fig.tight_layout(pad=LAYOUT_PAD)
+    return fig
 
 
 def _map(plt, table, color):
@@ -164,7 +176,9 @@ def _basins(ax, table, xe, ye, value) -> list:
     if (value == 0).any():
         handles.append(Patch(facecolor=BASIN_NONE, edgecolor="0.5", label="basin 0: rests in no minimum"))
     if table.keys == ("start.x", "start.y"):
-        ax.set_aspect("equal")   # (a map of the landscape's own square, in a figure to fit)
+        # (a map of the landscape's own square, in a figure to fit: at the top of the room the
+        # layout gives it, under the title, its legend just below; the figure is cropped to them)
+        ax.set_aspect("equal", anchor="N")
         ax.figure.set_size_inches(6.4, 7.4)
         for m in minima:
             ax.plot(m.x, m.y, "o", markersize=7, markerfacecolor=colours[m.number], markeredgecolor="k")
