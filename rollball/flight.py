@@ -124,6 +124,7 @@ class Surface:
         self._record = landscape.record(self.values)   # (held while its address is in use)
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
+        self._first_calls: dict[tuple, tuple] = {}   # (centres, starts each) -> nearest_feet's, packed once
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -182,31 +183,18 @@ class Surface:
         foot is NaN, and ``lost`` where the centre is over the landscape."""
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
         n = len(c)
-        below = self.evaluate(c[:, 0], c[:, 1])[0]
-        reach = np.abs(c[:, 2] - below)
-        reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
-        unit = np.linspace(-1.0, 1.0, SAMPLES)
-        gx, gy = np.broadcast_arrays(c[:, 0, None, None] + reach[:, None, None] * unit[None, :, None],
-                                     c[:, 1, None, None] + reach[:, None, None] * unit[None, None, :])
-        gx, gy = gx.reshape(n, -1), gy.reshape(n, -1)
         hints = np.array(self.hints).reshape(-1, 3)   # (x, y, the spacing it was found at)
-        if len(hints):
-            gx = np.concatenate([gx, np.broadcast_to(hints[:, 0], (n, len(hints)))], axis=1)
-            gy = np.concatenate([gy, np.broadcast_to(hints[:, 1], (n, len(hints)))], axis=1)
-        heights = self.evaluate(gx.ravel(), gy.ravel())[0].reshape(n, -1)
-        far = (gx - c[:, :1]) ** 2 + (gy - c[:, 1:2]) ** 2 + (heights - c[:, 2:]) ** 2
-        far = np.where(np.isnan(far), np.inf, far)
-        nearest = np.argsort(far, axis=1)[:, :BEST_SAMPLES]
-        rows = np.arange(n)[:, None]
-        starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float), (n, 1, 2))])
-        starts.append(np.stack([gx[rows, nearest], gy[rows, nearest]], axis=2))   # (nan where not finite)
-        if len(hints):
-            starts.append(np.broadcast_to(hints[None, :, :2], (n, len(hints), 2)))
-        starts = np.concatenate(starts, axis=1)
-        alpha, normal, distance = self._from_starts(c, starts)
-        sampled = np.sqrt(far.min(axis=1))   # a surface point this far: the nearest is no farther
+        alpha, normal, distance, below, sampled, points = self._first_feet(c, guess, hints)
         ok = self._plausible(c, below, distance, sampled)
         if not ok.all():   # Newton's method at round-off, its step not below the compiled test's?
+            starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float),
+                                                                                   (n, 1, 2))])
+            starts.append(points)   # (``_first_feet``'s starts)
+            if len(hints):
+                starts.append(np.broadcast_to(hints[None, :, :2], (n, len(hints), 2)))
+            starts = np.concatenate(starts, axis=1)
+            reach = np.abs(c[:, 2] - below)
+            reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
             bad = np.flatnonzero(~ok)
             alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
             a2, n2, d2 = self._polish(c[bad], starts[bad])
@@ -217,7 +205,7 @@ class Surface:
         if not ok.all():   # the foot was not found from these starts: a search of the samples for starts
             bad = np.flatnonzero(~ok)
             spacing = np.full((len(bad), BEST_SAMPLES), 1.0) * (2.0 * reach[bad, None] / (SAMPLES - 1))
-            points = np.stack([gx[bad[:, None], nearest[bad]], gy[bad[:, None], nearest[bad]]], axis=2)
+            points = points[bad]
             if len(hints):
                 shown = np.broadcast_to(hints[None, :, :2], (len(bad), len(hints), 2))
                 points = np.concatenate([points, shown], axis=1)
@@ -258,6 +246,35 @@ class Surface:
                 continue
             found.append(Foot(float(alpha[j, 0]), float(alpha[j, 1]), normal[j], float(distance[j])))
         return found
+
+    def _first_feet(self, c, guess, hints):
+        """The first search of ``feet_of``, compiled (``kernel.feet.nearest_feet``): for the
+        centres c (n, 3) the feet (n, 2), normals (n, 3), signed distances (n,) Newton's method
+        finds from the point below, ``guess``, the BEST_SAMPLES nearest of the SAMPLES × SAMPLES
+        grid and the ``hints``, the nearest of them with the ``tips`` put in; the heights below
+        (n,), the nearest sampled distance (n,) and those samples' (x, y) (n, BEST_SAMPLES, 2)."""
+        n = len(c)
+        guess = np.empty(0) if guess is None else np.array(guess, dtype=float).reshape(2)
+        k = 1 + len(guess) // 2 + BEST_SAMPLES + len(hints)
+        packed = self._first_calls.get((n, k))
+        if packed is None:
+            out = {"feet": np.empty((n, 2)), "normals": np.empty((n, 3)), "distances": np.empty(n),
+                   "below": np.empty(n), "sampled": np.empty(n), "nearest": np.empty((n, 2 * BEST_SAMPLES))}
+            call = machine_code.Arguments(
+                "nearest_feet", fn=self._record.ctypes.data, centers=np.empty((n, 3)), guess=guess,
+                hints=np.ascontiguousarray(hints, dtype=float), tips=np.empty((0, 3)),
+                unit=np.linspace(-1.0, 1.0, SAMPLES), reach_default=self.reach_default, **out,
+                start_centers=np.empty((n * k, 3)), start_feet=np.empty((n * k, 2)), start_normals=np.empty((n * k, 3)),
+                start_distances=np.empty(n * k), iterations=FOOT_ITERATIONS, d=np.empty(6))
+            packed = self._first_calls[(n, k)] = call, out
+        call, out = packed
+        call.kept["centers"][:] = c
+        call.set("guess", guess)
+        call.set("hints", np.ascontiguousarray(hints, dtype=float))
+        call.set("tips", np.array(self.tips, dtype=float).reshape(-1, 3))
+        call()
+        return (out["feet"].copy(), out["normals"].copy(), out["distances"].copy(), out["below"].copy(),
+                out["sampled"].copy(), out["nearest"].reshape(n, BEST_SAMPLES, 2).copy())
 
     def _from_starts(self, c, starts):
         """Newton's feet from starts (n, k, 2) for the centres c (n, 3), the tips put in, and
