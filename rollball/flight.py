@@ -124,7 +124,7 @@ class Surface:
         self._record = landscape.record(self.values)   # (held while its address is in use)
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
-        self._first_calls: dict[tuple, tuple] = {}   # (centres, starts each) -> nearest_feet's, packed once
+        self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -253,25 +253,24 @@ class Surface:
         finds from the point below, ``guess``, the BEST_SAMPLES nearest of the SAMPLES × SAMPLES
         grid and the ``hints``, the nearest of them with the ``tips`` put in; the heights below
         (n,), the nearest sampled distance (n,) and those samples' (x, y) (n, BEST_SAMPLES, 2)."""
-        n = len(c)
+        n, tips = len(c), np.array(self.tips, dtype=float).reshape(-1, 3)
         guess = np.empty(0) if guess is None else np.array(guess, dtype=float).reshape(2)
         k = 1 + len(guess) // 2 + BEST_SAMPLES + len(hints)
-        packed = self._first_calls.get((n, k))
+        key = (n, len(guess), len(hints), len(tips))
+        packed = self._first_calls.get(key)
         if packed is None:
             out = {"feet": np.empty((n, 2)), "normals": np.empty((n, 3)), "distances": np.empty(n),
                    "below": np.empty(n), "sampled": np.empty(n), "nearest": np.empty((n, 2 * BEST_SAMPLES))}
             call = machine_code.Arguments(
-                "nearest_feet", fn=self._record.ctypes.data, centers=np.empty((n, 3)), guess=guess,
-                hints=np.ascontiguousarray(hints, dtype=float), tips=np.empty((0, 3)),
-                unit=np.linspace(-1.0, 1.0, SAMPLES), reach_default=self.reach_default, **out,
-                start_centers=np.empty((n * k, 3)), start_feet=np.empty((n * k, 2)), start_normals=np.empty((n * k, 3)),
-                start_distances=np.empty(n * k), iterations=FOOT_ITERATIONS, d=np.empty(6))
-            packed = self._first_calls[(n, k)] = call, out
+                "nearest_feet", fn=self._record.ctypes.data, centers=np.empty((n, 3)), guess=guess.copy(),
+                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
+                reach_default=self.reach_default, **out, start_centers=np.empty((n * k, 3)),
+                start_feet=np.empty((n * k, 2)), start_normals=np.empty((n * k, 3)), start_distances=np.empty(n * k),
+                iterations=FOOT_ITERATIONS, d=np.empty(6))
+            packed = self._first_calls[key] = call, out
         call, out = packed
-        call.kept["centers"][:] = c
-        call.set("guess", guess)
-        call.set("hints", np.ascontiguousarray(hints, dtype=float))
-        call.set("tips", np.array(self.tips, dtype=float).reshape(-1, 3))
+        kept = call.kept   # (the arguments are written in place: packing costs more than the copies)
+        kept["centers"][:], kept["guess"][:], kept["hints"][:], kept["tips"][:] = c, guess, hints, tips
         call()
         return (out["feet"].copy(), out["normals"].copy(), out["distances"].copy(), out["below"].copy(),
                 out["sampled"].copy(), out["nearest"].reshape(n, BEST_SAMPLES, 2).copy())
@@ -485,18 +484,24 @@ class Flight:
         def primitive(w):
             return 0.5 * (w * math.hypot(p, w) + (p * p * math.asinh(w / p) if p > 0 else 0.0))
 
+        origin = primitive(w0)
+
         def path(delta):
-            return (primitive(w0 + g * delta) - primitive(w0)) / g
+            return (primitive(w0 + g * delta) - origin) / g
 
         # |ċ| ≤ speed + g τ, so the path is no longer than speed Δ + ½ g Δ²: a Δ short of the answer
         delta = 2.0 * length / (speed + math.sqrt(speed * speed + 2.0 * g * length))
-        best = delta if path(delta) <= length else 0.0
+        along = path(delta)
+        best = delta if along <= length else 0.0
         for _ in range(PATH_ITERATIONS):   # Newton's method on path(Δ) = length, ∂path/∂Δ = |ċ|
             rate = math.hypot(p, w0 + g * delta)
             if not rate > 0.0:
                 break
-            delta += (length - path(delta)) / rate
-            if path(delta) <= length:
+            after = delta + (length - along) / rate
+            if after == delta:   # (a fixed point: the iterations left change nothing)
+                break
+            delta, along = after, path(after)
+            if along <= length:
                 best = max(best, delta)
         return best
 
@@ -624,6 +629,7 @@ class Flight:
         cap = math.inf        # a step not certified: the next one at most this long
         last = before = math.inf   # the last two certified steps (the next is at most GROW_BY times the last)
         grazing = 0           # certified looks within the floor in a row
+        known = None, math.nan   # the last look's (t, h) and its time (1)
         for _ in range(MAX_LOOKS):
             if t >= t_end:
                 return None
@@ -633,7 +639,9 @@ class Flight:
             rate = float(np.dot(velocity, foot.normal))
             if h <= tol or (h <= floor and (rate >= 0.0 or grazing >= GRAZE_LOOKS)):
                 return self._touch(t, h, foot, rate, t_end)
-            sure = self.path_time(t, h - CLEAR_MARGIN * r)   # (1): no root before t + sure
+            if known[0] != (t, h):   # (1): no root before t + sure
+                known = (t, h), self.path_time(t, h - CLEAR_MARGIN * r)
+            sure = known[1]
             if t + sure >= t_end:
                 return None
             step = min(self._proposal(h, foot, speed, rate), GROW_BY * last)
@@ -657,7 +665,8 @@ class Flight:
                 t, h, foot, cap, last, before = float(s), float(h_s), foot_s, math.inf, s - t, last
                 if h <= floor or t >= t_end:
                     break
-                sure = self.path_time(t, h - CLEAR_MARGIN * r)
+                known = (t, h), self.path_time(t, h - CLEAR_MARGIN * r)
+                sure = known[1]
         raise RuntimeError("the landing search took too many steps")
 
     def _retry(self, t: float, s: float, h: float, h_s: float, speed: float) -> float:
@@ -699,24 +708,29 @@ class Flight:
     def _clear_off(self, t: float, h: float, foot: Foot, t_end: float):
         """Just after a lift-off: looks FIRST_STEP after it, doubling, until the gap exceeds
         GRAZE × r (returns that look's t, h, foot), or the landing (t, foot) where one is below
-        the surface, or where the ball is not clear by CLEAR_WITHIN (it never left)."""
+        the surface, or where the ball is not clear by CLEAR_WITHIN (it never left). The next
+        BATCH looks are taken at once, each judged as if taken alone."""
         floor, tol = GRAZE * self.radius, GAP_TOLERANCE * self.radius
         step = FIRST_STEP
         while True:
             if t >= t_end:
                 return t, h, foot
-            guess = np.array([foot.x, foot.y])
-            s = min(t + step, t_end)
-            h_s, foot_s = self.gap(s, guess)
-            if math.isnan(h_s):
-                raise self._off(t, foot_s)
-            if h_s < -tol:
-                return self._locate(t, s, guess)
-            if h_s > floor:
-                return s, h_s, foot_s
-            if s - self.start.t > CLEAR_WITHIN:
-                return s, foot_s   # it never left the surface
-            t, h, foot, step = s, h_s, foot_s, 2.0 * step
+            times, now, size = [], t, step
+            while len(times) < BATCH and now < t_end:
+                now = min(now + size, t_end)
+                times.append(now)
+                size *= 2.0
+            gaps, feet = self.gaps(np.array(times), np.array([foot.x, foot.y]))
+            for s, h_s, foot_s in zip(times, gaps, feet):
+                if math.isnan(h_s):
+                    raise self._off(t, foot_s)
+                if h_s < -tol:
+                    return self._locate(t, s, np.array([foot.x, foot.y]))
+                if h_s > floor:
+                    return s, float(h_s), foot_s
+                if s - self.start.t > CLEAR_WITHIN:
+                    return s, foot_s   # it never left the surface
+                t, h, foot, step = s, float(h_s), foot_s, 2.0 * step
 
     def _touch(self, t: float, h: float, foot: Foot, rate: float, t_end: float) -> tuple[float, Foot] | None:
         """The landing from a certified look at t whose gap h is within the floor: the root
@@ -725,10 +739,9 @@ class Flight:
         t (a graze, or the gap at round-off)."""
         tol = GAP_TOLERANCE * self.radius
         guess = np.array([foot.x, foot.y])
-        if h > 0.0 and rate < 0.0:
-            for k in (1.1, 2.0, 4.0, 8.0):
-                b = min(t + k * h / -rate, t_end)
-                h_b, foot_b = self.gap(b, guess)
+        if h > 0.0 and rate < 0.0:   # (the four looks at once)
+            ends = [min(t + k * h / -rate, t_end) for k in (1.1, 2.0, 4.0, 8.0)]
+            for b, h_b, foot_b in zip(ends, *self.gaps(np.array(ends), guess)):
                 if h_b < -tol:
                     return self._locate(t, b, guess)
                 if b >= t_end:
@@ -739,14 +752,19 @@ class Flight:
         """The root of the gap in [a, b] (gap(a) ≥ 0 ≥ gap(b)), to round-off."""
         from scipy.optimize import brentq
 
+        looks = {}   # (the root is often the last time looked at)
+
         def gap(t):
-            return self.gap(t, guess)[0]
+            if t not in looks:
+                looks[t] = self.gap(t, guess)
+            return looks[t][0]
         if gap(a) <= 0.0:
             t = a
         else:
             t = brentq(gap, a, b, xtol=4 * np.finfo(float).eps * max(abs(b), 1.0), rtol=4 * np.finfo(float).eps,
                        maxiter=200)
-        return t, self.gap(t, guess)[1]
+        gap(t)
+        return t, looks[t][1]
 
     def rows(self, times: np.ndarray, dissipated: float, guess=None) -> np.ndarray:
         """Recorded rows (``kernel.interface.ROW_FIELDS``) at ``times``: the exact state; as

@@ -230,3 +230,24 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give():
         assert np.array_equal(points[i], np.column_stack([gx[order], gy[order]]))
         assert np.array_equal(alpha[i], a[k]) and np.array_equal(normal[i], n[k]) and distance[i] == d[k]
     assert np.array_equal(alpha[0], surface.tips[0][:2])
+
+
+def test_the_looks_just_after_a_lift_off_are_taken_eight_at_a_time(monkeypatch):
+    """Lifting off a plane at 1 cm/s the gap passes GRAZE × r (1e-7 m) after some 1.6e-5 s: the
+    looks doubling from 1e-9 s (fourteen of them) are taken eight at a time, and the first one
+    clear is the one the looks taken one by one find (a foot search each before)."""
+    from rollball.flight import FIRST_STEP, GRAZE
+
+    f = flight("0.25", (0.3, 0.0, 0.35), (0.0, 0.0, 1e-2))
+    t, step = 0.0, FIRST_STEP
+    for _ in range(40):   # one by one, from the plane's exact gap
+        t, step = t + step, 2.0 * step
+        if 1e-2 * t - 0.5 * G * t * t > GRAZE * R:
+            break
+    h0, foot0 = f.gap(0.0)
+    calls = []
+    original = Surface.feet_of
+    monkeypatch.setattr(Surface, "feet_of", lambda self, c, guess=None: calls.append(len(c)) or original(self, c,
+                                                                                                          guess))
+    s, h, foot = f._clear_off(0.0, h0, foot0, 1.0)
+    assert s == t and h == pytest.approx(1e-2 * t - 0.5 * G * t * t, rel=1e-6) and calls == [8, 8]
