@@ -124,6 +124,7 @@ class Surface:
         self._record = landscape.record(self.values)   # (held while its address is in use)
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
+        self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -182,31 +183,18 @@ class Surface:
         foot is NaN, and ``lost`` where the centre is over the landscape."""
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
         n = len(c)
-        below = self.evaluate(c[:, 0], c[:, 1])[0]
-        reach = np.abs(c[:, 2] - below)
-        reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
-        unit = np.linspace(-1.0, 1.0, SAMPLES)
-        gx, gy = np.broadcast_arrays(c[:, 0, None, None] + reach[:, None, None] * unit[None, :, None],
-                                     c[:, 1, None, None] + reach[:, None, None] * unit[None, None, :])
-        gx, gy = gx.reshape(n, -1), gy.reshape(n, -1)
         hints = np.array(self.hints).reshape(-1, 3)   # (x, y, the spacing it was found at)
-        if len(hints):
-            gx = np.concatenate([gx, np.broadcast_to(hints[:, 0], (n, len(hints)))], axis=1)
-            gy = np.concatenate([gy, np.broadcast_to(hints[:, 1], (n, len(hints)))], axis=1)
-        heights = self.evaluate(gx.ravel(), gy.ravel())[0].reshape(n, -1)
-        far = (gx - c[:, :1]) ** 2 + (gy - c[:, 1:2]) ** 2 + (heights - c[:, 2:]) ** 2
-        far = np.where(np.isnan(far), np.inf, far)
-        nearest = np.argsort(far, axis=1)[:, :BEST_SAMPLES]
-        rows = np.arange(n)[:, None]
-        starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float), (n, 1, 2))])
-        starts.append(np.stack([gx[rows, nearest], gy[rows, nearest]], axis=2))   # (nan where not finite)
-        if len(hints):
-            starts.append(np.broadcast_to(hints[None, :, :2], (n, len(hints), 2)))
-        starts = np.concatenate(starts, axis=1)
-        alpha, normal, distance = self._from_starts(c, starts)
-        sampled = np.sqrt(far.min(axis=1))   # a surface point this far: the nearest is no farther
+        alpha, normal, distance, below, sampled, points = self._first_feet(c, guess, hints)
         ok = self._plausible(c, below, distance, sampled)
         if not ok.all():   # Newton's method at round-off, its step not below the compiled test's?
+            starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float),
+                                                                                   (n, 1, 2))])
+            starts.append(points)   # (``_first_feet``'s starts)
+            if len(hints):
+                starts.append(np.broadcast_to(hints[None, :, :2], (n, len(hints), 2)))
+            starts = np.concatenate(starts, axis=1)
+            reach = np.abs(c[:, 2] - below)
+            reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
             bad = np.flatnonzero(~ok)
             alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
             a2, n2, d2 = self._polish(c[bad], starts[bad])
@@ -217,7 +205,7 @@ class Surface:
         if not ok.all():   # the foot was not found from these starts: a search of the samples for starts
             bad = np.flatnonzero(~ok)
             spacing = np.full((len(bad), BEST_SAMPLES), 1.0) * (2.0 * reach[bad, None] / (SAMPLES - 1))
-            points = np.stack([gx[bad[:, None], nearest[bad]], gy[bad[:, None], nearest[bad]]], axis=2)
+            points = points[bad]
             if len(hints):
                 shown = np.broadcast_to(hints[None, :, :2], (len(bad), len(hints), 2))
                 points = np.concatenate([points, shown], axis=1)
@@ -258,6 +246,34 @@ class Surface:
                 continue
             found.append(Foot(float(alpha[j, 0]), float(alpha[j, 1]), normal[j], float(distance[j])))
         return found
+
+    def _first_feet(self, c, guess, hints):
+        """The first search of ``feet_of``, compiled (``kernel.feet.nearest_feet``): for the
+        centres c (n, 3) the feet (n, 2), normals (n, 3), signed distances (n,) Newton's method
+        finds from the point below, ``guess``, the BEST_SAMPLES nearest of the SAMPLES × SAMPLES
+        grid and the ``hints``, the nearest of them with the ``tips`` put in; the heights below
+        (n,), the nearest sampled distance (n,) and those samples' (x, y) (n, BEST_SAMPLES, 2)."""
+        n, tips = len(c), np.array(self.tips, dtype=float).reshape(-1, 3)
+        guess = np.empty(0) if guess is None else np.array(guess, dtype=float).reshape(2)
+        k = 1 + len(guess) // 2 + BEST_SAMPLES + len(hints)
+        key = (n, len(guess), len(hints), len(tips))
+        packed = self._first_calls.get(key)
+        if packed is None:
+            out = {"feet": np.empty((n, 2)), "normals": np.empty((n, 3)), "distances": np.empty(n),
+                   "below": np.empty(n), "sampled": np.empty(n), "nearest": np.empty((n, 2 * BEST_SAMPLES))}
+            call = machine_code.Arguments(
+                "nearest_feet", fn=self._record.ctypes.data, centers=np.empty((n, 3)), guess=guess.copy(),
+                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
+                reach_default=self.reach_default, **out, start_centers=np.empty((n * k, 3)),
+                start_feet=np.empty((n * k, 2)), start_normals=np.empty((n * k, 3)), start_distances=np.empty(n * k),
+                iterations=FOOT_ITERATIONS, d=np.empty(6))
+            packed = self._first_calls[key] = call, out
+        call, out = packed
+        kept = call.kept   # (the arguments are written in place: packing costs more than the copies)
+        kept["centers"][:], kept["guess"][:], kept["hints"][:], kept["tips"][:] = c, guess, hints, tips
+        call()
+        return (out["feet"].copy(), out["normals"].copy(), out["distances"].copy(), out["below"].copy(),
+                out["sampled"].copy(), out["nearest"].reshape(n, BEST_SAMPLES, 2).copy())
 
     def _from_starts(self, c, starts):
         """Newton's feet from starts (n, k, 2) for the centres c (n, 3), the tips put in, and
@@ -468,18 +484,24 @@ class Flight:
         def primitive(w):
             return 0.5 * (w * math.hypot(p, w) + (p * p * math.asinh(w / p) if p > 0 else 0.0))
 
+        origin = primitive(w0)
+
         def path(delta):
-            return (primitive(w0 + g * delta) - primitive(w0)) / g
+            return (primitive(w0 + g * delta) - origin) / g
 
         # |ċ| ≤ speed + g τ, so the path is no longer than speed Δ + ½ g Δ²: a Δ short of the answer
         delta = 2.0 * length / (speed + math.sqrt(speed * speed + 2.0 * g * length))
-        best = delta if path(delta) <= length else 0.0
+        along = path(delta)
+        best = delta if along <= length else 0.0
         for _ in range(PATH_ITERATIONS):   # Newton's method on path(Δ) = length, ∂path/∂Δ = |ċ|
             rate = math.hypot(p, w0 + g * delta)
             if not rate > 0.0:
                 break
-            delta += (length - path(delta)) / rate
-            if path(delta) <= length:
+            after = delta + (length - along) / rate
+            if after == delta:   # (a fixed point: the iterations left change nothing)
+                break
+            delta, along = after, path(after)
+            if along <= length:
                 best = max(best, delta)
         return best
 
@@ -607,6 +629,7 @@ class Flight:
         cap = math.inf        # a step not certified: the next one at most this long
         last = before = math.inf   # the last two certified steps (the next is at most GROW_BY times the last)
         grazing = 0           # certified looks within the floor in a row
+        known = None, math.nan   # the last look's (t, h) and its time (1)
         for _ in range(MAX_LOOKS):
             if t >= t_end:
                 return None
@@ -616,7 +639,9 @@ class Flight:
             rate = float(np.dot(velocity, foot.normal))
             if h <= tol or (h <= floor and (rate >= 0.0 or grazing >= GRAZE_LOOKS)):
                 return self._touch(t, h, foot, rate, t_end)
-            sure = self.path_time(t, h - CLEAR_MARGIN * r)   # (1): no root before t + sure
+            if known[0] != (t, h):   # (1): no root before t + sure
+                known = (t, h), self.path_time(t, h - CLEAR_MARGIN * r)
+            sure = known[1]
             if t + sure >= t_end:
                 return None
             step = min(self._proposal(h, foot, speed, rate), GROW_BY * last)
@@ -640,7 +665,8 @@ class Flight:
                 t, h, foot, cap, last, before = float(s), float(h_s), foot_s, math.inf, s - t, last
                 if h <= floor or t >= t_end:
                     break
-                sure = self.path_time(t, h - CLEAR_MARGIN * r)
+                known = (t, h), self.path_time(t, h - CLEAR_MARGIN * r)
+                sure = known[1]
         raise RuntimeError("the landing search took too many steps")
 
     def _retry(self, t: float, s: float, h: float, h_s: float, speed: float) -> float:
@@ -682,24 +708,29 @@ class Flight:
     def _clear_off(self, t: float, h: float, foot: Foot, t_end: float):
         """Just after a lift-off: looks FIRST_STEP after it, doubling, until the gap exceeds
         GRAZE × r (returns that look's t, h, foot), or the landing (t, foot) where one is below
-        the surface, or where the ball is not clear by CLEAR_WITHIN (it never left)."""
+        the surface, or where the ball is not clear by CLEAR_WITHIN (it never left). The next
+        BATCH looks are taken at once, each judged as if taken alone."""
         floor, tol = GRAZE * self.radius, GAP_TOLERANCE * self.radius
         step = FIRST_STEP
         while True:
             if t >= t_end:
                 return t, h, foot
-            guess = np.array([foot.x, foot.y])
-            s = min(t + step, t_end)
-            h_s, foot_s = self.gap(s, guess)
-            if math.isnan(h_s):
-                raise self._off(t, foot_s)
-            if h_s < -tol:
-                return self._locate(t, s, guess)
-            if h_s > floor:
-                return s, h_s, foot_s
-            if s - self.start.t > CLEAR_WITHIN:
-                return s, foot_s   # it never left the surface
-            t, h, foot, step = s, h_s, foot_s, 2.0 * step
+            times, now, size = [], t, step
+            while len(times) < BATCH and now < t_end:
+                now = min(now + size, t_end)
+                times.append(now)
+                size *= 2.0
+            gaps, feet = self.gaps(np.array(times), np.array([foot.x, foot.y]))
+            for s, h_s, foot_s in zip(times, gaps, feet):
+                if math.isnan(h_s):
+                    raise self._off(t, foot_s)
+                if h_s < -tol:
+                    return self._locate(t, s, np.array([foot.x, foot.y]))
+                if h_s > floor:
+                    return s, float(h_s), foot_s
+                if s - self.start.t > CLEAR_WITHIN:
+                    return s, foot_s   # it never left the surface
+                t, h, foot, step = s, float(h_s), foot_s, 2.0 * step
 
     def _touch(self, t: float, h: float, foot: Foot, rate: float, t_end: float) -> tuple[float, Foot] | None:
         """The landing from a certified look at t whose gap h is within the floor: the root
@@ -708,10 +739,9 @@ class Flight:
         t (a graze, or the gap at round-off)."""
         tol = GAP_TOLERANCE * self.radius
         guess = np.array([foot.x, foot.y])
-        if h > 0.0 and rate < 0.0:
-            for k in (1.1, 2.0, 4.0, 8.0):
-                b = min(t + k * h / -rate, t_end)
-                h_b, foot_b = self.gap(b, guess)
+        if h > 0.0 and rate < 0.0:   # (the four looks at once)
+            ends = [min(t + k * h / -rate, t_end) for k in (1.1, 2.0, 4.0, 8.0)]
+            for b, h_b, foot_b in zip(ends, *self.gaps(np.array(ends), guess)):
                 if h_b < -tol:
                     return self._locate(t, b, guess)
                 if b >= t_end:
@@ -722,14 +752,19 @@ class Flight:
         """The root of the gap in [a, b] (gap(a) ≥ 0 ≥ gap(b)), to round-off."""
         from scipy.optimize import brentq
 
+        looks = {}   # (the root is often the last time looked at)
+
         def gap(t):
-            return self.gap(t, guess)[0]
+            if t not in looks:
+                looks[t] = self.gap(t, guess)
+            return looks[t][0]
         if gap(a) <= 0.0:
             t = a
         else:
             t = brentq(gap, a, b, xtol=4 * np.finfo(float).eps * max(abs(b), 1.0), rtol=4 * np.finfo(float).eps,
                        maxiter=200)
-        return t, self.gap(t, guess)[1]
+        gap(t)
+        return t, looks[t][1]
 
     def rows(self, times: np.ndarray, dissipated: float, guess=None) -> np.ndarray:
         """Recorded rows (``kernel.interface.ROW_FIELDS``) at ``times``: the exact state; as

@@ -178,3 +178,76 @@ def test_the_closest_surface_point_is_the_cylinders_radial_one():
     assert distances == pytest.approx(rho - 2, abs=1e-14)
     beside = surface.foot(np.array([3.0, 0.0, -1.0]))   # no surface within reach of the point below
     assert math.isnan(beside.x) and math.isnan(beside.distance) and np.isnan(beside.normal).all()
+
+
+def test_a_look_of_the_landing_search_is_one_compiled_call(monkeypatch):
+    """A look at the gap (the point below, the grid, the starts, Newton's method from each and the
+    nearest foot) is one call of the compiled kernel where its first foot passes (issue 30: a
+    look was three calls and some forty array operations)."""
+    from rollball import machine_code
+
+    f = flight("0.3*sin(3*x)*cos(2*y)", (0.1, -0.2, 1.0), (1.0, 0.5, 0.0))
+    f.gap(0.05)   # (packed once)
+    calls = []
+    original = machine_code.Arguments.__call__
+    monkeypatch.setattr(machine_code.Arguments, "__call__", lambda self: calls.append(self.name) or original(self))
+    h, foot = f.gap(0.1, (0.2, -0.1))
+    assert calls == ["nearest_feet"] and h > 0
+
+
+def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give():
+    """Surface._first_feet (kernel.feet.nearest_feet) against the same search written here in numpy:
+    the 21 × 21 grid of half-width |c_z − f| about each centre and the hints sampled, Newton's
+    method (Surface.feet) from the point below, the guess, the three nearest samples and the
+    hints, a tip put in where nearer, the smallest |D| kept: the same numbers."""
+    from rollball.flight import BEST_SAMPLES, SAMPLES
+
+    surface = Surface(landscape_for("0.3*sin(3*x)*cos(2*y) + 0.05*x*y"))
+    surface.hints = [np.array([0.4, 0.3, 1e-4]), np.array([-0.2, 0.5, 1e-4])]
+    surface.tips = [np.array([0.7, -0.6, 0.2])]
+    rng = np.random.default_rng(7)
+    centers = np.column_stack([rng.uniform(-1, 1, 12), rng.uniform(-1, 1, 12), rng.uniform(0.3, 0.9, 12)])
+    centers[0] = [0.7, -0.6, 0.25]   # nearest to the tip
+    guess = np.array([0.1, 0.2])
+    hints = np.array(surface.hints)
+    alpha, normal, distance, below, sampled, points = surface._first_feet(centers, guess, hints)
+    unit = np.linspace(-1.0, 1.0, SAMPLES)
+    for i, c in enumerate(centers):
+        f0 = surface.evaluate(c[0], c[1])[0]
+        reach = abs(c[2] - f0)
+        gx = np.concatenate([np.repeat(c[0] + reach * unit, SAMPLES), hints[:, 0]])
+        gy = np.concatenate([np.tile(c[1] + reach * unit, SAMPLES), hints[:, 1]])
+        far = (gx - c[0]) ** 2 + (gy - c[1]) ** 2 + (surface.evaluate(gx, gy)[0] - c[2]) ** 2
+        order = np.argsort(far, kind="stable")[:BEST_SAMPLES]
+        starts = np.vstack([c[:2], guess, np.column_stack([gx[order], gy[order]]), hints[:, :2]])
+        a, n, d = surface.feet(np.repeat(c[None], len(starts), 0), starts)
+        tip = surface.tips[0]
+        arm = np.linalg.norm(c - tip)
+        nearer = ~(np.abs(d) <= arm)
+        a[nearer], n[nearer], d[nearer] = tip[:2], (c - tip) / arm, arm
+        k = int(np.argmin(np.where(np.isnan(d), np.inf, np.abs(d))))
+        assert below[i] == f0 and sampled[i] == np.sqrt(far.min())
+        assert np.array_equal(points[i], np.column_stack([gx[order], gy[order]]))
+        assert np.array_equal(alpha[i], a[k]) and np.array_equal(normal[i], n[k]) and distance[i] == d[k]
+    assert np.array_equal(alpha[0], surface.tips[0][:2])
+
+
+def test_the_looks_just_after_a_lift_off_are_taken_eight_at_a_time(monkeypatch):
+    """Lifting off a plane at 1 cm/s the gap passes GRAZE × r (1e-7 m) after some 1.6e-5 s: the
+    looks doubling from 1e-9 s (fourteen of them) are taken eight at a time, and the first one
+    clear is the one the looks taken one by one find (a foot search each before)."""
+    from rollball.flight import FIRST_STEP, GRAZE
+
+    f = flight("0.25", (0.3, 0.0, 0.35), (0.0, 0.0, 1e-2))
+    t, step = 0.0, FIRST_STEP
+    for _ in range(40):   # one by one, from the plane's exact gap
+        t, step = t + step, 2.0 * step
+        if 1e-2 * t - 0.5 * G * t * t > GRAZE * R:
+            break
+    h0, foot0 = f.gap(0.0)
+    calls = []
+    original = Surface.feet_of
+    monkeypatch.setattr(Surface, "feet_of", lambda self, c, guess=None: calls.append(len(c)) or original(self, c,
+                                                                                                          guess))
+    s, h, foot = f._clear_off(0.0, h0, foot0, 1.0)
+    assert s == t and h == pytest.approx(1e-2 * t - 0.5 * G * t * t, rel=1e-6) and calls == [8, 8]

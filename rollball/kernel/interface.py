@@ -47,6 +47,11 @@ ENTRIES = {
     "evaluate_points": (("fn", ADDRESS), ("xs", VECTOR), ("ys", VECTOR), ("out", MATRIX), ("d", VECTOR)),
     "closest_points": (("fn", ADDRESS), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX),
                        ("distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
+    "nearest_feet": (("fn", ADDRESS), ("centers", MATRIX), ("guess", VECTOR), ("hints", MATRIX), ("tips", MATRIX),
+                     ("unit", VECTOR), ("reach_default", FLOAT), ("feet", MATRIX), ("normals", MATRIX),
+                     ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
+                     ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
+                     ("start_distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
 }
 
 

@@ -1,0 +1,109 @@
+"""A flying ball's closest surface points, compiled: the first search of ``flight.Surface.feet_of``
+(the samples about each centre, the starts of Newton's method, the nearest of the feet it finds)."""
+
+from __future__ import annotations
+
+import math
+
+from .lowlevel import EXACT, data_pointer, landscape
+from .physics import closest_points
+
+
+@EXACT
+def nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, normals, distances, below, sampled,
+                 nearest, start_centers, start_feet, start_normals, start_distances, iterations, d):
+    """For each centre (n, 3): the surface below it (``below``), the square grid unit × unit of
+    half-width reach = |c_z − f(c_x, c_y)| (2 ``reach_default`` where that is not finite) about
+    it and the ``hints`` (m, 3: x, y, spacing) sampled, the distance to the nearest sample
+    (``sampled``) and the b nearest samples' (x, y) (``nearest``, (n, 2 b), b ≤ 3: nearest first,
+    the earlier first among equals); then Newton's method (``closest_points``) from
+    the k starts of each centre (start_* (n k, ·)): the point below it, ``guess`` (none or one
+    (x, y) for all), the nearest samples and the hints; a ``tips`` point (t, 3: x, y, f) is put in
+    where it is nearer than the foot found (or none was: its distance |c − T|, its normal from it
+    to c); of the k, the nearest (smallest |D|, the first among equals) is the centre's foot:
+    ``feet``, ``normals``, ``distances`` (NaN where none converged). What flight.Surface.feet_of
+    computes in numpy, number for number (EXACT), except which of equally near samples start."""
+    n, m, side, best_samples = centers.shape[0], hints.shape[0], unit.shape[0], nearest.shape[1] // 2
+    count = side * side + m
+    guessed = 1 if guess.shape[0] == 2 else 0
+    k = 1 + guessed + best_samples + m
+    for i in range(n):
+        cx, cy, cz = centers[i, 0], centers[i, 1], centers[i, 2]
+        landscape(fn, cx, cy, data_pointer(d))
+        below[i] = d[0]
+        reach = abs(cz - d[0])
+        if not math.isfinite(reach):
+            reach = 2.0 * reach_default
+        best = math.inf
+        f0 = f1 = f2 = math.inf
+        j0 = j1 = j2 = -1
+        for j in range(count):
+            if j < side * side:
+                x, y = cx + reach * unit[j // side], cy + reach * unit[j % side]
+            else:
+                x, y = hints[j - side * side, 0], hints[j - side * side, 1]
+            landscape(fn, x, y, data_pointer(d))
+            dx, dy, dz = x - cx, y - cy, d[0] - cz
+            far = dx * dx + dy * dy + dz * dz
+            if math.isnan(far):
+                far = math.inf
+            best = min(best, far)
+            if far < f0:
+                f0, f1, f2, j0, j1, j2 = far, f0, f1, j, j0, j1
+            elif far < f1:
+                f1, f2, j1, j2 = far, f1, j, j1
+            elif far < f2:
+                f2, j2 = far, j
+        sampled[i] = math.sqrt(best)
+        # (fewer finite samples than b: the first others, as a sort would give them)
+        for s in range(best_samples):
+            j = j0 if s == 0 else j1 if s == 1 else j2
+            if j < 0:
+                j = 0
+                while j == j0 or j == j1 or j == j2:
+                    j += 1
+                if s == 0:
+                    j0 = j
+                elif s == 1:
+                    j1 = j
+                else:
+                    j2 = j
+            if j < side * side:
+                x, y = cx + reach * unit[j // side], cy + reach * unit[j % side]
+            else:
+                x, y = hints[j - side * side, 0], hints[j - side * side, 1]
+            nearest[i, 2 * s], nearest[i, 2 * s + 1] = x, y
+        for s in range(k):
+            row = i * k + s
+            start_centers[row, 0], start_centers[row, 1], start_centers[row, 2] = cx, cy, cz
+            if s == 0:
+                x, y = cx, cy
+            elif s < 1 + guessed:
+                x, y = guess[0], guess[1]
+            elif s < 1 + guessed + best_samples:
+                q = s - 1 - guessed
+                x, y = nearest[i, 2 * q], nearest[i, 2 * q + 1]
+            else:
+                x, y = hints[s - 1 - guessed - best_samples, 0], hints[s - 1 - guessed - best_samples, 1]
+            start_feet[row, 0], start_feet[row, 1] = x, y
+    closest_points(fn, start_centers, start_feet, start_normals, start_distances, iterations, d)
+    for row in range(n * k):
+        for q in range(tips.shape[0]):
+            a1 = start_centers[row, 0] - tips[q, 0]
+            a2 = start_centers[row, 1] - tips[q, 1]
+            a3 = start_centers[row, 2] - tips[q, 2]
+            far = math.sqrt(a1 * a1 + a2 * a2 + a3 * a3)
+            if not abs(start_distances[row]) <= far and far > 0.0:
+                start_feet[row, 0], start_feet[row, 1] = tips[q, 0], tips[q, 1]
+                start_normals[row, 0], start_normals[row, 1], start_normals[row, 2] = a1 / far, a2 / far, a3 / far
+                start_distances[row] = far
+    for i in range(n):
+        chosen, size = i * k, math.inf
+        for row in range(i * k, i * k + k):
+            here = abs(start_distances[row])
+            if here < size:
+                chosen, size = row, here
+        feet[i, 0], feet[i, 1] = start_feet[chosen, 0], start_feet[chosen, 1]
+        for a in range(3):
+            normals[i, a] = start_normals[chosen, a]
+        distances[i] = start_distances[chosen]
