@@ -17,6 +17,7 @@ from rollball import simulate
 from rollball.flight import FreeState, energy
 from rollball.landscape import landscape_of
 from rollball.scene import Contact
+from rollball.simulation import Simulation
 from rollball.tip import FACE, Tip, turn_about
 
 G, RADIUS = 9.81, 0.1
@@ -189,6 +190,25 @@ def test_the_fixed_step_methods_converge_at_their_order_through_a_lopsided_tip(m
     for moves in (np.abs(lifts), np.array(ends)):
         orders = np.log2(moves[:-1] / moves[1:])
         assert np.all(orders > order - (0.55 if order == 5 else 0.1)) and np.all(orders < order + 0.3), (moves, orders)
+
+
+def test_the_transition_check_takes_a_liftoff_in_a_turn_again_from_before_the_turn():
+    """At rk4 dt 10⁻⁴ the oblique cone's lift-off comes 390 steps into the turn over the tip, whose
+    rows are the turn's (``Simulation.turns``), from which no kernel run can start: the retake starts
+    from the last row before the turn (the rows 64 steps before the lift-off are in it, and the
+    check skipped it) and takes the approach and the turn again."""
+    vx, t_tip, _, _, lifts = oblique()
+    run = Simulation(cone(vx, duration=0.8, landscape=OBLIQUE), method="rk4", dt=1e-4)
+    run.advance()
+    [(began, ended)] = run.turns
+    assert began == pytest.approx(t_tip, abs=1e-8) and ended == run.transitions[0].time
+    check = run.transition_check
+    assert check.skipped == 0 and [r.kind for r in check.retakes] == ["liftoff"], check
+    (retake,) = check.retakes
+    assert retake.start < began, retake
+    # (dt and dt/4 exact; dt/2's step ending 8·10⁻⁷ s past the tip still falls short of it, its last
+    # stage on the far face, and lifts off 10⁻⁵ s early: the check's verdict says so)
+    assert retake.times[0] == pytest.approx(lifts, abs=1e-9) and retake.times[2] == pytest.approx(lifts, abs=1e-9)
 
 
 def test_where_friction_cannot_hold_the_turn_the_run_stops_and_says_so():
