@@ -81,6 +81,8 @@ class ModeMachine:
         self.skip_first = False     # its first row repeats the last one (a slip or a grip)
         self.changes: list[Transition] = []       # every change the kernel runs stopped at
         self.transitions: list[Transition] = []   # the run's transitions (a slip turning about is none)
+        # (start, end) s of each turn over a ridge or a tip: its rows are no kernel run's (``_end_turn``)
+        self.turns: list[tuple[float, float]] = []
         self.flight: Flight | None = None
         self.spin: Spin | None = None   # a held ball's stay (spinning in place, or still), taken whole
         self.rest: Transition | None = None   # where the ball came to rest
@@ -387,7 +389,7 @@ class ModeMachine:
         turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                          friction=friction_of(scene.contact), t_end=run.t_end,
                          times=self.record_times(start.t, run.t_end))
-        if turn is None or not self._end_turn(turn, Reason.RIDGE_SLIP):
+        if turn is None or not self._end_turn(turn, start.t, Reason.RIDGE_SLIP):
             return turn is not None
         # on a face: rolling on from a little past the edge
         face = beyond if turn.how == END else ridge_line.near
@@ -399,15 +401,16 @@ class ModeMachine:
         run._start_kernel_run(state, on.t, slides=False, repeat=False)
         return True
 
-    def _end_turn(self, turn, slip: Reason) -> bool:
-        """A turn over a ridge or a tip (``ridge.Turn``) as the run's rows and how it ends: at the
-        run's end, stopped where the friction cannot hold it (``slip`` the reason), or off the edge
-        or tip where holding it would need a pull (a flight from there); True where it ends on a
-        face (the caller starts the rolling run there)."""
+    def _end_turn(self, turn, began: float, slip: Reason) -> bool:
+        """A turn over a ridge or a tip (``ridge.Turn``) begun at ``began`` as the run's rows, its
+        span among ``turns``, and how it ends: at the run's end, stopped where the friction cannot
+        hold it (``slip`` the reason), or off the edge or tip where holding it would need a pull (a
+        flight from there); True where it ends on a face (the caller starts the rolling run there)."""
         run = self.run
         lift = self._no_liftoff()
         self.mode = Mode.ROLLING
         self._append_turn(turn)
+        self.turns.append((began, turn.state.t))
         t, (cx, cy) = turn.state.t, turn.contact
         if turn.how == TIME:
             run.status = Status.OK
@@ -441,7 +444,7 @@ class ModeMachine:
         turn = turn_about(found, start, run._probe_normal(), radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                           friction=friction_of(scene.contact), t_end=run.t_end,
                           times=self.record_times(start.t, run.t_end))
-        if turn is None or not self._end_turn(turn, Reason.TIP_SLIP):
+        if turn is None or not self._end_turn(turn, start.t, Reason.TIP_SLIP):
             return turn is not None
         tau, face = onto_face(found, turn.state, gravity=scene.gravity)
         on = self._to_kink(turn.state, turn.state.t + tau, face, Mode.ROLLING)   # (along the face's plane)
@@ -612,6 +615,7 @@ class ModeMachine:
         for i in kept:
             self.mode = Mode(int(modes[i]))
             self.append(rows[i: i + 1].copy())
+        self.turns.extend(span for span in stretch.turns if span[0] <= t_end)
         for change in merged:
             if id(change) in changes:
                 self.changes.append(change)

@@ -391,6 +391,12 @@ class Simulation:
         """Every change of mode the kernel runs stopped at (a slip that turns about too)."""
         return self.machine.changes
 
+    @property
+    def turns(self) -> list[tuple[float, float]]:
+        """The (start, end) times (s) of the run's turns over a ridge or a tip so far: rows in them
+        are the turn's (integrated apart from the kernel, rolling about the edge or tip)."""
+        return self.machine.turns
+
     def advance(self, max_steps: int | None = None) -> np.ndarray:
         """Run up to ``max_steps`` more steps (a whole number >= 1; all remaining if None);
         return the new rows. Raises ``RuntimeError`` if another thread is advancing this run."""

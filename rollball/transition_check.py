@@ -105,7 +105,8 @@ def _invented(run, rows: np.ndarray, modes: np.ndarray) -> list[str]:
 def check_transitions(run) -> TransitionCheck | None:
     """The check of a finished run whose contact changed mode (None where it did not, or where the
     run is the 2011 model's). Each of the first MAX_CHECKED slips, grips, lift-offs and rests is taken
-    again from a recorded row before it that is not itself at such a change: the last at least
+    again from a recorded row before it that is not itself at such a change nor in a turn over a
+    ridge or a tip (``Simulation.turns``: a retake from there could not follow the turn): the last at least
     LEAD_STEPS of the run's steps before it, or its segment's first where that is later (its
     state by ``mode_machine.state_of``, in that row's mode), until the retake has it or is
     MARGIN_STEPS steps past it, and its time read in each retake: fixed steps with the run's dt,
@@ -123,6 +124,8 @@ def check_transitions(run) -> TransitionCheck | None:
     t = rows[:, T]
     located = {change.time for change in run.transitions if change.kind in RETAKEN}
     usable = ~np.isin(t, list(located))
+    for began, ended in run.turns:   # (a turn's rows, from the last state before it, are no kernel run's)
+        usable &= (t < began) | (t > ended)
     # (a run that ended ok before t_end came to rest: its retakes may look past that)
     end = run.t_end if run.status is Status.OK else float(t[-1])
     average = (end / run.steps) if run.adaptive and run.steps else run.dt

@@ -82,6 +82,50 @@ def test_a_faster_ball_leaves_the_edge_where_holding_it_would_need_a_pull():
     assert traj.liftoff.time == traj.transitions[0].time
 
 
+def lopsided(method: str, dt: float, landscape: str = "min(0.1*x, -0.5*x)", vx: float | None = None) -> Scene:
+    """Up a face of slope 0.1 to the edge, a face of slope 0.5 beyond it, arriving with
+    r θ̇₀² = 9 m/s² (vx None), so that the ball lifts off mid-turn; or ``landscape`` at ``vx``."""
+    if vx is None:
+        alpha, v1 = math.atan(0.1), math.sqrt(9.0 * RADIUS)
+        vx = math.sqrt(v1 * v1 + 2.0 * (5.0 / 7.0 * G * math.sin(alpha)) * 0.3 / math.cos(alpha)) * math.cos(alpha)
+    return Scene(landscape, gravity=G, ball=Ball(RADIUS, 1.0), start=Start(-0.3, 0.0, vx, 0.0, 0.0),
+                 integrator=Integrator(method, True, dt), duration=0.6, contact=Contact(None, 0.0, "fly"))
+
+
+@pytest.mark.parametrize("method", ["rk4", "lawson5"])
+def test_fixed_steps_reach_a_lopsided_edge_without_sampling_its_far_face(method):
+    """These are exact on the near face's plane, so the lift-off from the edge is the quadrature's
+    at every dt: the step that approaches the edge keeps its stages short of it too (rk4's lifted
+    off 9.0·10⁻⁵, 8.9·10⁻⁵, 3.9·10⁻⁵ s early at dt 10⁻³, 5·10⁻⁴, 2.5·10⁻⁴, its last stage on the far
+    face)."""
+    phi1, v1 = -math.atan(0.1), math.sqrt(9.0 * RADIUS)
+    t_edge = (math.sqrt(v1 * v1 + 2.0 * (5.0 / 7.0 * G * math.sin(-phi1)) * 0.3 / math.cos(phi1)) - v1) / (
+        5.0 / 7.0 * G * math.sin(-phi1))
+
+    def rate(th):
+        return math.sqrt((v1 / RADIUS) ** 2 + 10.0 / 7.0 * G / RADIUS * (math.cos(phi1) - math.cos(phi1 + th)))
+    theta = brentq(lambda th: RADIUS * rate(th) ** 2 - G * math.cos(phi1 + th), 0.0, math.atan(0.5) - phi1)
+    lifts = t_edge + quad(lambda th: 1.0 / rate(th), 0.0, theta, epsabs=1e-14, epsrel=1e-13)[0]
+    for dt in (1e-3, 5e-4, 2.5e-4):
+        traj = simulate(lopsided(method, dt))
+        assert [str(c.kind) for c in traj.transitions] == ["liftoff", "landing"], traj.message
+        assert traj.transitions[0].time == pytest.approx(lifts, abs=1e-9), dt
+
+
+def test_rk4_converges_at_its_order_through_a_lopsided_edge_whose_faces_bend():
+    """min(0.1 x, −0.5 x) − 0.1 x², rolled at 1.2 m/s: it turns, lifts off the edge mid-turn and
+    lands; the lift-off's time and the contact point at the end converge at order 4 (the differences
+    of successive halvings). Before, the state the turn starts from was carried to the edge along
+    the tangent plane from as far as 2·10⁻⁵ s before it (O(τ²) in the bending): 1.7 and 2.9."""
+    runs = [simulate(lopsided("rk4", dt, "min(0.1*x, -0.5*x) - 0.1*x^2", 1.2)) for dt in (4e-2, 2e-2, 1e-2, 5e-3)]
+    assert all([str(c.kind) for c in traj.transitions] == ["liftoff", "landing"] for traj in runs)
+    lifts = np.abs(np.diff([traj.transitions[0].time for traj in runs]))
+    ends = np.array([np.linalg.norm(a.contact[-1] - b.contact[-1]) for a, b in zip(runs, runs[1:])])
+    for moves in (lifts, ends):
+        orders = np.log2(moves[:-1] / moves[1:])
+        assert np.all(np.abs(orders - 4.0) < 0.3), (moves, orders)
+
+
 def test_where_friction_cannot_hold_the_turn_the_run_stops_and_says_so():
     """Turning over the edge needs |F_t| = (2/7) m g |sin(φ)| against F·N = m (g cos φ − r θ̇²): at
     its start (φ = φ₁) μ = 1 holds it as μ null does; μ just below what the start needs stops."""

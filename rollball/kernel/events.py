@@ -10,7 +10,7 @@ from .dense import interpolate, state_at
 from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
-    F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION,
+    F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION, IMPLICIT,
     D_SIDE, LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY,
     P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE,
     TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
@@ -714,8 +714,9 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                 stop, valid = b, a
             elif math.isnan(info[F_LIFTOFF]):  # a ridge: the real ball flies off it
                 info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + a * h, sa[0], sa[1], 1.0
+                edge = edge_line(K, sa, sb) if p[P_FLY] != 0.0 else NO_LINE
                 clean = approach(KINK, fn, d, p, W, t, h, a, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa,
-                                 sb, sm, info[F_LIFTOFF:F_LIFT_Y + 1], stepping)
+                                 sb, sm, info[F_LIFTOFF:F_LIFT_Y + 1], edge, stepping)
                 if p[P_FLY] != 0.0:  # the ball flies: the run stops at the last state before the ridge
                     stop, valid = clean, clean
                     kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, clean)
@@ -781,6 +782,7 @@ def kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, clean):
     info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y]
 
 
+NO_LINE = (0.0, 0.0, 0.0, 0.0, 0.0)   # (``past``: no line, nothing past it)
 TIP_HALVINGS = 60   # sub-steps that bisect the time the contact point reaches a tip (``tip_liftoff``)...
 TIP_RESTARTS = 30   # ...from the last clean one again, at most this many times
 
@@ -791,35 +793,24 @@ def tip_liftoff(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, 
     normal turns through a finite angle: the tip of a cone) stops the run as a lift-off
     (``kink_liftoff``) at the last state before it, marked info[F_LIFT_KINK] = LIFT_TIP: the ball
     then leaves the tip or would pivot about it (docs/design.md §1, "A tip"). That state is the
-    end of a sub-step whose length is bisected, from a first guess theta (a fraction of the
-    step), between sub-steps that end before the tip and ones that pass it (or jolt the centre,
-    or fail, or come within 4 BREAK_SPAN of it: in the model's motion the contact point may creep
-    into the tip while the centre turns about it), to round-off of the time; then again from the
+    end of the longest sub-step, from a first guess theta (a fraction of the step), that stays
+    before the tip (``clean_fraction``: its end and its stages short of the line through the tip
+    across the way to it, by 4 BREAK_SPAN, and its centre not jolted; in the model's motion the
+    contact point may creep into the tip while the centre turns about it); then again from the
     state reached (z, R, probe move on to it), whose shorter sub-steps resolve the last stretch
     better, until the contact point is within twice that of the tip or no sub-step gets nearer. The lift-off's place is
     the tip. Returns the fraction of the step where the run stops."""
-    r = p[0]
     n, mk = shape_of(z)
     done, m = 0.0, theta    # (the fraction of the step the state has moved on by)
     near = 4.0 * BREAK_SPAN * (1.0 + abs(tx) + abs(ty))   # (the tip is found to BREAK_SPAN)
     for _ in range(TIP_RESTARTS):
         span = (1.0 - done) * h
-        lo, hi = 0.0, 1.0
-        for _ in range(TIP_HALVINGS):
-            if not lo < m < hi:
-                m = 0.5 * (lo + hi)
-            crossed = search_step(stepping, fn, d, p, W, P, m * span, z, R, K, last, Y, zn, Rn, pn, ints) != 0
-            if not crossed:   # at or past the tip, or the centre jumped (a contact point racing round it)
-                crossed = ((zn[0] - tx) ** 2 + (zn[1] - ty) ** 2 <= near * near
-                           or (zn[0] - tx) * (z[0] - tx) + (zn[1] - ty) * (z[1] - ty) < 0.0
-                           or centre_jolted(r, m * span, z, probe, zn, pn))
-            if crossed:
-                hi = m
-            else:
-                lo = m
-            if not (hi - lo) * span > 4e-16 * (1.0 + abs(t)):
-                break
-            m = 0.5 * (lo + hi)
+        gap = math.sqrt((tx - z[0]) ** 2 + (ty - z[1]) ** 2)
+        if not gap > 0.0:
+            break
+        line = (tx, ty, (tx - z[0]) / gap, (ty - z[1]) / gap, near)
+        lo = clean_fraction(stepping, fn, d, p, W, P, t, span, m, z, R, K, last, probe, Y, zn, Rn, pn, ints, line,
+                            1.0)
         if not lo > 0.0:
             break
         search_step(stepping, fn, d, p, W, P, lo * span, z, R, K, last, Y, zn, Rn, pn, ints)   # (the clean one)
@@ -831,6 +822,75 @@ def tip_liftoff(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, 
     info[F_LIFTOFF], info[F_LIFT_X], info[F_LIFT_Y], info[F_LIFT_KINK] = t + done * h, tx, ty, LIFT_TIP
     kink_liftoff(p, z, R, probe, zn, Rn, pn, ints, info, 0.0)   # (the state reached: z, R, probe)
     return done
+
+
+@COLD
+def clean_fraction(stepping, fn, d, p, W, P, t, span, m, z, R, K, last, probe, Y, zn, Rn, pn, ints, line, tip):
+    """The longest sub-step from z, as a fraction of ``span`` (bisected from a first guess m to
+    round-off of the time, 0 where none is), that stays before a break of the surface: it is
+    finite and neither its end nor any of its stages (``stages_past``) lies past ``line`` (a tip
+    or a ridge's edge), nor (``tip``) does the ball's centre jump. A stage past it samples the far
+    face, whose rates differ from the near one's by a finite amount however short the step: a
+    step whose end still falls short of the break errs by O(h) (fixed steps would reach it at
+    order 1). (``tip`` a float, 1.0 or 0.0, as the flags of COLD functions are.)"""
+    r = p[0]
+    lo, hi = 0.0, 1.0
+    for _ in range(TIP_HALVINGS):
+        if not lo < m < hi:
+            m = 0.5 * (lo + hi)
+        crossed = search_step(stepping, fn, d, p, W, P, m * span, z, R, K, last, Y, zn, Rn, pn, ints) != 0
+        if not crossed:
+            crossed = (past(zn[0], zn[1], line) or stages_past(stepping, W, m * span, z, K, last, line)
+                       or (tip != 0.0 and centre_jolted(r, m * span, z, probe, zn, pn)))
+        if crossed:
+            hi = m
+        else:
+            lo = m
+        if not (hi - lo) * span > 4e-16 * (1.0 + abs(t)):
+            break
+        m = 0.5 * (lo + hi)
+    return lo
+
+
+@JIT
+def past(x, y, line):
+    """Whether the point (x, y) lies past ``line`` = (x₀, y₀, m_x, m_y, near), or within near
+    before it: (x − x₀, y − y₀)·m > −near, m its unit normal pointing across it (NO_LINE: no
+    point does)."""
+    return (x - line[0]) * line[2] + (y - line[1]) * line[3] > -line[4]
+
+
+@JIT
+def stages_past(stepping, W, h, z, K, last, line):
+    """Whether a stage of the step of size h just taken from z (its stage derivatives in K) put
+    its contact point past ``line`` (``past``)."""
+    stages = (last - 1) // 2 if stepping == IMPLICIT else last - 1   # (Gauss: W rows 1 .. s hold a)
+    for i in range(1, stages + 1):
+        x, y = z[0], z[1]
+        for j in range(last):
+            c = h * W[i, j]
+            if c != 0.0:
+                x += c * K[j, 0]
+                y += c * K[j, 1]
+        if past(x, y, line):
+            return True
+    return False
+
+
+@JIT
+def edge_line(K, sa, sb):
+    """The line of a ridge's edge in the plane, as ``past`` reads it, from the surface just before
+    it (sa) and just after it (sb): through sa's contact point, along the horizontal part of the
+    faces' normals' cross product, its normal pointing the way the contact point moves (K[0]),
+    near 4 BREAK_SPAN. NO_LINE where the normals give none."""
+    ax, ay = sa[4] * sb[5] - sa[5] * sb[4], sa[5] * sb[3] - sa[3] * sb[5]
+    size = math.sqrt(ax * ax + ay * ay)
+    if not size > 0.0:
+        return NO_LINE
+    mx, my = -ay / size, ax / size
+    if mx * K[0, 0] + my * K[0, 1] < 0.0:
+        mx, my = -mx, -my
+    return sa[0], sa[1], mx, my, 4.0 * BREAK_SPAN * (1.0 + abs(sa[0]) + abs(sa[1]))
 
 
 @JIT
@@ -967,7 +1027,7 @@ REFINE_STEPS = 6  # shorter steps tried to reach the last valid state before a s
 
 @COLD
 def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb, sm,
-             event, stepping):
+             event, line, stepping):
     """Reach the last valid state before a break inside a step from t to t + h, first guessed
     at theta (a fraction of the step) from the step's dense output.
 
@@ -976,8 +1036,13 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
     step of theta h from the step's start instead; while such a step still crosses (its ends'
     looks say so), the break is located again on its own, less spoiled, dense output and the
     step shortened to before it; a clean step's dense output, continued a little past its end,
-    times a kink or jump. event = (time, x, y) of the break is updated on the way. Returns the
-    theta of the clean step (zn, Rn, pn hold its end), or 0 when none was found.
+    times a kink or jump. event = (time, x, y) of the break is updated on the way. Where ``line``
+    is a ridge's edge (``edge_line``; NO_LINE: none), the clean step is the longest whose end and
+    stages stay before it (``clean_fraction``): its stages must not sample the far face, and its
+    end is within 4 BREAK_SPAN of the edge, from where the flight or the turn over the edge is
+    carried to the kink along the tangent plane (a clean step ending earlier, as the dense output
+    of the step across it may say, left that an O(τ²) error in the surface's bending). Returns
+    the theta of the clean step (zn, Rn, pn hold its end), or 0 when none was found.
     """
     n, mk = shape_of(z)
     r = p[0]
@@ -990,6 +1055,12 @@ def approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, z
             break
         fit_end, sharp, jumpy, bend, chord2 = looks(r, z, probe, zn, pn)
         if not (fit_end or sharp or jumpy):
+            if line[4] > 0.0:   # (a ridge's edge: the longest step before it, its stages too)
+                theta = clean_fraction(stepping, fn, d, p, W, P, t, h, theta, z, R, K, last, probe, Y, zn, Rn, pn,
+                                       ints, line, 0.0)
+                hs = theta * h
+                if not hs > 0.0 or search_step(stepping, fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints) != 0:
+                    break
             if kind != FIT_EVENT and theta < 1.0:
                 a, b, size = locate_break(kind, fn, d, r, z, hs, P, K, Ye, sa, sb, sm, 1.0, min(1.0 / theta, 2.0))
                 if size > 0.0:
@@ -1032,7 +1103,7 @@ def record_valid(fn, d, p, W, t, h, theta, z, R, K, last, P, probe, rows, ints, 
     kind = JUMP if reason == R_HEIGHT_JUMP else FIT_EVENT if reason == R_NO_FIT else KINK
     event = info[F_FAIL_T:F_FAIL_Y + 1]
     theta = approach(kind, fn, d, p, W, t, h, theta, z, R, K, last, P, probe, ints, Y, zn, Rn, pn, Ye, sa, sb,
-                     sm, event, stepping)
+                     sm, event, NO_LINE, stepping)
     if theta > 0.0:
         record(rows, ints[I_ROWS], t + theta * h, zn, Rn, pn, p)
         ints[I_ROWS] += 1
