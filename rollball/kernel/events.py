@@ -578,7 +578,8 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
     (``dipping``: dips, whose dense output is searched, ``dip_bracket``; bit 4: a spin's zero,
     ``spin_stops``): locate the earliest
     change on the step's dense output to ROOT_TOL of the step, and where ``refine`` (1.0: fixed
-    steps) to the method's own accuracy (``refine_transition``); stop the run there (status
+    steps) or the run goes on from it (T_SIDE) to the method's own accuracy (``refine_transition``:
+    K then holds the stages of the method's step from z to there); stop the run there (status
     TRANSITION, its kind, time and contact point in ints and info) and return the fraction of
     the step where it happens (``record_valid`` then records the state there, the one zn, Rn,
     pn hold where ints[I_HELD] is set); -1 when the dense output shows none after all.
@@ -653,7 +654,7 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
     if kind == 0:
         return -1.0
     held = False
-    if refine != 0.0 and best > 0.0:
+    if (refine != 0.0 or kind == T_SIDE) and best > 0.0:   # (the pairs too where the run goes on from it)
         # (a grip's reference slip u0 is s[0:3], set above)
         theta = refine_transition(event, stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints, s, Ye,
                                   Re, pe, best, b_end, g_end)

@@ -313,6 +313,9 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
+        # the rows before a side's turn placed by the method's own step to it: that step's dense output
+        # (``locate_transition``; the whole step's crosses the turn, a kink of a couple's law)
+        hd = valid * hs if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE and ints[I_HELD] == 1 else hs
         theta = 0.0  # Re: the orientation there (the rows' orientations follow on from each other)
         for a in range(3):
             for c in range(3):
@@ -327,9 +330,9 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
                 record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
                 ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
             else:
-                dense_stages(fn, d, p, W, hs, z, K, last, Ye, pe, ints)
-                state_at(fn, d, p, z, Re, hs, P, K, theta, (t_row - t) / hs, Ye, Re, pe)
-                theta = (t_row - t) / hs
+                dense_stages(fn, d, p, W, hd, z, K, last, Ye, pe, ints)
+                state_at(fn, d, p, z, Re, hd, P, K, theta, (t_row - t) / hd, Ye, Re, pe)
+                theta = (t_row - t) / hd
                 record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
             ints[I_ROWS] += 1
         if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there (its rows are recorded)
