@@ -631,7 +631,7 @@ class Flight:
         cap = math.inf        # a step not certified: the next one at most this long
         last = before = math.inf   # the last two certified steps (the next is at most GROW_BY times the last)
         grazing = 0           # certified looks within the floor in a row
-        sure = None   # (1): no root before t + sure, the look at t's path time (computed where needed)
+        sure = proposal = None   # (1): no root before t + sure, the look at t's path time; its step proposed
         here = velocity = None   # the centre and its velocity at t (from the batch that looked there)
         for _ in range(MAX_LOOKS):
             if t >= t_end:
@@ -647,7 +647,9 @@ class Flight:
                 sure = self.path_time(t, h - CLEAR_MARGIN * r, velocity)
             if t + sure >= t_end:
                 return None
-            step = min(self._proposal(h, foot, speed, rate), GROW_BY * last)
+            if proposal is None:   # (the same for each try from the same look)
+                proposal = self._proposal(h, foot, speed, rate)
+            step = min(proposal, GROW_BY * last)
             step = min(step, r / speed if speed > 0 else step, cap)
             step = max(step, sure)
             # while the gap grows, the steps ahead are looked at together, as the last ones grew
@@ -674,7 +676,7 @@ class Flight:
                     break
                 grazing = grazing + 1 if h_s <= floor else 0
                 t, h, foot, cap, last, before = float(s), float(h_s), foot_s, math.inf, s - t, last
-                here, velocity, sure = there, moving, None
+                here, velocity, sure, proposal = there, moving, None, None
                 if h <= floor or t >= t_end:
                     break
         raise RuntimeError("the landing search took too many steps")
