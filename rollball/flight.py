@@ -129,7 +129,9 @@ class Surface:
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
         from the same compiled code, its arguments packed once per number of points)."""
-        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if x.shape != y.shape:   # (broadcast_arrays costs more than a few points' evaluation)
+            x, y = np.broadcast_arrays(x, y)
         n = x.size
         packed = self._calls.get(n)
         if packed is None:
