@@ -133,12 +133,14 @@ class DragFlight(Flight):
         delta = s - t
         return self.pull(speed) * delta * delta / 8.0
 
-    def path_time(self, t: float, length: float) -> float:
+    def path_time(self, t: float, length: float, velocity=None) -> float:
         """A time Δ after t over which the centre's path is at most ``length`` long: its speed is at
-        most min(|ċ(t)| + g τ, U), U = max(|ċ(t)|, v_t), whose integral is ``length`` at Δ."""
+        most min(|ċ(t)| + g τ, U), U = max(|ċ(t)|, v_t), whose integral is ``length`` at Δ
+        (``velocity``: the centre's at t, where the caller has it)."""
         if not length > 0.0:
             return 0.0
-        speed, g = float(np.linalg.norm(self.centers(np.array([t]))[1][0])), self.gravity
+        velocity = self.centers(np.array([t]))[1][0] if velocity is None else velocity
+        speed, g = float(np.linalg.norm(velocity)), self.gravity
         top = max(speed, self.terminal)
         if not top > 0.0:
             return math.inf

@@ -129,7 +129,9 @@ class Surface:
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
         from the same compiled code, its arguments packed once per number of points)."""
-        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if x.shape != y.shape:   # (broadcast_arrays costs more than a few points' evaluation)
+            x, y = np.broadcast_arrays(x, y)
         n = x.size
         packed = self._calls.get(n)
         if packed is None:
@@ -353,10 +355,10 @@ class Surface:
     @staticmethod
     def _plausible(c, below, distance, sampled):
         """Whether each foot's signed distance can be the nearest surface point's: found, no
-        farther than a sampled surface point, and on the centre's side of the surface."""
-        with np.errstate(invalid="ignore"):
-            near = np.abs(distance) <= sampled * (1.0 + SAMPLE_SLACK)
-            side = ~(((distance > 0.0) & (c[:, 2] < below)) | ((distance < 0.0) & (c[:, 2] > below)))
+        farther than a sampled surface point, and on the centre's side of the surface (a comparison
+        with NaN is False, without a warning)."""
+        near = np.abs(distance) <= sampled * (1.0 + SAMPLE_SLACK)
+        side = ~(((distance > 0.0) & (c[:, 2] < below)) | ((distance < 0.0) & (c[:, 2] > below)))
         return np.isfinite(distance) & near & side
 
     def _zoom(self, c, points, spacing):
@@ -436,10 +438,11 @@ class Flight:
         return FreeState(t, centers[0], velocities[0], s.omega.copy(), rotation @ s.R)
 
     def centers(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Centre positions and velocities (n, 3) at ``times``."""
-        tau = (np.asarray(times, dtype=float) - self.start.t)[:, None]
-        return (self.start.center + self.start.velocity * tau + 0.5 * self.g * tau * tau,
-                self.start.velocity + self.g * tau)
+        """Centre positions and velocities (n, 3) at ``times`` (computed as (3, n): numpy's loops
+        over a last axis of 3 cost about a hundred times as much)."""
+        tau = np.asarray(times, dtype=float) - self.start.t
+        center, velocity, g = self.start.center[:, None], self.start.velocity[:, None], self.g[:, None]
+        return (center + velocity * tau + 0.5 * g * tau * tau).T, (velocity + g * tau).T
 
     def air_dissipated(self, times: np.ndarray) -> np.ndarray:
         """The energy the air took from the flight's start to each of ``times`` (J): none in vacuum
@@ -462,19 +465,21 @@ class Flight:
         foot = self.surface.foot(center, guess)
         return foot.distance - self.radius, foot
 
-    def gaps(self, times: np.ndarray, guess=None) -> tuple[np.ndarray, list[Foot]]:
-        """``gap`` at each of the times, all at once."""
-        feet = self.surface.feet_of(self.centers(np.asarray(times, dtype=float))[0], guess)
+    def gaps(self, times: np.ndarray, guess=None, motion=None) -> tuple[np.ndarray, list[Foot]]:
+        """``gap`` at each of the times, all at once (``motion``: their ``centers``, where the caller has them)."""
+        motion = self.centers(np.asarray(times, dtype=float)) if motion is None else motion
+        feet = self.surface.feet_of(motion[0], guess)
         return np.array([foot.distance for foot in feet]) - self.radius, feet
 
-    def path_time(self, t: float, length: float) -> float:
+    def path_time(self, t: float, length: float, velocity=None) -> float:
         """The time Δ after t over which the centre's path is ``length`` long, ∫|ċ| = length (its
         speed along the parabola is exact: |ċ|² = p² + w², w = ċ·ĝ + g τ along gravity, p the
         rest, so the path's length is [w √(p² + w²) + p² asinh(w/p)] / 2g between the ends'
-        w); the computed length at the Δ returned is at most ``length``."""
+        w); the computed length at the Δ returned is at most ``length``. ``velocity``: the
+        centre's at t, where the caller has it."""
         if not length > 0.0:
             return 0.0
-        velocity = self.centers(np.array([t]))[1][0]
+        velocity = self.centers(np.array([t]))[1][0] if velocity is None else velocity
         speed, g = float(np.linalg.norm(velocity)), self.gravity
         if g == 0.0:
             return length / speed if speed > 0 else math.inf
@@ -505,20 +510,19 @@ class Flight:
                 best = max(best, delta)
         return best
 
-    def clear(self, t: float, s: float, h_t: float, h_s: float) -> bool:
+    def clear(self, t: float, s: float, h_t: float, h_s: float, a: np.ndarray, b: np.ndarray) -> bool:
         """Whether the ball touches nothing between t and s > t, from the gaps h_t, h_s (> 0)
-        at the ends: the open balls of radius r + h about the centres c(t), c(s) hold no surface
-        point (h is the distance to the nearest), and so no ball of radius r + e about a point of
-        their chord is outside both while L²/4 + (r + e)² < (r + h)² (L the chord, h the smaller
-        gap; a point of that ball u along the chord and ρ across it from where x of L is behind:
-        min(|·−c(t)|², |·−c(s)|²) ≤ x(L − x) + (r + e)²). The centre's path is within
-        e = ``sag`` of the chord at every time, so the ball of radius r is inside that
-        ball. CLEAR_MARGIN × r of the gap is kept for round-off."""
+        at the ends, where the centre is at a = c(t) and b = c(s): the open balls of radius r + h
+        about them hold no surface point (h is the distance to the nearest), and so no ball of
+        radius r + e about a point of their chord is outside both while L²/4 + (r + e)² < (r + h)²
+        (L the chord, h the smaller gap; a point of that ball u along the chord and ρ across it
+        from where x of L is behind: min(|·−c(t)|², |·−c(s)|²) ≤ x(L − x) + (r + e)²). The centre's
+        path is within e = ``sag`` of the chord at every time, so the ball of radius r is inside
+        that ball. CLEAR_MARGIN × r of the gap is kept for round-off."""
         h = min(h_t, h_s) - CLEAR_MARGIN * self.radius
         e = self.sag(t, s)
         if not h > e:
             return False
-        a, b = self.centers(np.array([t, s]))[0]
         chord = float(np.linalg.norm(b - a))
         return 0.25 * chord * chord < (h - e) * (2.0 * self.radius + h + e)   # (r + h)² − (r + e)²
 
@@ -629,44 +633,54 @@ class Flight:
         cap = math.inf        # a step not certified: the next one at most this long
         last = before = math.inf   # the last two certified steps (the next is at most GROW_BY times the last)
         grazing = 0           # certified looks within the floor in a row
-        known = None, math.nan   # the last look's (t, h) and its time (1)
+        sure = proposal = None   # (1): no root before t + sure, the look at t's path time; its step proposed
+        here = velocity = None   # the centre and its velocity at t (from the batch that looked there)
         for _ in range(MAX_LOOKS):
             if t >= t_end:
                 return None
             guess = np.array([foot.x, foot.y])
-            velocity = self.centers(np.array([t]))[1][0]
+            if here is None:
+                here, velocity = (v[0] for v in self.centers(np.array([t])))
             speed = float(np.linalg.norm(velocity))
             rate = float(np.dot(velocity, foot.normal))
             if h <= tol or (h <= floor and (rate >= 0.0 or grazing >= GRAZE_LOOKS)):
                 return self._touch(t, h, foot, rate, t_end)
-            if known[0] != (t, h):   # (1): no root before t + sure
-                known = (t, h), self.path_time(t, h - CLEAR_MARGIN * r)
-            sure = known[1]
+            if sure is None:
+                sure = self.path_time(t, h - CLEAR_MARGIN * r, velocity)
             if t + sure >= t_end:
                 return None
-            step = min(self._proposal(h, foot, speed, rate), GROW_BY * last)
+            if proposal is None:   # (the same for each try from the same look)
+                proposal = self._proposal(h, foot, speed, rate)
+            step = min(proposal, GROW_BY * last)
             step = min(step, r / speed if speed > 0 else step, cap)
             step = max(step, sure)
             # while the gap grows, the steps ahead are looked at together, as the last ones grew
             growth = min(max(last / before, 1.0), GROW_BY) if rate >= 0.0 and last < math.inf else 1.0
             count = BATCH if growth > 1.0 and cap == math.inf else 1
             times = t + np.cumsum(step * growth ** np.arange(count))
-            times = np.append(times[times < t_end], t_end)[:count]
-            gaps, feet = self.gaps(times, guess)
-            for s, h_s, foot_s in zip(times, gaps, feet):
+            if not times[-1] < t_end:   # (increasing: those before t_end, then t_end)
+                times = np.append(times[times < t_end], t_end)
+            motion = self.centers(times)
+            gaps, feet = self.gaps(times, guess, motion)
+            for s, h_s, foot_s, there, moving in zip(times, gaps, feet, *motion):
                 if math.isnan(h_s):
                     raise self._off(t, foot_s)
-                if h_s < -tol and s <= t + sure:   # (only where the foot at t was not the nearest point)
-                    return self._locate(t, float(s), guess)
-                if not (h_s > -tol and (s <= t + sure or (h_s > 0.0 and self.clear(t, s, h, h_s)))):
+                # (the chord test first: a look after the first of a batch needs its path time only where it fails)
+                certified = h_s > -tol and h_s > 0.0 and self.clear(t, s, h, h_s, here, there)
+                if not certified:
+                    if sure is None:
+                        sure = self.path_time(t, h - CLEAR_MARGIN * r, velocity)
+                    if h_s < -tol and s <= t + sure:   # (only where the foot at t was not the nearest point)
+                        return self._locate(t, float(s), guess)
+                    certified = h_s > -tol and s <= t + sure
+                if not certified:
                     cap = self._retry(t, s, h, h_s, speed)   # not certified: try again shorter
                     break
                 grazing = grazing + 1 if h_s <= floor else 0
                 t, h, foot, cap, last, before = float(s), float(h_s), foot_s, math.inf, s - t, last
+                here, velocity, sure, proposal = there, moving, None, None
                 if h <= floor or t >= t_end:
                     break
-                known = (t, h), self.path_time(t, h - CLEAR_MARGIN * r)
-                sure = known[1]
         raise RuntimeError("the landing search took too many steps")
 
     def _retry(self, t: float, s: float, h: float, h_s: float, speed: float) -> float:
@@ -811,11 +825,19 @@ def energy(velocity, omega, height, mass, radius, gravity):
     return 0.5 * mass * v2 + 0.2 * mass * radius * radius * w2 + mass * gravity * np.asarray(height)
 
 
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b over the last axis (of 3), the products and differences ``np.cross`` takes, in the
+    same order (the same numbers), without its setup, which costs more than a flight's few vectors."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def tangential_slip(velocity, omega, normal, radius):
     """|u − (u·N) N| for the velocity u = ċ + ω × (−r N) of the ball's point towards the surface."""
     velocity, omega, normal = np.broadcast_arrays(*(np.atleast_2d(np.asarray(a, float)) for a in (velocity, omega,
                                                                                                   normal)))
-    u = velocity - radius * np.cross(omega, normal)
+    u = velocity - radius * cross(omega, normal)
     u_t = u - np.einsum("ij,ij->i", u, normal)[:, None] * normal
     return np.linalg.norm(u_t, axis=1)
 
@@ -847,7 +869,7 @@ def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: 
     there)."""
     velocity, omega, normal = (np.asarray(a, dtype=float) for a in (velocity, omega, normal))
     m, r, e = mass, radius, restitution
-    u = velocity - r * np.cross(omega, normal)
+    u = velocity - r * cross(omega, normal)
     u_n = float(np.dot(u, normal))
     approach = max(-u_n, 0.0)
     j_n = (1.0 + e) * m * approach
@@ -859,7 +881,7 @@ def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: 
         j_t = -friction * j_n * u_t / slip if slip > 0 else np.zeros(3)
     impulse = j_n * normal + j_t
     after_v = velocity + impulse / m
-    after_w = omega + (5.0 / (2.0 * m * r * r)) * np.cross(-r * normal, impulse)
+    after_w = omega + (5.0 / (2.0 * m * r * r)) * cross(-r * normal, impulse)
     lost = float(energy(velocity, omega, 0.0, m, r, 0.0) - energy(after_v, after_w, 0.0, m, r, 0.0))
     return Impact(after_v, after_w, approach, e * approach, bool(sticking), lost, impulse)
 
