@@ -44,6 +44,7 @@ def test_the_command_line_module_loads_nothing_numerical():
 
 @pytest.mark.parametrize("args, code", [
     (["--help"], 0),
+    (["examples"], 0),
     (["simulate", "--help"], 0),
     (["sweep", "--help"], 0),
     (["fit", "--help"], 0),
