@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from rollball import kernel, machine_code
-from rollball.kernel import interface, unpacking
+from rollball.kernel import entries, interface, unpacking
 from rollball.landscape import landscape_for
 
 
@@ -65,7 +65,7 @@ def test_arguments_are_given_by_their_declared_names_only():
 
 def test_each_entry_point_unpacks_what_the_interface_declares_for_its_function():
     for name, arguments in interface.ENTRIES.items():
-        function = kernel.entries.FUNCTIONS[name]
+        function = entries.FUNCTIONS[name]
         code = function.py_func.__code__
         assert [parameter for parameter, _ in arguments] == list(code.co_varnames[:code.co_argcount]), name
         source = unpacking.entry_source(name)
