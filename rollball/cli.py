@@ -18,7 +18,7 @@ from pathlib import Path
 # Only what the parser needs, none of it numerical: the help and a refused argument answer at
 # once; each command imports the simulation, sympy, numba or scipy it runs on (a test holds this).
 from . import __version__
-from .examples import EXAMPLES_DIR, example_scenes, scene_path, track_path
+from .examples import EXAMPLES_DIR, example_descriptions, scene_path, track_path
 from .files import replace_together, write_target
 from .fit_options import LENGTH_UNITS, LOSSES, NOT_FITTED, POINTS, TIME_UNITS
 from .kinds import KINDS, MethodKind, method_name
@@ -609,10 +609,10 @@ def _compiles(scene) -> str | None:
 
 
 def _examples() -> int:
-    examples = example_scenes()
-    width = max(len(path.stem) for path, _ in examples)
-    for path, scene in examples:
-        print(f"{path.stem:<{width}}  {shown(scene.description)}")
+    examples = example_descriptions()
+    width = max(len(name) for name, _ in examples)
+    for name, description in examples:
+        print(f"{name:<{width}}  {shown(description)}")
     print(f"\nRun one by name (rollball simulate hills); the files are in {EXAMPLES_DIR}")
     return EXIT_OK
 

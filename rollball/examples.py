@@ -4,6 +4,7 @@ installed wheel). A scene can be named by its file or, for an example, by its na
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,6 +27,14 @@ def example_scenes() -> list[tuple[Path, Scene]]:
     from .scene import Scene
 
     return [(EXAMPLES_DIR / f"{name}.json", Scene.load(EXAMPLES_DIR / f"{name}.json"))
+            for name in example_names()]
+
+
+def example_descriptions() -> list[tuple[str, str]]:
+    """Every example's name and description, sorted by name: read from the files as they are,
+    without loading the scenes (which checks their formulas with sympy; the tests load every
+    example)."""
+    return [(name, json.loads((EXAMPLES_DIR / f"{name}.json").read_text(encoding="utf-8-sig")).get("description", ""))
             for name in example_names()]
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import math
 import re
+import sys
 import threading
 import warnings
 import weakref
@@ -289,11 +290,12 @@ def _compile(source: str) -> LandscapeCode:
 def _compile_or_refuse(source: str) -> LandscapeCode:
     """``_compile``, with a construct numba refuses (where it lowers what the translation does
     not know) as one line, not its coloured traceback."""
-    from numba.core.errors import NumbaError
-
     try:
         return _compile(source)
-    except NumbaError as e:
+    except Exception as e:
+        errors = sys.modules.get("numba.core.errors")   # (numba is imported only when it compiles)
+        if errors is None or not isinstance(e, errors.NumbaError):
+            raise
         text = re.sub(r"\x1b\[[0-9;]*m", "", str(e))  # numba colours its messages
         first = next((line.strip() for line in text.splitlines() if line.strip()), "")
         raise FormulaError(f"cannot compile the formula ({first})") from None

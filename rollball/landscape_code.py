@@ -20,26 +20,17 @@ import ctypes
 import hashlib
 import json
 import math
+import sys
 import types
 
 from . import cache
+from .llvm_runtime import initialise, llvm_lock, numba_version, target_machine
 
 SYMBOL = "rollball_landscape"
 _MACHINE = None     # the target machine that emits landscapes' object code (under llvm_lock)
 LIMIT = 64 << 20    # bytes a landscape's cached machine code may have (a few kB to a few MB)
 _CTYPE = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double),
                           ctypes.POINTER(ctypes.c_double))   # kernel/interface.py: LANDSCAPE_ARGUMENTS
-
-
-def llvm_lock():
-    """The one lock every use of LLVM in this process takes: numba's compiler lock, which its
-    own compiles and the kernel's machine code (machine_code.py) take too. LLVM's global state
-    (the global context, the symbol table, engines being made or disposed of) is not safe to use
-    from two threads at once: an app that checks a formula in one thread while a run makes the
-    kernel's machine code, or frees a landscape, in another would otherwise abort."""
-    from numba.core.compiler_lock import global_compiler_lock
-
-    return global_compiler_lock
 
 
 class LandscapeCode:
@@ -55,13 +46,9 @@ class LandscapeCode:
 
     def __del__(self):
         engine, self._engine = self._engine, None
-        if engine is None:
+        if engine is None or sys.is_finalizing():   # (the interpreter shutting down frees it all)
             return
-        try:
-            lock = llvm_lock()
-        except ImportError:   # the interpreter is shutting down: the process frees it all
-            return
-        with lock:
+        with llvm_lock():
             engine.close()
 
 
@@ -71,12 +58,10 @@ def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
     ``unwritten`` says why that failed, if it did)."""
     import llvmlite.binding as llvm
 
-    from .machine_code import _target_machine
-
     global _MACHINE
     with llvm_lock():
-        _initialise()
-        machine = _MACHINE = _MACHINE or _target_machine()   # made once (0.7 ms); an engine owns its own
+        initialise()
+        machine = _MACHINE = _MACHINE or target_machine()   # made once (0.7 ms); an engine owns its own
         key = _key(text, machine)
         path = cache.cache_dir() / f"landscape-{key}.o"
         entry = _unpack(cache.read(path, LIMIT, "machine code of a landscape")) if cached else None
@@ -92,7 +77,7 @@ def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
         calls, code = entry
         if not _resolvable(calls):
             raise RuntimeError(f"the landscape's code calls symbols not found here: {', '.join(calls)}")
-        engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), _target_machine())
+        engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), target_machine())
         engine.add_object_file(llvm.ObjectFileRef.from_data(code))
         engine.finalize_object()
         address = engine.get_function_address(SYMBOL)
@@ -101,21 +86,12 @@ def load(text: str, name: str, cached: bool = True) -> LandscapeCode:
     return LandscapeCode(engine, address, unwritten)
 
 
-def _initialise() -> None:
-    """LLVM set up as numba sets it up, and numba's helper symbols known to every engine."""
-    from numba.core.registry import cpu_target
-    from numba.core.runtime import rtsys
-
-    rtsys.initialize(cpu_target.target_context)
-
-
 def _key(text: str, machine) -> str:
     """What the machine code depends on: the source, numba and LLVM, the processor."""
     import llvmlite
     import llvmlite.binding as llvm
-    import numba
 
-    facts = [text, numba.__version__, llvmlite.__version__, ".".join(map(str, llvm.llvm_version_info)),
+    facts = [text, numba_version(), llvmlite.__version__, ".".join(map(str, llvm.llvm_version_info)),
              str(machine.triple), llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()]
     return hashlib.sha256("\0".join(facts).encode()).hexdigest()[:40]
 

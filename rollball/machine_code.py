@@ -3,7 +3,7 @@
 numba needs about a minute of processor time to compile the kernel (typing it and lowering it
 to LLVM's intermediate code takes most of it). RollBall therefore ships that intermediate
 code: ``kernel.bc``, the LLVM bitcode numba made of the kernel's entry points
-(``kernel.ENTRIES``) on x86-64 Linux, optimised, with no particular processor's instructions
+(``kernel.ENTRY_POINTS``) on x86-64 Linux, optimised, with no particular processor's instructions
 in it. ``kernel.json`` says what it was made from: a digest of the kernel package's code
 (comments and docstrings aside), the numba and llvmlite that made it, the target, the
 interface (each entry's arguments) and the SHA-256 of kernel.bc itself. Where all of that
@@ -32,10 +32,10 @@ from importlib import resources
 
 import numpy as np
 
-from . import kernel
 from . import cache
 from .cache import cache_dir
 from .kernel import interface
+from .llvm_runtime import initialise, llvm_lock, numba_version, target_machine
 from .text import shown
 
 SHIPPED, STAMP = "kernel.bc", "kernel.json"
@@ -118,11 +118,10 @@ def stamp(shipped: dict | None = None) -> dict:
     those it was made from.)"""
     import llvmlite
     import llvmlite.binding as llvm
-    import numba
 
     same = shipped is not None and shipped.get("sources") == raw_digest() and isinstance(shipped.get("kernel"), str)
     return {"format": FORMAT, "version": FORMAT_VERSION, "kernel": shipped["kernel"] if same else sources_digest(),
-            "interface": interface.description(), "numba": numba.__version__, "llvmlite": llvmlite.__version__,
+            "interface": interface.description(), "numba": numba_version(), "llvmlite": llvmlite.__version__,
             "triple": llvm.get_process_triple()}
 
 
@@ -211,12 +210,18 @@ def _addresses() -> dict[str, int]:
 def compile_with_numba() -> tuple[bytes, dict[str, str], list[str]]:
     """The entry points compiled by numba in this process (no disk cache: every kernel function
     is compiled here, so its LLVM code is at hand): their LLVM modules linked into one, as
-    bitcode; each entry's symbol; the symbols the code calls (``calls``)."""
+    bitcode; each entry's symbol; the symbols the code calls (``calls``). (The one place the
+    kernel's compiled modules, and numba, are imported for the machine code.)"""
     import llvmlite.binding as llvm
     from numba import cfunc
 
+    from . import kernel
+
+    for listener in list(listeners):   # (said where the code cannot be kept too: numba's minute)
+        listener()
+
     linked, symbols = None, {}
-    for name, entry in kernel.ENTRIES.items():
+    for name, entry in kernel.ENTRY_POINTS.items():
         compiled = cfunc(kernel.ENTRY_SIGNATURE, cache=False, error_model="numpy")(entry)
         symbols[name] = compiled.native_name
         module = llvm.parse_assembly(compiled.inspect_llvm())
@@ -237,8 +242,7 @@ def calls(module) -> list[str]:
 def symbol_prefix(name: str) -> str:
     """How the symbol of the entry point ``name`` begins: numba's mangling of its function's
     module and name (the lengths make each entry's prefix unlike every other's)."""
-    entry = kernel.ENTRIES[name]
-    parts = entry.__module__.split(".") + [entry.__qualname__]
+    parts = interface.ENTRY_MODULE.split(".") + [interface.entry_name(name)]
     return "cfunc._ZN" + "".join(f"{len(part)}{part}" for part in parts)
 
 
@@ -263,7 +267,7 @@ def _shipped(folder=None) -> tuple[bytes, dict]:
     if facts.get("bitcode") != hashlib.sha256(bitcode).hexdigest():
         raise _Unusable(f"{SHIPPED} is not the code {STAMP} describes (its SHA-256 differs)")
     symbols, needed = facts.get("entries"), facts.get("calls")
-    if not (isinstance(symbols, dict) and set(symbols) == set(kernel.ENTRIES)
+    if not (isinstance(symbols, dict) and set(symbols) == set(interface.ENTRIES)
             and all(isinstance(symbols[name], str) and symbols[name].startswith(symbol_prefix(name))
                     and symbols[name][len(symbol_prefix(name)):][:1] in ("B", "E") for name in symbols)):
         raise _Unusable(f"the entry points in {STAMP} are not this kernel's")
@@ -272,29 +276,16 @@ def _shipped(folder=None) -> tuple[bytes, dict]:
     return bitcode, facts
 
 
-def _target_machine():
-    """LLVM's target for this processor, set up as numba sets up its own."""
-    import llvmlite.binding as llvm
-
-    target = llvm.Target.from_default_triple()
-    return target.create_target_machine(
-        cpu=llvm.get_host_cpu_name(), features=llvm.get_host_cpu_features().flatten(), opt=3,
-        reloc="static" if target.name.startswith("x86") else "default", codemodel="jitdefault", jit=True)
-
-
 def _machine_code(what: str, make) -> dict[str, int]:
     """The entry points' addresses in machine code made from ``what`` for this processor: kept
     by an earlier process, else made now from the bitcode ``make()`` returns (with its entries'
-    symbols and the symbols it calls) and kept. Under numba's compiler lock: LLVM's state is
-    shared with numba's."""
+    symbols and the symbols it calls) and kept. Under ``llvm_lock``: LLVM's state is shared with
+    the landscapes' code and numba's."""
     import llvmlite.binding as llvm
-    from numba.core.compiler_lock import global_compiler_lock
-    from numba.core.registry import cpu_target
-    from numba.core.runtime import rtsys
 
-    with global_compiler_lock:
-        rtsys.initialize(cpu_target.target_context)   # LLVM initialised, numba's symbols known
-        machine = _target_machine()
+    with llvm_lock():
+        initialise()   # LLVM set up, numba's helpers known (without numba)
+        machine = target_machine()
         key = hashlib.sha256("\0".join([what, str(machine.triple), llvm.get_host_cpu_name(),
                                         llvm.get_host_cpu_features().flatten(),
                                         ".".join(map(str, llvm.llvm_version_info))]).encode()).hexdigest()[:32]
@@ -326,7 +317,7 @@ def _machine_code(what: str, make) -> dict[str, int]:
         engine.finalize_object()
         _keep.append(engine)
         addresses = {name: engine.get_function_address(symbol) for name, symbol in symbols.items()}
-    if set(addresses) != set(kernel.ENTRIES) or not all(addresses.values()):
+    if set(addresses) != set(interface.ENTRIES) or not all(addresses.values()):
         raise _Unusable("an entry point is missing from the machine code")
     return addresses
 

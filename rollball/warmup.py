@@ -15,9 +15,7 @@ import dataclasses
 import os
 import sys
 import time
-from contextlib import contextmanager
-
-from numba.core import event
+from contextlib import ExitStack, contextmanager
 
 from . import machine_code
 from .examples import DEFAULT_EXAMPLE
@@ -54,22 +52,32 @@ def warm_up(progress=None, first=(), ready=None) -> None:
         progress(total, total, "done")
 
 
-class _FirstCompile(event.Listener):
+class _FirstCompile:
     def __init__(self, say):
         self.say, self.said = say, False
 
-    def __call__(self):   # machine_code makes the kernel's machine code
+    def __call__(self):   # machine_code makes the kernel's machine code, or numba compiles it
         if not self.said:
             self.said = True
             self.say()
 
-    def on_start(self, ev):
-        module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
-        if module.split(".")[0] == "rollball":  # not a landscape's callback
-            self()
 
-    def on_end(self, ev):
-        pass
+
+def _numba_listener(first: _FirstCompile):
+    """A listener to numba's compile events that calls ``first`` when numba compiles a function
+    of RollBall's (not a landscape's callback)."""
+    from numba.core import event
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
+            if module.split(".")[0] == "rollball":
+                first()
+
+        def on_end(self, ev):
+            pass
+
+    return event.install_listener("numba:compile", Listener())
 
 
 @contextmanager
@@ -80,7 +88,9 @@ def compile_notice(say):
     first = _FirstCompile(say)
     machine_code.listeners.append(first)
     try:
-        with event.install_listener("numba:compile", first):
+        with ExitStack() as stack:
+            if "numba" in sys.modules:   # (else numba is imported only by machine_code, which says so)
+                stack.enter_context(_numba_listener(first))
             yield
     finally:
         machine_code.listeners.remove(first)

@@ -11,7 +11,8 @@ import pytest
 
 from rollball import read_csv
 from rollball.cli import main
-from rollball.examples import EXAMPLES_DIR
+from rollball.examples import EXAMPLES_DIR, example_scenes
+from rollball.text import shown
 
 HILLS = str(EXAMPLES_DIR / "hills.json")
 
@@ -88,6 +89,8 @@ def test_examples_lists_descriptions(capsys):
     assert main(["examples"]) == 0
     out = capsys.readouterr().out
     assert re.search(r"^hills +Sine-cosine hills", out, re.MULTILINE) and len(out.splitlines()) >= 8
+    for path, scene in example_scenes():   # each example's description as its scene has it
+        assert re.search(rf"^{path.stem} +{re.escape(shown(scene.description))}$", out, re.MULTILINE)
 
 
 def test_an_example_runs_by_name_from_any_folder(tmp_path, monkeypatch, capsys):

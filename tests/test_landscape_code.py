@@ -20,7 +20,7 @@ from rollball import Scene, Simulation, landscape_code
 from rollball.examples import EXAMPLES_DIR
 from rollball.formula import X, Y, FormulaError, parse_formula
 from rollball.landscape import _COMPILED, Landscape, derivative, landscape_for
-from rollball.machine_code import _target_machine
+from rollball.llvm_runtime import initialise, target_machine
 from rollball.scene import Start
 
 FORMULAS = ["0.5*sin(x)*cos(y)", "exp(-(x^2 + y^2))", "x^3*y - 2*x*y^2 + 7", "atan2(y + 3, x + 5)",
@@ -40,7 +40,7 @@ def _values(calls_code, points, values=(0.0,)):
 
     calls, code = calls_code
     assert landscape_code._resolvable(calls)
-    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), _target_machine())
+    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), target_machine())
     engine.add_object_file(llvm.ObjectFileRef.from_data(code))
     engine.finalize_object()
     function = landscape_code._CTYPE(engine.get_function_address(landscape_code.SYMBOL))
@@ -58,8 +58,8 @@ def test_the_translation_gives_numbas_numbers_bit_for_bit(text, names):
                              [[0, 0], [1, 1], [0, 1], [1, 0], [-1, 0], [2, 2]]])
     source = "import math\n\n\n" + Landscape(text, names).source
     values = np.linspace(0.7, 1.3, len(names)) if names else (0.0,)
-    machine = _target_machine()
-    landscape_code._initialise()
+    machine = target_machine()
+    initialise()
     ours = _values(landscape_code._object_code(source, machine), points, values)
     numbas = _values(landscape_code._compile(source, "rollball_landscape_test", machine), points, values)
     assert np.array_equal(ours, numbas, equal_nan=True)
@@ -93,8 +93,8 @@ PARAMETRIC = [("a*sin(k*x)*cos(y)", ("a", "k"), (0.5, 2.0)), ("exp(-(x^2 + y^2)/
 def test_parameters_are_arguments_with_numbas_numbers_and_the_constants_numbers(text, names, values):
     points = np.random.default_rng(3).uniform(-2, 2, (40, 2))
     source = "import math\n\n\n" + Landscape(text, names).source
-    machine = _target_machine()
-    landscape_code._initialise()
+    machine = target_machine()
+    initialise()
     ours = _values(landscape_code._object_code(source, machine), points, values)
     numbas = _values(landscape_code._compile(source, "rollball_landscape_test_p", machine), points, values)
     assert np.array_equal(ours, numbas, equal_nan=True)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from rollball import kernel, machine_code
-from rollball.kernel import interface, unpacking
+from rollball.kernel import entries, interface, unpacking
 from rollball.landscape import landscape_for
 
 
@@ -22,6 +22,33 @@ def _points(xs, ys):
     _RECORDS.append(landscape_for("x^2 + 3*y").record())
     return machine_code.Arguments("evaluate_points", fn=_RECORDS[-1].ctypes.data, xs=xs, ys=ys,
                                   out=np.empty((6, len(xs))), d=np.empty(6))
+
+
+_EMITTED: dict[str, bytes] = {}   # object code by the SHA-256 of the bitcode LLVM made it from
+
+
+@pytest.fixture
+def emit_once(monkeypatch):
+    """LLVM's code generation of the shipped kernel (about 5 s of CPU time) done once for the
+    tests that make its machine code again and again: every step around it (reading, checking,
+    keeping, refusing, warning, loading) runs each time as before; only the same bitcode is not
+    handed to the code generator twice."""
+    real = machine_code.target_machine
+
+    class Machine:
+        def __init__(self):
+            self.machine = real()
+
+        def __getattr__(self, name):
+            return getattr(self.machine, name)
+
+        def emit_object(self, module):
+            key = hashlib.sha256(module.as_bitcode()).hexdigest()
+            if key not in _EMITTED:
+                _EMITTED[key] = self.machine.emit_object(module)
+            return _EMITTED[key]
+
+    monkeypatch.setattr(machine_code, "target_machine", Machine)
 
 
 def _shipped_or_skip(folder=None):
@@ -65,7 +92,7 @@ def test_arguments_are_given_by_their_declared_names_only():
 
 def test_each_entry_point_unpacks_what_the_interface_declares_for_its_function():
     for name, arguments in interface.ENTRIES.items():
-        function = kernel.entries.FUNCTIONS[name]
+        function = entries.FUNCTIONS[name]
         code = function.py_func.__code__
         assert [parameter for parameter, _ in arguments] == list(code.co_varnames[:code.co_argcount]), name
         source = unpacking.entry_source(name)
@@ -219,7 +246,7 @@ def test_a_docstring_edit_keeps_the_shipped_code_in_use(tmp_path, monkeypatch):
     assert hashlib.sha256(bitcode).hexdigest() == facts["bitcode"]
 
 
-def test_shipped_code_llvm_cannot_read_leaves_the_kernel_to_numba(monkeypatch, tmp_path):
+def test_shipped_code_llvm_cannot_read_leaves_the_kernel_to_numba(monkeypatch, tmp_path, emit_once):
     bitcode, facts = _shipped_or_skip()
 
     def unreadable(folder=None):
@@ -270,7 +297,7 @@ def test_the_kernel_package_is_layered_without_import_circles():
 
 @pytest.mark.parametrize("blocked", ["file", "folder"])
 def test_a_corrupt_kernel_file_that_cannot_be_replaced_is_said_once_a_run_not_first_run_only(
-        blocked, monkeypatch, tmp_path, capsys):
+        blocked, monkeypatch, tmp_path, capsys, emit_once):
     # A corrupt file the cache cannot replace (read-only, or in a read-only folder: the mode
     # bits decide, root too) made every run compile again, each saying "first run only"
     _shipped_or_skip()
@@ -311,7 +338,8 @@ def test_a_corrupt_kernel_file_that_cannot_be_replaced_is_said_once_a_run_not_fi
     assert said == [] and capsys.readouterr().err == ""
 
 
-def test_kernel_machine_code_that_cannot_be_kept_says_so_not_first_run_only(monkeypatch, tmp_path, capsys):
+def test_kernel_machine_code_that_cannot_be_kept_says_so_not_first_run_only(monkeypatch, tmp_path, capsys,
+                                                                           emit_once):
     _shipped_or_skip()
     folder = tmp_path / "cache"
     folder.mkdir(mode=0o555)

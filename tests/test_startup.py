@@ -3,6 +3,7 @@ load none of the numerical modules (sympy, numba, scipy, ...) that a run needs, 
 ``rollball-app`` refusing its arguments, which also loads no Qt. CPU time is measured (not wall
 time, which a busy machine stretches); the bounds are many times what they take."""
 
+import os
 import resource
 import subprocess
 import sys
@@ -44,6 +45,7 @@ def test_the_command_line_module_loads_nothing_numerical():
 
 @pytest.mark.parametrize("args, code", [
     (["--help"], 0),
+    (["examples"], 0),
     (["simulate", "--help"], 0),
     (["sweep", "--help"], 0),
     (["fit", "--help"], 0),
@@ -85,6 +87,32 @@ def test_the_app_refuses_bad_arguments_in_a_line_before_loading_qt_or_the_core(a
     assert cpu < CPU_BOUND
     modules, lines = _imported(["-m", "rollball_app", *args])
     assert modules & (HEAVY | QT) == set() and lines == result.stderr.splitlines()
+
+
+# A run of an example; prints where the kernel's machine code came from, how the run ended, and
+# which of numba, its compiled kernel modules and scipy the process imported.
+RUN = """
+import sys
+import rollball
+from rollball import machine_code
+from rollball.examples import scene_path
+run = rollball.simulate(scene_path("hills"), t_end=0.5)
+heavy = {"numba", "scipy", "rollball.kernel.lowlevel", "rollball.kernel.entries"}
+print(machine_code.source, run.status, sorted(name for name in sys.modules if name in heavy))
+"""
+
+
+def test_a_run_on_the_shipped_machine_code_imports_no_compiler(tmp_path):
+    """The shipped kernel made into machine code for this processor (first process), then that
+    machine code loaded from the cache folder (second), and the landscape's code translated and
+    then loaded: neither process imports numba or the kernel's compiled modules (they are for
+    compiling only), nor scipy (a flight's)."""
+    env = {key: value for key, value in os.environ.items() if key != "ROLLBALL_MACHINE_CODE"}
+    env["ROLLBALL_CACHE_DIR"] = str(tmp_path)
+    for _ in range(2):
+        result, _ = _run(["-c", RUN], env=env)
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.split() == ["shipped", "ok", "[]"], result.stdout
 
 
 # Runs the app as ``rollball-app ARGS`` where the module PACKAGE cannot be imported.

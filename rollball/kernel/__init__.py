@@ -30,11 +30,27 @@ entry points).
 """
 
 # The names the rest of the core reads the kernel by (it imports rollball.kernel and
-# rollball.kernel.interface only: pyproject.toml's import contracts), re-exported here
+# rollball.kernel.interface only: pyproject.toml's import contracts), re-exported here. The
+# interface's names come with the package; the compiled modules' names (which import numba) only
+# when first read: a process that runs the shipped machine code never imports them
+# (machine_code.py).
+import importlib
+
 from .interface import *  # noqa: F401,F403  (the names Python reads the kernel's arrays by)
-from .collocation import collocation_step  # noqa: F401
-from .dense import TURN_SHARE, omega_polynomial, turn  # noqa: F401
-from .entries import ENTRIES, ENTRY_SIGNATURE  # noqa: F401
-from .lowlevel import LANDSCAPE_SIGNATURE  # noqa: F401
-from .physics import DEXPINV_SERIES, dexpinv, dynamics, rodrigues  # noqa: F401
-from .steps import MIN_STEP  # noqa: F401
+
+# name here: (module, its name there); ENTRY_POINTS are the entry points' functions by the names
+# of interface.ENTRIES (ENTRIES here is the interface's declaration)
+_COMPILED_NAMES = {"collocation_step": ("collocation", "collocation_step"),
+                   "omega_polynomial": ("dense", "omega_polynomial"), "turn": ("dense", "turn"),
+                   "ENTRY_POINTS": ("entries", "ENTRIES"), "ENTRY_SIGNATURE": ("entries", "ENTRY_SIGNATURE"),
+                   "LANDSCAPE_SIGNATURE": ("lowlevel", "LANDSCAPE_SIGNATURE"),
+                   "DEXPINV_SERIES": ("physics", "DEXPINV_SERIES"), "dexpinv": ("physics", "dexpinv"),
+                   "dynamics": ("physics", "dynamics"), "rodrigues": ("physics", "rodrigues")}
+
+
+def __getattr__(name: str):
+    if name not in _COMPILED_NAMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module, attribute = _COMPILED_NAMES[name]
+    value = globals()[name] = getattr(importlib.import_module(f".{module}", __name__), attribute)
+    return value

@@ -27,9 +27,6 @@ GAUSS_SPREAD = math.sqrt(15.0) / 10.0   # the Gauss points of [0, 1]: 1/2 -+ thi
 MAX_TURNS = 1e6                         # sub-steps in one span at most (else R is not finite)
 MAGNUS_ERROR = 5e-5                     # Magnus 6's error in R over a span: at most this times
                                         # phi^4 |C| (measured 2e-5 - 6e-5; ``turn``)
-# The orientation's tolerance per step, as a share of rtol: the pairs' steps, taken on by the
-# higher-order solution, are far more accurate than their estimate (rtol) says.
-TURN_SHARE = 1e-2
 
 
 @JIT

@@ -55,6 +55,16 @@ ENTRIES = {
 }
 
 
+# Each entry point is the function ``entry_name(name)`` of the module ENTRY_MODULE (``unpacking``
+# makes them); their machine code's symbols begin with both.
+ENTRY_MODULE = "rollball.kernel.unpacking"
+
+
+def entry_name(name: str) -> str:
+    """The name of the entry point's function that runs the kernel function ``name``."""
+    return f"{name}_entry"
+
+
 def layout(name: str) -> tuple[tuple[str, str, int], ...]:
     """The arguments of the entry point ``name``: (parameter, kind, first slot) each."""
     slot, out = 0, []
@@ -371,6 +381,10 @@ def run_arrays(n: int, stages: int, rows: int) -> dict[str, np.ndarray]:
 
 # -- the run's clock --------------------------------------------------------------------------------
 
+MIN_STEP = 1e-13     # adaptive steps below this (relative to t, or absolute below t = 1) stop the run
+# The orientation's tolerance per step (p[P_TURN], ``dense.turn``), as a share of rtol: the pairs'
+# steps, taken on by the higher-order solution, are far more accurate than their estimate (rtol) says.
+TURN_SHARE = 1e-2
 GRID_SLIVER = 1e-9   # a run's first step or row closer than this many dt (or record_dt) to t_start joins the next
 
 

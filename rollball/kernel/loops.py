@@ -18,11 +18,11 @@ from .interface import (
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
-    P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, grid_steps_before)
+    P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, MIN_STEP, grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side
 from .recording import _fail, hold, record, record_last, start
-from .steps import (MAX_FACTOR, MIN_FACTOR, MIN_STEP, NONFINITE_TRIES, SAFETY, accept, error_norm,
+from .steps import (MAX_FACTOR, MIN_FACTOR, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
 from .unpacking import scratch
 

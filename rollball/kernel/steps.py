@@ -25,7 +25,6 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 5.0
 PI_BETA = (0.04, 0.08)
 PI_CUT = (0.75, 0.2)
 ERR_OLD_MIN = 1e-4
-MIN_STEP = 1e-13  # adaptive steps below this (relative to t, or absolute below t = 1) stop the run
 # An adaptive step that turns the state non-finite is retried 5 times smaller; after this
 # many such steps in a run the ball is pressing against the end of the landscape, and the
 # run stops as a fixed-step run would at the first.

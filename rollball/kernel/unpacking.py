@@ -9,7 +9,7 @@ import linecache
 
 from numba import carray, types
 
-from .interface import ENTRIES, ENTRY_SLOTS, INTS, MATRIX, SCRATCH, VECTOR, layout
+from .interface import ENTRIES, ENTRY_MODULE, ENTRY_SLOTS, INTS, MATRIX, SCRATCH, VECTOR, entry_name, layout
 from .lowlevel import JIT, as_floats, float_pointer, int_pointer
 
 ENTRY_SIGNATURE = types.void(types.CPointer(types.int64))   # every entry point: a pointer to its slots
@@ -40,14 +40,14 @@ def _compile(source: str, name: str, namespace: dict):
     linecache.cache[filename] = (len(source), None, source.splitlines(keepends=True), filename)
     exec(compile(source, filename, "exec"), namespace)
     function = namespace.pop(name)
-    function.__module__ = __name__
+    function.__module__ = ENTRY_MODULE
     return function
 
 
 def entry_source(name: str) -> str:
     """The entry point of the kernel function ``name``: its arguments read from the slots."""
     arguments = [_READ[kind].format(slot=slot) for _, kind, slot in layout(name)]
-    return (f"def {name}_entry(slots):\n"
+    return (f"def {entry_name(name)}(slots):\n"
             f"    a, x = carray(slots, ({ENTRY_SLOTS},)), carray(as_floats(slots), ({ENTRY_SLOTS},))\n"
             f"    {name}({', '.join(arguments)})\n")
 
@@ -62,7 +62,7 @@ def make_entry(name: str, function):
         raise TypeError(f"{name}: interface.ENTRIES declares {declared}, the function takes {parameters}")
     namespace = {"carray": carray, "as_floats": as_floats, "_vector": _vector, "_matrix": _matrix,
                  "_integers": _integers, name: function}
-    return _compile(entry_source(name), f"{name}_entry", namespace)
+    return _compile(entry_source(name), entry_name(name), namespace)
 
 
 def scratch_source() -> str:
