@@ -28,6 +28,7 @@ class Segment:
     need: float                                # the friction rolling needs there
     slip: np.ndarray                           # the slip velocity there
     steps: int
+    turned: float = float("nan")   # a run that did not stop at a transition: its last couple's side turn (time)
 
 
 def rolling_state(formula, x, y, vx, vy, spin=0.0, radius=0.1, mass=1.0) -> BallState:
@@ -83,4 +84,4 @@ def segment(formula, state, *, sliding, method="rk4", dt=1e-3, t_end=1.0, mu=Non
     return Segment(arrays["rows"][:ints[kernel.I_ROWS]].copy(), status, kind, event,
                    stopped_state(arrays["z"], arrays["R"], p, normal), float(probe[kernel.PROBE_FORCE]),
                    float(probe[kernel.PROBE_NEED]), probe[kernel.PROBE_SLIP:kernel.PROBE_SLIP + 3].copy(),
-                   int(ints[kernel.I_STEPS]))
+                   int(ints[kernel.I_STEPS]), float("nan") if kind is not None else float(info[kernel.F_EVENT_T]))

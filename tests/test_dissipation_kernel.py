@@ -168,6 +168,87 @@ def test_spin_friction_holds_a_rolling_ball_from_spinning_up_on_a_curved_surface
     assert np.abs(seg.rows[:, kernel.ROW_SPIN]).max() < 1e-12   # (held: the static couple does no work)
 
 
+@pytest.mark.parametrize("method, step", [("rk4", 2e-2), ("dopri5", 1e-9)])
+def test_a_held_ball_stays_still_and_its_rolling_couple_static_whatever_its_spin(method, step):
+    """Why a rolling ball's static rolling couple never reaches its limit inside a step: holding omega_t
+    at 0 it holds the ball still (c' = r omega x N = 0 for omega along N), so its pull, gravity's
+    moment m g r N x z about the contact point, and its limit c_rr r m g N_z stay what they were.
+    Spinning in place on an incline with tan theta < c_rr, the ball does not move while spin friction
+    runs the spin down at (5/2) mu_s g cos theta / r, and rolling resistance takes nothing."""
+    c_rr, tan, mu_s, w0 = 0.05, 0.04, 0.1, 10.0
+    normal = np.array([tan, 0.0, 1.0]) / math.hypot(tan, 1.0)
+    spinning = BallState(0.0, 0.0, np.zeros(3), w0 * normal, np.eye(3))
+    seg = _run(f"-{tan}*x", spinning, method, step, t_end=1.0, rolling_resistance=c_rr, spin_friction=mu_s)
+    assert seg.status == "ok"
+    t = seg.rows[:, 0]
+    exact = np.maximum(w0 - 2.5 * mu_s * G * normal[2] / R_BALL * t, 0.0)
+    assert 0.0 in exact and np.abs(seg.rows[:, kernel.ROW_OMEGA:kernel.ROW_OMEGA + 3]
+                                   - exact[:, None] * normal).max() < ROUND
+    assert np.abs(seg.rows[:, kernel.ROW_CONTACT:kernel.ROW_CONTACT + 2]).max() < ROUND
+    rolling, spin, _ = _causes(seg.rows)
+    assert np.abs(rolling).max() < ROUND and spin[-1] == pytest.approx(0.2 * M * R_BALL ** 2 * w0 ** 2, abs=ROUND)
+
+
+# A circular trough of radius RHO along x, the ball inside: its centre on a cylinder of radius
+# RHO - r, at the angle phi across from the bottom (the normal (0, -sin phi, cos phi)).
+RHO = 1.0
+TROUGH = f"0*x + {RHO} - sqrt({RHO}^2 - y^2)"
+
+
+def _trough_limit_time(phi0, xdot, mu_s):
+    """Released across the trough at phi0 while rolling along it at xdot, a ball whose spin friction
+    holds omega.N at 0 keeps xdot (v's component along the tangent e_phi has no rate there) and swings
+    as the pendulum (RHO - r) phi'' = -(5/7) g sin phi, phi'^2 = k (cos phi - cos phi0), k = (10/7) g /
+    (RHO - r); the pull on v.N is (2/5) m r² omega_t.N' = -(2/5) m r xdot phi', the static couple's
+    limit mu_s r F_n with F_n = m (g cos phi + (RHO - r) phi'^2). Returns the time the pull reaches
+    the limit, from the angle where it does: the integral of dphi / |phi'| from there up to phi0."""
+    from scipy.integrate import quad
+    from scipy.optimize import brentq
+    big = RHO - R_BALL
+    k = 10.0 / 7.0 * G / big
+
+    def rate2(phi):   # phi'^2, without cancellation near phi0
+        return 2.0 * k * math.sin(0.5 * (phi0 + phi)) * math.sin(0.5 * (phi0 - phi))
+
+    phi = brentq(lambda f: 0.4 * xdot * math.sqrt(rate2(f)) - mu_s * (G * math.cos(f) + big * rate2(f)), 0.0, phi0,
+                 xtol=1e-16, rtol=1e-15)
+
+    def smooth(f):   # 1 / |phi'| times sqrt(phi0 - phi), which quad's weight takes
+        u = 0.5 * (phi0 - f)
+        return math.sqrt((u / math.sin(u) if u > 0.0 else 1.0) / (k * math.sin(0.5 * (phi0 + f))))
+
+    return quad(smooth, phi, phi0, weight="alg", wvar=(0.0, -0.5), epsabs=1e-15, epsrel=1e-14)[0]
+
+
+# (method, step, how far off the limit's time it may be: rk4's and gauss4's are 5e-14 and 2e-14 s off,
+# dopri5's 6e-10 and 7e-12, dop853's 4e-12 and 1e-14, each placed by the method's own step)
+LIMIT_RUNS = [("rk4", 1e-3, 1e-12), ("gauss4", 1e-3, 1e-12), ("dopri5", 1e-6, 1e-8), ("dopri5", 1e-9, 1e-10),
+              ("dop853", 1e-6, 1e-10), ("dop853", 1e-9, 1e-12)]
+
+
+@pytest.mark.parametrize("method, step, off", LIMIT_RUNS)
+def test_a_static_spin_couple_gives_way_where_the_pull_reaches_its_limit(method, step, off):
+    """Across a circular trough, the pull on omega.N grows from 0 through mu_s r F_n at a time known
+    by quadrature (``_trough_limit_time``): the kernel ends a step there (the couple's law has a
+    kink, static to kinetic) and goes on with the kinetic couple, so omega.N is held at 0 up to that
+    time, turns the way the pull does after it, and the spin dissipation never falls."""
+    phi0, xdot, mu_s = 0.5, 2.0, 0.05
+    t_limit = _trough_limit_time(phi0, xdot, mu_s)
+    start = rolling_state(TROUGH, 0.0, RHO * math.sin(phi0), xdot, 0.0)
+    seg = _run(TROUGH, start, method, step, t_end=t_limit + 0.02, spin_friction=mu_s, record_dt=1e-3)
+    assert seg.status == "ok" and seg.transition is None
+    assert seg.turned == pytest.approx(t_limit, abs=off)
+    t, y = seg.rows[:, 0], seg.rows[:, kernel.ROW_CONTACT + 1]
+    normal = np.column_stack([np.zeros_like(y), -y / RHO, np.sqrt(RHO ** 2 - y ** 2) / RHO])
+    spin = np.einsum("ij,ij->i", seg.rows[:, kernel.ROW_OMEGA:kernel.ROW_OMEGA + 3], normal)
+    held = t < seg.turned
+    # (held to round-off by the fixed steps, to the pairs' own error)
+    assert held.sum() > 100 and np.abs(spin[held]).max() < (1e3 * step if method.startswith("dop") else 1e-10)
+    # (the pull -(2/5) m r xdot phi' is positive: phi falls while it swings down)
+    assert spin[-1] > 1e-3 and np.all(np.diff(spin[~held]) > 0.0)
+    assert np.diff(seg.rows[:, kernel.ROW_SPIN]).min() >= -ROUND
+
+
 @pytest.mark.parametrize("method, steps", [("rk4", (4e-3, 2e-3)), ("gauss4", (4e-3, 2e-3)), ("dopri5", (1e-7, 1e-9))])
 def test_a_sliding_ball_loses_to_each_cause_what_its_rate_says(method, steps):
     """Sliding over 0.5 sin x cos y with friction, rolling resistance, spin friction and air: the

@@ -29,14 +29,14 @@ def _reference():
 
 
 def test_dopri5_brings_the_ball_to_rest_where_dop853_does():
-    """Measured: 4.8·10⁻⁵ s at rtol 10⁻⁹, 5.8·10⁻⁷ s at 10⁻¹¹ (the place within 3·10⁻⁶ m); the
-    energy taken, 7.4652 J, to 10⁻⁶ J."""
+    """Measured: 2.0·10⁻⁷ s at rtol 10⁻⁹, 1.4·10⁻⁷ s at 10⁻¹¹ (the place within 2·10⁻⁸ m); the
+    energy taken, 7.4652 J, to 10⁻⁶ J. (4.8·10⁻⁵ and 5.8·10⁻⁷ s while a static spin couple's limit
+    inside a step was not located: both now at what the rest's own location leaves, docs/design.md §1.)"""
     reference, taken = _reference()
     errors = []
     for rtol in (1e-9, 1e-11):
         rest, dissipated = _rest("dopri5", rtol)
         errors.append(np.abs(rest - reference))
         assert abs(dissipated - taken) < 1e-6
-    assert errors[0][0] < 1e-4 and np.max(errors[0][1:]) < 1e-5, errors
-    assert errors[1][0] < 2e-6 and np.max(errors[1][1:]) < 2e-7, errors
-    assert np.max(errors[1]) < np.max(errors[0]) / 10, errors
+    assert errors[0][0] < 1e-6 and np.max(errors[0][1:]) < 1e-7, errors
+    assert errors[1][0] < 1e-6 and np.max(errors[1][1:]) < 1e-7, errors

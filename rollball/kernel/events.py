@@ -11,11 +11,12 @@ from .explicit import dense_stages
 from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
     F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION, IMPLICIT,
-    D_SIDE, LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP, P_FLY,
-    P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE,
-    TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
+    D_SIDE, LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP,
+    PROBE_SPIN_PULL, P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP,
+    SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import copy_state, couple_sides, curvatures, resisted_size, shape_of, sliding_size
+from .physics import (copy_state, couple_sides, curvatures, resisted_size, shape_of, sliding_size, spin_excess,
+                      spin_limit)
 from .recording import _fail, hold, record, record_last
 from .steps import accept, search_step
 
@@ -59,8 +60,9 @@ LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's co
 # FORCE_EVENT: F.N reaches 0; FIT_EVENT: r*kappa reaches 1; SLIP_EVENT: the friction rolling needs
 # reaches mu F.N; GRIP_EVENT: the slip velocity's component along the slip at the step's start reaches 0;
 # TURN_EVENT: omega's tangential part's along its value at the step's start (s[4:7]) reaches 0 (the
-# rolling resistance's side); SPIN_EVENT: omega.N times its sign at the step's start (s[7]) reaches 0
-FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT, TURN_EVENT, SPIN_EVENT = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0
+# rolling resistance's side); SPIN_EVENT: omega.N times its sign at the step's start (s[7]) reaches 0;
+# LIMIT_EVENT: where that sign is 0 (a static spin couple), the pull on omega.N reaches the couple's limit
+FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT, TURN_EVENT, SPIN_EVENT, LIMIT_EVENT = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
 KINK, JUMP, JOLT = 0.0, 1.0, 2.0   # what locate_break bisects towards (JOLT: the centre jumping)
 
 
@@ -87,6 +89,8 @@ def condition(kind, p, s, pe):
         return -turn_along(pe, s[4], s[5], s[6])
     if kind == SPIN_EVENT:
         return -spin_of(pe) * s[7]
+    if kind == LIMIT_EVENT:
+        return spin_excess(p, pe)
     return -(pe[PROBE_SLIP] * s[0] + pe[PROBE_SLIP + 1] * s[1] + pe[PROBE_SLIP + 2] * s[2])
 
 
@@ -119,11 +123,14 @@ def sides_turn(p, d, n, pn):
     """Which couple's side the end of a step (probe pn) says turned inside it, for a state of
     length n carrying the dissipation (``couple_reference``'s sides in d): T_REST where a rolling
     ball's omega_t, against its rolling resistance (c_rr > 0), reached 0; T_SIDE where a sliding
-    ball's did, or the spin omega.N against a spin friction (mu_s > 0); 0 for none."""
+    ball's did, or the spin omega.N against a spin friction (mu_s > 0), or where the spin couple is
+    static a rolling ball's pull on omega.N reached its limit (``spin_excess``); 0 for none."""
     if p[P_RESISTANCE] > 0.0 and (d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0):
         if turn_along(pn, d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]) <= 0.0:
             return T_SIDE if sliding_size(n) else T_REST
     if p[P_SPIN] > 0.0 and d[D_SIDE + 3] != 0.0 and spin_of(pn) * d[D_SIDE + 3] <= 0.0:
+        return T_SIDE
+    if p[P_SPIN] > 0.0 and d[D_SIDE + 3] == 0.0 and not sliding_size(n) and spin_excess(p, pn) >= 0.0:
         return T_SIDE
     return 0
 
@@ -358,6 +365,8 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     turned = watch and (mode_changes(p, n, probe, pn) != 0 or (resisted_size(n) and sides_turn(p, d, n, pn) != 0))
     # (watch: ``contact_watched``)
     dips = dipping(p, n, h, probe, pn, info) if watch else 0
+    if watch and resisted_size(n) and spin_stops(p, d, n, h, probe):
+        dips += 4
     turned |= dips != 0
     if not (fit_end or sharp or jumpy or raced or force_end or jolted or turned):
         return -1.0  # the usual step: nothing to look at closer
@@ -446,6 +455,19 @@ def dipping(p, n, h, probe, pn, info):
             probe[PROBE_NEED] - mu * probe[PROBE_FORCE], pn[PROBE_NEED] - mu * pn[PROBE_FORCE], h, info, F_RATE_SLIP):
         dips += 2
     return dips
+
+
+@JIT
+def spin_stops(p, d, n, h, probe):
+    """Whether a rolling ball's kinetic spin couple (its side d[D_SIDE + 3]) would, at the rate v.N
+    has at the step's start (probe), take omega.N to 0 within the step of h: the pull may then turn
+    it back inside the step, both ends on the side of the start, past a zero the ends do not show
+    (``locate_transition`` searches the dense output for it, ``dip_bracket``; bit 4 of ``dipping``'s)."""
+    side = d[D_SIDE + 3]
+    if side == 0.0 or p[P_SPIN] == 0.0 or sliding_size(n):
+        return False
+    rate = probe[PROBE_SPIN_PULL] - side * spin_limit(p, probe[PROBE_FORCE])
+    return rate * side < 0.0 and 0.4 * p[5] * abs(spin_of(probe)) < h * abs(rate)
 
 
 @COLD
@@ -553,9 +575,11 @@ def refine_transition(kind, stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, R
 def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info, Ye, Re, pe, s, out,
                       dips, stepping, refine):
     """A step whose ends say the contact changes mode (``mode_changes``), or inside which it may
-    (``dipping``: dips, whose dense output is searched, ``dip_bracket``): locate the earliest
+    (``dipping``: dips, whose dense output is searched, ``dip_bracket``; bit 4: a spin's zero,
+    ``spin_stops``): locate the earliest
     change on the step's dense output to ROOT_TOL of the step, and where ``refine`` (1.0: fixed
-    steps) to the method's own accuracy (``refine_transition``); stop the run there (status
+    steps) or the run goes on from it (T_SIDE) to the method's own accuracy (``refine_transition``:
+    K then holds the stages of the method's step from z to there); stop the run there (status
     TRANSITION, its kind, time and contact point in ints and info) and return the fraction of
     the step where it happens (``record_valid`` then records the state there, the one zn, Rn,
     pn hold where ints[I_HELD] is set); -1 when the dense output shows none after all.
@@ -592,7 +616,7 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
         ga = probe[PROBE_NEED] - mu * probe[PROBE_FORCE]
         gb = pn[PROBE_NEED] - mu * pn[PROBE_FORCE]
         found = ga < 0.0 < gb
-        if not found and ga < 0.0 and dips >= 2:
+        if not found and ga < 0.0 and dips & 2 != 0:
             found = dip_bracket(SLIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out)
         if found:
             a, hi = 0.0, 1.0
@@ -613,17 +637,24 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
                 if b < best:
                     best, kind, event = b, T_SIDE if sliding_size(n) else T_REST, TURN_EVENT
                     b_end, g_end = 1.0, gb
-        if p[P_SPIN] > 0.0 and s[7] != 0.0:
-            ga, gb = -spin_of(probe) * s[7], -spin_of(pn) * s[7]
-            if ga < 0.0 <= gb:
-                a, b = locate(SPIN_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+        if p[P_SPIN] > 0.0 and (s[7] != 0.0 or not sliding_size(n)):
+            spin = SPIN_EVENT if s[7] != 0.0 else LIMIT_EVENT   # (a static couple: its limit)
+            ga, gb = condition(spin, p, s, probe), condition(spin, p, s, pn)
+            found = ga < 0.0 <= gb
+            if not found and ga < 0.0 and dips & 4 != 0:   # (``spin_stops``)
+                found = dip_bracket(spin, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out)
+            if found:
+                a, hi = 0.0, 1.0
+                if not gb >= 0.0:   # (inside the step)
+                    a, ga, hi, gb = out[0], out[1], out[2], out[3]
+                a, b = locate(spin, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, a, ga, hi, gb, ints)
                 if b < best:
-                    best, kind, event = b, T_SIDE, SPIN_EVENT
-                    b_end, g_end = 1.0, gb
+                    best, kind, event = b, T_SIDE, spin
+                    b_end, g_end = hi, gb if hi == 1.0 else math.nan
     if kind == 0:
         return -1.0
     held = False
-    if refine != 0.0 and best > 0.0:
+    if (refine != 0.0 or kind == T_SIDE) and best > 0.0:   # (the pairs too where the run goes on from it)
         # (a grip's reference slip u0 is s[0:3], set above)
         theta = refine_transition(event, stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints, s, Ye,
                                   Re, pe, best, b_end, g_end)

@@ -20,7 +20,7 @@ from .interface import (
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
     P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, MIN_STEP, grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size
+from .physics import couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side
 from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -88,7 +88,8 @@ def couple_reference(fn, d, p, z, K, probe, ints, free):
     ``free`` is false the spin's side is zero, and a sliding ball's omega_t's (a rolling ball's omega_t
     reaching 0 is a rest, which ends the run, never a turn in a row: made static while it rolls, the
     couple would push along the motion), and the couple is then static (what holds it at 0, up to its
-    limit). Where that changes a couple's kind of side, K[0] and probe are evaluated anew (the
+    limit; a static spin couple whose pull is at its limit or beyond is the kinetic one on the pull's side,
+    ``spin_side``). Where that changes a couple's kind of side, K[0] and probe are evaluated anew (the
     step's first stage)."""
     n, mk = shape_of(z)
     t1, t2, t3, side = couple_sides(p, probe[PROBE_FORCE], probe[0], probe[1], probe[2], probe[PROBE_OMEGA],
@@ -97,6 +98,7 @@ def couple_reference(fn, d, p, z, K, probe, ints, free):
         side = 0.0
         if sliding_size(n):
             t1, t2, t3 = 0.0, 0.0, 0.0
+    side = spin_side(p, n, probe, side)   # (a static spin couple at its limit is kinetic)
     was = d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0
     now = t1 != 0.0 or t2 != 0.0 or t3 != 0.0
     changed = was != now or side != d[D_SIDE + 3]
@@ -311,6 +313,9 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
         t_stop = t + valid * hs if valid >= 0.0 else t_new
+        # the rows before a side's turn placed by the method's own step to it: that step's dense output
+        # (``locate_transition``; the whole step's crosses the turn, a kink of a couple's law)
+        hd = valid * hs if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE and ints[I_HELD] == 1 else hs
         theta = 0.0  # Re: the orientation there (the rows' orientations follow on from each other)
         for a in range(3):
             for c in range(3):
@@ -325,9 +330,9 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
                 record(rows, ints[I_ROWS], t_new, zn, Rn, pn, p)
                 ints[I_LAST_RECORDED] = ints[I_STEPS] + 1
             else:
-                dense_stages(fn, d, p, W, hs, z, K, last, Ye, pe, ints)
-                state_at(fn, d, p, z, Re, hs, P, K, theta, (t_row - t) / hs, Ye, Re, pe)
-                theta = (t_row - t) / hs
+                dense_stages(fn, d, p, W, hd, z, K, last, Ye, pe, ints)
+                state_at(fn, d, p, z, Re, hd, P, K, theta, (t_row - t) / hd, Ye, Re, pe)
+                theta = (t_row - t) / hd
                 record(rows, ints[I_ROWS], t_row, Ye, Re, pe, p)
             ints[I_ROWS] += 1
         if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there (its rows are recorded)

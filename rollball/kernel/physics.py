@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 
 from .interface import (
-    D_SIDE, D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, P_AIR, P_FLY, P_MU, P_RESISTANCE,
-    P_SPIN, P_TURN, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE,
-    SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE)
+    D_SIDE, D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_FORCE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, PROBE_SPIN_PULL, P_AIR,
+    P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE,
+    SLIDING_MK_SIZE, SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE)
 from .lowlevel import COLD, EXACT, JIT, STEP, data_pointer, landscape
 
 
@@ -40,8 +40,9 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 4] = mr2 * (d1 * w2 - d2 * w1)
     n = K.shape[1]
     m1, m2, m3 = 0.0, 0.0, 0.0   # the rolling resistance's couple (for the friction rolling needs)
+    pull = 0.0   # the pull on v.N (``rolling_couples``)
     if resisted_size(n):
-        m1, m2, m3 = rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3)
+        m1, m2, m3, pull = rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3, w1, w2, w3)
     if n == MOTION_SIZE:  # no orientation carried
         pass
     elif mk != 0.0 and p[P_TURN] > 0.0:
@@ -72,6 +73,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
             need = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_NEED] = need
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = 0.0, 0.0, 0.0
+        probe[PROBE_SPIN_PULL] = pull
 
 
 @JIT
@@ -143,6 +145,34 @@ def spin_couple(cap, side, pull):
 
 
 @JIT
+def spin_excess(p, pe):
+    """How far the pull on a rolling ball's v.N (probe pe) exceeds what the static spin couple can
+    hold, |pull| - mu_s r F_n (``spin_couple``'s cap, F_n as ``rolling_losses`` takes it): where it
+    reaches 0 inside a step whose spin couple is static, the couple's law has a kink (static to
+    kinetic), which is located on the step's dense output (``events.locate_transition``)."""
+    return abs(pe[PROBE_SPIN_PULL]) - spin_limit(p, pe[PROBE_FORCE])
+
+
+@JIT
+def spin_limit(p, fn_):
+    """The spin couple's limit mu_s r F_n for F.N = fn_ (|F.N|; F.N where the ball flies, as
+    ``rolling_losses`` takes it)."""
+    return p[P_SPIN] * p[0] * (fn_ if p[P_FLY] != 0.0 else abs(fn_))
+
+
+@JIT
+def spin_side(p, n, pe, side):
+    """The spin couple's side for a step from a state of length n with probe pe: ``side``
+    (``couple_sides``'), or, where that is 0 on a rolling ball whose pull on omega.N is at the
+    static couple's limit or beyond (``spin_excess``), the pull's sign: the kinetic couple, the
+    ball starting to spin the way it is pulled (docs/design.md §1, "Dissipation")."""
+    pull = pe[PROBE_SPIN_PULL]
+    if side == 0.0 and p[P_SPIN] > 0.0 and pull != 0.0 and not sliding_size(n) and spin_excess(p, pe) >= 0.0:
+        return 1.0 if pull > 0.0 else -1.0
+    return side
+
+
+@JIT
 def rolling_force(mr, mg, n1, n2, n3, o1, o2, o3, d1, d2, d3):
     """F.N of a rolling ball: m (c'' - g).N with c''.N = r (omega x N' alpha').N, N' alpha' = d."""
     return mr * ((o2 * d3 - o3 * d2) * n1 + (o3 * d1 - o1 * d3) * n2 + (o1 * d2 - o2 * d1) * n3) + mg * n3
@@ -155,7 +185,8 @@ def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2
     moment r N x F_air of the air's drag about the contact point added (docs/design.md §1,
     "Dissipation"), for |F.N| = fa and the couples' sides s (omega_t's) and ``spin_side``
     (``couple_sides``). Returns that v' (3), the rolling resistance's couple (3), the spin
-    friction's (along N), omega.N and the centre's speed."""
+    friction's (along N), omega.N, the centre's speed and the pull on v.N (the rate v.N would have
+    without spin friction, = (2/5) m r² times that of omega.N)."""
     r, k = p[0], p[P_AIR]
     # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F
     speed = r * math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
@@ -165,13 +196,14 @@ def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2
     e3 = e3 + r * a * (n1 * w2 - n2 * w1)
     # spin friction: the pull on omega.N is that on v.N, (v.N)' = v'.N + v.N'
     on = o1 * n1 + o2 * n2 + o3 * n3
-    ms = spin_couple(p[P_SPIN] * r * fa, spin_side, e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3)
+    pull = e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3
+    ms = spin_couple(p[P_SPIN] * r * fa, spin_side, pull)
     e1, e2, e3 = e1 + ms * n1, e2 + ms * n2, e3 + ms * n3
     # rolling resistance against omega's tangential part, pulled by v''s
     en = e1 * n1 + e2 * n2 + e3 * n3
     m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, s1, s2, s3,
                                 e1 - en * n1, e2 - en * n2, e3 - en * n3)
-    return e1 + m1, e2 + m2, e3 + m3, m1, m2, m3, ms, on, speed
+    return e1 + m1, e2 + m2, e3 + m3, m1, m2, m3, ms, on, speed, pull
 
 
 @JIT
@@ -180,17 +212,19 @@ def rolling_losses(p, d, K, row, n, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, 
     friction and the moment of the air's drag (``rolling_couples``, on the sides of the step's start
     in d[D_SIDE:D_SIDE + 4]), and write the rates of the energy each takes into K[row, n - 3:n]:
     -M_rr.omega, -M_s.omega and k |c'|^3 (docs/design.md §1, "Dissipation"). Returns the rolling
-    resistance's couple."""
+    resistance's couple and the pull on v.N."""
     fn_ = rolling_force(p[4], p[6], n1, n2, n3, o1, o2, o3, d1, d2, d3)
     fa = fn_ if p[P_FLY] != 0.0 else abs(fn_)   # (as the sliding friction's: smooth through F.N = 0 where it flies)
-    e1, e2, e3, m1, m2, m3, ms, on, speed = rolling_couples(
+    e1, e2, e3, m1, m2, m3, ms, on, speed, pull = rolling_couples(
         p, fa, d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3], n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2, d3,
         w1, w2, w3, K[row, 2], K[row, 3], K[row, 4])
     K[row, 2], K[row, 3], K[row, 4] = e1, e2, e3
     K[row, n - 3] = -(m1 * o1 + m2 * o2 + m3 * o3)
-    K[row, n - 2] = -ms * on
+    # (a static couple that holds omega.N at 0 does no work: what the integration leaves of omega.N
+    # there is its error, on which the couple's work would have either sign)
+    K[row, n - 2] = 0.0 if d[D_SIDE + 3] == 0.0 and ms == -pull else -ms * on
     K[row, n - 1] = p[P_AIR] * speed * speed * speed
-    return m1, m2, m3
+    return m1, m2, m3, pull
 
 
 @JIT
@@ -293,7 +327,7 @@ def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3, resisted)
     if resisted:
         fn_ = rolling_force(mr, mg, n1, n2, n3, o1, o2, o3, d1, d2, d3)
         s1, s2, s3, side = couple_sides(p, fn_, n1, n2, n3, o1, o2, o3, 1.4)
-        e1, e2, e3, m1, m2, m3, _, _, _ = rolling_couples(
+        e1, e2, e3, m1, m2, m3, _, _, _, _ = rolling_couples(
             p, fn_ if p[P_FLY] != 0.0 else abs(fn_), s1, s2, s3, side, n1, n2, n3, o1, o2, o3, v1, v2, v3, d1, d2,
             d3, w1, w2, w3, e1, e2, e3)
     return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3, m1, m2, m3)
@@ -431,6 +465,7 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
         t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3, resisted)
         probe[PROBE_NEED] = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = u1, u2, u3
+        probe[PROBE_SPIN_PULL] = 0.0   # (the sliding friction pulls on omega.N not at all)
 
 
 @JIT

@@ -16,7 +16,7 @@ from .interface import (
     R_START_OVERFLOW, R_START_UNDEFINED, S_DISSIPATED, S_VELOCITY, TRANSITION, T_GRIP, T_LIFTOFF, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import (FULL, _finite, _finite_row, copy_state, couple_sides, motion_size, rates, resisted_size, shape_of,
-                      sliding_size)
+                      sliding_size, spin_side)
 
 
 @JIT
@@ -114,6 +114,7 @@ def start(fn, d, p, z, R, K, probe, rows, ints, info, t_start):
     if resisted_size(n):   # the couples' sides at the start (``couple_sides``), as its first step takes them
         t1, t2, t3, side = couple_sides(p, probe[PROBE_FORCE], probe[0], probe[1], probe[2], probe[PROBE_OMEGA],
                                         probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2], 0.4 if sliding else 1.4)
+        side = spin_side(p, n, probe, side)
         if t1 != 0.0 or t2 != 0.0 or t3 != 0.0 or side != 0.0:
             d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3] = t1, t2, t3, side
             rates(fn, d, p, z, 1.0 if mk else 0.0, K, np.int64(0), probe, FULL)
