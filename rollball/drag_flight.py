@@ -49,10 +49,10 @@ class DragFlight(Flight):
         self.rate = drag / mass                          # k/m (1/m)
         self.terminal = math.sqrt(gravity / self.rate)   # v_t (m/s): drag balances gravity
         self._start = np.concatenate([start.center, start.velocity, [0.0]])
-        length = max(radius, float(np.abs(start.center).max()))
-        fast = max(float(np.linalg.norm(start.velocity)), self.terminal, math.sqrt(gravity * radius))
-        scale = np.array([length] * 3 + [fast] * 3 + [mass * (fast * fast + gravity * length)])
-        with np.errstate(all="ignore"):   # (its first step's choice: an overflow fails the first step)
+        with np.errstate(all="ignore"):   # (the scale and its first step's choice: an overflow fails the first step)
+            length = max(radius, float(np.abs(start.center).max()))
+            fast = max(float(np.linalg.norm(start.velocity)), self.terminal, math.sqrt(gravity * radius))
+            scale = np.array([length] * 3 + [fast] * 3 + [mass * (fast * fast + gravity * length)])
             self._solver = DOP853(self._motion, start.t, self._start, t_bound=math.inf, rtol=RTOL, atol=RTOL * scale)
         self._ends = [start.t]   # the steps' ends so far...
         self._pieces = []        # ...and their dense outputs
@@ -61,7 +61,7 @@ class DragFlight(Flight):
     def _motion(self, t: float, y: np.ndarray) -> np.ndarray:
         """(ċ, g − (k/m)|ċ| ċ, k |ċ|³) for y = (c, ċ, D_air)."""
         v = y[3:6]
-        speed = math.sqrt(float(v @ v))
+        speed = np.sqrt(v @ v)   # (a numpy float: an overflow is inf, a failed step, not an exception)
         out = np.empty(7)
         out[:3] = v
         out[3:6] = self.g - (self.rate * speed) * v
@@ -97,9 +97,13 @@ class DragFlight(Flight):
                     f"the air's drag (k = {self.drag:.6g} kg/m) is so strong that the flight after "
                     f"t = {solver.t:.6g} s takes more than {MAX_STEPS:,} steps to integrate (the drag makes its "
                     f"motion stiff), so the run stops")
-            with np.errstate(all="ignore"):   # (an overflow is told below)
-                solver.step()
-            if solver.status == "failed" or not np.isfinite(solver.y).all():
+            if not solver.h_abs > 0.0:   # (an overflowing motion leaves no step to try: scipy would try it for ever)
+                failed = True
+            else:
+                with np.errstate(all="ignore"):   # (an overflow is told below)
+                    solver.step()
+                failed = solver.status == "failed" or not np.isfinite(solver.y).all()
+            if failed:
                 raise FloatingPointError(
                     f"the air's drag (k = {self.drag:.6g} kg/m) slows the flying ball faster than its flight can "
                     f"be integrated after t = {solver.t:.6g} s, so the run stops")

@@ -318,18 +318,24 @@ class Simulation:
 
     def _stiff_drag(self, failure: Failure) -> Failure | None:
         """A kernel run's non-finite stop put down to the air where its drag is stiff beyond what
-        the steps can take: the drag's rate k|ċ|/m times the step (fixed: dt; adaptive: the step
-        that failed) above DRAG_STIFF in a recorded row, where no explicit method is stable and an
-        implicit one's stage equations do not converge; the failure at the first such row (the
-        rows after it are the unstable steps' own). None otherwise."""
-        rows = self.rows
-        if failure.reason not in STIFF_DRAG_SIGNS or not len(rows):
+        the steps can take (``stiff_drag_row``; adaptive: the step that failed). None otherwise."""
+        if failure.reason not in STIFF_DRAG_SIGNS:
             return None
+        return self.stiff_drag_row(failure.value if self.adaptive else self.dt)
+
+    def stiff_drag_row(self, step: float) -> Failure | None:
+        """The first recorded row where the drag's rate k|ċ|/m times ``step`` is above DRAG_STIFF,
+        where no explicit method is stable and an implicit one's stage equations do not converge:
+        a failure there (the rows after it are the unstable steps' own); None if there is none.
+        Asked where a fixed-step kernel run stops, however it stops: an unstable first step may
+        blow up into a state that is finite but absurd (a lift-off with the centre 10⁴⁷ m away)."""
+        rows = self.rows
         scene = self.scene
-        step = failure.value if self.adaptive else self.dt
+        drag = scene.air.drag_factor(scene.ball.radius)
+        if not (drag > 0.0 and len(rows)):
+            return None
         with np.errstate(all="ignore"):
-            stiffness = (scene.air.drag_factor(scene.ball.radius) / scene.ball.mass * step
-                         * np.linalg.norm(rows[:, VELOCITY], axis=1))
+            stiffness = drag / scene.ball.mass * step * np.linalg.norm(rows[:, VELOCITY], axis=1)
         beyond = np.flatnonzero(stiffness > DRAG_STIFF)
         if not len(beyond):
             return None

@@ -296,3 +296,12 @@ def test_a_flight_too_stiff_to_integrate_in_its_steps_stops_saying_so(monkeypatc
     fall = flight("0", (0.0, 0.0, 2.0), (5.0, 0.0, 3.0), drag=1e6)
     with pytest.raises(FloatingPointError, match="takes more than 300 steps"):
         fall.landing(5.0)
+
+
+def test_a_flight_whose_drag_overflows_fails_as_a_stiff_flight_not_an_exception():
+    """A speed whose cube overflows (here 10²⁰⁰ m/s) makes the energy the drag takes infinite: the
+    flight's motion fails with the drag's FloatingPointError (which the run turns into its stop),
+    never an OverflowError out of the motion's formula."""
+    fall = flight("0", (0.0, 0.0, 2.0), (1e200, 0.0, 0.0), drag=1.0)
+    with pytest.raises(FloatingPointError, match="drag"):
+        fall.centers(np.array([1e-3]))
