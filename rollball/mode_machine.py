@@ -40,8 +40,9 @@ MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it 
 # tolerance, far below the fixed steps' own error, to the first step on its grid where it can go
 # on (docs/design.md §8); STIFF_WINDOW steps of the grid at a time, twice as many while it cannot.
 STIFF_METHOD = "dop853"
-STIFF_TOLERANCE = 1e-12
+STIFF_TOLERANCE = 1e-13   # (a rest after a turning point slower than 10⁻⁴ m/s moves 10³ times its error)
 STIFF_WINDOW = 16
+EXIT_MARGIN = 2.0   # a stiff stretch ends where ω_t's turning is this much further from stiff (``_stiff``)
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
 SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
 
@@ -561,9 +562,14 @@ class ModeMachine:
                 run.status, self.off = stretch.status, stretch.failure
                 return
             _, on_grid = self._grid(rows[:, T])
-            free = [i for i in range(1, len(rows))
-                    if on_grid[i] and not self._stiff(rows[i], Mode(int(modes[i])))]
-            end = free[0] if free else len(rows) - 1
+            grid = np.flatnonzero(on_grid)
+            turns = self._turns(rows[grid])
+            # (ω_t's rate at each grid row from the next one in the stretch; at the last, from the one before)
+            beside = [*range(1, len(grid)), len(grid) - 2 if len(grid) > 1 else None]
+            free = next((int(grid[j]) for j in range(len(grid)) if grid[j] > 0 and not self._stiff(
+                rows[grid[j]], Mode(int(modes[grid[j]])), turns[j],
+                None if beside[j] is None else (rows[grid[beside[j]]], turns[beside[j]]))), None)
+            end = free if free is not None else len(rows) - 1
             self._adopt(stretch, end)
             row, mode, t = rows[end], Mode(int(modes[end])), float(rows[end, T])
             if not run.t_end - t > 1e-12 * run.t_end or (self.rest is not None and run.scene.stop_at_rest):
@@ -576,10 +582,10 @@ class ModeMachine:
                 return
             self.mode = mode
             self.carry(row)
-            if free and mode is Mode.FLYING:
+            if free is not None and mode is Mode.FLYING:
                 self.flight = self._new_flight(FreeState.from_row(row))
                 return
-            if free:
+            if free is not None:
                 run._start_kernel_run(state_of(run, row), t, slides=mode is Mode.SLIDING, repeat=True)
                 return
             state, window = state_of(run, row), 2 * window   # still stiff: on from there
@@ -589,20 +595,35 @@ class ModeMachine:
         k = np.round(times / self.run.dt)
         return k, np.abs(times / self.run.dt - k) < 1e-9
 
-    def _stiff(self, row: np.ndarray, mode: Mode) -> bool:
+    def _stiff(self, row: np.ndarray, mode: Mode, turn: np.ndarray, beside) -> bool:
         """Whether a row's direction is stiff for the fixed steps: sliding, friction would stop its
         slip within a step (the kernel's ``slip_reference``); rolling, rolling resistance its ω_t
-        (``turn_stiff``). Any other mode: not."""
+        (``turn``, ``_turns``), or ω_t turns too fast (``turning_point``; its rate there from the
+        grid row ``beside`` it and that row's ω_t, where there is one). Any other mode: not."""
         run = self.run
         ball, force = run.scene.ball, abs(row[NORMAL_FORCE]) * run.dt
         if mode is Mode.SLIDING:
             return row[SLIP_SPEED] * ball.mass < 3.5 * float(run._p[kernel.P_MU]) * force
         if mode is not Mode.ROLLING:
             return False
-        omega = row[OMEGA]
-        normal = unit_normal(run.landscape.evaluate(*row[CONTACT], run.scene.parameter_values))
-        turn = float(np.linalg.norm(omega - np.dot(omega, normal) * normal))
-        return 0.0 < 1.4 * ball.mass * ball.radius * turn < float(run._p[kernel.P_RESISTANCE]) * force
+        resistance = float(run._p[kernel.P_RESISTANCE])
+        if 0.0 < 1.4 * ball.mass * ball.radius * float(np.linalg.norm(turn)) < resistance * force:
+            return True
+        if beside is None or resistance == 0.0:
+            return False
+        other, other_turn = beside
+        rate = (other_turn - turn) / (other[T] - row[T])
+        cap = resistance * abs(row[NORMAL_FORCE]) / (1.4 * ball.mass * ball.radius)
+        unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
+        # (with twice the kernel's reach: a row the fixed steps go on from is not stiff to them)
+        return bool(kernel.turning_point.py_func(*turn, *rate, cap, EXIT_MARGIN * unit, EXIT_MARGIN * run.dt))
+
+    def _turns(self, rows: np.ndarray) -> np.ndarray:
+        """ω's tangential part ω_t at each of ``rows`` (n, 3)."""
+        omega = rows[:, OMEGA]
+        normal = unit_normal(self.run.landscape.evaluate(rows[:, CONTACT][:, 0], rows[:, CONTACT][:, 1],
+                                                         self.run.scene.parameter_values)).T
+        return omega - np.sum(omega * normal, axis=1)[:, None] * normal
 
     def _adopt(self, stretch, end: int) -> None:
         """A stretch's rows 1 to ``end`` (those at the run's recording times, at its transitions or

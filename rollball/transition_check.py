@@ -29,6 +29,9 @@ ADAPTIVE_SHRINK = TIGHTER ** 0.25  # ...and the move must shrink at least 3.2-fo
 MIN_TOLERANCE = 1e-15  # (tolerances not below this, as the energy check's)
 MOVE_FLOOR = 1e-10     # s: moves below this are round-off (the kernel locates a change to 1e-13 of a step); adaptive,
                        # also below rtol·√(r/g), what the tolerance allows (the error control's time unit)
+REST_FLOOR = 1e-9      # s: a fixed-step run's rest, where a stop pulled sideways is taken by the stiff stretch
+                       # (dop853 at 10⁻¹³ from the grid row before it): that places it within ~2·10⁻¹⁰ s (wells),
+                       # not 10⁻¹³ of a step
 LEAD_STEPS = 64        # a retake starts this many of the run's steps (its average step, adaptive) before the change, or
                        # where its segment starts if that is later...
 MARGIN_STEPS = 2       # ...and goes on until it has the change or is this many past it (one moved further is not there)
@@ -166,7 +169,7 @@ def check_transitions(run) -> TransitionCheck | None:
             steps = tuple(run.dt / 2 ** level for level in range(HALVINGS + 1))
             results = [_retake(run, rows[i], t_row, int(modes[i]), t_stop, k, method=tableau,
                                munthe_kaas=run.munthe_kaas, dt=h, record_every=2 ** 40) for h in steps]
-            shrink, floor = 2.0 ** (tableau.order - SLACK), MOVE_FLOOR
+            shrink, floor = 2.0 ** (tableau.order - SLACK), REST_FLOOR if change.kind == "rest" else MOVE_FLOOR
         if any(result is None for result in results):   # a retake that failed says nothing
             skipped += 1
             continue

@@ -185,7 +185,7 @@ def test_the_rest_time_on_a_bowl_converges_at_the_method_order(method, order, st
 TROUGH, TROUGH_C_RR, TROUGH_SPIN = (1.0, 0.6, 0.05), 0.08, 0.05
 TROUGH_START = (0.35, 0.1, -0.1, 0.45)   # x, y, vx, vy
 TROUGH_ORDERS = [("euler", 1, (2e-3, 1e-3, 5e-4)), ("rk4", 4, (2e-2, 1e-2, 5e-3)), ("lawson5", 5, (4e-2, 2e-2, 1e-2)),
-                 ("gauss4", 4, (4e-2, 2e-2, 1e-2))]
+                 ("gauss4", 4, (2e-2, 1e-2, 5e-3))]   # (at 0.04 gauss4 is not yet in its asymptotic range)
 
 
 def _trough_surface(x, y):

@@ -1,31 +1,44 @@
 """The three wells (resources/examples/wells.json: c_rr 0.04, μ_s 0.05, started at rest) bring the
 ball to rest after a 16 s path over turning points: dopri5 finds that rest where dop853 at rtol
 10⁻¹² does, time and place, its error shrinking with the tolerance (docs/design.md §1,
-"Dissipation": the couples' side turns counted per call once made them static and kept it rolling)."""
+"Dissipation": the couples' side turns counted per call once made them static and kept it rolling);
+the fixed steps hand its turning points, where ω_t passes close to 0, to the stiff stretch."""
 
 import dataclasses
 import functools
 
 import numpy as np
+import pytest
 
 from rollball.examples import EXAMPLES_DIR
 from rollball.scene import Scene
 from rollball.simulation import simulate
 
 
-def _rest(method, rtol):
+def _run(method, rtol=None, dt=None, record_dt=None, atol=None):
+    """wells with ``method`` at ``rtol`` or ``dt``, checked to end at its one rest (fixed steps: with no warning)."""
     scene = Scene.load(EXAMPLES_DIR / "wells.json")
+    step = {"rtol": rtol, **({} if atol is None else {"atol": atol})} if dt is None else {"dt": dt}
     traj = simulate(dataclasses.replace(scene, integrator=dataclasses.replace(scene.integrator, method=method,
-                                                                              rtol=rtol)))
+                                                                              **step)), record_dt=record_dt)
     assert [c.kind for c in traj.transitions] == ["rest"] and str(traj.status) == "ok", (method, rtol, traj.message)
     assert traj.message.startswith("the ball comes to rest at t = ")
+    assert dt is None or traj.warnings() == [], traj.message
+    return traj
+
+
+def _rest(traj):
     rest = traj.transitions[0]
     return np.array([rest.time, rest.x, rest.y]), traj.dissipated[-1]
 
 
 @functools.lru_cache(maxsize=1)
+def _reference_run():
+    return _run("dop853", 1e-12, record_dt=0.5, atol=1e-12)
+
+
 def _reference():
-    return _rest("dop853", 1e-12)
+    return _rest(_reference_run())
 
 
 def test_dopri5_brings_the_ball_to_rest_where_dop853_does():
@@ -35,8 +48,32 @@ def test_dopri5_brings_the_ball_to_rest_where_dop853_does():
     reference, taken = _reference()
     errors = []
     for rtol in (1e-9, 1e-11):
-        rest, dissipated = _rest("dopri5", rtol)
+        rest, dissipated = _rest(_run("dopri5", rtol))
         errors.append(np.abs(rest - reference))
         assert abs(dissipated - taken) < 1e-6
     assert errors[0][0] < 1e-6 and np.max(errors[0][1:]) < 1e-7, errors
     assert errors[1][0] < 1e-6 and np.max(errors[1][1:]) < 1e-7, errors
+
+
+def _contact_at(traj, times):
+    return np.array([traj.contact[np.flatnonzero(np.abs(traj.t - t) < 1e-9)[0]] for t in times])
+
+
+@pytest.mark.parametrize("method, order, steps", [("rk4", 4, (0.002, 0.001)), ("gauss4", 4, (0.002, 0.001)),
+                                                  ("lawson5", 5, (0.004, 0.002))])
+def test_the_fixed_steps_pass_its_turning_points_at_their_order(method, order, steps):
+    """Over its last turning points (14 to 16 s: the centre's least speeds 3·10⁻² to 10⁻⁴ m/s) the
+    pull beats the couple and ω_t turns about within 10⁻² to 10⁻⁵ s, and at its rest it turns through
+    90° as it stops: where ω_t's direction turns faster than 1/sqrt(r/g) the fixed steps hand the
+    stretch to dop853 (``physics.turning_point``). The contact point at 12 and 16 s converges at the
+    method's order and the rest is where dop853 at 10⁻¹² puts it, with no warning. (Measured: rk4
+    at dt 0.002, 0.001: 2.5·10⁻⁹, 1.6·10⁻¹⁰ m at 12 s, the rest 2.2·10⁻⁹ and 3·10⁻¹¹ s off; with a
+    bound within a step's reach instead, 5.6·10⁻⁷, 2.9·10⁻⁸ m and 3.5·10⁻⁵, 1.2·10⁻⁷ s, irregular below.)"""
+    reference = _contact_at(_reference_run(), (12.0, 16.0))
+    errors = []
+    for dt in steps:
+        traj = _run(method, dt=dt)
+        errors.append(np.max(np.abs(_contact_at(traj, (12.0, 16.0)) - reference), axis=1))
+        assert abs(traj.transitions[0].time - _reference()[0][0]) < 5e-8, (method, dt)
+    coarse, fine = errors
+    assert np.all(coarse < 5e-8) and np.all(fine < coarse / 2 ** order * 2), errors

@@ -45,7 +45,8 @@ _COMPILED_NAMES = {"collocation_step": ("collocation", "collocation_step"),
                    "ENTRY_POINTS": ("entries", "ENTRIES"), "ENTRY_SIGNATURE": ("entries", "ENTRY_SIGNATURE"),
                    "LANDSCAPE_SIGNATURE": ("lowlevel", "LANDSCAPE_SIGNATURE"),
                    "DEXPINV_SERIES": ("physics", "DEXPINV_SERIES"), "dexpinv": ("physics", "dexpinv"),
-                   "dynamics": ("physics", "dynamics"), "rodrigues": ("physics", "rodrigues")}
+                   "dynamics": ("physics", "dynamics"), "rodrigues": ("physics", "rodrigues"),
+                   "turning_point": ("physics", "turning_point")}
 
 
 def __getattr__(name: str):

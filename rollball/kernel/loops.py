@@ -18,9 +18,10 @@ from .interface import (
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
-    P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_SIDE, MIN_STEP, grid_steps_before)
+    P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_REST, T_SIDE, MIN_STEP, grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side
+from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side,
+                      turning_point)
 from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -63,18 +64,31 @@ def slip_reference(d, probe, p, h, cap):
 
 
 @JIT
-def turn_stiff(d, p, probe, h, n):
-    """Whether a rolling ball's omega_t at the step's start (d[D_SIDE:D_SIDE + 3], ``couple_reference``'s)
-    is stiff for a fixed step of h: its rolling resistance would stop it within the step,
-    |omega_t| < c_rr r F_n h / (7/5 m r^2). Its direction then relaxes towards the pull's at the rate
-    |pull| / |omega_t|, as a starting slip's does (``slip_reference``), which no fixed step follows:
-    ``advance`` stops there (T_STIFF) for the run in Python to take that stretch with an adaptive pair
-    (docs/design.md §1, "Dissipation")."""
+def turn_stiff(d, p, probe, K, h, n):
+    """Whether a rolling ball's omega_t at the step's start (w0 = d[D_SIDE:D_SIDE + 3],
+    ``couple_reference``'s) is stiff for a fixed step of h (docs/design.md §1, "Dissipation"): its
+    rolling resistance would stop it within the step, |w0| < C h with C = c_rr r F_n / (7/5 m r^2);
+    or its direction would turn within the step faster than a bound independent of h
+    (``turning_point``, with w0' = k v'_t from K[0], k = 5/(7 m r^2)): near a stop it relaxes
+    towards the pull's at the rate |pull| / |omega_t|, as a starting slip's does
+    (``slip_reference``), and at a turning point it turns about within |omega_t,min| / |w0'|, which
+    no fixed step follows at its order: ``advance`` stops there (T_STIFF) for the run in Python to
+    take that stretch with an adaptive pair."""
     if sliding_size(n) or p[P_RESISTANCE] == 0.0:
         return False
     t1, t2, t3 = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]
     ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
-    return ts > 0.0 and 1.4 * p[1] * p[0] * ts < p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) * h
+    if ts == 0.0:
+        return False
+    if 1.4 * p[1] * p[0] * ts < p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) * h:
+        return True
+    n1, n2, n3 = probe[0], probe[1], probe[2]
+    e1, e2, e3 = K[0, 2], K[0, 3], K[0, 4]
+    en = e1 * n1 + e2 * n2 + e3 * n3
+    k = p[3]
+    return turning_point(t1, t2, t3, k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3),
+                         p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]), math.sqrt(p[0] / abs(p[2])),
+                         h)
 
 
 SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static
@@ -90,7 +104,9 @@ def couple_reference(fn, d, p, z, K, probe, ints, free):
     couple would push along the motion), and the couple is then static (what holds it at 0, up to its
     limit; a static spin couple whose pull is at its limit or beyond is the kinetic one on the pull's side,
     ``spin_side``). Where that changes a couple's kind of side, K[0] and probe are evaluated anew (the
-    step's first stage)."""
+    step's first stage). Returns whether a rolling ball's omega_t came to 0 (within what
+    ``couple_sides`` tells from 0) at the end of the step before without its zero being crossed
+    (as where omega_t turns sideways as it stops): that is the rest, at the step's start."""
     n, mk = shape_of(z)
     t1, t2, t3, side = couple_sides(p, probe[PROBE_FORCE], probe[0], probe[1], probe[2], probe[PROBE_OMEGA],
                                     probe[PROBE_OMEGA + 1], probe[PROBE_OMEGA + 2], 0.4 if sliding_size(n) else 1.4)
@@ -101,11 +117,23 @@ def couple_reference(fn, d, p, z, K, probe, ints, free):
     side = spin_side(p, n, probe, side)   # (a static spin couple at its limit is kinetic)
     was = d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0
     now = t1 != 0.0 or t2 != 0.0 or t3 != 0.0
+    if was and not now and not sliding_size(n):
+        return True
     changed = was != now or side != d[D_SIDE + 3]
     d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], d[D_SIDE + 3] = t1, t2, t3, side
     if changed:
         evaluate(fn, d, p, z, mk, K, np.int64(0), probe)
         ints[I_EVALS] += 1
+    return False
+
+
+@JIT
+def stopped_rolling(rows, ints, info, t, z, R, probe, p):
+    """A rolling ball's omega_t came to 0 without crossing it (``couple_reference``): stop the run
+    there as a rest (status TRANSITION, T_REST), its state the last row."""
+    record_last(rows, ints, t, z, R, probe, p)
+    ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_REST
+    info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t, z[0], z[1]
 
 
 @COLD
@@ -176,12 +204,13 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         t = t_end if final else g * dt
         turns = 0
         while True:   # (again from where a couple's side turned inside the step, ``resume``)
-            if resists:
-                couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS)
+            if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
+                stopped_rolling(rows, ints, info, t0, z, R, probe, p)
+                return
             if watch:
                 slip_reference(d, probe, p, h, math.inf)
                 if p[P_STIFF] != 0.0 and (d[D_SLIP + 3] == math.inf and sliding_size(n)
-                                          or resists and turn_stiff(d, p, probe, h, n)):   # (Python's: T_STIFF)
+                                          or resists and turn_stiff(d, p, probe, K, h, n)):   # (Python's: T_STIFF)
                     ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
                     info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
                     return
@@ -279,8 +308,9 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        if resists:
-            couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS)
+        if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
+            stopped_rolling(rows, ints, info, t, z, R, probe, p)
+            break
         if watch:
             slip_reference(d, probe, p, hs, cap)
         if n == MK_SIZE:

@@ -112,6 +112,39 @@ def couple_sides(p, fn_, n1, n2, n3, o1, o2, o3, inertia):
     return t1, t2, t3, side
 
 
+# A rolling ball's omega_t turns its direction at the rate |omega_t'_perp| / |omega_t|, which grows
+# without bound as omega_t passes close to 0 at a turning point or a sideways stop (``turning_point``).
+# A fixed step's error keeps its order only where that rate is bounded independently of the step:
+# a rate above 1 / (TURN_TIME sqrt(r/g)) is stiff for a fixed step, whatever the step.
+TURN_TIME = 1.0
+
+
+@JIT
+def turning_point(t1, t2, t3, r1, r2, r3, cap, unit, h):
+    """Whether omega_t = t, changing at the rate r, turns its direction too fast for a fixed step of
+    h within the step ahead (docs/design.md §1, "Dissipation"): on the line t + r tau the
+    direction's rate |r x t| / |t + r tau|^2, at its greatest within the step (where the line comes
+    closest to 0), exceeds 1 / (TURN_TIME ``unit``), ``unit`` = sqrt(r / g0) (with no gravity, unit
+    is inf: never; nor is there a rolling couple then but on a curve). So it
+    does where the ball turns about at a turning point (the pull beats the rolling couple, whose
+    rate is ``cap``, C = c_rr r F_n / (7/5 m r^2)) and where it comes to a stop while pulled
+    sideways (the path curving ever faster as the speed falls). A line through 0 itself (closer
+    than ``couple_sides`` tells from 0) is a stop or a reversal along a line, which the rest's event
+    places."""
+    ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+    rate2 = r1 * r1 + r2 * r2 + r3 * r3
+    if not (ts > 0.0 and rate2 > 0.0 and unit < math.inf):
+        return False
+    tau = min(h, max(0.0, -(t1 * r1 + t2 * r2 + t3 * r3) / rate2))
+    m1, m2, m3 = t1 + r1 * tau, t2 + r2 * tau, t3 + r3 * tau
+    miss = m1 * m1 + m2 * m2 + m3 * m3
+    zero = cap * SIDE_ZERO * unit
+    if not zero * zero < miss:
+        return False
+    c1, c2, c3 = r2 * t3 - r3 * t2, r3 * t1 - r1 * t3, r1 * t2 - r2 * t1
+    return math.sqrt(c1 * c1 + c2 * c2 + c3 * c3) * TURN_TIME * unit > miss
+
+
 @JIT
 def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3):
     """The rolling resistance's couple for omega's tangential part t, at most ``cap`` = c_rr r F_n
