@@ -192,7 +192,7 @@ class ModeMachine:
         """The kernel run stopped where the contact changes mode: go on in the new one."""
         run = self.run
         info = run._info
-        stiff = None if run.adaptive else run.stiff_drag_row(run.dt)
+        stiff = None if run.adaptive else run.stiff_drag_row(run.dt, run._rows[:int(run._ints[kernel.I_ROWS])])
         if stiff is not None:   # (an unstable step's absurd state is no change of mode)
             run._finish_kernel_run()
             self.off, run.status = stiff, Status.NONFINITE

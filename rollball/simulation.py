@@ -323,13 +323,14 @@ class Simulation:
             return None
         return self.stiff_drag_row(failure.value if self.adaptive else self.dt)
 
-    def stiff_drag_row(self, step: float) -> Failure | None:
-        """The first recorded row where the drag's rate k|ċ|/m times ``step`` is above DRAG_STIFF,
-        where no explicit method is stable and an implicit one's stage equations do not converge:
-        a failure there (the rows after it are the unstable steps' own); None if there is none.
-        Asked where a fixed-step kernel run stops, however it stops: an unstable first step may
-        blow up into a state that is finite but absurd (a lift-off with the centre 10⁴⁷ m away)."""
-        rows = self.rows
+    def stiff_drag_row(self, step: float, rows: np.ndarray | None = None) -> Failure | None:
+        """The first of ``rows`` (default: the run's) where the drag's rate k|ċ|/m times ``step`` is
+        above DRAG_STIFF, where no explicit method is stable and an implicit one's stage equations
+        do not converge: a failure there (the rows after it are the unstable steps' own); None if
+        there is none. Asked where a fixed-step kernel run stops, however it stops (of that kernel
+        run's rows): an unstable first step may blow up into a state that is finite but absurd (a
+        lift-off with the centre 10⁴⁷ m away)."""
+        rows = self.rows if rows is None else rows
         scene = self.scene
         drag = scene.air.drag_factor(scene.ball.radius)
         if not (drag > 0.0 and len(rows)):
