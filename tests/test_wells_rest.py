@@ -77,3 +77,16 @@ def test_the_fixed_steps_pass_its_turning_points_at_their_order(method, order, s
         assert abs(traj.transitions[0].time - _reference()[0][0]) < 5e-8, (method, dt)
     coarse, fine = errors
     assert np.all(coarse < 5e-8) and np.all(fine < coarse / 2 ** order * 2), errors
+
+
+@pytest.mark.parametrize("x, y, rest", [(0.45833333333333304, -0.625, 13.0899), (-1.25, 1.583333333333333, 16.2421)])
+def test_a_ball_settling_in_a_well_is_not_stopped_by_its_last_steps_round_off(x, y, rest):
+    """Two starts of the basin map's grid whose ball settles in well 1 after turning sideways: the
+    stiff stretch's last steps before the rest move the contact point by about 10⁻¹⁵ m, and the
+    normal's round-off over such a chord looked like a bend of r·κ = 1.6 and 1.2: the runs stopped
+    "does not fit" at their rest (``events.looks``: a chord within round-off has no bend to judge)."""
+    scene = Scene.load(EXAMPLES_DIR / "wells.json")
+    traj = simulate(dataclasses.replace(scene, start=dataclasses.replace(scene.start, x=x, y=y)))
+    assert str(traj.status) == "ok" and [c.kind for c in traj.transitions] == ["rest"], traj.message
+    assert traj.transitions[0].time == pytest.approx(rest, abs=1e-4)
+    assert np.hypot(traj.transitions[0].x - 0.9732, traj.transitions[0].y) < 0.02   # in well 1

@@ -52,6 +52,7 @@ JOLT_MIN = 1e-6        # a centre jump (``centre_jolted``) shorter than this tim
 # taken again in sub-steps that approach the edge geometrically (``fold_search``).
 STAGE_RACE = 3.0
 FOLD_TOL = 1e-13       # sub-steps end here; the edge is then located to this fraction of the step
+CHORD_ROUND_OFF = 1e-24  # a step's squared chord below this share of the contact point's squared size is round-off
 FOLD_NEAR = 1e-3       # ...where 1 - r*kappa is below this (else a jump of the curvature is
 JUMP_TOL = 1e-6        # crossed, at once once a sub-step this short fits and does not race)
 FOLD_TRIES = 400       # sub-steps tried at most (then the step is taken as it is)
@@ -330,7 +331,10 @@ def looks(r, z, probe, zn, pn):
     chord2 = dx * dx + dy * dy + df * df
     worst = max(probe[PROBE_FIT], pn[PROBE_FIT], -probe[PROBE_FIT_LO], -pn[PROBE_FIT_LO])
     fit_end = pn[PROBE_FIT] >= 1.0
-    sharp = chord2 > 0.0 and (r * bend >= chord2 or r * abs(bend) > chord2 * (2.0 * worst + KINK_SLACK))
+    # (a chord within round-off of the contact point's coordinates has no bend to judge: a step ending
+    # at a ball's rest moves it 10^-15 m, and the normal's round-off over that looks like any bend)
+    sharp = chord2 > CHORD_ROUND_OFF * (1.0 + z[0] * z[0] + z[1] * z[1] + f0 * f0) and (
+        r * bend >= chord2 or r * abs(bend) > chord2 * (2.0 * worst + KINK_SLACK))
     # the height change against the slopes' trapezoid, grad f = -(N1, N2) / N3; 1 / N3 bounds
     # 1 and |grad f| (squares: no root per step)
     w0, w1 = 1.0 / probe[2], 1.0 / pn[2]
