@@ -331,10 +331,7 @@ def looks(r, z, probe, zn, pn):
     chord2 = dx * dx + dy * dy + df * df
     worst = max(probe[PROBE_FIT], pn[PROBE_FIT], -probe[PROBE_FIT_LO], -pn[PROBE_FIT_LO])
     fit_end = pn[PROBE_FIT] >= 1.0
-    # (a chord within round-off of the contact point's coordinates has no bend to judge: a step ending
-    # at a ball's rest moves it 10^-15 m, and the normal's round-off over that looks like any bend)
-    sharp = chord2 > CHORD_ROUND_OFF * (1.0 + z[0] * z[0] + z[1] * z[1] + f0 * f0) and (
-        r * bend >= chord2 or r * abs(bend) > chord2 * (2.0 * worst + KINK_SLACK))
+    sharp = chord2 > 0.0 and (r * bend >= chord2 or r * abs(bend) > chord2 * (2.0 * worst + KINK_SLACK))
     # the height change against the slopes' trapezoid, grad f = -(N1, N2) / N3; 1 / N3 bounds
     # 1 and |grad f| (squares: no root per step)
     w0, w1 = 1.0 / probe[2], 1.0 / pn[2]
@@ -758,7 +755,10 @@ def examine_step(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn, ints
                 else:  # the run goes on with the whole step, taken again (the approach used its buffers)
                     retake(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
                     dense_stages(fn, d, p, W, h, z, K, last, Ye, pe, ints)
-        elif r * bend >= chord2:
+        elif r * bend >= chord2 and chord2 > CHORD_ROUND_OFF * (1.0 + z[0] * z[0] + z[1] * z[1]
+                                                            + probe[PROBE_HEIGHT] * probe[PROBE_HEIGHT]):
+            # (a chord within round-off of the contact point's coordinates has no secant to judge: a step
+            # ending at a ball's rest moves it 10^-15 m, and the normal's round-off over that bends like anything)
             # a step passing a tip of the surface within round-off of its stages bends like that too
             # (the normal turns through a finite angle over a span the dense output cannot resolve)
             turn, tx, ty, convex = find_tip(fn, d, sb[0], sb[1], max(math.sqrt(chord2), BREAK_SPAN))
