@@ -34,15 +34,16 @@ from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REA
 # bound NaN.
 FRICTION_CAP = 1e100
 MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it would never move on)
-# A fixed-step run takes the stretch where a slip's direction is stiff (kernel.T_STIFF: friction
-# would stop the slip within a step, at its start or its end), or a rolling ball's ω_t's (rolling
-# resistance would stop it within a step), with this adaptive pair at this
-# tolerance, far below the fixed steps' own error, to the first step on its grid where it can go
-# on (docs/design.md §8); STIFF_WINDOW steps of the grid at a time, twice as many while it cannot.
+# A fixed-step run takes its steps where a slip's direction is stiff (friction would stop the
+# slip within a step), or a rolling ball's ω_t's (rolling resistance would stop it within a step,
+# or it turns faster than the step can follow), with this adaptive pair at this tolerance, far
+# below the fixed steps' own error (docs/design.md §8): in the kernel (``kernel.advance``'s pair);
+# a classic run stops there instead (kernel.T_STIFF) and takes the stretch here, STIFF_WINDOW steps
+# of the grid at a time (twice as many while it cannot go on), to the first step on its grid where
+# it can.
 STIFF_METHOD = "dop853"
 STIFF_TOLERANCE = 1e-13   # (a rest after a turning point slower than 10⁻⁴ m/s moves 10³ times its error)
 STIFF_WINDOW = 16
-EXIT_MARGIN = 2.0   # a stiff stretch ends where ω_t's turning is this much further from stiff (``_stiff``)
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
 SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
 
@@ -539,8 +540,9 @@ class ModeMachine:
     # -- a stretch where the slip is stiff (docs/design.md §8) ------------------------------------
 
     def _stiff_stretch(self) -> None:
-        """The fixed-step kernel run stopped before a step where the slip's direction is stiff, or
-        a rolling ball's ω_t's against rolling resistance (kernel.T_STIFF): that direction relaxes
+        """The classic fixed-step kernel run (a Munthe-Kaas one takes these steps with the pair
+        itself) stopped before a step where the slip's direction is stiff, or a rolling ball's
+        ω_t's against rolling resistance (kernel.T_STIFF): that direction relaxes
         at the rate |B| / |u| (the pull's |G| / |ω_t|) and turns with B (G), which no fixed step can
         follow at its order. That stretch is taken by STIFF_METHOD at STIFF_TOLERANCE (every
         transition in it too, a rest where ω_t reaches 0), recording every step of the run's grid;
@@ -616,7 +618,8 @@ class ModeMachine:
         cap = resistance * abs(row[NORMAL_FORCE]) / (1.4 * ball.mass * ball.radius)
         unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
         # (with twice the kernel's reach: a row the fixed steps go on from is not stiff to them)
-        return bool(kernel.turning_point.py_func(*turn, *rate, cap, EXIT_MARGIN * unit, EXIT_MARGIN * run.dt))
+        margin = kernel.EXIT_MARGIN
+        return bool(kernel.turning_point.py_func(*turn, *rate, cap, margin * unit, margin * run.dt))
 
     def _turns(self, rows: np.ndarray) -> np.ndarray:
         """ω's tangential part ω_t at each of ``rows`` (n, 3)."""

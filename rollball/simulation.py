@@ -17,7 +17,7 @@ from .run_size import MAX_ROWS, MAX_STEPS, step_count
 from .energy_check import energy_check
 from .geometry import unit_normal
 from .landscape import Landscape, landscape_of
-from .mode_machine import ModeMachine, friction_of
+from .mode_machine import STIFF_METHOD, STIFF_TOLERANCE, ModeMachine, friction_of
 from .modes import Mode
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
@@ -203,6 +203,9 @@ class Simulation:
         self._fn = self._landscape_record.ctypes.data
         self._W, self._E, self._P = _kernel_arrays(self.tableau)
         self._error_kind = max(len(self._E) - 1, 0)  # kernel.steps.error_norm: 1 or 2 estimates
+        # (fixed steps: the pair that takes their stiff steps, ``kernel.advance``; K holds its stages too)
+        self._S, self._SE, self._SP = _registered_arrays(STIFF_METHOD)
+        self._stages = len(self._W) if self.adaptive else max(len(self._W), len(self._S))
         # The 2011 model (friction null, glued after a lift-off) is one kernel run, as before scene
         # version 3; any other contact is a sequence of runs, each in one mode (``_advance``).
         contact = scene.contact
@@ -215,10 +218,10 @@ class Simulation:
             d = self.landscape.evaluate(s.x, s.y, scene.parameter_values)
             velocity = np.array([s.vx, s.vy, d[1] * s.vx + d[2] * s.vy])
             state = sliding.BallState(s.x, s.y, velocity, np.array(s.omega), np.eye(3), 0.0)
-            arrays = sliding.start_arrays(state, d, sliding=True, munthe_kaas=mk, stages=len(self._W), rows=n_rows,
+            arrays = sliding.start_arrays(state, d, sliding=True, munthe_kaas=mk, stages=self._stages, rows=n_rows,
                                           radius=scene.ball.radius, mass=scene.ball.mass, resisted=scene.dissipates)
         else:
-            arrays = kernel.run_arrays(kernel.state_size(mk, resisted=scene.dissipates), len(self._W), n_rows)
+            arrays = kernel.run_arrays(kernel.state_size(mk, resisted=scene.dissipates), self._stages, n_rows)
             alpha, v = initial_state(self.landscape, scene)
             arrays["z"][:2], arrays["z"][2:5] = alpha, v
             if not mk:
@@ -283,7 +286,9 @@ class Simulation:
             self._kernel = machine_code.Arguments(
                 "advance", fn=self._fn, W=self._W, P=self._P, p=self._p, dt=self.dt, t_start=t_start, t_end=t_end,
                 n_steps=n_steps, every=self.record_every, max_steps=1, **arrays,
-                stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT)
+                stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT,
+                S=self._S, SE=self._SE, SP=self._SP, s_kind=len(self._SE) - 1,
+                s_exp=METHODS[STIFF_METHOD].error_exponent, s_tol=STIFF_TOLERANCE)
 
     @property
     def done(self) -> bool:
@@ -295,7 +300,8 @@ class Simulation:
 
     @property
     def rejected(self) -> int:
-        """Steps tried and rejected by the adaptive method's error control (0 for fixed steps)."""
+        """Steps tried and rejected by the adaptive method's error control (fixed steps: by their
+        stiff pair's, ``kernel.advance``)."""
         return self._finished[1] + int(self._ints[kernel.I_REJECTED])
 
     @property
@@ -497,7 +503,7 @@ class Simulation:
             rows = 1 + own // self.record_every + 2
         d = self.landscape.evaluate(state.x, state.y, self.scene.parameter_values)
         h = float(self._info[kernel.F_H]) if self.adaptive and math.isfinite(self._info[kernel.F_H]) else self.dt
-        arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=len(self._W),
+        arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=self._stages,
                                rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass,
                                resisted=self.scene.dissipates)
         arrays["info"][kernel.F_H] = h

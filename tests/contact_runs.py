@@ -71,7 +71,8 @@ def segment(formula, state, *, sliding, method="rk4", dt=1e-3, t_end=1.0, mu=Non
         run = machine_code.Arguments("advance", fn=record.ctypes.data, W=W, P=P, p=p, dt=dt, t_start=0.0, t_end=t_end,
                                      n_steps=n_steps, every=every, max_steps=10 ** 9, **arrays,
                                      stepping=kernel.IMPLICIT if tableau.kind is MethodKind.IMPLICIT
-                                     else kernel.EXPLICIT)
+                                     else kernel.EXPLICIT, S=W, SE=W, SP=P, s_kind=0, s_exp=0.0, s_tol=0.0)
+        # (p[P_STIFF] 0: the run steps on where it is stiff, and the pair S is never taken)
     ints, info = arrays["ints"], arrays["info"]
     while ints[kernel.I_STATUS] == kernel.RUNNING:
         run()

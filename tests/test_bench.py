@@ -123,3 +123,25 @@ def test_a_sweep_is_timed_on_one_worker_against_two(monkeypatch):
     assert "**" in _targets(sweep=figures) and "two workers" in _targets(sweep=figures)
     monkeypatch.setattr(targets.os, "cpu_count", lambda: 1)
     assert targets.sweep_speedup(1) is None and "two workers" not in _targets(sweep=None)
+
+
+def test_a_run_with_the_three_dissipations_is_timed_against_the_same_run_without(monkeypatch):
+    """``dissipation_cost``: both runs really differ (the one with rolling resistance, spin friction
+    and air takes more evaluations), and the report marks a ratio above its goal."""
+    from rollball.simulation import Simulation
+    evaluations = []
+
+    class Counted(Simulation):
+        def advance(self, max_steps=None):
+            rows = super().advance(max_steps)
+            evaluations.append(self.evaluations)
+            return rows
+
+    monkeypatch.setattr(targets, "Simulation", Counted)
+    figures = targets.dissipation_cost(1)
+    assert figures["with_ms"] > 0.0 and figures["without_ms"] > 0.0 and figures["ratio"] > 0.0
+    assert evaluations[0] > evaluations[1] * 1.2, evaluations   # (with the three, then without)
+    assert "missed" not in _targets(dissipation={**figures, "ratio": 1.4})
+    assert "with the three" in _targets(dissipation=figures)
+    missed = [line for line in _targets(dissipation={**figures, "ratio": 1.6}).splitlines() if "missed" in line]
+    assert len(missed) == 1 and "1.60×" in missed[0]

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from ..examples import EXAMPLES_DIR
-from ..scene import Scene
+from ..scene import Air, Scene
 from ..simulation import Simulation
 from ..tableaus import METHODS
 from ..trajectory import CONTACT
@@ -238,6 +238,25 @@ def hybrid_costs(repeats: int) -> dict:
     return out
 
 
+DISSIPATION_GOAL = 1.5   # a run with rolling resistance, spin friction and air against the same run without
+AIR = {"density": 1.2, "drag_coefficient": 0.47}   # (air at sea level, a smooth sphere)
+
+
+def dissipation_cost(repeats: int) -> dict:
+    """CPU time of the wells example (rk4, dt 2e-3, to 16 s: its 20 turning points, the rest after
+    16.39 s left out) with its rolling resistance and spin friction and air, against the same run
+    with none of the three, the two in turn: medians and the median of the ratios."""
+    scene = dataclasses.replace(Scene.load(EXAMPLES_DIR / "wells.json"), duration=16.0)
+    on = dataclasses.replace(scene, air=Air(**AIR))
+    off = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, rolling_resistance=0.0,
+                                                                 spin_friction=0.0))
+    _run_cpu(on), _run_cpu(off)   # (compiled, the landscape too)
+    pairs = [(_run_cpu(on), _run_cpu(off)) for _ in range(repeats)]
+    with_, without = (np.array(column) for column in zip(*pairs))
+    return {"with_ms": float(np.median(with_)) * 1e3, "without_ms": float(np.median(without)) * 1e3,
+            "ratio": float(np.median(with_ / np.maximum(without, 1e-9)))}
+
+
 SWEEP_GOAL = 1.6   # a sweep on two workers against one: wall time, the same runs
 
 
@@ -276,5 +295,6 @@ def measure(quick: bool) -> dict:
         "memory": peak_memory(10_000_000),
         "app": app_responsiveness(),
         "hybrid": hybrid_costs(3 if quick else 9),
+        "dissipation": dissipation_cost(5 if quick else 21),
         "sweep": sweep_speedup(3 if quick else 5),
     }

@@ -107,6 +107,20 @@ def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
 
 
 @JIT
+def pair_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
+    """An embedded pair's try (``_trial_step``, R left to ``carry_orientation``) for z's layout:
+    MK_SIZE or SLIDING_MK_SIZE, each with the dissipation's quadratures or without."""
+    n = z.shape[0]
+    if n == MK_SIZE:
+        return trial_step_pair(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == SLIDING_MK_SIZE:
+        return sliding_step_pair(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    if n == RESISTED_MK_SIZE:
+        return resisted_step_pair(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+    return resisted_sliding_pair(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
+
+
+@JIT
 def resisted_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
     """The explicit step for a layout with the dissipation's quadratures (``trial_step``)."""
     n = z.shape[0]

@@ -30,6 +30,11 @@ ENTRY_SLOTS = 64
 RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("rows", MATRIX), ("ints", INTS),
               ("info", VECTOR), ("work", VECTOR))
 
+# advance takes, beside its fixed method, the embedded pair (S, SE, SP, s_kind, s_exp: as
+# advance_adaptive's W, E, P, err_kind, err_exp) that takes its stiff steps at the tolerance s_tol
+# (rtol and atol both): a stretch of them ends at the first step whose direction is EXIT_MARGIN
+# times further from stiff (``loops.turn_stiff``). (The sweeps' batches, p[P_STIFF] 0, have none.)
+EXIT_MARGIN = 2.0
 # advance and advance_adaptive take the absolute time ``t_start`` of the run's start and its
 # absolute ``t_end``: a run that goes on after a change of contact mode keeps the whole run's clock
 # (its steps and rows on the grid a run from t = 0 has, ``grid_steps_before``; advance's n_steps
@@ -37,7 +42,8 @@ RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("
 ENTRIES = {
     "advance": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("p", VECTOR), ("dt", FLOAT), ("t_start", FLOAT),
                 ("t_end", FLOAT), ("n_steps", INT), ("every", INT), ("max_steps", INT), *RUN_ARRAYS,
-                ("stepping", FLOAT)),
+                ("stepping", FLOAT), ("S", MATRIX), ("SE", MATRIX), ("SP", MATRIX), ("s_kind", INT), ("s_exp", FLOAT),
+                ("s_tol", FLOAT)),
     "advance_adaptive": (("fn", ADDRESS), ("W", MATRIX), ("E", MATRIX), ("P", MATRIX), ("p", VECTOR),
                          ("err_kind", INT), ("err_exp", FLOAT), ("t_start", FLOAT), ("t_end", FLOAT),
                          ("record_dt", FLOAT), ("rtol", FLOAT), ("atol", FLOAT), ("max_steps", INT), *RUN_ARRAYS),
@@ -133,7 +139,7 @@ P_TURN = 7  # p[P_TURN] > 0: omega is carried instead of u, R follows it to this
 P_MU = 8    # the friction coefficient mu; inf: always enough friction to roll (the 2011 model)
 P_FLY = 9   # 1: the run stops at a lift-off (the ball flies); 0: it goes on glued to the surface
 P_DISSIPATED = 10  # the energy dissipated before this run (J): what rolling rows record
-P_STIFF = 11  # 1: a fixed-step run stops before a step whose slip or rolling omega_t is stiff (T_STIFF); 0: steps on
+P_STIFF = 11  # 1: a fixed-step run's steps whose slip or rolling omega_t is stiff are the stiff pair's; 0: steps on
 P_RESISTANCE = 12  # the rolling resistance c_rr (a couple -c_rr r F_n along omega's tangential part)
 P_SPIN = 13        # the spin friction mu_s (a couple -mu_s r F_n along omega's normal part)
 P_AIR = 14         # the air's drag factor k (kg/m): a force -k |c'| c' on the centre
@@ -151,9 +157,10 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, fr
     then the contact: ``friction`` mu (None: always enough to roll, the 2011 model: no slip is
     ever looked for), ``fly`` (stop the run at a lift-off instead of going on glued), the
     energy ``dissipated`` before this run (J, carried into its rows) and ``stiff`` (a fixed-step
-    run stops before a step whose slip, or whose rolling omega_t against rolling resistance, is
-    stiff, T_STIFF, for the caller to take that stretch; without it the run steps on with the
-    direction at the step's start); then the dissipation
+    run's steps where its slip, or its rolling omega_t against rolling resistance, is stiff are
+    taken by the stiff pair, ``advance``'s S; a classic run stops before them, T_STIFF, for the
+    caller to take that stretch; without it the run steps on with the direction at the step's
+    start); then the dissipation
     (docs/design.md §1, "Dissipation"): ``rolling_resistance`` c_rr, ``spin_friction`` mu_s, ``air``
     the drag factor k (kg/m) and the energy each of the three took before this run (``causes``, J,
     which is part of ``dissipated``). A run whose state carries the quadratures (``state_size``,

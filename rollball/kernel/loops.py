@@ -9,16 +9,15 @@ import numpy as np
 
 from .dense import state_at
 from .events import TIP_REACH, contact_watched, fold_search, record_valid, step_events, tip_liftoff, tip_stop
-from .explicit import (STEP_NOT_CONVERGED, carry_orientation, dense_stages, resisted_sliding_pair, resisted_step_pair,
-                       sliding_step_pair, trial_step_pair)
+from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, pair_step
 from .interface import (
     BATCH_CHUNK, D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED,
     I_NONFINITE, I_REJECTED,
-    I_RETRY, I_ROWS, I_STATUS, I_STEPS, MK_SIZE, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
+    I_RETRY, I_ROWS, I_STATUS, I_STEPS, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
     O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
-    P_RESISTANCE, RESISTED_MK_SIZE, SLIDING_MK_SIZE, T_REST, T_SIDE, MIN_STEP, grid_steps_before)
+    P_RESISTANCE, P_TURN, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side,
                       turning_point)
@@ -64,7 +63,7 @@ def slip_reference(d, probe, p, h, cap):
 
 
 @JIT
-def turn_stiff(d, p, probe, K, h, n):
+def turn_stiff(d, p, probe, K, h, n, margin):
     """Whether a rolling ball's omega_t at the step's start (w0 = d[D_SIDE:D_SIDE + 3],
     ``couple_reference``'s) is stiff for a fixed step of h (docs/design.md §1, "Dissipation"): its
     rolling resistance would stop it within the step, |w0| < C h with C = c_rr r F_n / (7/5 m r^2);
@@ -72,8 +71,9 @@ def turn_stiff(d, p, probe, K, h, n):
     (``turning_point``, with w0' = k v'_t from K[0], k = 5/(7 m r^2)): near a stop it relaxes
     towards the pull's at the rate |pull| / |omega_t|, as a starting slip's does
     (``slip_reference``), and at a turning point it turns about within |omega_t,min| / |w0'|, which
-    no fixed step follows at its order: ``advance`` stops there (T_STIFF) for the run in Python to
-    take that stretch with an adaptive pair."""
+    no fixed step follows at its order: ``advance`` takes such steps with an embedded pair
+    (``stiff_step``). ``margin``: the bound's time and the reach times it (1 to enter a stretch
+    of such steps, EXIT_MARGIN to stay in it: a step the fixed steps go on from is not stiff to them)."""
     if sliding_size(n) or p[P_RESISTANCE] == 0.0:
         return False
     t1, t2, t3 = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]
@@ -87,8 +87,8 @@ def turn_stiff(d, p, probe, K, h, n):
     en = e1 * n1 + e2 * n2 + e3 * n3
     k = p[3]
     return turning_point(t1, t2, t3, k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3),
-                         p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]), math.sqrt(p[0] / abs(p[2])),
-                         h)
+                         p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]),
+                         margin * math.sqrt(p[0] / abs(p[2])), margin * h)
 
 
 SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static
@@ -158,9 +158,92 @@ def slow_slip(p, rtol):
     return math.sqrt(rtol * p[2] * p[0])
 
 
+@JIT
+def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, rows, ints, info, work, watch):
+    """A fixed step from t0 to t0 + h where the slip's direction, or a rolling ball's omega_t's, is
+    stiff (``slip_reference``, ``turn_stiff``: no fixed step follows it at its order), taken by the
+    embedded pair S, SE, SP (as ``advance_adaptive``'s W, E, P; s_kind, s_exp its err_kind, err_exp)
+    at the tolerance ``tol``, in as many of its steps as its error control takes, the first tried
+    at ``hp``; each with its events: a transition inside stops the run there as a fixed step's does,
+    a rest where omega_t reaches 0 included. Returns the pair's next step, or -1 where the run
+    stopped (status set, its last row recorded). A Munthe-Kaas state only. The state is the fixed
+    steps' at both ends (u zero, K[0]'s u-part omega, p[P_TURN] 0); inside, the pair carries
+    omega (p[P_TURN] > 0, ``accept``)."""
+    n, mk = shape_of(z)
+    m = motion_size(n)
+    last = SE.shape[1] - 1
+    d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
+    resists = resisted_size(n)
+    p[P_TURN] = TURN_SHARE * tol
+    if m == MOTION_SIZE:   # (rolling, the pair carries omega in u's place; sliding, omega is the motion's)
+        for q in range(3):
+            z[5 + q] = probe[PROBE_OMEGA + q]
+    evaluate(fn, d, p, z, mk, K, np.int64(0), probe)
+    ints[I_EVALS] += 1
+    cap = slow_slip(p, tol)
+    t, t_end, turns, retry, out = t0, t0 + h, 0, False, -1.0
+    while True:
+        land = t + 1.1 * hp >= t_end
+        hs = t_end - t if land else hp
+        if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
+            stopped_rolling(rows, ints, info, t, z, R, probe, p)
+            break
+        if watch:
+            slip_reference(d, probe, p, hs, cap)
+        bad = pair_step(fn, d, p, S, SP, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        err = math.inf if bad else error_norm(SE, s_kind, K, last, m, z, zn, hs, tol, tol, p)
+        if err <= 1.0:
+            bad = carry_orientation(fn, d, p, S, SP, hs, z, R, K, last, Y, Rn, pn, ints)
+            err = math.inf if bad else err
+        if not err <= 1.0:
+            ints[I_REJECTED] += 1
+            retry = True
+            hp = hs * max(MIN_FACTOR, SAFETY * err ** s_exp) if err < math.inf else MIN_FACTOR * hs
+            ints[I_NONFINITE] += 1 if bad else 0
+            if ints[I_NONFINITE] >= NONFINITE_TRIES:
+                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
+            elif hp <= MIN_STEP * max(1.0, abs(t)):
+                if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
+                    _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], hp)
+            else:
+                continue
+            record_last(rows, ints, t, z, R, probe, p)
+            break
+        valid = step_events(fn, d, p, S, True, n, t, hs, z, R, K, last, SP, probe, Y, zn, Rn, pn, ints, info,
+                            False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
+        if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there
+            resume(fn, d, p, hs, SP, valid, z, R, K, probe, ints, zn, Rn, pn)
+            turns += 1
+            t += valid * hs
+            continue
+        if valid >= 0.0:
+            record_valid(fn, d, p, S, t, hs, valid, z, R, K, last, SP, probe, rows, ints, info, Y, zn,
+                         Rn, pn, Ye, sa, sb, sm, EXPLICIT)
+            break
+        t = t_end if land else t + hs
+        accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
+        turns = 0
+        grown = hs * min(1.0 if retry else MAX_FACTOR, next_step_factor(err, s_kind, s_exp, info))
+        hp = max(hp, grown) if land else grown
+        retry = False
+        if t == t_end:
+            out = hp
+            break
+        if hp <= MIN_STEP * max(1.0, abs(t)):
+            if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
+                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], hp)
+            record_last(rows, ints, t, z, R, probe, p)
+            break
+    p[P_TURN] = 0.0
+    for q in range(3):   # (the fixed steps' state: u zero, its rate omega)
+        z[m + q] = 0.0
+        K[0, m + q] = probe[PROBE_OMEGA + q]
+    return out
+
+
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
 def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K, probe, rows, ints, info, work,
-            stepping):
+            stepping, S, SE, SP, s_kind, s_exp, s_tol):
     """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
     W, P: the method (``Tableau.kernel_arrays``); K has ``stage_rows(W.shape[0])`` rows.
@@ -170,6 +253,10 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
     call (no rows yet) the initial state is checked and recorded. The run stops early, with
     ints[I_STATUS] set, where the state turns non-finite or a check fails; the last valid state
     is then the last row.
+
+    Where the slip's direction, or a rolling ball's omega_t's, is stiff for the steps, a stretch
+    of steps is the embedded pair's S, SE, SP at s_tol (``stiff_step``; a classic run stops there
+    instead, T_STIFF, for the caller to take that stretch).
 
     The run's clock is the whole run's (``interface.grid_steps_before``): it starts at t_start
     (0, or where the contact changed mode) and its steps end at the multiples k·dt of the grid, the
@@ -196,6 +283,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
     phase = before % every              # the first row after the start: at the step every - phase
     k0 = ints[I_STEPS]
     k_stop = min(own, k0 + max_steps)
+    stretch, hp = False, dt   # in a stretch of stiff steps; the pair's next step
     for k in range(k0 + 1, k_stop + 1):
         final = k == own
         g = before + k
@@ -207,13 +295,23 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
                 stopped_rolling(rows, ints, info, t0, z, R, probe, p)
                 return
+            stiff = False
             if watch:
                 slip_reference(d, probe, p, h, math.inf)
-                if p[P_STIFF] != 0.0 and (d[D_SLIP + 3] == math.inf and sliding_size(n)
-                                          or resists and turn_stiff(d, p, probe, K, h, n)):   # (Python's: T_STIFF)
-                    ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
-                    info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
+                stiff = p[P_STIFF] != 0.0 and (d[D_SLIP + 3] == math.inf and sliding_size(n) or resists and turn_stiff(
+                    d, p, probe, K, h, n, EXIT_MARGIN if stretch else 1.0))
+            if stiff and not mk:   # (the caller's: T_STIFF)
+                ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
+                info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
+                return
+            stretch = stiff
+            if stiff:
+                hp = stiff_step(fn, S, SE, SP, s_kind, s_exp, s_tol, p, t0, h, min(hp, h), z, R, K, probe, rows, ints,
+                                info, work, watch)
+                if hp < 0.0:
                     return
+                valid = -1.0
+                break
             bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
             if bad and info[F_FOLD] < t0 + 2.0 * h:  # a step failing at the edge of the no-fit region
                 valid = fold_search(fn, d, p, W, P, t0, h, z, R, K, last, probe, Y, zn, Rn, pn, ints, info, Ye, Re,
@@ -250,7 +348,8 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             record_valid(fn, d, p, W, t0, h, valid, z, R, K, last, P, probe, rows, ints, info, Y, zn,
                          Rn, pn, Ye, sa, sb, sm, stepping)
             return
-        accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
+        if not stretch:   # (a stiff step's state is the run's already)
+            accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] = k
         if k - ints[I_LAST_RECORDED] == (every if ints[I_LAST_RECORDED] > 0 else every - phase) or final:
             # (no division in the loop)
@@ -313,14 +412,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             break
         if watch:
             slip_reference(d, probe, p, hs, cap)
-        if n == MK_SIZE:
-            bad = trial_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        elif n == SLIDING_MK_SIZE:
-            bad = sliding_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        elif n == RESISTED_MK_SIZE:
-            bad = resisted_step_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        else:
-            bad = resisted_sliding_pair(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+        bad = pair_step(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
         err = math.inf if bad else error_norm(E, err_kind, K, last, motion, z, zn, hs, rtol, atol, p)
         if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
             bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
@@ -439,7 +531,7 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K
         while ints[I_STATUS] == RUNNING:
             # (np.int64: a literal int would compile advance anew for it)
             advance(fn, W, P, p, DT[b], 0.0, T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R, K, probe,
-                    rows, ints, info, work, EXPLICIT)
+                    rows, ints, info, work, EXPLICIT, W, W, P, np.int64(0), 0.0, 0.0)   # (p[P_STIFF] 0: no pair)
             count = ints[I_ROWS]
             if count == 0:  # the initial state is not finite: nothing to report
                 break
