@@ -617,7 +617,7 @@ class ModeMachine:
         rate = (other_turn - turn) / (other[T] - row[T])
         cap = resistance * abs(row[NORMAL_FORCE]) / (1.4 * ball.mass * ball.radius)
         unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
-        # (with twice the kernel's reach: a row the fixed steps go on from is not stiff to them)
+        # (as the kernel's stretch ends: a row the fixed steps go on from is not stiff to them)
         margin = kernel.EXIT_MARGIN
         return bool(kernel.turning_point.py_func(*turn, *rate, cap, margin * unit, margin * run.dt))
 

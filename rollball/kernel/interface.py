@@ -34,7 +34,7 @@ RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("
 # advance_adaptive's W, E, P, err_kind, err_exp) that takes its stiff steps at the tolerance s_tol
 # (rtol and atol both): a stretch of them ends at the first step whose direction is EXIT_MARGIN
 # times further from stiff (``loops.turn_stiff``). (The sweeps' batches, p[P_STIFF] 0, have none.)
-EXIT_MARGIN = 2.0
+EXIT_MARGIN = 1.5
 # advance and advance_adaptive take the absolute time ``t_start`` of the run's start and its
 # absolute ``t_end``: a run that goes on after a change of contact mode keeps the whole run's clock
 # (its steps and rows on the grid a run from t = 0 has, ``grid_steps_before``; advance's n_steps

@@ -166,20 +166,13 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
     at the tolerance ``tol``, in as many of its steps as its error control takes, the first tried
     at ``hp``; each with its events: a transition inside stops the run there as a fixed step's does,
     a rest where omega_t reaches 0 included. Returns the pair's next step, or -1 where the run
-    stopped (status set, its last row recorded). A Munthe-Kaas state only. The state is the fixed
-    steps' at both ends (u zero, K[0]'s u-part omega, p[P_TURN] 0); inside, the pair carries
-    omega (p[P_TURN] > 0, ``accept``)."""
+    stopped (status set, its last row recorded). A Munthe-Kaas state only, in the pair's layout
+    (``pair_layout``) at both ends."""
     n, mk = shape_of(z)
     m = motion_size(n)
     last = SE.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     resists = resisted_size(n)
-    p[P_TURN] = TURN_SHARE * tol
-    if m == MOTION_SIZE:   # (rolling, the pair carries omega in u's place; sliding, omega is the motion's)
-        for q in range(3):
-            z[5 + q] = probe[PROBE_OMEGA + q]
-    evaluate(fn, d, p, z, mk, K, np.int64(0), probe)
-    ints[I_EVALS] += 1
     cap = slow_slip(p, tol)
     t, t_end, turns, retry, out = t0, t0 + h, 0, False, -1.0
     while True:
@@ -234,11 +227,32 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
                 _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], hp)
             record_last(rows, ints, t, z, R, probe, p)
             break
+    return out
+
+
+@JIT
+def pair_layout(fn, d, p, z, K, probe, ints, tol):
+    """A Munthe-Kaas state at a step's start made the stiff pair's (``stiff_step``): the pair
+    carries omega (p[P_TURN] > 0: rolling, in u's place; sliding, omega is the motion's and u
+    stays 0), and K[0] is evaluated anew."""
+    n, mk = shape_of(z)
+    p[P_TURN] = TURN_SHARE * tol
+    if motion_size(n) == MOTION_SIZE:
+        for q in range(3):
+            z[5 + q] = probe[PROBE_OMEGA + q]
+    evaluate(fn, d, p, z, mk, K, np.int64(0), probe)
+    ints[I_EVALS] += 1
+
+
+@JIT
+def fixed_layout(p, z, K, probe):
+    """The stiff pair's state (``pair_layout``) made the fixed steps' again: u zero, K[0]'s
+    u-part omega (as ``accept`` leaves it), p[P_TURN] 0."""
+    m = motion_size(z.shape[0])
     p[P_TURN] = 0.0
-    for q in range(3):   # (the fixed steps' state: u zero, its rate omega)
+    for q in range(3):
         z[m + q] = 0.0
         K[0, m + q] = probe[PROBE_OMEGA + q]
-    return out
 
 
 @COLD  # called by its entry point (simulate) and by the sweeps' batch loop: compiled once
@@ -283,7 +297,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
     phase = before % every              # the first row after the start: at the step every - phase
     k0 = ints[I_STEPS]
     k_stop = min(own, k0 + max_steps)
-    stretch, hp = False, dt   # in a stretch of stiff steps; the pair's next step
+    stretch, hp = False, dt   # in a stretch of stiff steps (its state in the pair's layout); the pair's next step
     for k in range(k0 + 1, k_stop + 1):
         final = k == own
         g = before + k
@@ -293,6 +307,8 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         turns = 0
         while True:   # (again from where a couple's side turned inside the step, ``resume``)
             if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
+                if stretch:
+                    fixed_layout(p, z, K, probe)
                 stopped_rolling(rows, ints, info, t0, z, R, probe, p)
                 return
             stiff = False
@@ -304,11 +320,16 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
                 ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
                 info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]
                 return
+            if stiff and not stretch:
+                pair_layout(fn, d, p, z, K, probe, ints, s_tol)
+            elif stretch and not stiff:
+                fixed_layout(p, z, K, probe)
             stretch = stiff
             if stiff:
                 hp = stiff_step(fn, S, SE, SP, s_kind, s_exp, s_tol, p, t0, h, min(hp, h), z, R, K, probe, rows, ints,
                                 info, work, watch)
                 if hp < 0.0:
+                    fixed_layout(p, z, K, probe)
                     return
                 valid = -1.0
                 break
@@ -356,6 +377,8 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             record(rows, ints[I_ROWS], t, z, R, probe, p)
             ints[I_ROWS] += 1
             ints[I_LAST_RECORDED] = k
+    if stretch:
+        fixed_layout(p, z, K, probe)
     if ints[I_STEPS] == own:
         ints[I_STATUS] = OK
 
