@@ -159,6 +159,42 @@ def slow_slip(p, rtol):
 
 
 @JIT
+def pair_try(fn, d, p, W, E, P, err_kind, err_exp, rtol, atol, t, hs, cap, free, z, R, K, last, probe, rows, ints, info,
+             Y, zn, Rn, pn, watch):
+    """One try of an embedded pair's step of hs from t (``advance_adaptive``, ``stiff_step``): the
+    couples' sides (``free``: ``couple_reference``'s) and the slip's reference (``cap``:
+    ``slip_reference``'s) at its start, the step, its error in units of the tolerance and, accepted
+    (<= 1), R carried through it. Returns (err, h): accepted, h = hs; rejected, h the step to try
+    next; -1 where the run stopped (status set, its last row recorded: a rest at t, a step
+    that cannot be made small enough or finite)."""
+    n = z.shape[0]
+    if resisted_size(n) and couple_reference(fn, d, p, z, K, probe, ints, free):
+        stopped_rolling(rows, ints, info, t, z, R, probe, p)
+        return math.inf, -1.0
+    if watch:
+        slip_reference(d, probe, p, hs, cap)
+    bad = pair_step(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
+    err = math.inf if bad else error_norm(E, err_kind, K, last, motion_size(n), z, zn, hs, rtol, atol, p)
+    if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
+        bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
+        err = math.inf if bad else err
+    if err <= 1.0:
+        return err, hs
+    ints[I_REJECTED] += 1
+    h = hs * max(MIN_FACTOR, SAFETY * err ** err_exp) if err < math.inf else MIN_FACTOR * hs
+    ints[I_NONFINITE] += 1 if bad else 0
+    if ints[I_NONFINITE] >= NONFINITE_TRIES:
+        _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
+    elif h <= MIN_STEP * max(1.0, abs(t)):
+        if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
+            _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+    else:
+        return err, h
+    record_last(rows, ints, t, z, R, probe, p)
+    return err, -1.0
+
+
+@JIT
 def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, rows, ints, info, work, watch):
     """A fixed step from t0 to t0 + h where the slip's direction, or a rolling ball's omega_t's, is
     stiff (``slip_reference``, ``turn_stiff``: no fixed step follows it at its order), taken by the
@@ -168,40 +204,21 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
     a rest where omega_t reaches 0 included. Returns the pair's next step, or -1 where the run
     stopped (status set, its last row recorded). A Munthe-Kaas state only, in the pair's layout
     (``pair_layout``) at both ends."""
-    n, mk = shape_of(z)
-    m = motion_size(n)
+    n = z.shape[0]
     last = SE.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
-    resists = resisted_size(n)
     cap = slow_slip(p, tol)
     t, t_end, turns, retry, out = t0, t0 + h, 0, False, -1.0
     while True:
         land = t + 1.1 * hp >= t_end
         hs = t_end - t if land else hp
-        if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
-            stopped_rolling(rows, ints, info, t, z, R, probe, p)
+        err, tried = pair_try(fn, d, p, S, SE, SP, s_kind, s_exp, tol, tol, t, hs, cap, turns < SIDE_TURNS, z, R, K,
+                              last, probe, rows, ints, info, Y, zn, Rn, pn, watch)
+        if tried < 0.0:
             break
-        if watch:
-            slip_reference(d, probe, p, hs, cap)
-        bad = pair_step(fn, d, p, S, SP, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        err = math.inf if bad else error_norm(SE, s_kind, K, last, m, z, zn, hs, tol, tol, p)
-        if err <= 1.0:
-            bad = carry_orientation(fn, d, p, S, SP, hs, z, R, K, last, Y, Rn, pn, ints)
-            err = math.inf if bad else err
         if not err <= 1.0:
-            ints[I_REJECTED] += 1
-            retry = True
-            hp = hs * max(MIN_FACTOR, SAFETY * err ** s_exp) if err < math.inf else MIN_FACTOR * hs
-            ints[I_NONFINITE] += 1 if bad else 0
-            if ints[I_NONFINITE] >= NONFINITE_TRIES:
-                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
-            elif hp <= MIN_STEP * max(1.0, abs(t)):
-                if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
-                    _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], hp)
-            else:
-                continue
-            record_last(rows, ints, t, z, R, probe, p)
-            break
+            retry, hp = True, tried
+            continue
         valid = step_events(fn, d, p, S, True, n, t, hs, z, R, K, last, SP, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
         if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there
@@ -410,7 +427,6 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
     than two free rows while recording every step: the caller grows it and calls again.
     """
     n = z.shape[0]   # MK_SIZE, or SLIDING_MK_SIZE
-    motion = motion_size(n)
     last = E.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
     if ints[I_ROWS] == 0:
@@ -419,7 +435,6 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         if ints[I_STATUS] != RUNNING:
             return
     watch = contact_watched(p, n)
-    resists = resisted_size(n)
     turns = 0   # (the couples' sides turned since the last step that ended whole: SIDE_TURNS at most, ``resume``)
     cap = slow_slip(p, rtol)
     skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
@@ -430,30 +445,13 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             break
         land = t + 1.1 * h >= t_end  # stretch a little rather than leave a sliver
         hs = t_end - t if land else h
-        if resists and couple_reference(fn, d, p, z, K, probe, ints, turns < SIDE_TURNS):
-            stopped_rolling(rows, ints, info, t, z, R, probe, p)
+        err, tried = pair_try(fn, d, p, W, E, P, err_kind, err_exp, rtol, atol, t, hs, cap, turns < SIDE_TURNS, z, R,
+                              K, last, probe, rows, ints, info, Y, zn, Rn, pn, watch)
+        if tried < 0.0:
             break
-        if watch:
-            slip_reference(d, probe, p, hs, cap)
-        bad = pair_step(fn, d, p, W, P, hs, z, R, K, last, Y, zn, Rn, pn, ints)
-        err = math.inf if bad else error_norm(E, err_kind, K, last, motion, z, zn, hs, rtol, atol, p)
-        if err <= 1.0:  # accepted: R carried through the step (its dense-output stages only now)
-            bad = carry_orientation(fn, d, p, W, P, hs, z, R, K, last, Y, Rn, pn, ints)
-            err = math.inf if bad else err
         if not err <= 1.0:  # rejected (or not finite): try again with a smaller step
-            ints[I_REJECTED] += 1
-            retry = True
-            h = hs * max(MIN_FACTOR, SAFETY * err ** err_exp) if err < math.inf else MIN_FACTOR * hs
-            ints[I_NONFINITE] += 1 if bad else 0
-            if ints[I_NONFINITE] >= NONFINITE_TRIES:
-                _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
-            elif h <= MIN_STEP * max(1.0, abs(t)):
-                if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
-                    _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
-            else:
-                continue
-            record_last(rows, ints, t, z, R, probe, p)
-            break
+            retry, h = True, tried
+            continue
         t_new = t_end if land else t + hs
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
