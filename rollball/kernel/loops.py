@@ -277,7 +277,8 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             stepping, S, SE, SP, s_kind, s_exp, s_tol):
     """Run up to ``max_steps`` further fixed steps; all run state lives in the arrays passed in.
 
-    W, P: the method (``Tableau.kernel_arrays``); K has ``stage_rows(W.shape[0])`` rows.
+    W, P: the method (``Tableau.kernel_arrays``); K has ``stage_rows`` of the larger of W's and S's
+    rows (``Simulation``; S's only where p[P_STIFF] is set).
     ``stepping``: IMPLICIT for collocation_step's steps (the
     Gauss methods, Munthe-Kaas only), EXPLICIT for trial_step's. One compiled loop serves every
     fixed-step method and both orientation schemes (read from the state's length). On the first
