@@ -95,9 +95,8 @@ class ModeMachine:
         self.off: Failure | None = None   # a flight found no surface below the ball, or a tip too slow to leave
         self.stall: str | None = None     # why the contact's modes could not go on
         self.stop_after = stop_after
-        # a kernel run recording every adaptive step writes its rows straight into ``out`` from
-        # row ``base`` on (``shared_rows``): no second buffer of millions of rows; None: it has
-        # its own rows, moved here as it goes
+        # a kernel run writes its rows straight into ``out`` from row ``base`` on (``shared_rows``):
+        # no second buffer of them; None: it has its own rows, moved here as it goes
         self.base: int | None = None
         self.saved: np.ndarray | None = None   # the row its first row lands on, put back (``collect``)
 
@@ -136,7 +135,7 @@ class ModeMachine:
         self.count = need
 
     def shared_rows(self, repeat: bool, rows: int) -> np.ndarray:
-        """The rows a kernel run that records every adaptive step writes to: ``out`` from the
+        """The rows a kernel run writes to (``Simulation._shares_rows``): ``out`` from the
         run's next row on, room for ``rows`` made (``repeat``: from its last row, which the
         kernel's first row, the same state again, lands on and ``collect`` puts back)."""
         self.base = self.count - (1 if repeat else 0)
