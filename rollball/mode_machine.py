@@ -96,8 +96,8 @@ class ModeMachine:
         self.stall: str | None = None     # why the contact's modes could not go on
         self.stop_after = stop_after
         # a kernel run writes its rows straight into ``out`` from row ``base`` on (``shared_rows``):
-        # no second buffer of them; None: it has its own rows, moved here as it goes
-        self.base: int | None = None
+        # no second buffer of them
+        self.base = 0
         self.saved: np.ndarray | None = None   # the row its first row lands on, put back (``collect``)
 
     # -- the rows ---------------------------------------------------------------------------------
@@ -135,7 +135,7 @@ class ModeMachine:
         self.count = need
 
     def shared_rows(self, repeat: bool, rows: int) -> np.ndarray:
-        """The rows a kernel run writes to (``Simulation._shares_rows``): ``out`` from the
+        """The rows a kernel run writes to (``Simulation._room``): ``out`` from the
         run's next row on, room for ``rows`` made (``repeat``: from its last row, which the
         kernel's first row, the same state again, lands on and ``collect`` puts back)."""
         self.base = self.count - (1 if repeat else 0)
@@ -165,11 +165,8 @@ class ModeMachine:
         start = self.taken
         if self.skip_first and start == 0 and count > 0:
             start = 1
-            if self.base is not None:
-                self.out[self.base] = self.saved
-        if self.base is None:
-            self.append(run._rows[start:count].copy())
-        elif count > start:   # (written in place)
+            self.out[self.base] = self.saved
+        if count > start:   # (written in place)
             if self.starts[-1][1] != self.mode:
                 self.starts.append((self.count, self.mode))
             self.count = self.base + count
@@ -179,12 +176,10 @@ class ModeMachine:
             self.first_liftoff = Liftoff(float(info[kernel.F_LIFTOFF]), float(info[kernel.F_LIFT_X]),
                                          float(info[kernel.F_LIFT_Y]), bool(info[kernel.F_LIFT_KINK]))
 
-    def new_kernel_run(self, repeat: bool, shared: bool) -> None:
-        """A new kernel run's rows begin (``repeat``: its first row is the run's last row again;
-        ``shared``: it writes them into ``out``, ``shared_rows``)."""
+    def new_kernel_run(self, repeat: bool) -> None:
+        """A new kernel run's rows begin, written into ``out`` (``shared_rows``; ``repeat``: its first
+        row is the run's last row again)."""
         self.taken, self.skip_first = 0, repeat
-        if not shared:
-            self.base = self.saved = None
 
     # -- a kernel run stopped at a change ------------------------------------------------------
 

@@ -213,15 +213,17 @@ class Simulation:
         self._p = self._parameters(0.0)
         slip = start_slip(scene)
         slips = slip is not None and bool(np.any(slip != 0.0)) and contact.friction is not None
+        # (a run whose contact changes mode writes its rows into the mode machine's, ``_room``: none of its own)
+        own_rows = 0 if self.segmented else n_rows
         if slips:   # a start.omega that does not roll: the ball starts sliding
             s = scene.start
             d = self.landscape.evaluate(s.x, s.y, scene.parameter_values)
             velocity = np.array([s.vx, s.vy, d[1] * s.vx + d[2] * s.vy])
             state = sliding.BallState(s.x, s.y, velocity, np.array(s.omega), np.eye(3), 0.0)
-            arrays = sliding.start_arrays(state, d, sliding=True, munthe_kaas=mk, stages=self._stages, rows=n_rows,
+            arrays = sliding.start_arrays(state, d, sliding=True, munthe_kaas=mk, stages=self._stages, rows=own_rows,
                                           radius=scene.ball.radius, mass=scene.ball.mass, resisted=scene.dissipates)
         else:
-            arrays = kernel.run_arrays(kernel.state_size(mk, resisted=scene.dissipates), self._stages, n_rows)
+            arrays = kernel.run_arrays(kernel.state_size(mk, resisted=scene.dissipates), self._stages, own_rows)
             alpha, v = initial_state(self.landscape, scene)
             arrays["z"][:2], arrays["z"][2:5] = alpha, v
             if not mk:
@@ -232,9 +234,9 @@ class Simulation:
         # once it has this many transitions, ``ModeMachine``)
         self.machine = ModeMachine(self, Mode.SLIDING if slips else Mode.ROLLING, n_rows if self.segmented else 0,
                                    stop_after=stop_after)
-        if self._shares_rows:
+        if self.segmented:
             arrays["rows"] = self.machine.shared_rows(False, self._room(n_rows))
-            self.machine.new_kernel_run(False, True)
+            self.machine.new_kernel_run(False)
         self._arm(arrays, 0.0)
         self.status: Status | None = None
         s = scene.start
@@ -247,17 +249,12 @@ class Simulation:
         self._transition_check: TransitionCheck | None = None
         self.judge_energy = True  # whether the finished run looks at whose its energy error is (and its transitions)
 
-    @property
-    def _shares_rows(self) -> bool:
-        """Whether the kernel runs write their rows into the mode machine's (``ModeMachine.shared_rows``):
-        those of every run whose contact changes mode. A buffer of their own would hold the rows twice
-        (millions, recording every adaptive step), and first touching its pages took 1.2 ms of a
-        fixed-step wells run's 5.1 ms."""
-        return self.segmented
-
     def _room(self, rows: float) -> int:
-        """The rows a kernel run finds free in the mode machine's (``_shares_rows``): all it can
-        write (``rows``), or SHARED_ROWS for an adaptive run recording every step, grown as it goes."""
+        """The rows a kernel run of a run whose contact changes mode finds free in the mode machine's,
+        which it writes to (``ModeMachine.shared_rows``; a buffer of its own would hold the rows twice,
+        millions recording every adaptive step, and first touching its pages took 1.2 ms of a
+        fixed-step wells run's 5.1 ms): all it can write (``rows``), or SHARED_ROWS for an adaptive
+        run recording every step, grown as it goes."""
         return SHARED_ROWS if self.adaptive and self.record_dt is None else math.ceil(rows)
 
     def _parameters(self, dissipated: float, dissipated_by=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -451,7 +448,7 @@ class Simulation:
             chunk = int(min(remaining, CHUNK))
             if self.adaptive:
                 if self._ints[kernel.I_ROWS] >= len(self._rows) - 2:
-                    if self._shares_rows:
+                    if self.segmented:
                         grown = self.machine.grow_shared(int(self._ints[kernel.I_ROWS]))
                     elif len(self._rows) < MAX_ROWS:
                         grown = np.empty((min(2 * len(self._rows), MAX_ROWS), kernel.ROW_SIZE))
@@ -510,12 +507,11 @@ class Simulation:
         d = self.landscape.evaluate(state.x, state.y, self.scene.parameter_values)
         h = float(self._info[kernel.F_H]) if self.adaptive and math.isfinite(self._info[kernel.F_H]) else self.dt
         arrays = sliding.start_arrays(state, d, sliding=slides, munthe_kaas=self.munthe_kaas, stages=self._stages,
-                               rows=math.ceil(rows), radius=self.scene.ball.radius, mass=self.scene.ball.mass,
-                               resisted=self.scene.dissipates)
+                                      rows=0, radius=self.scene.ball.radius, mass=self.scene.ball.mass,
+                                      resisted=self.scene.dissipates)
         arrays["info"][kernel.F_H] = h
-        if self._shares_rows:
-            arrays["rows"] = self.machine.shared_rows(repeat, self._room(rows))
-        self.machine.new_kernel_run(repeat, self._shares_rows)
+        arrays["rows"] = self.machine.shared_rows(repeat, self._room(rows))   # (only a segmented run has these)
+        self.machine.new_kernel_run(repeat)
         self._p = self._parameters(state.dissipated, state.dissipated_by)
         self._arm(arrays, t)
 
