@@ -51,6 +51,11 @@ def test_memory_is_measured_in_a_separate_process():
     assert 10 * 2**20 < targets.peak_memory(1000) < 1 << 30
 
 
+def test_the_row_limits_memory_is_measured_in_a_separate_process():
+    """(Its own row limit, small: the child asserts the run stopped there, rows kept.)"""
+    assert 10 * 2**20 < targets.row_limit_memory(5000) < 1 << 30
+
+
 def test_bench_command_line_usage(capsys):
     with pytest.raises(SystemExit) as stop:
         main(["bench", "--help"])
@@ -77,7 +82,8 @@ def test_the_report_marks_each_figure_that_misses_its_goal():
     assert "missed" not in _targets()
     for change, row in [({"all_methods_cold_cache": 36.0}, "compiling every method"),
                         ({"c": {"ratio": 1.3, "ns_ours": 300.0, "ns_c": 230.0, "same_step": 1e-15}}, "against C"),
-                        ({"latency": 0.045}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory"),
+                        ({"latency": 0.045}, "never seen before"), ({"memory": 400 * 2**20}, "peak memory, 10"),
+                        ({"row_limit_memory": 3.1e9}, "row limit"),
                         ({"hybrid": {"liftoff": {"hybrid_ms": 30.0, "glued_ms": 0.4, "ratio": 75.0},
                                      "cylinder": {"hybrid_ms": 3.0, "glued_ms": 1.0, "ratio": 3.0}}}, "| liftoff |"),
                         ({"sweep": {"runs": 400, "one_s": 1.3, "two_s": 1.0, "ratio": 1.3}}, "| 1.30 s | 1.00 s |")]:

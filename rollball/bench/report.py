@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from ..comparison_report import draw_work_precision, findings, legend_below, machine, new_figure, png
-from .targets import DISSIPATION_GOAL, HYBRID_GOAL, LATENCY_GOAL, SWEEP_GOAL
+from ..run_size import MAX_ROWS
+from .targets import DISSIPATION_GOAL, HYBRID_GOAL, LATENCY_GOAL, ROW_LIMIT_GOAL, SWEEP_GOAL
 from .workprecision import SceneResult
 
 
@@ -76,6 +77,10 @@ def _targets(t: dict) -> list[str]:
         + f" | ≤ {LATENCY_GOAL * 1e3:.0f} ms |",
         f"| peak memory, 10⁷ steps recording every 100th | **{t['memory'] / 2**20:.0f} MB**"
         f"{_missed(t['memory'] < 300 * 2**20)} | < 300 MB |",
+        *([] if t.get("row_limit_memory") is None else [
+            f"| peak memory, dopri5 recording every step of a run that may slip until the row limit "
+            f"({MAX_ROWS:,} rows) stops it | **{t['row_limit_memory'] / 1e9:.2f} GB**"
+            f"{_missed(t['row_limit_memory'] < ROW_LIMIT_GOAL)} | < {ROW_LIMIT_GOAL / 1e9:.1f} GB |"]),
         _app_line(t.get("app")),
         *_app_latency_lines(t.get("app")),
         f"| compiling every method in one process, empty caches (CPU time; once per machine, "

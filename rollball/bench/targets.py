@@ -17,6 +17,7 @@ import numpy as np
 
 from ..examples import EXAMPLES_DIR
 from ..scene import Air, Scene
+from ..run_size import MAX_ROWS
 from ..simulation import Simulation
 from ..tableaus import METHODS
 from ..trajectory import CONTACT
@@ -124,17 +125,38 @@ warm_up()
 print(time.process_time() - start)
 """
 
-_MEMORY = """
+# (what a child process prints last: its own high-water mark; ru_maxrss would include the parent's, from the fork)
+_HIGH_WATER = """
 import resource
-from rollball import Scene, simulate
-traj = simulate(Scene.load({hills!r}), method="rk4", dt=1e-3, t_end={steps} * 1e-3, record_every=100)
-assert traj.steps == {steps}, traj.message
-try:  # this program's own high-water mark (ru_maxrss would include the parent's, from the fork)
+try:
     status = open("/proc/self/status").read().split("VmHWM:")[1]
     print(int(status.split()[0]) * 1024)
 except (OSError, IndexError):
     print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
 """
+_MEMORY = """
+from rollball import Scene, simulate
+traj = simulate(Scene.load({hills!r}), method="rk4", dt=1e-3, t_end={steps} * 1e-3, record_every=100)
+assert traj.steps == {steps}, traj.message
+""" + _HIGH_WATER
+
+
+# An adaptive run recording every step until the row limit stops it, on a scene whose ball may slip
+# (a run whose contact changes mode: its kernel runs write into the mode machine's rows).
+_ROW_LIMIT = """
+import dataclasses
+from rollball import Scene, mode_machine, simulation
+from rollball.scene import Contact
+for module in (simulation, mode_machine):
+    module.MAX_ROWS = {rows}
+scene = Scene.load({hills!r})
+scene = dataclasses.replace(scene, contact=Contact(friction=1.0), duration=1e6)
+run = simulation.Simulation(scene, method="dopri5", rtol=1e-12, atol=1e-12, record_dt=None)
+run.advance()
+traj = run.trajectory()
+assert run.segmented and str(traj.status) == "row_limit" and len(traj) > 0.99 * {rows}, traj.message
+""" + _HIGH_WATER
+ROW_LIMIT_GOAL = 2.5e9   # bytes: an adaptive run recording every step up to MAX_ROWS rows
 
 
 def _python(code: str, env: dict | None = None) -> tuple[list[float], float]:
@@ -174,6 +196,13 @@ def all_methods_cold(source: str = "shipped") -> float:
 def peak_memory(steps: int) -> float:
     """Peak resident memory (bytes) of a process running ``steps`` steps, every 100th recorded."""
     (rss,), _ = _python(_MEMORY.format(hills=str(HILLS), steps=steps))
+    return rss
+
+
+def row_limit_memory(rows: int = MAX_ROWS) -> float:
+    """Peak resident memory (bytes) of a process whose dopri5 run records every step of a run whose
+    contact changes mode (hills, friction 1) until it stops at ``rows`` rows (the row limit)."""
+    (rss,), _ = _python(_ROW_LIMIT.format(hills=str(HILLS), rows=rows))
     return rss
 
 
@@ -293,6 +322,7 @@ def measure(quick: bool) -> dict:
         **dict(zip(("latency", "latency_cpu"), new_formula_latency(7 if quick else 21))),
         "cold": cold_start(quick),
         "memory": peak_memory(10_000_000),
+        "row_limit_memory": None if quick else row_limit_memory(),
         "app": app_responsiveness(),
         "hybrid": hybrid_costs(3 if quick else 9),
         "dissipation": dissipation_cost(5 if quick else 21),
