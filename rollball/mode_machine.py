@@ -559,7 +559,7 @@ class ModeMachine:
                 return
             _, on_grid = self._grid(rows[:, T])
             grid = np.flatnonzero(on_grid)
-            turns = self._turns(rows[grid])
+            turns = self._turns(rows[grid], modes[grid] == int(Mode.SLIDING))
             # (ω_t's rate at each grid row from the next one in the stretch; at the last, from the one before)
             beside = [*range(1, len(grid)), len(grid) - 2 if len(grid) > 1 else None]
             free = next((int(grid[j]) for j in range(len(grid)) if grid[j] > 0 and not self._stiff(
@@ -592,35 +592,46 @@ class ModeMachine:
         return k, np.abs(times / self.run.dt - k) < 1e-9
 
     def _stiff(self, row: np.ndarray, mode: Mode, turn: np.ndarray, beside) -> bool:
-        """Whether a row's direction is stiff for the fixed steps: sliding, friction would stop its
-        slip within a step (the kernel's ``slip_reference``); rolling, rolling resistance its ω_t
-        (``turn``, ``_turns``), or ω_t turns too fast (``turning_point``; its rate there from the
-        grid row ``beside`` it and that row's ω_t, where there is one). Any other mode: not."""
+        """Whether a row's direction is stiff for the fixed steps (``turn``: the slip velocity u
+        sliding, ω_t rolling, ``_turns``): sliding, friction would stop its slip within a step (the
+        kernel's ``slip_reference``); rolling, rolling resistance its ω_t; or the direction turns
+        too fast (``turning_point``, as the kernel's ``slip_stiff`` and ``turn_stiff``; its rate
+        there from the grid row ``beside`` it and that row's direction, where there is one). Any
+        other mode: not."""
         run = self.run
         ball, force = run.scene.ball, abs(row[NORMAL_FORCE]) * run.dt
         if mode is Mode.SLIDING:
-            return row[SLIP_SPEED] * ball.mass < 3.5 * float(run._p[kernel.P_MU]) * force
-        if mode is not Mode.ROLLING:
+            cap = 3.5 * float(run._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) / ball.mass
+            if row[SLIP_SPEED] * ball.mass < 3.5 * float(run._p[kernel.P_MU]) * force:
+                return True
+        elif mode is Mode.ROLLING:
+            resistance = float(run._p[kernel.P_RESISTANCE])
+            if 0.0 < 1.4 * ball.mass * ball.radius * float(np.linalg.norm(turn)) < resistance * force:
+                return True
+            if resistance == 0.0:
+                return False
+            cap = resistance * abs(row[NORMAL_FORCE]) / (1.4 * ball.mass * ball.radius)
+        else:
             return False
-        resistance = float(run._p[kernel.P_RESISTANCE])
-        if 0.0 < 1.4 * ball.mass * ball.radius * float(np.linalg.norm(turn)) < resistance * force:
-            return True
-        if beside is None or resistance == 0.0:
+        if beside is None:
             return False
         other, other_turn = beside
         rate = (other_turn - turn) / (other[T] - row[T])
-        cap = resistance * abs(row[NORMAL_FORCE]) / (1.4 * ball.mass * ball.radius)
         unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
         # (as the kernel's stretch ends: a row the fixed steps go on from is not stiff to them)
         margin = kernel.EXIT_MARGIN
         return bool(kernel.turning_point.py_func(*turn, *rate, cap, margin * unit, margin * run.dt))
 
-    def _turns(self, rows: np.ndarray) -> np.ndarray:
-        """ω's tangential part ω_t at each of ``rows`` (n, 3)."""
+    def _turns(self, rows: np.ndarray, sliding: np.ndarray) -> np.ndarray:
+        """The direction whose turning is stiff at each of ``rows`` (n, 3): where ``sliding``, the
+        slip velocity u = ċ − r ω × N in the tangent plane; else ω's tangential part ω_t."""
         omega = rows[:, OMEGA]
         normal = unit_normal(self.run.landscape.evaluate(rows[:, CONTACT][:, 0], rows[:, CONTACT][:, 1],
                                                          self.run.scene.parameter_values)).T
-        return omega - np.sum(omega * normal, axis=1)[:, None] * normal
+        turn = omega - np.sum(omega * normal, axis=1)[:, None] * normal
+        slip = rows[:, VELOCITY] - self.run.scene.ball.radius * np.cross(omega, normal)
+        slip -= np.sum(slip * normal, axis=1)[:, None] * normal
+        return np.where(np.asarray(sliding)[:, None], slip, turn)
 
     def _adopt(self, stretch, end: int) -> None:
         """A stretch's rows 1 to ``end`` (those at the run's recording times, at its transitions or

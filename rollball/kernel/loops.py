@@ -14,7 +14,8 @@ from .interface import (
     BATCH_CHUNK, D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED,
     I_NONFINITE, I_REJECTED,
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
-    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, P_FLY, P_MU, ROW_CENTER, ROW_ENERGY,
+    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, PROBE_SLIP_PULL, P_FLY, P_MU,
+    ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
     P_RESISTANCE, P_TURN, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, TURN_SHARE, grid_steps_before)
@@ -60,6 +61,30 @@ def slip_reference(d, probe, p, h, cap):
     else:
         us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
         d[D_SLIP + 3] = math.inf if us * p[1] < 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) * h else 0.0
+
+
+@JIT
+def slip_stiff(d, p, probe, h, margin):
+    """Whether a sliding ball's slip direction at the step's start is stiff for a fixed step of h
+    (``slip_reference`` has run: d[D_SLIP + 3] inf where friction would stop the slip within the
+    step), or turns within the step faster than a bound independent of h (``turning_point``): the
+    slip u changes at the rate u' = B - (7/2)(mu F_n / m) u/|u| (probe: B, the slip's acceleration
+    with friction off), and before a grip, where |u| falls to 0 while B pulls across it, its
+    direction turns at |B x u| / |u|^2, which no fixed step follows at its order (a test of the
+    slip speed against the step alone lets each step's turn reach a size independent of h: the
+    grip's time then converges at a lower order). ``margin`` as ``turn_stiff``'s."""
+    if d[D_SLIP + 3] == math.inf:
+        return True
+    u1, u2, u3 = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
+    us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
+    if us == 0.0:
+        return False
+    a = 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) / p[1]   # the friction's deceleration of the slip
+    if not a < math.inf:
+        return False
+    w = a / us
+    return turning_point(u1, u2, u3, probe[PROBE_SLIP_PULL] - w * u1, probe[PROBE_SLIP_PULL + 1] - w * u2,
+                         probe[PROBE_SLIP_PULL + 2] - w * u3, a, margin * math.sqrt(p[0] / abs(p[2])), margin * h)
 
 
 @JIT
@@ -332,8 +357,9 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             stiff = False
             if watch:
                 slip_reference(d, probe, p, h, math.inf)
-                stiff = p[P_STIFF] != 0.0 and (d[D_SLIP + 3] == math.inf and sliding_size(n) or resists and turn_stiff(
-                    d, p, probe, K, h, n, EXIT_MARGIN if stretch else 1.0))
+                margin = EXIT_MARGIN if stretch else 1.0
+                stiff = p[P_STIFF] != 0.0 and (sliding_size(n) and slip_stiff(d, p, probe, h, margin)
+                                               or resists and turn_stiff(d, p, probe, K, h, n, margin))
             if stiff and not mk:   # (the caller's: T_STIFF)
                 ints[I_STATUS], ints[I_TRANSITION] = TRANSITION, T_STIFF
                 info[F_EVENT_T], info[F_EVENT_X], info[F_EVENT_Y] = t0, z[0], z[1]

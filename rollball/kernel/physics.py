@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 from .interface import (
-    D_SIDE, D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_FORCE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, PROBE_SPIN_PULL, P_AIR,
-    P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE,
+    D_SIDE, D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_FORCE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, PROBE_SLIP_PULL, PROBE_SPIN_PULL,
+    P_AIR,     P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE,
     SLIDING_MK_SIZE, SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE)
 from .lowlevel import COLD, EXACT, JIT, STEP, data_pointer, landscape
 
@@ -74,6 +74,7 @@ def dynamics(fn, d, p, z, mk, K, row, probe, full):
         probe[PROBE_NEED] = need
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = 0.0, 0.0, 0.0
         probe[PROBE_SPIN_PULL] = pull
+        probe[PROBE_SLIP_PULL], probe[PROBE_SLIP_PULL + 1], probe[PROBE_SLIP_PULL + 2] = 0.0, 0.0, 0.0
 
 
 @JIT
@@ -499,6 +500,7 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
         probe[PROBE_NEED] = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = u1, u2, u3
         probe[PROBE_SPIN_PULL] = 0.0   # (the sliding friction pulls on omega.N not at all)
+        probe[PROBE_SLIP_PULL], probe[PROBE_SLIP_PULL + 1], probe[PROBE_SLIP_PULL + 2] = b1, b2, b3
 
 
 @JIT
