@@ -594,15 +594,22 @@ class ModeMachine:
     def _stiff(self, row: np.ndarray, mode: Mode, turn: np.ndarray, beside) -> bool:
         """Whether a row's direction is stiff for the fixed steps (``turn``: the slip velocity u
         sliding, ω_t rolling, ``_turns``): sliding, friction would stop its slip within a step (the
-        kernel's ``slip_reference``); rolling, rolling resistance its ω_t; or the direction turns
-        too fast (``turning_point``, as the kernel's ``slip_stiff`` and ``turn_stiff``; its rate
-        there from the grid row ``beside`` it and that row's direction, where there is one). Any
-        other mode: not."""
+        kernel's ``slip_reference``) or the slip changes by as much as itself within SLIP_TIME
+        √(r/g); rolling, rolling resistance would stop its ω_t; or the direction turns too fast
+        (``turning_point``): as the kernel's ``slip_stiff`` and ``turn_stiff``, with the rate from
+        the grid row ``beside`` it and that row's direction, where there is one. Any other mode: not."""
         run = self.run
         ball, force = run.scene.ball, abs(row[NORMAL_FORCE]) * run.dt
+        unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
+        rate = None if beside is None else (beside[1] - turn) / (beside[0][T] - row[T])
+        # (as the kernel's stretch ends: a row the fixed steps go on from is not stiff to them)
+        margin = kernel.EXIT_MARGIN
         if mode is Mode.SLIDING:
             cap = 3.5 * float(run._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) / ball.mass
             if row[SLIP_SPEED] * ball.mass < 3.5 * float(run._p[kernel.P_MU]) * force:
+                return True
+            if (rate is not None and unit < math.inf
+                    and np.linalg.norm(rate) * kernel.SLIP_TIME * margin * unit > np.linalg.norm(turn)):
                 return True
         elif mode is Mode.ROLLING:
             resistance = float(run._p[kernel.P_RESISTANCE])
@@ -613,13 +620,8 @@ class ModeMachine:
             cap = resistance * abs(row[NORMAL_FORCE]) / (1.4 * ball.mass * ball.radius)
         else:
             return False
-        if beside is None:
+        if rate is None:
             return False
-        other, other_turn = beside
-        rate = (other_turn - turn) / (other[T] - row[T])
-        unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
-        # (as the kernel's stretch ends: a row the fixed steps go on from is not stiff to them)
-        margin = kernel.EXIT_MARGIN
         return bool(kernel.turning_point.py_func(*turn, *rate, cap, margin * unit, margin * run.dt))
 
     def _turns(self, rows: np.ndarray, sliding: np.ndarray) -> np.ndarray:

@@ -35,6 +35,9 @@ RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("
 # (rtol and atol both): a stretch of them ends at the first step whose direction is EXIT_MARGIN
 # times further from stiff (``loops.turn_stiff``). (The sweeps' batches, p[P_STIFF] 0, have none.)
 EXIT_MARGIN = 1.5
+# A sliding ball's slip whose speed would change by as much as itself within SLIP_TIME sqrt(r/g) is
+# stiff for a fixed step, whatever the step (``loops.slip_stiff``).
+SLIP_TIME = 0.5
 # advance and advance_adaptive take the absolute time ``t_start`` of the run's start and its
 # absolute ``t_end``: a run that goes on after a change of contact mode keeps the whole run's clock
 # (its steps and rows on the grid a run from t = 0 has, ``grid_steps_before``; advance's n_steps

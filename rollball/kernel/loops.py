@@ -18,7 +18,7 @@ from .interface import (
     ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
-    P_RESISTANCE, P_TURN, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, TURN_SHARE, grid_steps_before)
+    P_RESISTANCE, P_TURN, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side,
                       turning_point)
@@ -65,14 +65,18 @@ def slip_reference(d, probe, p, h, cap):
 
 @JIT
 def slip_stiff(d, p, probe, h, margin):
-    """Whether a sliding ball's slip direction at the step's start is stiff for a fixed step of h
-    (``slip_reference`` has run: d[D_SLIP + 3] inf where friction would stop the slip within the
-    step), or turns within the step faster than a bound independent of h (``turning_point``): the
-    slip u changes at the rate u' = B - (7/2)(mu F_n / m) u/|u| (probe: B, the slip's acceleration
-    with friction off), and before a grip, where |u| falls to 0 while B pulls across it, its
-    direction turns at |B x u| / |u|^2, which no fixed step follows at its order (a test of the
-    slip speed against the step alone lets each step's turn reach a size independent of h: the
-    grip's time then converges at a lower order). ``margin`` as ``turn_stiff``'s."""
+    """Whether a sliding ball's slip is stiff for a fixed step of h (docs/design.md §8, "the
+    slip's direction where it is stiff"): friction would stop it within the step
+    (``slip_reference`` has run: d[D_SLIP + 3] inf), or it changes too fast for any step, by a
+    bound independent of h. The slip u changes at u' = B - (7/2)(mu F_n / m) u/|u| (probe: B, its
+    acceleration with friction off); the friction's direction u/|u| has derivatives that grow as
+    powers of |u'|/|u| wherever it turns at all, so the slip is stiff where |u'| SLIP_TIME
+    sqrt(r/g) > |u| (just after a slip begins, |u| growing from 0, and before a grip) or where its
+    direction turns within the step faster than 1/sqrt(r/g) (``turning_point``: a line through
+    nearly 0 within the step). With tests against the step alone (|u| < a h), the fixed steps began
+    and ended their stretches where |u'|/|u| grows as the step shrinks, and the grips' times
+    converged at order 2-3. (With no gravity, unit = sqrt(r/g) is inf: only the first test.)
+    ``margin`` as ``turn_stiff``'s."""
     if d[D_SLIP + 3] == math.inf:
         return True
     u1, u2, u3 = probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2]
@@ -83,8 +87,12 @@ def slip_stiff(d, p, probe, h, margin):
     if not a < math.inf:
         return False
     w = a / us
-    return turning_point(u1, u2, u3, probe[PROBE_SLIP_PULL] - w * u1, probe[PROBE_SLIP_PULL + 1] - w * u2,
-                         probe[PROBE_SLIP_PULL + 2] - w * u3, a, margin * math.sqrt(p[0] / abs(p[2])), margin * h)
+    b = PROBE_SLIP_PULL
+    r1, r2, r3 = probe[b] - w * u1, probe[b + 1] - w * u2, probe[b + 2] - w * u3
+    unit = math.sqrt(p[0] / abs(p[2]))
+    if unit < math.inf and math.sqrt(r1 * r1 + r2 * r2 + r3 * r3) * SLIP_TIME * margin * unit > us:
+        return True
+    return turning_point(u1, u2, u3, r1, r2, r3, a, margin * unit, margin * h)
 
 
 @JIT
