@@ -10,6 +10,7 @@ from dataclasses import dataclass
 TIGHTER = 100.0        # adaptive: taken again with tolerances 100 and 10^4 times tighter...
 
 CONVERGED, NEGLIGIBLE, PLATEAU, GROWS, CHANGED = "converged", "negligible", "plateau", "grows", "changed"
+LOOSE = "loose"
 
 
 @dataclass(frozen=True)
@@ -21,7 +22,8 @@ class Retake:
     transition there: ``found`` says what it had instead) and the ``verdict`` (CONVERGED;
     NEGLIGIBLE: every move below the floor, MOVE_FLOOR or, adaptive, what the tolerance allows;
     PLATEAU: the moves shrink more slowly than the method's order says; GROWS: a finer retake
-    moves it more; CHANGED: the kinds differ)."""
+    moves it more; CHANGED: the kinds differ; LOOSE, adaptive: the first move, the run's own error
+    as the tighter retakes tell it, is above ``allowed``, a time its tolerance does not allow)."""
 
     index: int
     kind: str
@@ -31,6 +33,7 @@ class Retake:
     times: tuple[float | None, ...]
     found: tuple[str, ...]
     verdict: str
+    allowed: float = float("inf")   # s: the first move above this is LOOSE (adaptive; fixed steps: inf)
 
     @property
     def converged(self) -> bool:
@@ -110,5 +113,7 @@ def _sentence(retake: Retake, check: TransitionCheck) -> str:
         return (f"{what} is not there {levels[k]} (taken again from t = {retake.start:.6g} s: "
                 f"{retake.found[k]})")
     moves = retake.moves
+    if retake.verdict == LOOSE:
+        expected = f"more than rtol {retake.steps[0]:.0e} allows: about {retake.allowed:.2g} s at most"
     return (f"{what} moved by {moves[0]:.2g} s {levels[1]} and by {moves[1]:.2g} s {levels[2]} "
             f"({expected})")

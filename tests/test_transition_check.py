@@ -19,7 +19,7 @@ from rollball.simulation import Simulation
 from rollball.tableaus import get_method
 from rollball.trajectory import ROLLING, SLIDING, SLIP_SPEED, T, Transition
 from rollball.transition_check import verdict
-from rollball.transition_verdict import CHANGED, CONVERGED, GROWS, NEGLIGIBLE, PLATEAU, Retake, TransitionCheck
+from rollball.transition_verdict import CHANGED, CONVERGED, GROWS, LOOSE, NEGLIGIBLE, PLATEAU, Retake, TransitionCheck
 
 G = 9.81
 THETA = math.radians(30.0)
@@ -197,6 +197,9 @@ def test_the_verdict_follows_the_order_and_the_adaptive_shrink():
     assert verdict(ladder, shrink=RK4) == PLATEAU
     tight = (1.0, 1.0 + 1e-6, 1.0 + 1e-6 + 1e-8)     # 100-fold per tolerances 100 times tighter
     assert verdict(tight, shrink=transition_check.ADAPTIVE_SHRINK) == CONVERGED
+    # the same moves, but the first above what the run's tolerance allows: its own error is too large
+    allowed = abs(tight[1] - tight[0]) / 2
+    assert verdict(tight, shrink=transition_check.ADAPTIVE_SHRINK, allowed=allowed) == LOOSE
     assert verdict((1.0, 1.0 + 1e-6, 1.0 + 1e-6 + 0.5e-6), shrink=transition_check.ADAPTIVE_SHRINK) == PLATEAU
     # adaptive: moves below what the tolerance allows (rtol·√(r/g), 1e-7 s at rtol 1e-6) say nothing
     noise = (1.0, 1.0 + 1e-9, 1.0 + 1e-9 + 1.8e-9)
