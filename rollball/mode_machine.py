@@ -605,8 +605,8 @@ class ModeMachine:
         # (as the kernel's stretch ends: a row the fixed steps go on from is not stiff to them)
         margin = kernel.EXIT_MARGIN
         if mode is Mode.SLIDING:
-            cap = 3.5 * float(run._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) / ball.mass
-            if row[SLIP_SPEED] * ball.mass < 3.5 * float(run._p[kernel.P_MU]) * force:
+            cap = 3.5 * float(run._p[kernel.P_MU]) * abs(row[NORMAL_FORCE]) / ball.mass   # the slip's deceleration
+            if row[SLIP_SPEED] < cap * run.dt:
                 return True
             if (rate is not None and unit < math.inf
                     and np.linalg.norm(rate) * kernel.SLIP_TIME * margin * unit > np.linalg.norm(turn)):
