@@ -1,6 +1,7 @@
 """``rollball bench`` in miniature: the report's shape, sane errors, and the C yardstick."""
 
 import json
+import time
 
 import numpy as np
 import pytest
@@ -49,6 +50,13 @@ def test_the_c_step_is_the_same_step():
 
 def test_memory_is_measured_in_a_separate_process():
     assert 10 * 2**20 < targets.peak_memory(1000) < 1 << 30
+
+
+def test_a_measurements_child_process_is_stopped_after_its_timeout():
+    started = time.monotonic()
+    with pytest.raises(RuntimeError, match="took more than 0.5 s"):
+        targets._python("import time; time.sleep(60)", timeout=0.5)
+    assert time.monotonic() - started < 30
 
 
 def test_the_row_limits_memory_is_measured_in_a_separate_process():

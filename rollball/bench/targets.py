@@ -159,10 +159,18 @@ assert run.segmented and str(traj.status) == "row_limit" and len(traj) > 0.99 * 
 ROW_LIMIT_GOAL = 2.5e9   # bytes: an adaptive run recording every step up to MAX_ROWS rows
 
 
-def _python(code: str, env: dict | None = None) -> tuple[list[float], float]:
+CHILD_TIMEOUT = 1800.0   # s: the most a measurement's child process may take (numba's cold compile takes 240 s of CPU)
+
+
+def _python(code: str, env: dict | None = None, timeout: float = CHILD_TIMEOUT) -> tuple[list[float], float]:
+    """Run ``code`` in a fresh interpreter: the numbers it prints, and its wall time. A child that
+    takes longer than ``timeout`` is killed and RuntimeError says so."""
     start = time.perf_counter()
-    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
-                         env={**os.environ, **(env or {})}).stdout
+    try:
+        out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
+                             env={**os.environ, **(env or {})}, timeout=timeout).stdout
+    except subprocess.TimeoutExpired:
+        raise RuntimeError(f"a measurement's child process took more than {timeout:g} s and was stopped") from None
     return [float(v) for v in out.split()], time.perf_counter() - start
 
 
