@@ -12,8 +12,8 @@ from .interface import (
     DOES_NOT_FIT, F_EVENT_T, F_EVENT_X, F_EVENT_Y, F_FAIL_T, F_FAIL_Y, F_FOLD, F_LIFTOFF, F_LIFT_KINK, F_LIFT_X,
     F_LIFT_Y, F_RATE_FORCE, F_RATE_SLIP, I_DENSE, I_EVALS, I_HELD, I_REASON, I_ROWS, I_STATUS, I_TRANSITION, IMPLICIT,
     D_SIDE, LIFT_TIP, PROBE_FIT, PROBE_FIT_LO, PROBE_FORCE, PROBE_HEIGHT, PROBE_NEED, PROBE_OMEGA, PROBE_SLIP,
-    PROBE_SPIN_PULL, P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT, R_SECANT_NO_FIT, R_TIP,
-    SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
+    PROBE_SLIP_PULL, PROBE_SPIN_PULL, P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT,
+    R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
 from .physics import (copy_state, couple_sides, curvatures, resisted_size, shape_of, sliding_size, spin_excess,
                       spin_limit)
@@ -62,8 +62,10 @@ LINE_SAMPLES = 8       # fit checks on the straight line between a sub-step's co
 # reaches mu F.N; GRIP_EVENT: the slip velocity's component along the slip at the step's start reaches 0;
 # TURN_EVENT: omega's tangential part's along its value at the step's start (s[4:7]) reaches 0 (the
 # rolling resistance's side); SPIN_EVENT: omega.N times its sign at the step's start (s[7]) reaches 0;
-# LIMIT_EVENT: where that sign is 0 (a static spin couple), the pull on omega.N reaches the couple's limit
-FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT, TURN_EVENT, SPIN_EVENT, LIMIT_EVENT = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+# LIMIT_EVENT: where that sign is 0 (a static spin couple), the pull on omega.N reaches the couple's limit;
+# MISS_EVENT: -|u_slip|^2, never crossing 0: its largest value is where a slip passes closest to 0
+FORCE_EVENT, FIT_EVENT, SLIP_EVENT, GRIP_EVENT, TURN_EVENT = 0.0, 1.0, 2.0, 3.0, 4.0
+SPIN_EVENT, LIMIT_EVENT, MISS_EVENT = 5.0, 6.0, 7.0
 KINK, JUMP, JOLT = 0.0, 1.0, 2.0   # what locate_break bisects towards (JOLT: the centre jumping)
 
 
@@ -92,6 +94,8 @@ def condition(kind, p, s, pe):
         return -spin_of(pe) * s[7]
     if kind == LIMIT_EVENT:
         return spin_excess(p, pe)
+    if kind == MISS_EVENT:
+        return -(pe[PROBE_SLIP] ** 2 + pe[PROBE_SLIP + 1] ** 2 + pe[PROBE_SLIP + 2] ** 2)
     return -(pe[PROBE_SLIP] * s[0] + pe[PROBE_SLIP + 1] * s[1] + pe[PROBE_SLIP + 2] * s[2])
 
 
@@ -363,7 +367,8 @@ def step_events(fn, d, p, W, mk, n, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn
     info[F_FOLD] = fold
     force_end = pn[PROBE_FORCE] < 0.0 and math.isnan(info[F_LIFTOFF])
     jolted = math.isnan(info[F_LIFTOFF]) and centre_jolted(p[0], h, z, probe, zn, pn)
-    turned = watch and (mode_changes(p, n, probe, pn) != 0 or (resisted_size(n) and sides_turn(p, d, n, pn) != 0))
+    turned = watch and (mode_changes(p, n, probe, pn) != 0 or (resisted_size(n) and sides_turn(p, d, n, pn) != 0)
+                        or (not segment and passed_beside(p, n, probe, pn)))
     # (watch: ``contact_watched``)
     dips = dipping(p, n, h, probe, pn, info) if watch else 0
     if watch and resisted_size(n) and spin_stops(p, d, n, h, probe):
@@ -410,6 +415,34 @@ def mode_changes(p, n, probe, pn):
     if p[P_MU] < math.inf and pn[PROBE_NEED] > p[P_MU] * pn[PROBE_FORCE]:
         return T_SLIP
     return 0
+
+
+@JIT
+def passed_beside(p, n, probe, pn):
+    """Whether a sliding step of an embedded pair passed its slip's zero beside it (docs/design.md
+    §8, "grips"): the slip speed |u| rose from the step's start (not 0) to its end while the
+    friction could hold the slip at both ends, |B| < (7/2) mu F_n / m (B: the slip's acceleration
+    with friction off). There the exact slip falls at a rate of at least that difference all along
+    and reaches 0 in finite time (a grip); a rise is the step's own error carrying u past 0 on one
+    side of it (u.u0 still positive, so ``mode_changes`` sees no grip), and the pair's next steps
+    would chatter about 0 until one of them crossed it. ``locate_transition`` grips where the
+    step's dense output passes closest to 0 (``dip_bracket`` on MISS_EVENT)."""
+    if not sliding_size(n):
+        return False
+    u0 = probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2
+    u1 = pn[PROBE_SLIP] ** 2 + pn[PROBE_SLIP + 1] ** 2 + pn[PROBE_SLIP + 2] ** 2
+    if not 0.0 < u0 < u1:
+        return False
+    return holds(p, probe) and holds(p, pn)
+
+
+@JIT
+def holds(p, pe):
+    """Whether friction can hold a sliding ball's slip at a state with probe pe: its largest
+    deceleration of the slip, (7/2) mu F_n / m, exceeds B, the slip's acceleration without it."""
+    a = 3.5 * p[P_MU] * abs(pe[PROBE_FORCE]) / p[1]
+    b = pe[PROBE_SLIP_PULL] ** 2 + pe[PROBE_SLIP_PULL + 1] ** 2 + pe[PROBE_SLIP_PULL + 2] ** 2
+    return b < a * a
 
 
 # A change of contact mode that begins and ends inside one step (F.N dipping below 0 and back, or
@@ -475,7 +508,9 @@ def spin_stops(p, d, n, h, probe):
 def dip_bracket(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out):
     """Search the step's dense output for a change of mode whose condition g is ga < 0 at the
     step's start and negative at its end (see DIP_REACH): out = (a, g(a), b, g(b)) with
-    g(a) < 0 <= g(b) around the first crossing found; returns whether one was found."""
+    g(a) < 0 <= g(b) around the first crossing found; returns whether one was found. Where none
+    is, out[0:2] = (theta, g(theta)) at the condition's largest value found (``MISS_EVENT``: where
+    the slip passes closest to 0)."""
     a, g_a, top, g_top = 0.0, ga, 0.0, ga
     for j in range(1, DIP_SAMPLES):
         x = j / DIP_SAMPLES
@@ -511,6 +546,7 @@ def dip_bracket(kind, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out):
             e = lo + GOLDEN * (hi - lo)
             ge = event_value(kind, fn, d, p, z, R, h, P, K, e, Ye, Re, pe, s)
         ints[I_EVALS] += 1
+    out[0], out[1] = (c, gc) if gc > ge else (e, ge)
     return False
 
 
@@ -613,6 +649,11 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
             if b < best:
                 best, kind, event = b, T_GRIP, GRIP_EVENT
                 b_end, g_end = 1.0, gb
+        elif refine == 0.0 and passed_beside(p, n, probe, pn):   # (an embedded pair's step)
+            zero = dip_bracket(MISS_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out)
+            b = out[2] if zero else out[0]   # (the slip exactly 0 there, or closest to it)
+            if b < best:
+                best, kind, event = b, T_GRIP, GRIP_EVENT
     elif mu < math.inf:
         ga = probe[PROBE_NEED] - mu * probe[PROBE_FORCE]
         gb = pn[PROBE_NEED] - mu * pn[PROBE_FORCE]
