@@ -294,19 +294,27 @@ def test_each_adaptive_transition_is_within_what_its_tolerance_allows(name, meth
         assert max(m["time_errors"], default=0.0) <= allowed and not m["warned"], (tol, m["time_errors"])
 
 
-def test_dopri5_grips_on_the_bowl_within_its_tolerance_at_a_loose_one():
+@pytest.mark.parametrize("method", ADAPTIVE)
+def test_the_pairs_grip_on_the_bowl_within_their_tolerance_at_a_loose_one(method):
     """At rtol 1e-4 dopri5 took the bowl's slip past its 0 without a grip at all (the run ended
-    sliding); its grip is now 1.5e-4 s off there (15 rtol sqrt(r/g)), and the slip it leaves
-    behind on gripping is within what the tolerance resolves of the ball's speed."""
+    sliding), and dop853 took the last 50 ms of the slip in one step and gripped at its end 1e-2 s
+    late, 0.039 m/s of slip left. Now a step that passes beside the zero grips where it passes
+    closest (``events.passed_beside``), and a grip that leaves a slip the step did not resolve is
+    taken again with a shorter step (``loops.grip_left``): each grip within what the tolerance allows
+    (LOOSE_FACTOR rtol sqrt(r/g): measured 15 and 67 times rtol sqrt(r/g)), with no warning, and the
+    slip left behind on gripping at most sqrt(rtol g r), below which a slip is slow to the pairs
+    (``loops.slow_slip``)."""
+    from rollball.transition_check import LOOSE_FACTOR
+
     scene, t_end = SCENES["bowl"]
     grip = reference(scene, t_end, [0.0]).transitions[-1]
-    run = simulate(scene, method="dopri5", rtol=1e-4, atol=1e-4, t_end=t_end, record_dt=None)
+    run = simulate(scene, method=method, rtol=1e-4, atol=1e-4, t_end=t_end, record_dt=None)
     assert [c.kind for c in run.transitions] == [Change.SLIP, Change.GRIP], run.transitions
     unit = math.sqrt(scene.ball.radius / scene.gravity)
-    assert abs(run.transitions[-1].time - grip.time) < 30 * 1e-4 * unit
+    assert abs(run.transitions[-1].time - grip.time) < LOOSE_FACTOR * 1e-4 * unit and run.warnings() == []
     at = np.flatnonzero(run.t == run.transitions[-1].time)[-1]
-    # (measured: 2.0e-4 m/s at a speed of 1.03 m/s; 6.3e-6 at rtol 1e-6, 3.7e-9 at 1e-8)
-    assert run.slip_speed[at] < 20 * 1e-4 * np.linalg.norm(run.velocity[at])
+    # (measured: 2.0e-4 and 5.2e-3 m/s; at rtol 1e-6, 6.3e-6 and 3.8e-6)
+    assert run.slip_speed[at] <= math.sqrt(1e-4 * scene.gravity * scene.ball.radius)
     assert np.all(run.slip_speed[at + 1:] == 0.0) and np.all(run.mode[at + 1:] == "rolling")
 
 
