@@ -15,8 +15,8 @@ from .interface import (
     PROBE_SLIP_PULL, PROBE_SPIN_PULL, P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, R_HEIGHT_JUMP, R_KINK, R_NO_FIT,
     R_SECANT_NO_FIT, R_TIP, SURFACE_SIZE, TRANSITION, T_GRIP, T_LIFTOFF, T_REST, T_SIDE, T_SLIP)
 from .lowlevel import COLD, JIT, data_pointer, landscape
-from .physics import (copy_state, couple_sides, curvatures, resisted_size, shape_of, sliding_size, spin_excess,
-                      spin_limit)
+from .physics import (copy_state, couple_sides, curvatures, resisted_size, shape_of, sliding_size, slip_deceleration,
+                      spin_excess, spin_limit)
 from .recording import _fail, hold, record, record_last
 from .steps import accept, search_step
 
@@ -439,8 +439,8 @@ def passed_beside(p, n, probe, pn):
 @JIT
 def holds(p, pe):
     """Whether friction can hold a sliding ball's slip at a state with probe pe: its largest
-    deceleration of the slip, (7/2) mu F_n / m, exceeds B, the slip's acceleration without it."""
-    a = 3.5 * p[P_MU] * abs(pe[PROBE_FORCE]) / p[1]
+    deceleration of the slip (``slip_deceleration``) exceeds B, the slip's acceleration without it."""
+    a = slip_deceleration(p, pe)
     b = pe[PROBE_SLIP_PULL] ** 2 + pe[PROBE_SLIP_PULL + 1] ** 2 + pe[PROBE_SLIP_PULL + 2] ** 2
     return b < a * a
 

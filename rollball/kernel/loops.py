@@ -20,8 +20,8 @@ from .interface import (
     TRANSITION, T_GRIP, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
     P_RESISTANCE, P_TURN, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, spin_side,
-                      turning_point)
+from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, slip_deceleration,
+                      spin_side, turning_point)
 from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -83,7 +83,7 @@ def slip_stiff(d, p, probe, h, margin):
     us = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
     if us == 0.0:
         return False
-    a = 3.5 * p[P_MU] * abs(probe[PROBE_FORCE]) / p[1]   # the friction's deceleration of the slip
+    a = slip_deceleration(p, probe)
     if not a < math.inf:
         return False
     w = a / us

@@ -367,6 +367,13 @@ def rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3, resisted)
     return friction_needed(p, n1, n2, n3, o1, o2, o3, d1, d2, d3, v1, v2, v3, e1, e2, e3, m1, m2, m3)
 
 
+@JIT
+def slip_deceleration(p, pe):
+    """The most a sliding ball's friction decelerates its slip at a state with probe pe:
+    (7/2) mu F_n / m (the slip u = c' - r omega x N changes by -(1 + 5/2) mu F_n / m along u/|u|)."""
+    return 3.5 * p[P_MU] * abs(pe[PROBE_FORCE]) / p[1]
+
+
 # A slip speed below this fraction of the ball's speeds (|c'|, r |omega|) is zero: the slip of a
 # sliding run that starts from rolling, in round-off (its direction is then the one it starts in).
 SLIP_ZERO = 1e-12
