@@ -36,7 +36,9 @@ SEEN_MOST = 1024    # ...up to this many times in all (then it starts again)
 class DragFlight(Flight):
     """A flight through air, drag factor ``drag`` = k = ½ ρ C_d π r² (kg/m, > 0): its state at
     any time from the integrated motion, the energy the air took (``air_dissipated``), and the
-    landing (``Flight.landing``)."""
+    landing (``Flight.landing``, searched in Python: the kernel's search follows a parabola)."""
+
+    compiled = False
 
     def __init__(self, surface: Surface, start: FreeState, *, radius: float, mass: float, gravity: float,
                  drag: float):

@@ -21,7 +21,11 @@ import numpy as np
 
 from . import machine_code
 from .geometry import fit_ratio
-from .kernel.interface import ROW_SIZE, ROW_SLICES
+from .kernel.interface import (
+    BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, FOOT_ITERATIONS, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GROW_BY,
+    LANDING_BATCH, LANDING_FLYING, LANDING_LANDED, MAX_LOOKS, OUT_LANDING, PATH_ITERATIONS, ROW_SIZE, ROW_SLICES,
+    SAMPLE_SLACK, SAMPLES, SHRINK, SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
+)
 from .trajectory import DISSIPATED, SLIP_SPEED
 
 # A rebound whose apex above the surface would be lower than this share of the radius ends in
@@ -30,30 +34,13 @@ from .trajectory import DISSIPATED, SLIP_SPEED
 # what can be seen or matters, and an endless series of ever smaller bounces is cut off.
 REST_HEIGHT = 1e-6
 
-FOOT_ITERATIONS = 50     # Newton's iterations for the closest surface point (converges in a few)
-GAP_TOLERANCE = 1e-12    # × r: a gap this small is contact (round-off of the distance)
-FIRST_STEP = 1e-9        # s: the first look after a lift-off, then doubling until the ball is clear
-CLEAR_WITHIN = 1e-2      # s: a ball not clear of the surface by then never left it
-MAX_LOOKS = 1_000_000    # looks of the landing search (far more than it takes: see ``landing``)
-SHRINK = 0.1             # a step not certified to hold no root is tried again at least this share...
-SHRINK_MOST = 0.8        # ...and at most this share as long
-GROW_BY = 2.0            # a step tried is at most this many times the last certified one
-BATCH = 8                # while the gap grows, the landing search looks this many steps ahead at once
-GRAZE = 1e-6             # × r: a gap below this is contact (a graze, or just after a lift-off)
-GRAZE_LOOKS = 8          # certified looks within it while the gap still falls, before it is contact
-CLEAR_MARGIN = 1e-13     # × r: the share of a gap a certified step keeps for round-off
-PATH_ITERATIONS = 8      # Newton's iterations for the time a path length takes
-SAMPLES = 21             # the grid a closest point is looked for on, per side...
-BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
+# The landing search's numbers (the compiled search, ``kernel.landing``, shares them): kernel/interface.py
 ZOOM_SAMPLES = 9         # where no foot found is as near as the nearest sample: finer grids, per side...
 ZOOM_ROUNDS = 200        # ...at most this many, each over ± a spacing about the last nearest points...
 ZOOM_BEAM = 24           # ...this many of them
 POLISH_STEP = 1e-9       # Newton's last step (× (1 + |α|)) below which ``_polish`` takes a foot as found
-SAMPLE_SLACK = 1e-9      # a foot may be this share farther than the nearest surface sample (round-off)
-TRACK = 1e-3             # × r: the spacing of the surface samples under the centre's path (``Flight.track``)
-TRACK_MOST = 100_000     # (the samples taken at once)
-TRACK_SLACK = 1e-9       # × r: a sample this much nearer than r is inside the ball (round-off)
 MAX_HINTS = 8            # surface points the search was shown it missed, before a run stops
+REFER = "refer"          # ``Surface.land``: the kernel's search leaves this flight to flight.py's own
 
 
 class OffLandscape(Exception):
@@ -125,6 +112,7 @@ class Surface:
         self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
         self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
+        self._land_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> land's, packed once
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -277,6 +265,37 @@ class Surface:
         return (out["feet"].copy(), out["normals"].copy(), out["distances"].copy(), out["below"].copy(),
                 out["sampled"].copy(), out["nearest"].reshape(n, BEST_SAMPLES, 2).copy())
 
+    def land(self, start: FreeState, *, gravity: float, radius: float, t_end: float):
+        """The compiled landing search (``kernel.landing.land``) of a flight in vacuum from ``start``:
+        (t, the foot) where it lands, None where it is still flying at t_end, or REFER where that
+        search leaves the flight to ``Flight.landing``'s own (see ``kernel.landing``)."""
+        hints, tips = np.array(self.hints, dtype=float).reshape(-1, 3), np.array(self.tips, dtype=float).reshape(-1, 3)
+        key = (len(hints), len(tips))
+        call = self._land_calls.get(key)
+        if call is None:
+            b, k = LANDING_BATCH, LANDING_BATCH * (2 + BEST_SAMPLES + len(hints))
+            call = self._land_calls[key] = machine_code.Arguments(
+                "land", fn=self._record.ctypes.data, start=np.empty(7), gravity=0.0, radius=0.0, t_end=0.0,
+                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
+                reach_default=self.reach_default, iterations=FOOT_ITERATIONS, out=np.empty(OUT_LANDING),
+                times=np.empty(b), guess=np.empty(2), centers=np.empty((b, 3)), feet=np.empty((b, 2)),
+                normals=np.empty((b, 3)), distances=np.empty(b), below=np.empty(b), sampled=np.empty(b),
+                nearest=np.empty((b, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
+                start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))
+        kept = call.kept
+        kept["start"][0], kept["start"][1:4], kept["start"][4:7] = start.t, start.center, start.velocity
+        kept["hints"][:], kept["tips"][:] = hints, tips
+        call.set("gravity", gravity)
+        call.set("radius", radius)
+        call.set("t_end", t_end)
+        call()
+        out = kept["out"]
+        if out[0] == LANDING_FLYING:
+            return None
+        if out[0] != LANDING_LANDED:
+            return REFER
+        return float(out[1]), Foot(float(out[2]), float(out[3]), out[4:7].copy(), float(out[7]))
+
     def _from_starts(self, c, starts):
         """Newton's feet from starts (n, k, 2) for the centres c (n, 3), the tips put in, and
         each centre's nearest (smallest |D|) first: (alpha (n, 2), normal (n, 3), distance (n,))
@@ -424,6 +443,8 @@ class Flight:
     """A ball in free flight from ``start`` until it lands: its exact state at any time,
     recorded rows, and the landing."""
 
+    compiled = True   # its landing searched by the kernel first (its centre on a parabola: ``kernel.landing``)
+
     def __init__(self, surface: Surface, start: FreeState, *, radius: float, mass: float, gravity: float):
         self.surface, self.start = surface, start
         self.radius, self.mass, self.gravity = radius, mass, gravity
@@ -539,7 +560,15 @@ class Flight:
           and that point is the nearest a search of its own finds; else ``OffLandscape``
           "false_landing".
         ``OffLandscape`` also where no surface is found below the ball ("off_domain") or its
-        nearest point is not found ("no_foot")."""
+        nearest point is not found ("no_foot").
+
+        In vacuum (``compiled``) the kernel's search (``Surface.land``), which takes the same
+        looks, answers first; it leaves to this one every flight where its first foot search does
+        not suffice, where the track finds the surface nearer, or where the landing's check fails."""
+        if self.compiled:
+            found = self.surface.land(self.start, gravity=self.gravity, radius=self.radius, t_end=t_end)
+            if found is not REFER:
+                return found
         r = self.radius
         for _ in range(MAX_HINTS + 1):
             found = self._search(t_end)
@@ -656,7 +685,7 @@ class Flight:
             step = max(step, sure)
             # while the gap grows, the steps ahead are looked at together, as the last ones grew
             growth = min(max(last / before, 1.0), GROW_BY) if rate >= 0.0 and last < math.inf else 1.0
-            count = BATCH if growth > 1.0 and cap == math.inf else 1
+            count = LANDING_BATCH if growth > 1.0 and cap == math.inf else 1
             times = t + np.cumsum(step * growth ** np.arange(count))
             if not times[-1] < t_end:   # (increasing: those before t_end, then t_end)
                 times = np.append(times[times < t_end], t_end)
@@ -723,14 +752,14 @@ class Flight:
         """Just after a lift-off: looks FIRST_STEP after it, doubling, until the gap exceeds
         GRAZE × r (returns that look's t, h, foot), or the landing (t, foot) where one is below
         the surface, or where the ball is not clear by CLEAR_WITHIN (it never left). The next
-        BATCH looks are taken at once, each judged as if taken alone."""
+        LANDING_BATCH looks are taken at once, each judged as if taken alone."""
         floor, tol = GRAZE * self.radius, GAP_TOLERANCE * self.radius
         step = FIRST_STEP
         while True:
             if t >= t_end:
                 return t, h, foot
             times, now, size = [], t, step
-            while len(times) < BATCH and now < t_end:
+            while len(times) < LANDING_BATCH and now < t_end:
                 now = min(now + size, t_end)
                 times.append(now)
                 size *= 2.0

@@ -61,6 +61,12 @@ ENTRIES = {
                      ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
                      ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
                      ("start_distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
+    "land": (("fn", ADDRESS), ("start", VECTOR), ("gravity", FLOAT), ("radius", FLOAT), ("t_end", FLOAT),
+             ("hints", MATRIX), ("tips", MATRIX), ("unit", VECTOR), ("reach_default", FLOAT), ("iterations", INT),
+             ("out", VECTOR), ("times", VECTOR), ("guess", VECTOR), ("centers", MATRIX), ("feet", MATRIX),
+             ("normals", MATRIX), ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
+             ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
+             ("start_distances", VECTOR), ("d", VECTOR)),
 }
 
 
@@ -105,6 +111,36 @@ def landscape_record(address: int, values=()) -> np.ndarray:
     record[LANDSCAPE_RECORD_CODE:LANDSCAPE_RECORD_VALUES].view(np.int64)[0] = address
     record[LANDSCAPE_RECORD_VALUES:] = values
     return record
+
+
+# -- a flight's landing ---------------------------------------------------------------------------
+#
+# The landing search's numbers (flight.py's search and the compiled one, ``landing.land``, take
+# the same looks: docs/design.md §1, "Flight").
+FOOT_ITERATIONS = 50     # Newton's iterations for the closest surface point (converges in a few)
+GAP_TOLERANCE = 1e-12    # × r: a gap this small is contact (round-off of the distance)
+FIRST_STEP = 1e-9        # s: the first look after a lift-off, then doubling until the ball is clear
+CLEAR_WITHIN = 1e-2      # s: a ball not clear of the surface by then never left it
+MAX_LOOKS = 1_000_000    # looks of the landing search (far more than it takes: see ``landing``)
+SHRINK = 0.1             # a step not certified to hold no root is tried again at least this share...
+SHRINK_MOST = 0.8        # ...and at most this share as long
+GROW_BY = 2.0            # a step tried is at most this many times the last certified one
+LANDING_BATCH = 8        # while the gap grows, the landing search looks this many steps ahead at once
+GRAZE = 1e-6             # × r: a gap below this is contact (a graze, or just after a lift-off)
+GRAZE_LOOKS = 8          # certified looks within it while the gap still falls, before it is contact
+CLEAR_MARGIN = 1e-13     # × r: the share of a gap a certified step keeps for round-off
+PATH_ITERATIONS = 8      # Newton's iterations for the time a path length takes
+SAMPLES = 21             # the grid a closest point is looked for on, per side...
+BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
+SAMPLE_SLACK = 1e-9      # a foot may be this share farther than the nearest surface sample (round-off)
+TRACK = 1e-3             # × r: the spacing of the surface samples under the centre's path (``Flight.track``)
+TRACK_MOST = 100_000     # (the samples taken at once)
+TRACK_SLACK = 1e-9       # × r: a sample this much nearer than r is inside the ball (round-off)
+# ``landing.land`` writes its answer into OUT_LANDING floats: LANDING_LANDED (then the time, the
+# foot's x, y, the normal there (3) and the centre's signed distance), LANDING_FLYING (still in
+# the air at t_end), or LANDING_REFER (flight.py searches this flight itself).
+LANDING_FLYING, LANDING_LANDED, LANDING_REFER = 0.0, 1.0, 2.0
+OUT_LANDING = 8
 
 
 # -- a run's state -------------------------------------------------------------------------------
