@@ -332,7 +332,7 @@ def measure(quick: bool) -> dict:
         "memory": peak_memory(10_000_000),
         "row_limit_memory": None if quick else row_limit_memory(),
         "app": app_responsiveness(),
-        "hybrid": hybrid_costs(3 if quick else 9),
+        "hybrid": hybrid_costs(3 if quick else 21),
         "dissipation": dissipation_cost(5 if quick else 21),
         "sweep": sweep_speedup(3 if quick else 5),
     }
