@@ -1,8 +1,8 @@
 """A ball off the surface: free flight, exact; the landing, located; the impact (docs/design.md §1).
 
 In flight the centre falls freely and the spin is constant, so the motion is closed form:
-c(t) = c₀ + ċ₀ τ + ½ g τ², ω constant, R(t) = exp(A(ω) τ) R₀ with τ = t − t₀ (scipy's rotation
-vector exponential, exact at any angle): no integrator, no step error. The ball lands where the
+c(t) = c₀ + ċ₀ τ + ½ g τ², ω constant, R(t) = exp(A(ω) τ) R₀ with τ = t − t₀ (the rotation
+vector's exponential, exact at any angle: Rodrigues' formula in the kernel's rows, scipy's in ``state``): no integrator, no step error. The ball lands where the
 centre's distance to the surface first comes down to r. That distance is measured to the centre's
 closest surface point (its foot), found by Newton's method on (c − φ(α)) ∥ N(α); the first root
 in time is never stepped over (each step is certified to hold none, from the distance being
@@ -26,7 +26,7 @@ from .kernel.interface import (
     LANDING_BATCH, LANDING_FLYING, LANDING_LANDED, MAX_LOOKS, OUT_LANDING, PATH_ITERATIONS, ROW_SIZE, ROW_SLICES,
     SAMPLE_SLACK, SAMPLES, SHRINK, SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
 )
-from .trajectory import DISSIPATED, SLIP_SPEED
+from .trajectory import SLIP_SPEED
 
 # A rebound whose apex above the surface would be lower than this share of the radius ends in
 # contact: the bounces after it last 2 v/(g (1 − e)) together, v = sqrt(2 g · REST_HEIGHT · r):
@@ -113,6 +113,7 @@ class Surface:
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
         self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
         self._land_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> land's, packed once
+        self._rows_call: machine_code.Arguments | None = None   # flight_rows', packed for as many rows as the most yet
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -295,6 +296,31 @@ class Surface:
         if out[0] != LANDING_LANDED:
             return REFER
         return float(out[1]), Foot(float(out[2]), float(out[3]), out[4:7].copy(), float(out[7]))
+
+    def flight_rows(self, centers: np.ndarray, velocities: np.ndarray, times: np.ndarray, start: FreeState, guess,
+                    *, mass: float, radius: float, gravity: float, dissipated: float) -> tuple[np.ndarray, np.ndarray]:
+        """A flight's rows at ``times`` (``kernel.flight_rows``), where the centre is at ``centers``
+        (n, 3) and moves at ``velocities`` (n, 3), and which of them need the foot searched in
+        full (``Flight.rows``)."""
+        n, tips = len(times), np.array(self.tips, dtype=float).reshape(-1, 3)
+        call = self._rows_call
+        if call is None or len(call.kept["times"]) < n or len(call.kept["tips"]) != len(tips):
+            size = max(n, 2 * len(call.kept["times"]) if call is not None else 64)
+            call = self._rows_call = machine_code.Arguments(
+                "flight_rows", fn=self._record.ctypes.data, count=0, centers=np.empty((size, 3)),
+                velocities=np.empty((size, 3)), times=np.empty(size), start_time=0.0, omega=np.empty(3),
+                R=np.empty((3, 3)), guess=np.empty(2), tips=np.empty((len(tips), 3)), mass=0.0, radius=0.0,
+                gravity=0.0, dissipated=0.0, rows=np.empty((size, ROW_SIZE)), refer=np.empty(size, dtype=np.int64),
+                feet=np.empty((size, 2)), normals=np.empty((size, 3)), distances=np.empty(size), turn=np.empty((3, 3)),
+                iterations=FOOT_ITERATIONS, d=np.empty(6))
+        kept = call.kept
+        kept["centers"][:n], kept["velocities"][:n], kept["times"][:n] = centers, velocities, times
+        kept["omega"][:], kept["R"][:], kept["guess"][:], kept["tips"][:] = start.omega, start.R, guess, tips
+        for key, value in (("count", n), ("start_time", start.t), ("mass", mass), ("radius", radius),
+                           ("gravity", gravity), ("dissipated", dissipated)):
+            call.set(key, value)
+        call()
+        return kept["rows"][:n].copy(), kept["refer"][:n].copy()
 
     def _from_starts(self, c, starts):
         """Newton's feet from starts (n, k, 2) for the centres c (n, 3), the tips put in, and
@@ -812,38 +838,21 @@ class Flight:
     def rows(self, times: np.ndarray, dissipated: float, guess=None) -> np.ndarray:
         """Recorded rows (``kernel.interface.ROW_FIELDS``) at ``times``: the exact state; as
         contact point the centre's closest surface point; normal force 0; slip speed the
-        tangential speed of the ball's point nearest the surface; ``dissipated`` as given."""
+        tangential speed of the ball's point nearest the surface; ``dissipated`` as given
+        (compiled: ``Surface.flight_rows``; the full foot search where Newton's method from
+        ``guess``, or the start's point below, does not give a foot that can be the nearest)."""
         times = np.asarray(times, dtype=float)
-        n = len(times)
-        rows = np.zeros((n, ROW_SIZE))
-        if n == 0:
-            return rows
+        if len(times) == 0:
+            return np.zeros((0, ROW_SIZE))
         centers, velocities = self.centers(times)
-        start = np.repeat(np.asarray(guess if guess is not None else self.start.center[:2], float)[None, :], n, 0)
-        alpha, normals, distance = self.surface.feet(centers, start)
-        alpha, normals, distance = self.surface._nearer_tips(centers, alpha, normals, distance)
-        below = self.surface.evaluate(centers[:, 0], centers[:, 1])[0]
-        # the full search where that does not converge, or converges to a point that cannot be the nearest
-        # (farther than the point below the centre, or on the far side of the surface)
-        plausible = self.surface._plausible(centers, below, distance, np.abs(centers[:, 2] - below))
-        for i in np.flatnonzero(np.isnan(alpha[:, 0]) | ~plausible):
-            foot = self.surface.foot(centers[i])
-            alpha[i], normals[i] = (foot.x, foot.y), foot.normal
         s = self.start
-        from scipy.spatial.transform import Rotation
-
-        rotations = Rotation.from_rotvec(np.outer(times - s.t, s.omega)).as_matrix() @ s.R
-        m, r = self.mass, self.radius
-        rows[:, ROW_SLICES["t"]] = times[:, None]
-        rows[:, ROW_SLICES["contact"]] = alpha
-        rows[:, ROW_SLICES["center"]] = centers
-        rows[:, ROW_SLICES["velocity"]] = velocities
-        rows[:, ROW_SLICES["omega"]] = s.omega
-        rows[:, ROW_SLICES["R"]] = rotations.reshape(n, 9)
-        rows[:, ROW_SLICES["energy"]] = energy(velocities, s.omega, centers[:, 2], m, r, self.gravity)[:, None]
-        rows[:, ROW_SLICES["normal_force"]] = 0.0
-        rows[:, SLIP_SPEED] = tangential_slip(velocities, s.omega, normals, r)
-        rows[:, DISSIPATED] = dissipated
+        guess = np.asarray(guess if guess is not None else s.center[:2], dtype=float)
+        rows, refer = self.surface.flight_rows(centers, velocities, times, s, guess, mass=self.mass,
+                                               radius=self.radius, gravity=self.gravity, dissipated=dissipated)
+        for i in np.flatnonzero(refer):
+            foot = self.surface.foot(centers[i])
+            rows[i, ROW_SLICES["contact"]] = foot.x, foot.y
+            rows[i, SLIP_SPEED] = tangential_slip(velocities[i], s.omega, foot.normal, self.radius)[0]
         return rows
 
 

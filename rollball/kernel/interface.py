@@ -67,6 +67,11 @@ ENTRIES = {
              ("normals", MATRIX), ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
              ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
              ("start_distances", VECTOR), ("d", VECTOR)),
+    "flight_rows": (("fn", ADDRESS), ("count", INT), ("centers", MATRIX), ("velocities", MATRIX), ("times", VECTOR),
+                    ("start_time", FLOAT), ("omega", VECTOR), ("R", MATRIX), ("guess", VECTOR), ("tips", MATRIX),
+                    ("mass", FLOAT), ("radius", FLOAT), ("gravity", FLOAT), ("dissipated", FLOAT), ("rows", MATRIX),
+                    ("refer", INTS), ("feet", MATRIX), ("normals", MATRIX), ("distances", VECTOR), ("turn", MATRIX),
+                    ("iterations", INT), ("d", VECTOR)),
 }
 
 
