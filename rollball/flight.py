@@ -2,9 +2,10 @@
 
 In flight the centre falls freely and the spin is constant, so the motion is closed form:
 c(t) = c₀ + ċ₀ τ + ½ g τ², ω constant, R(t) = exp(A(ω) τ) R₀ with τ = t − t₀ (the rotation
-vector's exponential, exact at any angle: Rodrigues' formula in the kernel's rows, scipy's in ``state``): no integrator, no step error. The ball lands where the
-centre's distance to the surface first comes down to r. That distance is measured to the centre's
-closest surface point (its foot), found by Newton's method on (c − φ(α)) ∥ N(α); the first root
+vector's exponential, exact at any angle: Rodrigues' formula in the kernel's rows, scipy's in
+``state``): no integrator, no step error. The ball lands where the centre's distance to the
+surface first comes down to r. That distance is measured to the centre's closest surface point
+(its foot), found by Newton's method on (c − φ(α)) ∥ N(α); the first root
 in time is never stepped over (each step is certified to hold none, from the distance being
 1-Lipschitz in the centre and the empty balls about the ends, ``landing``; provided each look's
 distance is the true one) and is then located by a bracketing root finder to round-off. The impact there is an impulse
