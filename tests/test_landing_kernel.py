@@ -1,9 +1,10 @@
 """The compiled landing search (``kernel.landing.land``, through ``Surface.land``) answers every
-flight in vacuum as flight.py's own search does, bit for bit, and leaves to flight.py the flights
+flight in vacuum as flight.py's own search does, to round-off, and leaves to flight.py the flights
 its first foot search cannot answer. The answers themselves are held against independent
 computations elsewhere (tests/test_flight.py, test_flight_honest.py, test_flight_parts.py): here
-the two searches are held against each other, on the examples' flights and on thrown balls that
-land on slopes, bumps and valleys, graze, or fly to the end."""
+the two searches are held against each other, on the examples' flights, a 3-D throw that bounces
+and a ball that flies to the end; and a flight's compiled rows against its exact state and the
+full foot search."""
 
 import dataclasses
 import json
@@ -26,20 +27,28 @@ def thrown(landscape, duration=1.5, restitution=0.0, **start):
     return Scene.from_dict(data)
 
 
-def flights_of(scene, monkeypatch):
-    """Each flight of the scene's run, as (flight, t_end, the surface's hints and tips then)."""
-    seen, landing = [], Flight.landing
+def watch(scene, monkeypatch, name):
+    """Run the scene with ``Flight.<name>`` watched: each call's flight, its arguments, the
+    surface's hints and tips before it, and what it returned."""
+    seen, method = [], getattr(Flight, name)
 
-    def watched(flight, t_end):
-        seen.append((flight, t_end, list(flight.surface.hints), list(flight.surface.tips)))
-        return landing(flight, t_end)
+    def watched(flight, *args):
+        before = list(flight.surface.hints), list(flight.surface.tips)
+        out = method(flight, *args)
+        seen.append((flight, args, before, out))
+        return out
 
     with monkeypatch.context() as m:
-        m.setattr(Flight, "landing", watched)
+        m.setattr(Flight, name, watched)
         run = Simulation(scene)
         run.judge_energy = False
         run.advance()
     return seen
+
+
+def flights_of(scene, monkeypatch):
+    """Each flight of the scene's run, as (flight, t_end, the surface's hints and tips then)."""
+    return [(flight, t_end, hints, tips) for flight, (t_end,), (hints, tips), _ in watch(scene, monkeypatch, "landing")]
 
 
 def both(flight, t_end, hints, tips):
@@ -79,9 +88,10 @@ def test_the_kernel_lands_each_flight_as_flight_py_does(name, monkeypatch):
             assert compiled is None
             continue
         (t, foot), (t_own, foot_own) = compiled, own
-        assert t == t_own
-        assert (foot.x, foot.y, foot.distance) == (foot_own.x, foot_own.y, foot_own.distance)
-        assert np.array_equal(foot.normal, foot_own.normal)
+        assert t == pytest.approx(t_own, rel=1e-14, abs=1e-14)
+        assert [foot.x, foot.y] == pytest.approx([foot_own.x, foot_own.y], rel=1e-12, abs=1e-12)
+        assert foot.distance == pytest.approx(foot_own.distance, rel=1e-12)
+        assert foot.normal == pytest.approx(foot_own.normal, rel=1e-12, abs=1e-12)
     assert (owns == [None]) == (name == "away")   # (one flight to the end there; every other flight lands)
 
 
@@ -106,23 +116,6 @@ def test_a_flight_through_air_is_searched_by_flight_py(monkeypatch):
 
 # -- a flight's rows (``kernel.flight_rows``, through ``Surface.flight_rows``) -----------------------
 
-def rows_and_flights(scene, monkeypatch):
-    """Each flight of the scene's run and the rows it recorded: (flight, times, rows)."""
-    seen, rows = [], Flight.rows
-
-    def watched(flight, times, dissipated, guess=None):
-        out = rows(flight, times, dissipated, guess)
-        seen.append((flight, np.asarray(times, dtype=float), out))
-        return out
-
-    with monkeypatch.context() as m:
-        m.setattr(Flight, "rows", watched)
-        run = Simulation(scene)
-        run.judge_energy = False
-        run.advance()
-    return seen
-
-
 @pytest.mark.parametrize("name", ["liftoff", "valley", "away"])
 def test_a_flights_rows_are_its_exact_state_and_its_nearest_surface_point(name, monkeypatch):
     """Against scipy's rotation vector exponential, the parabola, the energy's formula and the full
@@ -132,7 +125,8 @@ def test_a_flights_rows_are_its_exact_state_and_its_nearest_surface_point(name, 
     from rollball.flight import tangential_slip
     from rollball.kernel.interface import ROW_SLICES
 
-    seen = rows_and_flights(SCENES[name], monkeypatch)
+    calls = watch(SCENES[name], monkeypatch, "rows")
+    seen = [(flight, np.asarray(args[0], dtype=float), rows) for flight, args, _, rows in calls]
     assert sum(len(times) for _, times, _ in seen) > 100
     for flight, times, rows in seen:
         s, m, r, g = flight.start, flight.mass, flight.radius, flight.gravity

@@ -1,14 +1,16 @@
 """A flying ball's landing, compiled (docs/design.md §1, "Flight"): the search of
 ``flight.Flight.landing`` for a ball in vacuum, its centre on the parabola c₀ + ċ₀τ + ½gτ², step
 for step as flight.py's search takes it (the same looks, certificates, proposals and retries, the
-same Brent's method), each look the compiled first foot search (``feet.nearest_feet``).
+same Brent's method), each look the compiled first foot search (``feet.nearest_feet``); only the
+curvature a step is proposed from is the kernel's own (``physics.curvatures``), whose rounding
+differs from numpy's in the last bits.
 
 Where flight.py's search would need more than that first search (a foot not plausible, none
 found, a bracket Brent's method refuses), where the track under the path finds the surface nearer
 than the search did, or where the landing's own check fails, the search stops with LANDING_REFER:
 flight.py then searches the whole flight itself (its robust foot search, its hints, its reasons
 to stop), so every answer is flight.py's own; a landing or a flight to t_end this search finds is
-what flight.py's would find, to the last bits of numpy's sums (tests/test_landing_kernel.py)."""
+what flight.py's would find, to round-off (tests/test_landing_kernel.py)."""
 
 from __future__ import annotations
 
@@ -21,6 +23,7 @@ from .interface import (
     SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
 )
 from .lowlevel import EXACT, JIT, data_pointer, landscape
+from .physics import curvatures
 
 EPS = 2.220446049250313e-16   # (the double's machine epsilon, as numpy's finfo gives it)
 BRENT_ITERATIONS = 200
@@ -98,20 +101,12 @@ def leaves_clear(r, gravity, h, rate, bend, speed):
 
 @JIT
 def proposal(fn, d, r, gravity, h, x, y, speed, rate):
-    """``Flight._proposal``: the step from a look with gap h at the foot (x, y), κ as ``geometry.fit_ratio``."""
+    """``Flight._proposal``: the step from a look with gap h at the foot (x, y), κ the largest
+    principal curvature there (``physics.curvatures``; NaN where f cannot be evaluated)."""
     landscape(fn, x, y, data_pointer(d))
-    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
-    W2 = 1.0 + fx * fx + fy * fy
-    W = math.sqrt(W2)
-    h11, h12, h22 = fxx / W, fxy / W, fyy / W
-    mean = 0.5 * ((1.0 + fx * fx) * h22 + (1.0 + fy * fy) * h11 - 2.0 * fx * fy * h12) / W2
-    gauss = (h11 * h22 - h12 * h12) / W2
-    q = mean * mean - gauss
-    kappa = 1.0 * (mean + math.sqrt(q if not q < 0.0 else 0.0))
-    for k in range(6):
-        if math.isnan(d[k]):
-            kappa = math.nan
-    kappa = 0.0 if 0.0 > kappa else kappa   # (Python's max(κ, 0): NaN stays)
+    fx, fy = d[1], d[2]
+    kappa, _ = curvatures(fx, fy, d[3], d[4], d[5], 1.0 / math.sqrt(1.0 + fx * fx + fy * fy))
+    kappa = 0.0 if 0.0 > kappa else kappa   # (max(κ, 0), NaN kept)
     room = 1.0 - (h + r) * kappa
     bend = 2.0 * (gravity + speed * speed * kappa / room) if room > 0 else math.inf
     return leaves_clear(r, gravity, h, rate, bend, speed) if bend < math.inf else 0.0
