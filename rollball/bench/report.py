@@ -104,7 +104,7 @@ def _targets(t: dict) -> list[str]:
     lines += [f"| {label} | {ns:.0f} |" for label, ns in t["costs"].items()]
     if t.get("hybrid"):
         lines += ["", "A run that changes mode against the same scene glued to its surface (CPU time per run, "
-                      "medians, the two in turn; the landing search compiled, a flight's rows, its impact and the "
+                      "medians, the two in turn; a flight's landing search and rows compiled, its impact and the "
                       "changes of mode in Python):", "",
                   "| scene | changes mode | glued | ratio | goal |", "|---|---|---|---|---|"]
         lines += [f"| {name} | {h['hybrid_ms']:.1f} ms | {h['glued_ms']:.1f} ms | **{h['ratio']:.1f}×**"
