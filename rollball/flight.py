@@ -42,6 +42,7 @@ ZOOM_BEAM = 24           # ...this many of them
 POLISH_STEP = 1e-9       # Newton's last step (× (1 + |α|)) below which ``_polish`` takes a foot as found
 MAX_HINTS = 8            # surface points the search was shown it missed, before a run stops
 REFER = "refer"          # ``Surface.land``: the kernel's search leaves this flight to flight.py's own
+KEPT_ROWS = 4096         # a flight's rows made through arrays a surface keeps, at most (``Surface.flight_rows``)
 
 
 class OffLandscape(Exception):
@@ -302,18 +303,22 @@ class Surface:
                     *, mass: float, radius: float, gravity: float, dissipated: float) -> tuple[np.ndarray, np.ndarray]:
         """A flight's rows at ``times`` (``kernel.flight_rows``), where the centre is at ``centers``
         (n, 3) and moves at ``velocities`` (n, 3), and which of them need the foot searched in
-        full (``Flight.rows``)."""
+        full (``Flight.rows``). Up to KEPT_ROWS rows go through arrays packed once per surface (a
+        run records a flight's rows a few at a time: every bounce's first row); more, through
+        arrays of their own, so that no run keeps a long flight's arrays."""
         n, tips = len(times), np.array(self.tips, dtype=float).reshape(-1, 3)
         call = self._rows_call
         if call is None or len(call.kept["times"]) < n or len(call.kept["tips"]) != len(tips):
-            size = max(n, 2 * len(call.kept["times"]) if call is not None else 64)
-            call = self._rows_call = machine_code.Arguments(
+            size = max(n, min(2 * len(call.kept["times"]), KEPT_ROWS) if call is not None else 64)
+            call = machine_code.Arguments(
                 "flight_rows", fn=self._record.ctypes.data, count=0, centers=np.empty((size, 3)),
                 velocities=np.empty((size, 3)), times=np.empty(size), start_time=0.0, omega=np.empty(3),
                 R=np.empty((3, 3)), guess=np.empty(2), tips=np.empty((len(tips), 3)), mass=0.0, radius=0.0,
                 gravity=0.0, dissipated=0.0, rows=np.empty((size, ROW_SIZE)), refer=np.empty(size, dtype=np.int64),
                 feet=np.empty((size, 2)), normals=np.empty((size, 3)), distances=np.empty(size), turn=np.empty((3, 3)),
                 iterations=FOOT_ITERATIONS, d=np.empty(6))
+            if size <= KEPT_ROWS:
+                self._rows_call = call
         kept = call.kept
         kept["centers"][:n], kept["velocities"][:n], kept["times"][:n] = centers, velocities, times
         kept["omega"][:], kept["R"][:], kept["guess"][:], kept["tips"][:] = start.omega, start.R, guess, tips
@@ -321,6 +326,8 @@ class Surface:
                            ("gravity", gravity), ("dissipated", dissipated)):
             call.set(key, value)
         call()
+        if call is not self._rows_call and len(kept["times"]) == n:   # (its own arrays: no copies)
+            return kept["rows"], kept["refer"]
         return kept["rows"][:n].copy(), kept["refer"][:n].copy()
 
     def _from_starts(self, c, starts):

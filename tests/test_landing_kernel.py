@@ -116,35 +116,54 @@ def test_a_flight_through_air_is_searched_by_flight_py(monkeypatch):
 
 # -- a flight's rows (``kernel.flight_rows``, through ``Surface.flight_rows``) -----------------------
 
-@pytest.mark.parametrize("name", ["liftoff", "valley", "away"])
-def test_a_flights_rows_are_its_exact_state_and_its_nearest_surface_point(name, monkeypatch):
-    """Against scipy's rotation vector exponential, the parabola, the energy's formula and the full
-    foot search of each row's centre (Surface.foot)."""
+def check_rows(flight, times, rows):
+    """A flight's rows against scipy's rotation vector exponential, the parabola, the energy's
+    formula and the full foot search of (some of) the rows' centres (Surface.foot)."""
     from scipy.spatial.transform import Rotation
 
     from rollball.flight import tangential_slip
     from rollball.kernel.interface import ROW_SLICES
 
+    s, m, r, g = flight.start, flight.mass, flight.radius, flight.gravity
+    tau = times - s.t
+    center = s.center + np.outer(tau, s.velocity) + np.outer(0.5 * tau * tau, [0.0, 0.0, -g])
+    velocity = s.velocity + np.outer(tau, [0.0, 0.0, -g])
+    column = {name: rows[:, part] for name, part in ROW_SLICES.items()}
+    assert np.array_equal(column["t"][:, 0], times)
+    assert np.allclose(column["center"], center, rtol=0, atol=1e-13)
+    assert np.allclose(column["velocity"], velocity, rtol=0, atol=1e-13)
+    assert np.array_equal(column["omega"], np.broadcast_to(s.omega, (len(times), 3)))
+    turned = Rotation.from_rotvec(np.outer(tau, s.omega)).as_matrix() @ s.R
+    assert np.allclose(column["R"], turned.reshape(-1, 9), rtol=0, atol=1e-14)
+    energy = 0.5 * m * (velocity ** 2).sum(axis=1) + 0.2 * m * r * r * (s.omega ** 2).sum() + m * g * center[:, 2]
+    assert np.allclose(column["energy"][:, 0], energy, rtol=1e-13, atol=0)
+    assert not column["normal_force"].any()
+    for i in range(0, len(times), max(len(times) // 25, 1)):
+        foot = flight.surface.foot(rows[i, ROW_SLICES["center"]])
+        assert rows[i, ROW_SLICES["contact"]] == pytest.approx([foot.x, foot.y], abs=1e-12)
+        slip = tangential_slip(rows[i, ROW_SLICES["velocity"]], s.omega, foot.normal, r)[0]
+        assert column["slip_speed"][i, 0] == pytest.approx(slip, rel=1e-12, abs=1e-14)
+
+
+@pytest.mark.parametrize("name", ["liftoff", "valley", "away"])
+def test_a_flights_rows_are_its_exact_state_and_its_nearest_surface_point(name, monkeypatch):
     calls = watch(SCENES[name], monkeypatch, "rows")
     seen = [(flight, np.asarray(args[0], dtype=float), rows) for flight, args, _, rows in calls]
     assert sum(len(times) for _, times, _ in seen) > 100
     for flight, times, rows in seen:
-        s, m, r, g = flight.start, flight.mass, flight.radius, flight.gravity
-        tau = times - s.t
-        center = s.center + np.outer(tau, s.velocity) + np.outer(0.5 * tau * tau, [0.0, 0.0, -g])
-        velocity = s.velocity + np.outer(tau, [0.0, 0.0, -g])
-        column = {name: rows[:, part] for name, part in ROW_SLICES.items()}
-        assert np.array_equal(column["t"][:, 0], times)
-        assert np.allclose(column["center"], center, rtol=0, atol=1e-13)
-        assert np.allclose(column["velocity"], velocity, rtol=0, atol=1e-13)
-        assert np.array_equal(column["omega"], np.broadcast_to(s.omega, (len(times), 3)))
-        turned = Rotation.from_rotvec(np.outer(tau, s.omega)).as_matrix() @ s.R
-        assert np.allclose(column["R"], turned.reshape(-1, 9), rtol=0, atol=1e-14)
-        energy = 0.5 * m * (velocity ** 2).sum(axis=1) + 0.2 * m * r * r * (s.omega ** 2).sum() + m * g * center[:, 2]
-        assert np.allclose(column["energy"][:, 0], energy, rtol=1e-13, atol=0)
-        assert not column["normal_force"].any()
-        for i in range(0, len(times), max(len(times) // 25, 1)):
-            foot = flight.surface.foot(rows[i, ROW_SLICES["center"]])
-            assert rows[i, ROW_SLICES["contact"]] == pytest.approx([foot.x, foot.y], abs=1e-12)
-            slip = tangential_slip(rows[i, ROW_SLICES["velocity"]], s.omega, foot.normal, r)[0]
-            assert column["slip_speed"][i, 0] == pytest.approx(slip, rel=1e-12, abs=1e-14)
+        check_rows(flight, times, rows)
+
+
+def test_a_long_flights_rows_are_made_in_arrays_of_their_own(monkeypatch):
+    """A flight of more than KEPT_ROWS rows (liftoff at dt 1e-4: 4 453) is made through arrays of
+    its own, which the surface does not keep; its rows are as exact."""
+    from rollball.flight import KEPT_ROWS
+
+    scene = dataclasses.replace(SCENES["liftoff"], integrator=dataclasses.replace(SCENES["liftoff"].integrator,
+                                                                                 dt=1e-4))
+    calls = watch(scene, monkeypatch, "rows")
+    flight, args, _, rows = max(calls, key=lambda call: len(call[3]))
+    assert len(rows) > KEPT_ROWS
+    check_rows(flight, np.asarray(args[0], dtype=float), rows)
+    kept = flight.surface._rows_call   # (None: nothing kept; else a short flight's call)
+    assert kept is None or len(kept.kept["times"]) <= KEPT_ROWS
