@@ -276,14 +276,14 @@ class Surface:
         key = (len(hints), len(tips))
         call = self._land_calls.get(key)
         if call is None:
-            b, k = LANDING_BATCH, LANDING_BATCH * (2 + BEST_SAMPLES + len(hints))
+            k = 2 + BEST_SAMPLES + len(hints)   # (a look's starts: below, the guess, the samples, the hints)
             call = self._land_calls[key] = machine_code.Arguments(
                 "land", fn=self._record.ctypes.data, start=np.empty(7), gravity=0.0, radius=0.0, t_end=0.0,
                 hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
                 reach_default=self.reach_default, iterations=FOOT_ITERATIONS, out=np.empty(OUT_LANDING),
-                times=np.empty(b), guess=np.empty(2), centers=np.empty((b, 3)), feet=np.empty((b, 2)),
-                normals=np.empty((b, 3)), distances=np.empty(b), below=np.empty(b), sampled=np.empty(b),
-                nearest=np.empty((b, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
+                times=np.empty(LANDING_BATCH + 1), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
+                normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
+                nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
                 start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))
         kept = call.kept
         kept["start"][0], kept["start"][1:4], kept["start"][4:7] = start.t, start.center, start.velocity

@@ -230,12 +230,16 @@ def locate(fn, start, gravity, r, a, b, guess, hints, tips, unit, reach_default,
 @JIT
 def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, iterations, times, guess, work, out):
     """``Flight._search`` (with ``_clear_off`` and ``_touch``): LANDING_LANDED (out: t, the foot),
-    LANDING_FLYING (still flying at t_end) or LANDING_REFER."""
+    LANDING_FLYING (still flying at t_end) or LANDING_REFER. flight.py looks at a batch of times
+    at once (one vectorised call) and uses them in turn up to the first that ends the batch; here
+    each is looked at when its turn comes (times[:LANDING_BATCH] the batch's times,
+    times[LANDING_BATCH] the look's), so the looks after that one are not taken at all: every
+    look used is the same, with the same guess."""
     feet, normals, distances = work[1], work[2], work[3]
-    none, one = guess[:0], guess[:2]
+    none, one, single = guess[:0], guess[:2], times[LANDING_BATCH:]
     tol, floor = GAP_TOLERANCE * r, GRAZE * r
     t = start[0]
-    h = gap_at(fn, start, gravity, r, t, none, hints, tips, unit, reach_default, iterations, times, work)
+    h = gap_at(fn, start, gravity, r, t, none, hints, tips, unit, reach_default, iterations, single, work)
     if math.isnan(h):
         return LANDING_REFER
     fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
@@ -253,25 +257,26 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
                 n += 1
                 size *= 2.0
             guess[0], guess[1] = fx, fy
-            if not look(fn, start, gravity, times, n, one, hints, tips, unit, reach_default, iterations, work):
-                return LANDING_REFER
             for i in range(n):
-                s, h_s = times[i], distances[i] - r
+                s = times[i]
+                h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, single, work)
+                if math.isnan(h_s):
+                    return LANDING_REFER
                 if h_s < -tol:
                     guess[0], guess[1] = fx, fy
                     return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations,
-                                  times, work, out)
+                                  single, work, out)
                 if h_s > floor or s - start[0] > CLEAR_WITHIN:
                     if h_s <= floor:   # it never left the surface
-                        return foot_out(out, LANDING_LANDED, s, work, i)
+                        return foot_out(out, LANDING_LANDED, s, work, 0)
                     t, h = s, h_s
-                    fx, fy, dd = feet[i, 0], feet[i, 1], distances[i]
-                    m1, m2, m3 = normals[i, 0], normals[i, 1], normals[i, 2]
+                    fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
+                    m1, m2, m3 = normals[0, 0], normals[0, 1], normals[0, 2]
                     cleared = True
                     break
                 t, h, step = s, h_s, 2.0 * step
-                fx, fy, dd = feet[i, 0], feet[i, 1], distances[i]
-                m1, m2, m3 = normals[i, 0], normals[i, 1], normals[i, 2]
+                fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
+                m1, m2, m3 = normals[0, 0], normals[0, 1], normals[0, 2]
         if t >= t_end:
             return LANDING_FLYING
     cap = math.inf
@@ -289,15 +294,17 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
             if h > 0.0 and rate < 0.0:
                 for k in range(4):
                     times[k] = min(t + (1.1, 2.0, 4.0, 8.0)[k] * h / -rate, t_end)
-                if not look(fn, start, gravity, times, 4, one, hints, tips, unit, reach_default, iterations, work):
-                    return LANDING_REFER
                 for k in range(4):
-                    b, h_b = times[k], distances[k] - r
+                    b = times[k]
+                    h_b = gap_at(fn, start, gravity, r, b, one, hints, tips, unit, reach_default, iterations, single,
+                                 work)
+                    if math.isnan(h_b):
+                        return LANDING_REFER
                     if h_b < -tol:
                         return locate(fn, start, gravity, r, t, b, one, hints, tips, unit, reach_default, iterations,
-                                      times, work, out)
+                                      single, work, out)
                     if b >= t_end:
-                        return LANDING_FLYING if h_b > tol else foot_out(out, LANDING_LANDED, b, work, k)
+                        return LANDING_FLYING if h_b > tol else foot_out(out, LANDING_LANDED, b, work, 0)
             out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7] = LANDING_LANDED, t, fx, fy, m1, m2, m3, dd
             return LANDING_LANDED
         if math.isnan(sure):
@@ -321,23 +328,24 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
                 n += 1
             times[n] = t_end
             count = n + 1
-        if not look(fn, start, gravity, times, count, one, hints, tips, unit, reach_default, iterations, work):
-            return LANDING_REFER
         for i in range(count):
-            s, h_s = times[i], distances[i] - r
+            s = times[i]
+            h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, single, work)
+            if math.isnan(h_s):
+                return LANDING_REFER
             certified = h_s > -tol and h_s > 0.0 and clear(start, gravity, r, t, s, h, h_s)
             if not certified:
                 if h_s < -tol and s <= t + sure:
-                    return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations, times,
-                                  work, out)
+                    return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations,
+                                  single, work, out)
                 certified = h_s > -tol and s <= t + sure
             if not certified:
                 cap = retry(start, gravity, r, t, s, h, h_s, speed)
                 break
             grazing = grazing + 1 if h_s <= floor else 0
             t, h, cap, last, before = s, h_s, math.inf, s - t, last
-            fx, fy, dd = feet[i, 0], feet[i, 1], distances[i]
-            m1, m2, m3 = normals[i, 0], normals[i, 1], normals[i, 2]
+            fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
+            m1, m2, m3 = normals[0, 0], normals[0, 1], normals[0, 2]
             sure = chosen = math.nan
             if h <= floor or t >= t_end:
                 break
@@ -369,8 +377,8 @@ def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, it
     """``Flight.landing`` for a ball in vacuum from ``start`` (t₀, c₀ (3), ċ₀ (3)) until t_end, on
     the surface ``fn`` with flight.py's ``Surface`` hints and tips: out[0] LANDING_LANDED (out[1]
     the time, out[2:8] the foot: x, y, normal (3), signed distance), LANDING_FLYING (still flying
-    at t_end) or LANDING_REFER (flight.py searches this flight itself: see the module). The rest:
-    work arrays for LANDING_BATCH looks (``feet.nearest_feet``'s, each with room for its starts)."""
+    at t_end) or LANDING_REFER (flight.py searches this flight itself: see the module). times:
+    LANDING_BATCH + 1; the rest: work arrays for a look (``feet.nearest_feet``'s, with room for its starts)."""
     r = radius
     work = (centers, feet, normals, distances, below, sampled, nearest, start_centers, start_feet, start_normals,
             start_distances, d)
@@ -393,8 +401,8 @@ def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, it
     cx, cy, cz, _, _, _ = motion(start, gravity, t)
     landscape(fn, x, y, data_pointer(d))
     far = math.sqrt((cx - x) * (cx - x) + (cy - y) * (cy - y) + (cz - d[0]) * (cz - d[0]))
-    if math.isnan(gap_at(fn, start, gravity, r, t, guess[:0], hints, tips, unit, reach_default, iterations, times,
-                         work)):
+    if math.isnan(gap_at(fn, start, gravity, r, t, guess[:0], hints, tips, unit, reach_default, iterations,
+                         times[LANDING_BATCH:], work)):
         out[0] = LANDING_REFER
         return
     if not (abs(far - r) <= 2.0 * GRAZE * r and distances[0] >= far - 2.0 * GRAZE * r):
