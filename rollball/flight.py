@@ -115,7 +115,7 @@ class Surface:
         self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
         self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
         self._land_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> land's, packed once
-        self._rows_call: machine_code.Arguments | None = None   # flight_rows', packed for as many rows as the most yet
+        self._rows_call: machine_code.Arguments | None = None   # flight_rows', packed for up to KEPT_ROWS rows
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
