@@ -281,7 +281,7 @@ class Surface:
                 "land", fn=self._record.ctypes.data, start=np.empty(7), gravity=0.0, radius=0.0, t_end=0.0,
                 hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
                 reach_default=self.reach_default, iterations=FOOT_ITERATIONS, out=np.empty(OUT_LANDING),
-                times=np.empty(LANDING_BATCH + 1), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
+                times=np.empty(LANDING_BATCH), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
                 normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
                 nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
                 start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))

@@ -124,59 +124,48 @@ def retry(start, gravity, r, t, s, h, h_s, speed):
 
 
 @JIT
-def look(fn, start, gravity, times, n, guess, hints, tips, unit, reach_default, iterations, work):
-    """The feet of the centres at times[:n] (``Surface.feet_of``'s first search), in work's feet,
-    normals and distances; False where one of them is not plausible (``Surface._plausible``)."""
+def gap_at(fn, start, gravity, r, t, guess, hints, tips, unit, reach_default, iterations, work):
+    """One look at t (``Surface.feet_of``'s first search for the centre then): the gap, the foot in
+    work's feet, normals and distances (their one row); NaN where the foot is not plausible
+    (``Surface._plausible``), where flight.py's search would look further."""
     centers, feet, normals, distances, below, sampled, nearest, s_centers, s_feet, s_normals, s_distances, d = work
-    for i in range(n):
-        cx, cy, cz, _, _, _ = motion(start, gravity, times[i])
-        centers[i, 0], centers[i, 1], centers[i, 2] = cx, cy, cz
-    k = n * (1 + guess.shape[0] // 2 + BEST_SAMPLES + hints.shape[0])
-    nearest_feet(fn, centers[:n], guess, hints, tips, unit, reach_default, feet[:n], normals[:n], distances[:n],
-                 below[:n], sampled[:n], nearest[:n], s_centers[:k], s_feet[:k], s_normals[:k], s_distances[:k],
-                 iterations, d)
-    for i in range(n):
-        distance = distances[i]
-        if not (math.isfinite(distance) and abs(distance) <= sampled[i] * (1.0 + SAMPLE_SLACK)):
-            return False
-        if (distance > 0.0 and centers[i, 2] < below[i]) or (distance < 0.0 and centers[i, 2] > below[i]):
-            return False
-    return True
-
-
-@JIT
-def gap_at(fn, start, gravity, r, t, guess, hints, tips, unit, reach_default, iterations, times, work):
-    """One look at t: the gap (NaN where flight.py's search would look further), the foot in work[1:4] row 0."""
-    times[0] = t
-    if not look(fn, start, gravity, times, 1, guess, hints, tips, unit, reach_default, iterations, work):
+    cx, cy, cz, _, _, _ = motion(start, gravity, t)
+    centers[0, 0], centers[0, 1], centers[0, 2] = cx, cy, cz
+    k = 1 + guess.shape[0] // 2 + BEST_SAMPLES + hints.shape[0]
+    nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, normals, distances, below, sampled,
+                 nearest, s_centers[:k], s_feet[:k], s_normals[:k], s_distances[:k], iterations, d)
+    distance = distances[0]
+    if not (math.isfinite(distance) and abs(distance) <= sampled[0] * (1.0 + SAMPLE_SLACK)):
         return math.nan
-    return work[3][0] - r
+    if (distance > 0.0 and cz < below[0]) or (distance < 0.0 and cz > below[0]):
+        return math.nan
+    return distance - r
 
 
 @JIT
-def foot_out(out, status, t, work, i):
-    """Write the answer: status, t and the foot of look i (x, y, normal (3), distance)."""
+def foot_out(out, status, t, work):
+    """Write the answer: status, t and the last look's foot (x, y, normal (3), distance)."""
     feet, normals, distances = work[1], work[2], work[3]
     out[0], out[1] = status, t
-    out[2], out[3] = feet[i, 0], feet[i, 1]
-    out[4], out[5], out[6] = normals[i, 0], normals[i, 1], normals[i, 2]
-    out[7] = distances[i]
+    out[2], out[3] = feet[0, 0], feet[0, 1]
+    out[4], out[5], out[6] = normals[0, 0], normals[0, 1], normals[0, 2]
+    out[7] = distances[0]
     return status
 
 
 @EXACT   # (compiled once, called from three places: inlined, the search took three times as long to compile)
-def locate(fn, start, gravity, r, a, b, guess, hints, tips, unit, reach_default, iterations, times, work, out):
+def locate(fn, start, gravity, r, a, b, guess, hints, tips, unit, reach_default, iterations, work, out):
     """``Flight._locate``: the root of the gap in [a, b] by Brent's method (scipy's brentq,
     step for step), then the look there; LANDING_REFER where a gap is not found or the bracket
     holds no sign change."""
-    fa = gap_at(fn, start, gravity, r, a, guess, hints, tips, unit, reach_default, iterations, times, work)
+    fa = gap_at(fn, start, gravity, r, a, guess, hints, tips, unit, reach_default, iterations, work)
     if math.isnan(fa):
         return LANDING_REFER
     t = a
     if fa > 0.0:
         xtol, rtol = 4 * EPS * max(abs(b), 1.0), 4 * EPS
         xpre, xcur, fpre = a, b, fa
-        fcur = gap_at(fn, start, gravity, r, b, guess, hints, tips, unit, reach_default, iterations, times, work)
+        fcur = gap_at(fn, start, gravity, r, b, guess, hints, tips, unit, reach_default, iterations, work)
         if math.isnan(fcur):
             return LANDING_REFER
         xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
@@ -216,15 +205,15 @@ def locate(fn, start, gravity, r, a, b, guess, hints, tips, unit, reach_default,
                     xcur += scur
                 else:
                     xcur += delta if sbis > 0 else -delta
-                fcur = gap_at(fn, start, gravity, r, xcur, guess, hints, tips, unit, reach_default, iterations, times,
+                fcur = gap_at(fn, start, gravity, r, xcur, guess, hints, tips, unit, reach_default, iterations,
                               work)
                 if math.isnan(fcur):
                     return LANDING_REFER
         if math.isnan(t):
             return LANDING_REFER
-    if math.isnan(gap_at(fn, start, gravity, r, t, guess, hints, tips, unit, reach_default, iterations, times, work)):
+    if math.isnan(gap_at(fn, start, gravity, r, t, guess, hints, tips, unit, reach_default, iterations, work)):
         return LANDING_REFER
-    return foot_out(out, LANDING_LANDED, t, work, 0)
+    return foot_out(out, LANDING_LANDED, t, work)
 
 
 @JIT
@@ -232,14 +221,13 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
     """``Flight._search`` (with ``_clear_off`` and ``_touch``): LANDING_LANDED (out: t, the foot),
     LANDING_FLYING (still flying at t_end) or LANDING_REFER. flight.py looks at a batch of times
     at once (one vectorised call) and uses them in turn up to the first that ends the batch; here
-    each is looked at when its turn comes (times[:LANDING_BATCH] the batch's times,
-    times[LANDING_BATCH] the look's), so the looks after that one are not taken at all: every
-    look used is the same, with the same guess."""
+    each is looked at when its turn comes (``times``: the batch's), so the looks after that one
+    are not taken at all: every look used is the same, with the same guess."""
     feet, normals, distances = work[1], work[2], work[3]
-    none, one, single = guess[:0], guess[:2], times[LANDING_BATCH:]
+    none, one = guess[:0], guess[:2]
     tol, floor = GAP_TOLERANCE * r, GRAZE * r
     t = start[0]
-    h = gap_at(fn, start, gravity, r, t, none, hints, tips, unit, reach_default, iterations, single, work)
+    h = gap_at(fn, start, gravity, r, t, none, hints, tips, unit, reach_default, iterations, work)
     if math.isnan(h):
         return LANDING_REFER
     fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
@@ -259,16 +247,16 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
             guess[0], guess[1] = fx, fy
             for i in range(n):
                 s = times[i]
-                h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, single, work)
+                h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, work)
                 if math.isnan(h_s):
                     return LANDING_REFER
                 if h_s < -tol:
                     guess[0], guess[1] = fx, fy
                     return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations,
-                                  single, work, out)
+                                  work, out)
                 if h_s > floor or s - start[0] > CLEAR_WITHIN:
                     if h_s <= floor:   # it never left the surface
-                        return foot_out(out, LANDING_LANDED, s, work, 0)
+                        return foot_out(out, LANDING_LANDED, s, work)
                     t, h = s, h_s
                     fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
                     m1, m2, m3 = normals[0, 0], normals[0, 1], normals[0, 2]
@@ -296,15 +284,15 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
                     times[k] = min(t + (1.1, 2.0, 4.0, 8.0)[k] * h / -rate, t_end)
                 for k in range(4):
                     b = times[k]
-                    h_b = gap_at(fn, start, gravity, r, b, one, hints, tips, unit, reach_default, iterations, single,
+                    h_b = gap_at(fn, start, gravity, r, b, one, hints, tips, unit, reach_default, iterations,
                                  work)
                     if math.isnan(h_b):
                         return LANDING_REFER
                     if h_b < -tol:
                         return locate(fn, start, gravity, r, t, b, one, hints, tips, unit, reach_default, iterations,
-                                      single, work, out)
+                                      work, out)
                     if b >= t_end:
-                        return LANDING_FLYING if h_b > tol else foot_out(out, LANDING_LANDED, b, work, 0)
+                        return LANDING_FLYING if h_b > tol else foot_out(out, LANDING_LANDED, b, work)
             out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7] = LANDING_LANDED, t, fx, fy, m1, m2, m3, dd
             return LANDING_LANDED
         if math.isnan(sure):
@@ -330,14 +318,14 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
             count = n + 1
         for i in range(count):
             s = times[i]
-            h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, single, work)
+            h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, work)
             if math.isnan(h_s):
                 return LANDING_REFER
             certified = h_s > -tol and h_s > 0.0 and clear(start, gravity, r, t, s, h, h_s)
             if not certified:
                 if h_s < -tol and s <= t + sure:
                     return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations,
-                                  single, work, out)
+                                  work, out)
                 certified = h_s > -tol and s <= t + sure
             if not certified:
                 cap = retry(start, gravity, r, t, s, h, h_s, speed)
@@ -378,7 +366,7 @@ def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, it
     the surface ``fn`` with flight.py's ``Surface`` hints and tips: out[0] LANDING_LANDED (out[1]
     the time, out[2:8] the foot: x, y, normal (3), signed distance), LANDING_FLYING (still flying
     at t_end) or LANDING_REFER (flight.py searches this flight itself: see the module). times:
-    LANDING_BATCH + 1; the rest: work arrays for a look (``feet.nearest_feet``'s, with room for its starts)."""
+    LANDING_BATCH; the rest: work arrays for a look (``feet.nearest_feet``'s, with room for its starts)."""
     r = radius
     work = (centers, feet, normals, distances, below, sampled, nearest, start_centers, start_feet, start_normals,
             start_distances, d)
@@ -401,8 +389,7 @@ def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, it
     cx, cy, cz, _, _, _ = motion(start, gravity, t)
     landscape(fn, x, y, data_pointer(d))
     far = math.sqrt((cx - x) * (cx - x) + (cy - y) * (cy - y) + (cz - d[0]) * (cz - d[0]))
-    if math.isnan(gap_at(fn, start, gravity, r, t, guess[:0], hints, tips, unit, reach_default, iterations,
-                         times[LANDING_BATCH:], work)):
+    if math.isnan(gap_at(fn, start, gravity, r, t, guess[:0], hints, tips, unit, reach_default, iterations, work)):
         out[0] = LANDING_REFER
         return
     if not (abs(far - r) <= 2.0 * GRAZE * r and distances[0] >= far - 2.0 * GRAZE * r):
