@@ -775,12 +775,19 @@ class Flight:
         """A step to try from a look with gap h > 0 falling at ``rate`` (``landing``): the one
         ``clear`` would certify if the gap fell no faster than the local model h + D′Δ − ½ A Δ²,
         A twice the bound of D″ ≥ −(|c̈| + |ċ|² κ/(1 − Dκ)) (|c̈| ≤ ``pull``), κ the largest principal curvature
-        towards the ball at the foot."""
+        towards the ball at the foot; where the gap is not falling, at least the one ``clear``
+        certifies if the gap at its end is no smaller than h: 0.9 of the chord 2√(m (2r + m)),
+        m = h − CLEAR_MARGIN × r, at the speed here (as ``_retry``'s; the model alone proposes about
+        60 % of that chord while the gap creeps up after a lift-off, docs/design.md §1, "Flight and landing")."""
         r, g = self.radius, self.pull(speed)
         kappa = max(float(fit_ratio(self.surface.evaluate(foot.x, foot.y), 1.0)), 0.0)
         room = 1.0 - (h + r) * kappa
         bend = 2.0 * (g + speed * speed * kappa / room) if room > 0 else math.inf
-        return self._leaves_clear(h, rate, bend, speed) if bend < math.inf else 0.0
+        step = self._leaves_clear(h, rate, bend, speed) if bend < math.inf else 0.0
+        if rate >= 0.0 and speed > 0.0:
+            m = h - CLEAR_MARGIN * r
+            step = max(step, 0.9 * 2.0 * math.sqrt(max(m, 0.0) * (2.0 * r + m)) / speed)
+        return step
 
     def _clear_off(self, t: float, h: float, foot: Foot, t_end: float):
         """Just after a lift-off: looks FIRST_STEP after it, doubling, until the gap exceeds

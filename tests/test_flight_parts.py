@@ -234,12 +234,15 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give():
 
 def test_the_looks_just_after_a_lift_off_are_taken_eight_at_a_time(monkeypatch):
     """Lifting off a plane at 1 cm/s the gap passes GRAZE × r (1e-7 m) after some 1.6e-5 s: the
-    looks doubling from 1e-9 s (fourteen of them) are taken eight at a time, and the first one
-    clear is the one the looks taken one by one find (a foot search each before)."""
-    from rollball.flight import FIRST_STEP, GRAZE
+    looks doubling from a first look 1e-9 s after it (fourteen of them; FIRST_STEP made so short,
+    to take two batches) are taken eight at a time, and the first one clear is the one the looks
+    taken one by one find (a foot search each before)."""
+    from rollball import flight as flight_module
+    from rollball.flight import GRAZE
 
+    monkeypatch.setattr(flight_module, "FIRST_STEP", 1e-9)
     f = flight("0.25", (0.3, 0.0, 0.35), (0.0, 0.0, 1e-2))
-    t, step = 0.0, FIRST_STEP
+    t, step = 0.0, 1e-9
     for _ in range(40):   # one by one, from the plane's exact gap
         t, step = t + step, 2.0 * step
         if 1e-2 * t - 0.5 * G * t * t > GRAZE * R:

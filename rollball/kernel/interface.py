@@ -124,7 +124,7 @@ def landscape_record(address: int, values=()) -> np.ndarray:
 # the same looks: docs/design.md §1, "Flight").
 FOOT_ITERATIONS = 50     # Newton's iterations for the closest surface point (converges in a few)
 GAP_TOLERANCE = 1e-12    # × r: a gap this small is contact (round-off of the distance)
-FIRST_STEP = 1e-9        # s: the first look after a lift-off, then doubling until the ball is clear
+FIRST_STEP = 1e-6        # s: the first look after a lift-off, then doubling until the ball is clear
 CLEAR_WITHIN = 1e-2      # s: a ball not clear of the surface by then never left it
 MAX_LOOKS = 1_000_000    # looks of the landing search (far more than it takes: see ``landing``)
 SHRINK = 0.1             # a step not certified to hold no root is tried again at least this share...

@@ -102,14 +102,19 @@ def leaves_clear(r, gravity, h, rate, bend, speed):
 @JIT
 def proposal(fn, d, r, gravity, h, x, y, speed, rate):
     """``Flight._proposal``: the step from a look with gap h at the foot (x, y), κ the largest
-    principal curvature there (``physics.curvatures``; NaN where f cannot be evaluated)."""
+    principal curvature there (``physics.curvatures``; NaN where f cannot be evaluated); where the
+    gap is not falling, at least the chord ``clear`` certifies if the gap does not fall."""
     landscape(fn, x, y, data_pointer(d))
     fx, fy = d[1], d[2]
     kappa, _ = curvatures(fx, fy, d[3], d[4], d[5], 1.0 / math.sqrt(1.0 + fx * fx + fy * fy))
     kappa = 0.0 if 0.0 > kappa else kappa   # (max(κ, 0), NaN kept)
     room = 1.0 - (h + r) * kappa
     bend = 2.0 * (gravity + speed * speed * kappa / room) if room > 0 else math.inf
-    return leaves_clear(r, gravity, h, rate, bend, speed) if bend < math.inf else 0.0
+    step = leaves_clear(r, gravity, h, rate, bend, speed) if bend < math.inf else 0.0
+    if rate >= 0.0 and speed > 0.0:
+        m = h - CLEAR_MARGIN * r
+        step = max(step, 0.9 * 2.0 * math.sqrt(max(m, 0.0) * (2.0 * r + m)) / speed)
+    return step
 
 
 @JIT
