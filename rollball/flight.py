@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import machine_code
-from .geometry import fit_ratio
+from .geometry import fit_ratio, rotation
 from .kernel.interface import (
     BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, FOOT_ITERATIONS, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GROW_BY,
     LANDING_BATCH, LANDING_FLYING, LANDING_LANDED, MAX_LOOKS, OUT_LANDING, PATH_ITERATIONS, ROW_SIZE, ROW_SLICES,
@@ -486,11 +486,8 @@ class Flight:
 
     def state(self, t: float) -> FreeState:
         s = self.start
-        from scipy.spatial.transform import Rotation   # (scipy loads with a flight, not with the program)
-
-        rotation = Rotation.from_rotvec(s.omega * (t - s.t)).as_matrix()
         centers, velocities = self.centers(np.array([t]))
-        return FreeState(t, centers[0], velocities[0], s.omega.copy(), rotation @ s.R)
+        return FreeState(t, centers[0], velocities[0], s.omega.copy(), rotation(s.omega * (t - s.t)) @ s.R)
 
     def centers(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Centre positions and velocities (n, 3) at ``times`` (computed as (3, n): numpy's loops

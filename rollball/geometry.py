@@ -7,6 +7,8 @@ same formulas the kernel evaluates at every step (docs/design.md §1).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -15,6 +17,21 @@ def unit_normal(d: np.ndarray) -> np.ndarray:
     fx, fy = d[1], d[2]
     W = np.sqrt(1.0 + fx * fx + fy * fy)
     return np.stack([-fx / W, -fy / W, 1.0 / W])
+
+
+def rotation(u) -> np.ndarray:
+    """The rotation exp([u]×) by the angle θ = |u| about u (3,): Rodrigues' formula
+    I + sinc(θ) [u]× + ½ sinc²(θ/2) [u]×² (sinc x = sin x / x: no cancellation as θ → 0); for the few
+    rotations Python takes (a flight's state at a time; the kernel's ``physics.rodrigues`` turns the rows)."""
+    u1, u2, u3 = (float(c) for c in u)
+    theta = math.sqrt(u1 * u1 + u2 * u2 + u3 * u3)
+    cross = np.array([[0.0, -u3, u2], [u3, 0.0, -u1], [-u2, u1, 0.0]])
+    half = _sinc(0.5 * theta)
+    return np.eye(3) + _sinc(theta) * cross + 0.5 * half * half * (cross @ cross)
+
+
+def _sinc(x: float) -> float:
+    return math.sin(x) / x if x != 0.0 else 1.0
 
 
 def fit_ratio(d: np.ndarray, radius: float) -> np.ndarray:

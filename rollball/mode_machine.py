@@ -19,7 +19,7 @@ import numpy as np
 from . import kernel, sliding
 from .drag_flight import new_flight
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
-from .geometry import unit_normal
+from .geometry import rotation, unit_normal
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
@@ -501,9 +501,7 @@ class ModeMachine:
         if not sliding_now:
             omega = np.cross(normal, velocity) / r + float(np.dot(start.omega, normal)) * normal
         center = start.center + start.velocity * tau + 0.5 * acceleration * tau * tau
-        from scipy.spatial.transform import Rotation   # (scipy loads with a flight, not with the program)
-
-        R = Rotation.from_rotvec(0.5 * (start.omega + omega) * tau).as_matrix() @ start.R
+        R = rotation(0.5 * (start.omega + omega) * tau) @ start.R
         return FreeState(t, center, velocity, omega, R)
 
     def _at_tip(self, x: float, y: float) -> bool:

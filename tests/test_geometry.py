@@ -1,11 +1,13 @@
 """Normals and fit ratios on grids, against curvatures known in closed form."""
 
+import math
+
 import numpy as np
 import pytest
 
 from rollball import Scene, simulate
 from rollball.examples import scene_path
-from rollball.geometry import fit_ratio, reachable_height, unit_normal
+from rollball.geometry import fit_ratio, reachable_height, rotation, unit_normal
 from rollball.landscape import Landscape
 
 xs, ys = np.meshgrid(np.linspace(-0.5, 0.5, 7), np.linspace(-0.4, 0.6, 5), indexing="ij")
@@ -55,3 +57,16 @@ def test_reachable_height_is_the_start_energy_over_m_g(name):
     d = landscape.evaluate(scene.start.x, scene.start.y)
     energy = simulate(scene, t_end=0.01).energy[0]
     assert reachable_height(d, scene) == pytest.approx(energy / (scene.ball.mass * scene.gravity), rel=1e-12)
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-12, 1e-6, 0.99e-4, 1.01e-4, 0.1, 1.0, 3.0, math.pi, 10.0])
+def test_rotation_is_scipys_rotation_by_the_vector(angle):
+    """``rotation(u)``, Rodrigues' formula with its series below 10⁻⁴, against scipy's rotation by
+    the vector u (through quaternions: an independent computation), about three axes; orthonormal."""
+    from scipy.spatial.transform import Rotation
+
+    for axis in ([0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [1.0, 2.0, -2.0]):
+        u = angle * np.array(axis) / np.linalg.norm(axis)
+        R = rotation(u)
+        np.testing.assert_allclose(R, Rotation.from_rotvec(u).as_matrix(), rtol=0, atol=2e-15)
+        np.testing.assert_allclose(R.T @ R, np.eye(3), rtol=0, atol=2e-15)
