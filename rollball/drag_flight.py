@@ -123,6 +123,10 @@ class DragFlight(Flight):
         y = self._states(times)
         return y[:, :3], y[:, 3:6]
 
+    def center_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        centers, velocities = self.centers(np.array([t]))
+        return centers[0], velocities[0]
+
     def air_dissipated(self, times: np.ndarray) -> np.ndarray:
         """The energy the air took from the flight's start to each of ``times``: ∫ k |ċ|³ dt (J)."""
         return self._states(times)[:, 6]

@@ -142,6 +142,7 @@ class Arguments:
         if problems:
             raise TypeError(f"{name}: {'; '.join(problems)}")
         self.slots = np.zeros(interface.ENTRY_SLOTS, dtype=np.int64)
+        self._floats = self.slots.view(np.float64)   # (the same memory: a view made once)
         self.address = self.slots.ctypes.data
         self.kept: dict = {}
         for key, value in arguments.items():
@@ -153,7 +154,7 @@ class Arguments:
         except KeyError:
             raise TypeError(f"{self.name}: no argument {key}") from None
         if kind == interface.FLOAT:
-            self.slots.view(np.float64)[i] = float(value)
+            self._floats[i] = float(value)
         elif kind in interface.NUMBER_KINDS:
             self.slots[i] = int(value)
         else:
