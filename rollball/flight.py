@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import machine_code
+from . import kernel, machine_code
 from .geometry import fit_ratio, rotation
 from .kernel.interface import (
     BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, FOOT_ITERATIONS, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GROW_BY,
@@ -97,6 +97,25 @@ class Foot:
     lost: bool = False   # NaN because no foot is as near as the nearest surface sample (not off the domain)
 
 
+@dataclass(frozen=True)
+class Bounces:
+    """What ``Surface.bounces`` did: how it ended (``kernel.BOUNCES_*``), the rows it recorded,
+    the landings it made (t, x, y, the normal speed, the energy lost each), the energy dissipated
+    then; ``state``: the ball just after its last impact where it settled (``foot`` (x, y),
+    ``sticking``), else the start of the flight it stopped in (whose first row is recorded);
+    ``landing``: where its rows did not fit (BOUNCES_ROOM), the landing search's answer for that
+    flight (``Flight.landing``'s)."""
+
+    status: float
+    rows: np.ndarray
+    landings: np.ndarray
+    dissipated: float
+    state: FreeState
+    foot: tuple[float, float]
+    sticking: bool
+    landing: tuple | None
+
+
 class Surface:
     """The landscape as flight needs it: the closest point to a centre."""
 
@@ -116,6 +135,7 @@ class Surface:
         self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
         self._land_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> land's, packed once
         self._rows_call: machine_code.Arguments | None = None   # flight_rows', packed for up to KEPT_ROWS rows
+        self._bounce_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> bounces', packed once
 
     def evaluate(self, x, y) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
@@ -298,6 +318,64 @@ class Surface:
         if out[0] != LANDING_LANDED:
             return REFER
         return float(out[1]), Foot(float(out[2]), float(out[3]), out[4:7].copy(), float(out[7]))
+
+    def bounces(self, start: FreeState, *, gravity: float, radius: float, mass: float, restitution: float,
+                friction: float, rest: float, t_end: float, every: int, step: float, enough: int,
+                dissipated: float) -> "Bounces":
+        """The compiled flights of a ball in vacuum from ``start`` (``kernel.bounces.bounces``):
+        landing, rows at the recording times (every ``every``-th multiple of ``step``), impact
+        (``impact``, a rebound at most ``rest`` settling) and the next flight, until the ball
+        settles, flies to t_end, makes ``enough`` landings (-1: no limit), makes BOUNCES_CHAIN of
+        them, or leaves a flight to flight.py (see ``Bounces``). Rows whose foot the kernel
+        refers are searched here (``refer_rows``)."""
+        hints, tips = np.array(self.hints, dtype=float).reshape(-1, 3), np.array(self.tips, dtype=float).reshape(-1, 3)
+        key = (len(hints), len(tips))
+        call = self._bounce_calls.get(key)
+        if call is None:
+            k, size = 2 + BEST_SAMPLES + len(hints), KEPT_ROWS
+            call = self._bounce_calls[key] = machine_code.Arguments(
+                "bounces", fn=self._record.ctypes.data, state=np.empty(10), R=np.empty((3, 3)), gravity=0.0,
+                radius=0.0, mass=0.0, restitution=0.0, friction=0.0, rest=0.0, t_end=0.0, step=0.0, every=1,
+                enough=-1, dissipated=0.0, hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)),
+                unit=np.linspace(-1.0, 1.0, SAMPLES), reach_default=self.reach_default, iterations=FOOT_ITERATIONS,
+                out=np.empty(kernel.OUT_BOUNCES), landed=np.empty((kernel.BOUNCES_CHAIN, 5)),
+                rows=np.empty((size, ROW_SIZE)), refer=np.empty(size, dtype=np.int64), hit=np.empty(kernel.HIT_SIZE),
+                times=np.empty(LANDING_BATCH), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
+                normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
+                nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
+                start_normals=np.empty((k, 3)), start_distances=np.empty(k), row_times=np.empty(size),
+                row_centers=np.empty((size, 3)), row_velocities=np.empty((size, 3)), row_feet=np.empty((size, 2)),
+                row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6))
+        kept = call.kept
+        state = kept["state"]
+        state[0], state[1:4], state[4:7], state[7:10] = start.t, start.center, start.velocity, start.omega
+        kept["R"][:], kept["hints"][:], kept["tips"][:] = start.R, hints, tips
+        for key, value in (("gravity", gravity), ("radius", radius), ("mass", mass), ("restitution", restitution),
+                           ("friction", friction), ("rest", rest), ("t_end", t_end), ("step", step), ("every", every),
+                           ("enough", enough), ("dissipated", dissipated)):
+            call.set(key, value)
+        call()
+        out = kept["out"]
+        count, landings = int(out[1]), int(out[2])
+        rows = kept["rows"][:count].copy()
+        self.refer_rows(rows, kept["refer"][:count], radius)
+        after = FreeState(float(state[0]), state[1:4].copy(), state[4:7].copy(), state[7:10].copy(), kept["R"].copy())
+        answer = kept["out"][8:8 + OUT_LANDING]
+        landing = (None if answer[0] == LANDING_FLYING else
+                   (float(answer[1]), Foot(float(answer[2]), float(answer[3]), answer[4:7].copy(), float(answer[7]))))
+        return Bounces(float(out[0]), rows, kept["landed"][:landings].copy(), float(out[3]), after,
+                       (float(out[4]), float(out[5])), bool(out[6]), landing)
+
+    def refer_rows(self, rows: np.ndarray, refer: np.ndarray, radius: float) -> None:
+        """A flight's rows (``kernel.flight_rows``'), their foot searched in full where ``refer``
+        says Newton's method did not give one that can be the nearest: the contact columns and
+        the slip speed of the ball's point nearest the surface."""
+        for i in np.flatnonzero(refer):
+            row = rows[i]
+            foot = self.foot(row[ROW_SLICES["center"]].copy())
+            row[ROW_SLICES["contact"]] = foot.x, foot.y
+            row[SLIP_SPEED] = tangential_slip(row[ROW_SLICES["velocity"]], row[ROW_SLICES["omega"]], foot.normal,
+                                              radius)[0]
 
     def flight_rows(self, centers: np.ndarray, velocities: np.ndarray, times: np.ndarray, start: FreeState, guess,
                     *, mass: float, radius: float, gravity: float, dissipated: float) -> tuple[np.ndarray, np.ndarray]:
@@ -870,10 +948,7 @@ class Flight:
         guess = np.asarray(guess if guess is not None else s.center[:2], dtype=float)
         rows, refer = self.surface.flight_rows(centers, velocities, times, s, guess, mass=self.mass,
                                                radius=self.radius, gravity=self.gravity, dissipated=dissipated)
-        for i in np.flatnonzero(refer):
-            foot = self.surface.foot(centers[i])
-            rows[i, ROW_SLICES["contact"]] = foot.x, foot.y
-            rows[i, SLIP_SPEED] = tangential_slip(velocities[i], s.omega, foot.normal, self.radius)[0]
+        self.surface.refer_rows(rows, refer, self.radius)
         return rows
 
 
@@ -908,56 +983,28 @@ class Impact:
     velocity: np.ndarray   # the centre's, after
     omega: np.ndarray      # after
     normal_speed: float    # the speed the ball hit the surface with, along the normal (m/s, ≥ 0)
-    rebound: float         # the normal speed it leaves with (e times the above)
+    rebound: float         # the normal speed it leaves with (e times the above; 0 where it settled)
     sticking: bool         # the contact point's tangential velocity is 0 after (friction sufficed)
     energy_lost: float     # J
     impulse: np.ndarray    # the impulse the surface gave at the contact point (N s)
+    settled: bool          # the rebound was too slow to fly: the ball stays on the surface
 
 
-def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: float,
-           friction: float) -> Impact:
-    """The impulse J = J_n N + J_t at the contact point of a ball hitting the surface with
-    the centre's ``velocity`` and ``omega``, the surface's unit ``normal`` there.
-
-    The contact point's velocity u = ċ + ω × (−r N) changes by J_n/m along N and by (7/2) J_t/m
-    in the tangent plane (a homogeneous ball: Δċ = J/m, Δω = (5/(2 m r²)) (−r N) × J). Normal:
-    u_n → −e u_n, so J_n = (1 + e) m |u_n|. Tangential: sticking needs J_t = −(2/7) m u_t, taken
-    when |J_t| ≤ μ J_n (always for μ = inf, a scene's null friction); else J_t = −μ J_n û_t (the slip
-    keeps its direction
-    and shrinks). Angular momentum about the contact point does not change (the impulse acts
-    there)."""
-    (v1, v2, v3), (w1, w2, w3), (n1, n2, n3) = (map(float, a) for a in (velocity, omega, normal))
-    m, r, e = mass, radius, restitution
-    # (plain floats: numpy's setup on vectors of 3 costs a flight's impact about ten times as much)
-    u1, u2, u3 = v1 - r * (w2 * n3 - w3 * n2), v2 - r * (w3 * n1 - w1 * n3), v3 - r * (w1 * n2 - w2 * n1)
-    u_n = u1 * n1 + u2 * n2 + u3 * n3
-    approach = max(-u_n, 0.0)
-    j_n = (1.0 + e) * m * approach
-    t1, t2, t3 = u1 - u_n * n1, u2 - u_n * n2, u3 - u_n * n3
-    k = -(2.0 / 7.0) * m
-    j1, j2, j3 = k * t1, k * t2, k * t3
-    slip = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
-    sticking = friction == math.inf or math.sqrt(j1 * j1 + j2 * j2 + j3 * j3) <= friction * j_n
-    if not sticking:
-        k = -friction * j_n / slip if slip > 0 else 0.0
-        j1, j2, j3 = k * t1, k * t2, k * t3
-    i1, i2, i3 = j_n * n1 + j1, j_n * n2 + j2, j_n * n3 + j3
-    a1, a2, a3 = v1 + i1 / m, v2 + i2 / m, v3 + i3 / m
-    q = 5.0 / (2.0 * m * r * r)   # Δω = q (−r N) × J
-    b1 = w1 + q * (-r * (n2 * i3 - n3 * i2))
-    b2 = w2 + q * (-r * (n3 * i1 - n1 * i3))
-    b3 = w3 + q * (-r * (n1 * i2 - n2 * i1))
-    before = 0.5 * m * (v1 * v1 + v2 * v2 + v3 * v3) + 0.2 * m * r * r * (w1 * w1 + w2 * w2 + w3 * w3)
-    after = 0.5 * m * (a1 * a1 + a2 * a2 + a3 * a3) + 0.2 * m * r * r * (b1 * b1 + b2 * b2 + b3 * b3)
-    return Impact(np.array([a1, a2, a3]), np.array([b1, b2, b3]), approach, e * approach, bool(sticking),
-                  before - after, np.array([i1, i2, i3]))
-
-
-def settle(hit: Impact, normal, *, mass: float, radius: float) -> Impact:
-    """The impact ``hit`` ending in contact (its rebound too slow to fly): the normal velocity
-    left is taken away too, and its energy counted as lost."""
-    (n1, n2, n3), (v1, v2, v3) = (map(float, a) for a in (normal, hit.velocity))
-    v_n = v1 * n1 + v2 * n2 + v3 * n3
-    lost = hit.energy_lost + 0.5 * mass * v_n * v_n
-    return Impact(np.array([v1 - v_n * n1, v2 - v_n * n2, v3 - v_n * n3]), hit.omega, hit.normal_speed, 0.0,
-                  hit.sticking, lost, hit.impulse - mass * v_n * np.array([n1, n2, n3]))
+def impact(velocity, omega, normal, *, mass: float, radius: float, restitution: float, friction: float,
+           rest: float = -1.0) -> Impact:
+    """The impulse a ball hitting the surface with the centre's ``velocity`` and ``omega`` gets at
+    the contact point, the surface's unit ``normal`` there, with restitution e and friction μ (inf:
+    a scene's null, always enough to stick); a rebound e|u_n| at most ``rest`` settles (its normal
+    velocity taken away too, its energy counted as lost; the default never settles). Computed by
+    the kernel (``kernel.bounces.impact``, where the law is written), as a flight's bounces are."""
+    hit = np.zeros(kernel.HIT_SIZE)
+    hit[kernel.HIT_VELOCITY: kernel.HIT_VELOCITY + 3] = velocity
+    hit[kernel.HIT_OMEGA: kernel.HIT_OMEGA + 3] = omega
+    hit[kernel.HIT_NORMAL: kernel.HIT_NORMAL + 3] = normal
+    hit[[kernel.HIT_MASS, kernel.HIT_RADIUS, kernel.HIT_RESTITUTION, kernel.HIT_FRICTION, kernel.HIT_REST]] = (
+        mass, radius, restitution, friction, rest)
+    machine_code.call("impact", hit=hit)
+    return Impact(hit[kernel.HIT_AFTER: kernel.HIT_AFTER + 3].copy(),
+                  hit[kernel.HIT_SPIN_AFTER: kernel.HIT_SPIN_AFTER + 3].copy(), float(hit[kernel.HIT_APPROACH]),
+                  float(hit[kernel.HIT_REBOUND]), bool(hit[kernel.HIT_STICKING]), float(hit[kernel.HIT_LOST]),
+                  hit[kernel.HIT_IMPULSE: kernel.HIT_IMPULSE + 3].copy(), bool(hit[kernel.HIT_SETTLED]))

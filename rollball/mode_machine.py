@@ -18,7 +18,7 @@ import numpy as np
 
 from . import kernel, sliding
 from .drag_flight import new_flight
-from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed, settle
+from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed
 from .geometry import rotation, unit_normal
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
@@ -46,6 +46,9 @@ STIFF_TOLERANCE = 1e-13   # (a rest after a turning point slower than 10⁻⁴ m
 STIFF_WINDOW = 16
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
 SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
+# What ``ModeMachine._bounces`` leaves ``_fly`` to do: nothing (DONE), or search the current
+# flight's landing with flight.py's own search (SEARCH)
+DONE, SEARCH = object(), object()
 
 
 def friction_of(contact) -> float:
@@ -684,13 +687,63 @@ class ModeMachine:
         return times[(times > t0) & (times < t1)]
 
     def fly(self) -> None:
-        """Take the current flight to its landing (or to t_end), then the impact there."""
+        """Take the current flight to its landing (or to t_end), then the impact there: in vacuum
+        the kernel's (``Surface.bounces``: flight after flight while the ball rebounds), and the
+        flight it leaves to flight.py, or one through air, here (``_fly``)."""
+        flight = self.flight
+        if type(flight) is Flight and flight.compiled:
+            landing = self._bounces()
+            if landing is not DONE:
+                self._fly(landing)
+            return
+        self._fly(SEARCH)
+
+    def _bounces(self):
+        """The kernel's flights from the current one (``Surface.bounces``), their rows, landings and
+        losses taken as the run's. Returns DONE, or what ``_fly`` is to finish the current flight
+        with: its landing (t, foot), None (flying to t_end) or SEARCH (flight.py's own search)."""
+        run, flight = self.run, self.flight
+        scene = run.scene
+        ball, contact = scene.ball, scene.contact
+        every, step = (run.record_every, run.dt) if not run.adaptive else (1, run.record_dt or run.dt)
+        enough = -1 if self.stop_after is None else self.stop_after - len(self.transitions)
+        done = self.surface.bounces(flight.start, gravity=scene.gravity, radius=ball.radius, mass=ball.mass,
+                                    restitution=contact.restitution, friction=friction_of(contact),
+                                    rest=rest_speed(ball.radius, scene.gravity), t_end=run.t_end, every=every,
+                                    step=step, enough=enough, dissipated=self.dissipated)
+        self.append(self._carried(done.rows))
+        self.dissipated = done.dissipated
+        self.transitions.extend(Transition(float(t), Change.LANDING, float(x), float(y), float(speed), float(lost))
+                                for t, x, y, speed, lost in done.landings)
+        status = done.status
+        if status in (kernel.BOUNCES_FLYING, kernel.BOUNCES_DONE, kernel.BOUNCES_ENOUGH):
+            self.flight, run.status = None, Status.OK
+            return DONE
+        if status == kernel.BOUNCES_SETTLED:
+            self.flight = None
+            self.mode = Mode.ROLLING if done.sticking else Mode.SLIDING
+            s = done.state
+            state = sliding.BallState(*done.foot, s.velocity, s.omega, s.R, self.dissipated, self.causes)
+            run._start_kernel_run(state, s.t, slides=not done.sticking, repeat=False)
+            return DONE
+        self.flight = self._new_flight(done.state)
+        if status == kernel.BOUNCES_CONTINUE:
+            return DONE
+        if status == kernel.BOUNCES_REFER:   # (the kernel's search just referred this flight)
+            self.flight.compiled = False
+            return SEARCH
+        return done.landing   # BOUNCES_ROOM: its rows recorded here
+
+    def _fly(self, landing) -> None:
+        """``fly`` here: the current flight's ``landing`` (SEARCH: flight.py's search, now), its
+        rows, the impact there and the next flight or the contact run."""
         run, flight = self.run, self.flight
         scene = run.scene
         ball, contact = scene.ball, scene.contact
         dissipated = self.dissipated
         try:
-            landing = flight.landing(run.t_end)
+            if landing is SEARCH:
+                landing = flight.landing(run.t_end)
         except FloatingPointError as stiff:   # (a flight through air too thick to integrate)
             self.flight, self.stall, run.status = None, str(stiff), Status.NONFINITE
             return
@@ -711,10 +764,9 @@ class ModeMachine:
         self.append(self._carried(flight.rows(self.record_times(flight.start.t, t), dissipated)))
         s = flight.state(t)
         hit = impact(s.velocity, s.omega, foot.normal, mass=ball.mass, radius=ball.radius,
-                     restitution=contact.restitution, friction=friction_of(contact))
-        bounces = hit.rebound > rest_speed(ball.radius, scene.gravity)
-        if not bounces:
-            hit = settle(hit, foot.normal, mass=ball.mass, radius=ball.radius)
+                     restitution=contact.restitution, friction=friction_of(contact),
+                     rest=rest_speed(ball.radius, scene.gravity))
+        bounces = not hit.settled
         air = float(flight.air_dissipated(np.array([t]))[0])
         self.dissipated = dissipated = dissipated + air + hit.energy_lost
         self.causes = (*self.causes[:2], self.causes[2] + air)   # (rolling resistance, spin friction, air)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq, minimize_scalar
 
-from rollball.flight import FreeState, Flight, Surface, energy, impact, rest_speed, settle
+from rollball.flight import FreeState, Flight, Surface, energy, impact, rest_speed
 from rollball.kernel.interface import ROW_SLICES
 from rollball.landscape import landscape_for
 
@@ -125,10 +125,15 @@ def test_a_slow_rebound_settles_and_counts_the_energy():
     n = np.array([0.0, 0.0, 1.0])
     slow = rest_speed(R, G) / 2
     hit = impact([1.0, 0.0, -slow / 0.5], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.5, friction=math.inf)
-    assert hit.rebound < rest_speed(R, G)
-    rest = settle(hit, n, mass=M, radius=R)
-    assert rest.velocity[2] == 0.0 and rest.rebound == 0.0
+    assert hit.rebound < rest_speed(R, G) and not hit.settled   # (no rest speed given: it never settles)
+    rest = impact([1.0, 0.0, -slow / 0.5], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.5, friction=math.inf,
+                  rest=rest_speed(R, G))
+    assert rest.settled and rest.velocity[2] == 0.0 and rest.rebound == 0.0
     assert rest.energy_lost == pytest.approx(hit.energy_lost + 0.5 * M * hit.rebound ** 2, rel=1e-14)
+    assert rest.impulse[2] == pytest.approx(hit.impulse[2] - M * hit.rebound, rel=1e-14)
+    fast = impact([1.0, 0.0, -4 * slow / 0.5], [0.0, 0.0, 0.0], n, mass=M, radius=R, restitution=0.5,
+                  friction=math.inf, rest=rest_speed(R, G))
+    assert not fast.settled and fast.rebound == pytest.approx(4 * slow, rel=1e-14)   # (twice the rest speed)
     assert rest_speed(0.1, 9.81) == pytest.approx(math.sqrt(2 * 9.81 * 1e-7))
 
 

@@ -24,9 +24,10 @@ The modules, from the bottom layer up (each imports only those before it): ``int
 curvatures, Rodrigues), ``dense`` (interpolation, omega's polynomial, the turn of R),
 ``recording`` (rows, the start, failures), ``explicit`` and ``collocation`` (the steps),
 ``steps`` (choosing a step, error norm, acceptance), ``feet`` (a flying ball's closest surface
-points), ``events`` (locating lift-off, breaks, the fold, the changes of contact mode),
-``unpacking`` (slots and scratch, generated), ``loops`` (the stepping loops), ``entries`` (the
-entry points).
+points), ``landing``, ``flight_rows`` and ``bounces`` (a flight's landing search, its rows, its
+impact and, in vacuum, flight after flight), ``events`` (locating lift-off, breaks, the fold,
+the changes of contact mode), ``unpacking`` (slots and scratch, generated), ``loops`` (the
+stepping loops), ``entries`` (the entry points).
 """
 
 # The names the rest of the core reads the kernel by (it imports rollball.kernel and

@@ -5,6 +5,7 @@ compiles nothing."""
 
 from __future__ import annotations
 
+from .bounces import bounces, impact
 from .feet import nearest_feet
 from .flight_rows import flight_rows
 from .landing import land
@@ -14,7 +15,8 @@ from .unpacking import ENTRY_SIGNATURE, make_entry
 
 FUNCTIONS = {"advance": advance, "advance_adaptive": advance_adaptive, "advance_batch": advance_batch,
              "evaluate_points": evaluate_points, "closest_points": closest_points,
-             "nearest_feet": nearest_feet, "land": land, "flight_rows": flight_rows}
+             "nearest_feet": nearest_feet, "land": land, "flight_rows": flight_rows,
+             "impact": impact, "bounces": bounces}
 ENTRIES = {name: make_entry(name, function) for name, function in FUNCTIONS.items()}
 
 __all__ = ["ENTRIES", "ENTRY_SIGNATURE", "FUNCTIONS"]

@@ -24,7 +24,7 @@ VERSION = 3   # of the slot convention and the landscape's record below (kernel.
 ADDRESS, INT, FLOAT = "address", "int", "float"   # one slot each (address: the landscape's record)
 VECTOR, MATRIX, INTS = "vector", "matrix", "ints"  # three slots each
 NUMBER_KINDS = (ADDRESS, INT, FLOAT)
-ENTRY_SLOTS = 64
+ENTRY_SLOTS = 128
 
 # The arrays of a run every loop takes (``run_arrays`` makes them).
 RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("rows", MATRIX), ("ints", INTS),
@@ -67,6 +67,17 @@ ENTRIES = {
              ("normals", MATRIX), ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
              ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
              ("start_distances", VECTOR), ("d", VECTOR)),
+    "impact": (("hit", VECTOR),),
+    "bounces": (("fn", ADDRESS), ("state", VECTOR), ("R", MATRIX), ("gravity", FLOAT), ("radius", FLOAT),
+                ("mass", FLOAT), ("restitution", FLOAT), ("friction", FLOAT), ("rest", FLOAT), ("t_end", FLOAT),
+                ("step", FLOAT), ("every", INT), ("enough", INT), ("dissipated", FLOAT), ("hints", MATRIX),
+                ("tips", MATRIX), ("unit", VECTOR), ("reach_default", FLOAT), ("iterations", INT), ("out", VECTOR),
+                ("landed", MATRIX), ("rows", MATRIX), ("refer", INTS), ("hit", VECTOR), ("times", VECTOR),
+                ("guess", VECTOR), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX), ("distances", VECTOR),
+                ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX), ("start_centers", MATRIX),
+                ("start_feet", MATRIX), ("start_normals", MATRIX), ("start_distances", VECTOR),
+                ("row_times", VECTOR), ("row_centers", MATRIX), ("row_velocities", MATRIX), ("row_feet", MATRIX),
+                ("row_normals", MATRIX), ("row_distances", VECTOR), ("turn", MATRIX), ("d", VECTOR)),
     "flight_rows": (("fn", ADDRESS), ("count", INT), ("centers", MATRIX), ("velocities", MATRIX), ("times", VECTOR),
                     ("start_time", FLOAT), ("omega", VECTOR), ("R", MATRIX), ("guess", VECTOR), ("tips", MATRIX),
                     ("mass", FLOAT), ("radius", FLOAT), ("gravity", FLOAT), ("dissipated", FLOAT), ("rows", MATRIX),
@@ -146,6 +157,22 @@ TRACK_SLACK = 1e-9       # × r: a sample this much nearer than r is inside the 
 # the air at t_end), or LANDING_REFER (flight.py searches this flight itself).
 LANDING_FLYING, LANDING_LANDED, LANDING_REFER = 0.0, 1.0, 2.0
 OUT_LANDING = 8
+
+# An impact (``bounces.impact``) reads and writes HIT_SIZE floats: the centre's velocity (3), omega
+# (3) and the unit normal (3) at the contact, m, r, e, mu (inf: always enough to stick) and the
+# slowest rebound that flies; then what it leaves: the velocity and omega after (3 each), the normal
+# speed it hit with, the rebound's, 1 where the contact point sticks, the energy lost, 1 where the
+# ball settled (a rebound too slow to fly: its normal velocity taken away too), the impulse (3).
+(HIT_VELOCITY, HIT_OMEGA, HIT_NORMAL, HIT_MASS, HIT_RADIUS, HIT_RESTITUTION, HIT_FRICTION, HIT_REST, HIT_AFTER,
+ HIT_SPIN_AFTER, HIT_APPROACH, HIT_REBOUND, HIT_STICKING, HIT_LOST, HIT_SETTLED, HIT_IMPULSE,
+ HIT_SIZE) = 0, 3, 6, 9, 10, 11, 12, 13, 14, 17, 20, 21, 22, 23, 24, 25, 28
+# How ``bounces.bounces`` (a flight in vacuum, flight after flight) ended, in out[0] of its
+# OUT_BOUNCES floats; BOUNCES_CHAIN landings at most in one call (then BOUNCES_CONTINUE: a caller
+# that advances step by step gets its answer between them).
+(BOUNCES_SETTLED, BOUNCES_FLYING, BOUNCES_DONE, BOUNCES_ENOUGH, BOUNCES_CONTINUE, BOUNCES_REFER,
+ BOUNCES_ROOM) = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+OUT_BOUNCES = 8 + OUT_LANDING
+BOUNCES_CHAIN = 64
 
 
 # -- a run's state -------------------------------------------------------------------------------
