@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .flight_rows import flight_rows
 from .interface import (
     BOUNCES_CONTINUE, BOUNCES_DONE, BOUNCES_ENOUGH, BOUNCES_FLYING, BOUNCES_REFER, BOUNCES_ROOM, BOUNCES_SETTLED,
@@ -167,13 +169,14 @@ def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_
             out[0] = BOUNCES_SETTLED
             out[4], out[5], out[6] = lout[2], lout[3], hit[HIT_STICKING]
             break
-        # off again: the state just after the impact is the new flight's first row
+        # off again: the state just after the impact is the new flight's first row (its count an
+        # int64: a literal 1 would have numba compile flight_rows once more, for that constant)
         row_times[0] = t
         for q in range(3):
             row_centers[0, q], row_velocities[0, q] = state[1 + q], state[4 + q]
-        flight_rows(fn, 1, row_centers, row_velocities, row_times, t, state[7:10], R, state[1:3], tips, mass, radius,
-                    gravity, lost, rows[count:], refer[count:], row_feet, row_normals, row_distances, turn,
-                    iterations, d)
+        flight_rows(fn, np.int64(1), row_centers, row_velocities, row_times, t, state[7:10], R, state[1:3], tips,
+                    mass, radius, gravity, lost, rows[count:], refer[count:], row_feet, row_normals, row_distances,
+                    turn, iterations, d)
         count += 1
         if t >= t_end:
             out[0] = BOUNCES_DONE
