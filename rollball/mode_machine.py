@@ -673,12 +673,18 @@ class ModeMachine:
         return new_flight(self.surface, start, radius=scene.ball.radius, mass=scene.ball.mass, gravity=scene.gravity,
                           drag=scene.air.drag_factor(scene.ball.radius))
 
+    def record_spacing(self) -> tuple[int, float]:
+        """The run's rows are at every ``every``-th multiple of ``step`` (the kernel's k·dt or
+        k·record_dt): fixed steps every record_every-th multiple of dt; adaptive: every multiple
+        of record_dt, or of dt."""
+        run = self.run
+        return (run.record_every, run.dt) if not run.adaptive else (1, run.record_dt or run.dt)
+
     def record_times(self, t0: float, t1: float) -> np.ndarray:
         """The run's recording times strictly between t0 and t1 (fixed steps: every
         record_every-th multiple of dt; adaptive: the multiples of record_dt, or of dt), each
         computed as the kernel computes its rows' times (k·dt, k·record_dt)."""
-        run = self.run
-        every, step = (run.record_every, run.dt) if not run.adaptive else (1, run.record_dt or run.dt)
+        every, step = self.record_spacing()
         spacing = every * step
         k0, k1 = math.floor(t0 / spacing) + 1, math.ceil(t1 / spacing) - 1
         if k1 - k0 + 1 > MAX_ROWS:
@@ -705,7 +711,7 @@ class ModeMachine:
         run, flight = self.run, self.flight
         scene = run.scene
         ball, contact = scene.ball, scene.contact
-        every, step = (run.record_every, run.dt) if not run.adaptive else (1, run.record_dt or run.dt)
+        every, step = self.record_spacing()
         enough = -1 if self.stop_after is None else self.stop_after - len(self.transitions)
         done = self.surface.bounces(flight.start, gravity=scene.gravity, radius=ball.radius, mass=ball.mass,
                                     restitution=contact.restitution, friction=friction_of(contact),

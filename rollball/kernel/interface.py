@@ -215,7 +215,8 @@ P_RESISTANCE = 12  # the rolling resistance c_rr (a couple -c_rr r F_n along ome
 P_SPIN = 13        # the spin friction mu_s (a couple -mu_s r F_n along omega's normal part)
 P_AIR = 14         # the air's drag factor k (kg/m): a force -k |c'| c' on the centre
 P_CAUSES = 15      # the energy rolling resistance, spin friction and air took before this run (3, J)
-P_SIZE = 18
+P_UNIT = 18        # the ball's time unit sqrt(r / |g0|) (s; inf without gravity)
+P_SIZE = 19
 
 
 def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, friction: float | None = None,
@@ -235,7 +236,8 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, fr
     (docs/design.md §1, "Dissipation"): ``rolling_resistance`` c_rr, ``spin_friction`` mu_s, ``air``
     the drag factor k (kg/m) and the energy each of the three took before this run (``causes``, J,
     which is part of ``dissipated``). A run whose state carries the quadratures (``state_size``,
-    ``resisted``) feels them; any other leaves them unread."""
+    ``resisted``) feels them; any other leaves them unread. Last the ball's time unit sqrt(r / |g0|)
+    (inf without gravity), which the stiffness bounds and the couples' zero are measured in."""
     r, m, g0 = radius, mass, gravity
     zero = 0.0 * r   # (+ 0 r: a column like the others where r is an array, sweeps)
     mu = np.inf if friction is None else friction
@@ -244,10 +246,12 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, fr
             raise ValueError(f"{name} must be a number >= 0, not {value!r}")
     if len(causes) != QUADRATURES:
         raise ValueError(f"causes holds the energy to rolling resistance, spin friction and air (3), not {causes!r}")
+    with np.errstate(divide="ignore"):
+        unit = np.sqrt(np.divide(r, np.abs(g0)))
     return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + zero, mu + zero,
                      (1.0 if fly else 0.0) + zero, dissipated + zero, (1.0 if stiff else 0.0) + zero,
                      rolling_resistance + zero, spin_friction + zero, air + zero,
-                     *(float(c) + zero for c in causes)])
+                     *(float(c) + zero for c in causes), unit + zero])
 
 
 # How a method steps (``take_step``). Floats: numba compiles a function anew for every

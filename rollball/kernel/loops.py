@@ -18,7 +18,7 @@ from .interface import (
     ROW_CENTER, ROW_ENERGY,
     ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_GRIP, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
-    P_RESISTANCE, P_TURN, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
+    P_RESISTANCE, P_TURN, P_UNIT, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, slip_deceleration,
                       spin_side, turning_point)
@@ -89,7 +89,7 @@ def slip_stiff(d, p, probe, h, margin):
     w = a / us
     b = PROBE_SLIP_PULL
     r1, r2, r3 = probe[b] - w * u1, probe[b + 1] - w * u2, probe[b + 2] - w * u3
-    unit = math.sqrt(p[0] / abs(p[2]))
+    unit = p[P_UNIT]
     if unit < math.inf and math.sqrt(r1 * r1 + r2 * r2 + r3 * r3) * SLIP_TIME * margin * unit > us:
         return True
     return turning_point(u1, u2, u3, r1, r2, r3, a, margin * unit, margin * h)
@@ -121,7 +121,7 @@ def turn_stiff(d, p, probe, K, h, n, margin):
     k = p[3]
     return turning_point(t1, t2, t3, k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3),
                          p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]),
-                         margin * math.sqrt(p[0] / abs(p[2])), margin * h)
+                         margin * p[P_UNIT], margin * h)
 
 
 SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static
@@ -246,15 +246,60 @@ def pair_try(fn, d, p, W, E, P, err_kind, err_exp, rtol, atol, t, hs, cap, free,
 
 
 @JIT
-def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, rows, ints, info, work, watch):
-    """A fixed step from t0 to t0 + h where the slip's direction, or a rolling ball's omega_t's, is
-    stiff (``slip_reference``, ``turn_stiff``: no fixed step follows it at its order), taken by the
-    embedded pair S, SE, SP (as ``advance_adaptive``'s W, E, P; s_kind, s_exp its err_kind, err_exp)
-    at the tolerance ``tol``, in as many of its steps as its error control takes, the first tried
-    at ``hp``; each with its events: a transition inside stops the run there as a fixed step's does,
-    a rest where omega_t reaches 0 included. Returns the pair's next step, or -1 where the run
-    stopped (status set, its last row recorded). A Munthe-Kaas state only, in the pair's layout
-    (``pair_layout``) at both ends."""
+def row_due(ints, k, every, phase):
+    """Whether the end of this run's grid step k is a recorded row (``advance``'s rows: every
+    ``every``-th time of the whole run's grid, the first after the start at step every - phase)."""
+    done = ints[I_LAST_RECORDED]
+    return k - done == (every if done > 0 else every - phase)
+
+
+@JIT
+def rows_inside(fn, d, p, P, t, hs, theta, z, R, K, rows, ints, Ye, Re, pe, dt, before, kk, k_end, every, phase):
+    """The rows due (``row_due``) at the ends of this run's grid steps kk, kk + 1, ... before k_end
+    that a stiff pair's step from t of hs passed strictly before t + theta hs, from its dense output
+    (one evaluation each; Ye, Re, pe: scratch). Returns the first of those steps it did not pass."""
+    stop = t + theta * hs
+    while kk < k_end:
+        tk = (before + kk) * dt
+        if not tk < stop:
+            break
+        if row_due(ints, kk, every, phase):
+            state_at(fn, d, p, z, R, hs, P, K, 0.0, (tk - t) / hs, Ye, Re, pe)
+            ints[I_EVALS] += 1
+            record(rows, ints[I_ROWS], tk, Ye, Re, pe, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = kk
+        kk += 1
+    return kk
+
+
+@JIT
+def row_at_end(rows, ints, t, z, R, probe, p, dt, before, kk, k_end, every, phase):
+    """A stiff pair's step whose state z (at t) ended exactly at the end of this run's grid step
+    kk (before k_end): its row where due, and the step counted. Returns the first step ahead."""
+    if kk < k_end and (before + kk) * dt == t:
+        if row_due(ints, kk, every, phase):
+            record(rows, ints[I_ROWS], t, z, R, probe, p)
+            ints[I_ROWS] += 1
+            ints[I_LAST_RECORDED] = kk
+        ints[I_STEPS] = kk
+        return kk + 1
+    return kk
+
+
+@JIT
+def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, rows, ints, info, work, watch, dt,
+               before, kk, k_end, every, phase):
+    """The fixed steps kk .. k_end of this run (``advance``), from t0 to t0 + h, where the slip's
+    direction, or a rolling ball's omega_t's, is stiff (``slip_reference``, ``turn_stiff``: no fixed
+    step follows it at its order), taken by the embedded pair S, SE, SP (as ``advance_adaptive``'s
+    W, E, P; s_kind, s_exp its err_kind, err_exp) at the tolerance ``tol``, in as many of its steps
+    as its error control takes, the first tried at ``hp``; the rows due at the grid times inside
+    (dt, before, every, phase: ``advance``'s) from its dense output (``rows_inside``); each step
+    with its events: a transition inside stops the run there as a fixed step's does, a rest where
+    omega_t reaches 0 included. Returns the pair's next step, or -1 where the run stopped (status
+    set, its last row recorded). A Munthe-Kaas state only, in the pair's layout (``pair_layout``)
+    at both ends."""
     n = z.shape[0]
     last = SE.shape[1] - 1
     d, Y, zn, pn, Rn, Ye, Re, pe, sa, sb, sm = scratch(work, n)
@@ -272,10 +317,13 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
             continue
         valid = step_events(fn, d, p, S, True, n, t, hs, z, R, K, last, SP, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
+        kk = rows_inside(fn, d, p, SP, t, hs, valid if valid >= 0.0 else 1.0, z, R, K, rows, ints, Ye, Re, pe, dt,
+                         before, kk, k_end, every, phase)
         if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there
             resume(fn, d, p, hs, SP, valid, z, R, K, probe, ints, zn, Rn, pn)
             turns += 1
             t += valid * hs
+            kk = row_at_end(rows, ints, t, z, R, probe, p, dt, before, kk, k_end, every, phase)
             continue
         if valid >= 0.0:
             record_valid(fn, d, p, S, t, hs, valid, z, R, K, last, SP, probe, rows, ints, info, Y, zn,
@@ -283,6 +331,7 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
             break
         t = t_end if land else t + hs
         accept(p, True, n, z, R, K, last, probe, zn, Rn, pn)
+        kk = row_at_end(rows, ints, t, z, R, probe, p, dt, before, kk, k_end, every, phase)
         turns = 0
         grown = hs * min(1.0 if retry else MAX_FACTOR, next_step_factor(err, s_kind, s_exp, info))
         hp = max(hp, grown) if land else grown
@@ -339,7 +388,9 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
 
     Where the slip's direction, or a rolling ball's omega_t's, is stiff for the steps, a stretch
     of steps is the embedded pair's S, SE, SP at s_tol (``stiff_step``; a classic run stops there
-    instead, T_STIFF, for the caller to take that stretch).
+    instead, T_STIFF, for the caller to take that stretch), in the pair's own steps: where its next
+    step reaches past the grid step's end, as many of the grid's steps at once as it reaches (the
+    stiffness judged again at the end of the last, the rows between from the pair's dense output).
 
     The run's clock is the whole run's (``interface.grid_steps_before``): it starts at t_start
     (0, or where the contact changed mode) and its steps end at the multiples k·dt of the grid, the
@@ -364,10 +415,11 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
     before = grid_before(t_start, dt)   # the grid's steps before this run (0 from t = 0)
     own = max(1, n_steps - before)      # this run's steps
     phase = before % every              # the first row after the start: at the step every - phase
-    k0 = ints[I_STEPS]
-    k_stop = min(own, k0 + max_steps)
+    k = ints[I_STEPS]
+    k_stop = min(own, k + max_steps)
     stretch, hp = False, dt   # in a stretch of stiff steps (its state in the pair's layout); the pair's next step
-    for k in range(k0 + 1, k_stop + 1):
+    while k < k_stop:
+        k += 1
         final = k == own
         g = before + k
         t0 = (g - 1) * dt if k > 1 else t_start
@@ -396,11 +448,18 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
                 fixed_layout(p, z, K, probe)
             stretch = stiff
             if stiff:
-                hp = stiff_step(fn, S, SE, SP, s_kind, s_exp, s_tol, p, t0, h, min(hp, h), z, R, K, probe, rows, ints,
-                                info, work, watch)
+                # the pair's next step reaching past this step's end: the stretch on to the last end
+                # of a grid step it reaches (at most k_stop's), the rows between from its dense output
+                k_end = k
+                if hp > h and not final:
+                    k_end += int(min(float(k_stop - k), (t0 + hp - t) / dt))
+                t_span = t_end if k_end == own else (before + k_end) * dt
+                hp = stiff_step(fn, S, SE, SP, s_kind, s_exp, s_tol, p, t0, t_span - t0, min(hp, t_span - t0), z, R,
+                                K, probe, rows, ints, info, work, watch, dt, before, k, k_end, every, phase)
                 if hp < 0.0:
                     fixed_layout(p, z, K, probe)
                     return
+                k, t, final = k_end, t_span, k_end == own
                 valid = -1.0
                 break
             bad = take_step(stepping, fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints)
@@ -442,8 +501,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
         if not stretch:   # (a stiff step's state is the run's already)
             accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] = k
-        if k - ints[I_LAST_RECORDED] == (every if ints[I_LAST_RECORDED] > 0 else every - phase) or final:
-            # (no division in the loop)
+        if row_due(ints, k, every, phase) or final:   # (no division in the loop)
             record(rows, ints[I_ROWS], t, z, R, probe, p)
             ints[I_ROWS] += 1
             ints[I_LAST_RECORDED] = k

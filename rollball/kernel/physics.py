@@ -8,7 +8,7 @@ import math
 
 from .interface import (
     D_SIDE, D_SLIP, MK_SIZE, MOTION_SIZE, PROBE_FORCE, PROBE_NEED, PROBE_SIZE, PROBE_SLIP, PROBE_SLIP_PULL,
-    PROBE_SPIN_PULL, P_AIR, P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE,
+    PROBE_SPIN_PULL, P_AIR, P_FLY, P_MU, P_RESISTANCE, P_SPIN, P_TURN, P_UNIT, RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE,
     SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE)
 from .lowlevel import COLD, EXACT, JIT, STEP, data_pointer, landscape
 
@@ -98,13 +98,12 @@ def couple_sides(p, fn_, n1, n2, n3, o1, o2, o3, inertia):
     moment the rolling resistance turns, over m r² (7/5 rolling, about the contact point; 2/5
     sliding). What a step keeps (``loops.couple_reference``), what a run starts with
     (``recording.start``) and what the friction rolling needs is taken with (``rolling_need``)."""
-    r, m, g0 = p[0], p[1], abs(p[2])
     on = o1 * n1 + o2 * n2 + o3 * n3
     t1, t2, t3 = o1 - on * n1, o2 - on * n2, o3 - on * n3
-    force = r * abs(fn_) * SIDE_ZERO * math.sqrt(r / g0) / (m * r * r)
+    force = abs(fn_) * SIDE_ZERO * p[P_UNIT] / p[4]   # r F_n SIDE_ZERO sqrt(r / g0) / (m r^2)
     # (the couples' largest rates of omega: c r F_n / I)
     turning = force * p[P_RESISTANCE] / inertia
-    spinning = force * p[P_SPIN] / 0.4
+    spinning = force * p[P_SPIN] * 2.5   # (I = 0.4 m r^2)
     if not t1 * t1 + t2 * t2 + t3 * t3 > turning * turning:
         t1, t2, t3 = 0.0, 0.0, 0.0
     side = 0.0
@@ -159,8 +158,8 @@ def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3):
         ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         if ts == 0.0:
             return 0.0, 0.0, 0.0
-        side = ts if t1 * r1 + t2 * r2 + t3 * r3 >= 0.0 else -ts
-        return -cap * t1 / side, -cap * t2 / side, -cap * t3 / side
+        c = -cap / (ts if t1 * r1 + t2 * r2 + t3 * r3 >= 0.0 else -ts)   # (one division)
+        return c * t1, c * t2, c * t3
     qs = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
     if qs <= cap:
         return -q1, -q2, -q3
@@ -219,15 +218,18 @@ def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2
     moment r N x F_air of the air's drag about the contact point added (docs/design.md §1,
     "Dissipation"), for |F.N| = fa and the couples' sides s (omega_t's) and ``spin_side``
     (``couple_sides``). Returns that v' (3), the rolling resistance's couple (3), the spin
-    friction's (along N), omega.N, the centre's speed and the pull on v.N (the rate v.N would have
-    without spin friction, = (2/5) m r² times that of omega.N)."""
+    friction's (along N), omega.N, the centre's speed (0 without air, whose work alone reads it)
+    and the pull on v.N (the rate v.N would have without spin friction, = (2/5) m r² times that of
+    omega.N)."""
     r, k = p[0], p[P_AIR]
     # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F
-    speed = r * math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
-    a = -k * speed * r   # F = a w
-    e1 = e1 + r * a * (n2 * w3 - n3 * w2)
-    e2 = e2 + r * a * (n3 * w1 - n1 * w3)
-    e3 = e3 + r * a * (n1 * w2 - n2 * w1)
+    speed = 0.0
+    if k != 0.0:   # (no air: nothing to add)
+        speed = r * math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
+        a = -k * speed * r   # F = a w
+        e1 = e1 + r * a * (n2 * w3 - n3 * w2)
+        e2 = e2 + r * a * (n3 * w1 - n1 * w3)
+        e3 = e3 + r * a * (n1 * w2 - n2 * w1)
     # spin friction: the pull on omega.N is that on v.N, (v.N)' = v'.N + v.N'
     on = o1 * n1 + o2 * n2 + o3 * n3
     pull = e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3
