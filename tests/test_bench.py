@@ -159,3 +159,27 @@ def test_a_run_with_the_three_dissipations_is_timed_against_the_same_run_without
     assert "with the three" in _targets(dissipation=figures)
     missed = [line for line in _targets(dissipation={**figures, "ratio": 1.6}).splitlines() if "missed" in line]
     assert len(missed) == 1 and "1.60×" in missed[0]
+
+
+def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeypatch):
+    """``hybrid_sweeps``: the sweep of the example really flies (its runs land) where the glued one
+    runs the batch path, and the report marks a ratio above its goal."""
+    from rollball.sweeps import batch
+    monkeypatch.setattr(targets, "HYBRID", ("cylinder",))
+    landed = []
+    run_one = batch.run_one
+
+    def counted(scene):
+        code, out = run_one(scene)
+        landed.append(out[batch.O_LANDINGS])
+        return code, out
+
+    monkeypatch.setattr(batch, "run_one", counted)
+    figures = targets.hybrid_sweeps(1, runs=6)
+    assert set(figures) == {"cylinder"} and figures["cylinder"]["runs"] == 6
+    assert figures["cylinder"]["hybrid_s"] > 0.0 and figures["cylinder"]["glued_s"] > 0.0
+    assert len(landed) == 12 and min(landed) >= 1, landed   # (the warm-up's and the timed sweep's runs)
+    assert "missed" not in _targets(hybrid_sweeps={"cylinder": {**figures["cylinder"], "ratio": 3.0}})
+    missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**figures["cylinder"], "ratio": 5.0}}).splitlines()
+              if "missed" in line]
+    assert len(missed) == 1 and "| cylinder | 6 |" in missed[0]

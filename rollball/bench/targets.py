@@ -255,6 +255,11 @@ def _run_cpu(scene: Scene) -> float:
     return time.process_time() - start
 
 
+def _glued(scene: Scene) -> Scene:
+    """The scene glued to its surface: friction null, after_liftoff "glued" (the 2011 model)."""
+    return dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, friction=None, after_liftoff="glued"))
+
+
 def hybrid_costs(repeats: int) -> dict:
     """CPU time of a run that changes mode against the same scene glued to its surface (friction
     null, after_liftoff "glued": the 2011 model's one kernel run), the two in turn, medians and the
@@ -265,12 +270,36 @@ def hybrid_costs(repeats: int) -> dict:
     scenes["bowl, slip and grip"] = dataclasses.replace(bowl, contact=dataclasses.replace(bowl.contact, friction=0.2))
     out = {}
     for name, scene in scenes.items():
-        glued = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, friction=None,
-                                                                       after_liftoff="glued"))
+        glued = _glued(scene)
         _run_cpu(scene), _run_cpu(glued)   # (compiled, the landscape too)
         pairs = [(_run_cpu(scene), _run_cpu(glued)) for _ in range(repeats)]
         hybrid, plain = (np.array(column) for column in zip(*pairs))
         out[name] = {"hybrid_ms": float(np.median(hybrid)) * 1e3, "glued_ms": float(np.median(plain)) * 1e3,
+                     "ratio": float(np.median(hybrid / np.maximum(plain, 1e-9)))}
+    return out
+
+
+def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
+    """CPU time of a sweep of ``runs`` runs of each example that flies, over its start speed vx
+    (±5 %: every run lifts off), on one worker, against the same sweep glued (the compiled batch
+    path), the two in turn: medians and the median of the ratios. (A sweep whose contact changes
+    mode runs one ``Simulation`` a point.)"""
+    from ..sweeps import sweep   # (sweeps load on demand)
+
+    def cpu(scene, vary) -> float:
+        started = time.process_time()
+        sweep(scene, vary, workers=1)
+        return time.process_time() - started
+
+    out = {}
+    for name in HYBRID:
+        scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
+        vary = {"start.vx": np.linspace(0.95 * scene.start.vx, 1.05 * scene.start.vx, runs)}
+        glued = _glued(scene)
+        cpu(scene, vary), cpu(glued, vary)   # (compiled, the landscape too)
+        pairs = [(cpu(scene, vary), cpu(glued, vary)) for _ in range(repeats)]
+        hybrid, plain = (np.array(column) for column in zip(*pairs))
+        out[name] = {"runs": runs, "hybrid_s": float(np.median(hybrid)), "glued_s": float(np.median(plain)),
                      "ratio": float(np.median(hybrid / np.maximum(plain, 1e-9)))}
     return out
 
@@ -333,6 +362,7 @@ def measure(quick: bool) -> dict:
         "row_limit_memory": None if quick else row_limit_memory(),
         "app": app_responsiveness(),
         "hybrid": hybrid_costs(3 if quick else 21),
+        "hybrid_sweeps": hybrid_sweeps(1 if quick else 5, 40 if quick else 200),
         "dissipation": dissipation_cost(5 if quick else 21),
         "sweep": sweep_speedup(3 if quick else 5),
     }
