@@ -601,7 +601,7 @@ class ModeMachine:
         the grid row ``beside`` it and that row's direction, where there is one. Any other mode: not."""
         run = self.run
         ball, force = run.scene.ball, abs(row[NORMAL_FORCE]) * run.dt
-        unit = math.sqrt(ball.radius / run.scene.gravity) if run.scene.gravity else math.inf
+        unit = float(run._p[kernel.P_UNIT])   # √(r/g), inf without gravity: the kernel's own
         rate = None if beside is None else (beside[1] - turn) / (beside[0][T] - row[T])
         # (as the kernel's stretch ends: a row the fixed steps go on from is not stiff to them)
         margin = kernel.EXIT_MARGIN
