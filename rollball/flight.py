@@ -130,30 +130,11 @@ class Surface:
         # search samples them and starts there
         self.hints: list[np.ndarray] = []
         self._record = landscape.record(self.values)   # (held while its address is in use)
-        self._calls: dict[int, tuple] = {}   # points -> the sampler's arguments, packed once
-        self._feet_calls: dict[int, tuple] = {}   # points -> closest_points' arguments, packed once
-        self._first_calls: dict[tuple, tuple] = {}   # (centres, guess, hints, tips) -> nearest_feet's, packed once
-        self._land_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> land's, packed once
         self._rows_call: machine_code.Arguments | None = None   # flight_rows', packed for up to KEPT_ROWS rows
-        self._bounce_calls: dict[tuple, machine_code.Arguments] = {}   # (hints, tips) -> bounces', packed once
 
     def evaluate(self, x, y) -> np.ndarray:
-        """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s numbers,
-        from the same compiled code, its arguments packed once per number of points)."""
-        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        if x.shape != y.shape:   # (broadcast_arrays costs more than a few points' evaluation)
-            x, y = np.broadcast_arrays(x, y)
-        n = x.size
-        packed = self._calls.get(n)
-        if packed is None:
-            xs, ys, out = np.empty(n), np.empty(n), np.empty((6, n))
-            call = machine_code.Arguments("evaluate_points", fn=self._record.ctypes.data, xs=xs, ys=ys, out=out,
-                                          d=np.empty(6))
-            packed = self._calls[n] = (call, xs, ys, out)
-        call, xs, ys, out = packed
-        xs[:], ys[:] = x.ravel(), y.ravel()
-        call()
-        return out.reshape((6,) + x.shape).copy()
+        """f, f_x, f_y, f_xx, f_xy, f_yy at the points (x, y) (``Landscape.evaluate``'s)."""
+        return self.landscape.evaluate(x, y, self.values)
 
     def feet(self, centers: np.ndarray, guesses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For centres (n, 3) from first guesses (n, 2): the feet (n, 2), the unit normals there
@@ -163,13 +144,14 @@ class Surface:
         landscape's domain, or beyond a focal point where the nearest point is elsewhere)."""
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
         n = len(c)
-        packed = self._feet_calls.get(n)
-        if packed is None:   # (the iteration runs compiled: kernel.physics.closest_points)
+        def make(fn):   # (the iteration runs compiled: kernel.physics.closest_points)
             arrays = np.empty((n, 3)), np.empty((n, 2)), np.empty((n, 3)), np.empty(n)
-            call = machine_code.Arguments("closest_points", fn=self._record.ctypes.data, centers=arrays[0],
-                                          feet=arrays[1], normals=arrays[2], distances=arrays[3],
-                                          iterations=FOOT_ITERATIONS, d=np.empty(6))
-            packed = self._feet_calls[n] = (call, *arrays)
+            call = machine_code.Arguments("closest_points", fn=fn, centers=arrays[0], feet=arrays[1],
+                                          normals=arrays[2], distances=arrays[3], iterations=FOOT_ITERATIONS,
+                                          d=np.empty(6))
+            return (call, *arrays)
+
+        packed = self.landscape.packed(self.values, ("closest_points", n), make)
         call, at, alpha, normal, distance = packed
         at[:], alpha[:] = c, np.asarray(guesses, dtype=float).reshape(-1, 2)
         call()
@@ -269,18 +251,20 @@ class Surface:
         n, tips = len(c), np.array(self.tips, dtype=float).reshape(-1, 3)
         guess = np.empty(0) if guess is None else np.array(guess, dtype=float).reshape(2)
         k = 1 + len(guess) // 2 + BEST_SAMPLES + len(hints)
-        key = (n, len(guess), len(hints), len(tips))
-        packed = self._first_calls.get(key)
-        if packed is None:
+
+        def make(fn):
             out = {"feet": np.empty((n, 2)), "normals": np.empty((n, 3)), "distances": np.empty(n),
                    "below": np.empty(n), "sampled": np.empty(n), "nearest": np.empty((n, 2 * BEST_SAMPLES))}
             call = machine_code.Arguments(
-                "nearest_feet", fn=self._record.ctypes.data, centers=np.empty((n, 3)), guess=guess.copy(),
+                "nearest_feet", fn=fn, centers=np.empty((n, 3)), guess=guess.copy(),
                 hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
                 reach_default=self.reach_default, **out, start_centers=np.empty((n * k, 3)),
                 start_feet=np.empty((n * k, 2)), start_normals=np.empty((n * k, 3)), start_distances=np.empty(n * k),
                 iterations=FOOT_ITERATIONS, d=np.empty(6))
-            packed = self._first_calls[key] = call, out
+            return call, out
+
+        packed = self.landscape.packed(self.values, ("nearest_feet", n, len(guess), len(hints), len(tips),
+                                                     self.reach_default), make)
         call, out = packed
         kept = call.kept   # (the arguments are written in place: packing costs more than the copies)
         kept["centers"][:], kept["guess"][:], kept["hints"][:], kept["tips"][:] = c, guess, hints, tips
@@ -293,18 +277,16 @@ class Surface:
         (t, the foot) where it lands, None where it is still flying at t_end, or REFER where that
         search leaves the flight to ``Flight.landing``'s own (see ``kernel.landing``)."""
         hints, tips = np.array(self.hints, dtype=float).reshape(-1, 3), np.array(self.tips, dtype=float).reshape(-1, 3)
-        key = (len(hints), len(tips))
-        call = self._land_calls.get(key)
-        if call is None:
-            k = 2 + BEST_SAMPLES + len(hints)   # (a look's starts: below, the guess, the samples, the hints)
-            call = self._land_calls[key] = machine_code.Arguments(
-                "land", fn=self._record.ctypes.data, start=np.empty(7), gravity=0.0, radius=0.0, t_end=0.0,
+        k = 2 + BEST_SAMPLES + len(hints)   # (a look's starts: below, the guess, the samples, the hints)
+        call = self.landscape.packed(self.values, ("land", len(hints), len(tips), self.reach_default), lambda fn: (
+            machine_code.Arguments(
+                "land", fn=fn, start=np.empty(7), gravity=0.0, radius=0.0, t_end=0.0,
                 hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
                 reach_default=self.reach_default, iterations=FOOT_ITERATIONS, out=np.empty(OUT_LANDING),
                 times=np.empty(LANDING_BATCH), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
                 normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
                 nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
-                start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))
+                start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))))
         kept = call.kept
         kept["start"][0], kept["start"][1:4], kept["start"][4:7] = start.t, start.center, start.velocity
         kept["hints"][:], kept["tips"][:] = hints, tips
@@ -329,12 +311,10 @@ class Surface:
         them, or leaves a flight to flight.py (see ``Bounces``). Rows whose foot the kernel
         refers are searched here (``refer_rows``)."""
         hints, tips = np.array(self.hints, dtype=float).reshape(-1, 3), np.array(self.tips, dtype=float).reshape(-1, 3)
-        key = (len(hints), len(tips))
-        call = self._bounce_calls.get(key)
-        if call is None:
-            k, size = 2 + BEST_SAMPLES + len(hints), KEPT_ROWS
-            call = self._bounce_calls[key] = machine_code.Arguments(
-                "bounces", fn=self._record.ctypes.data, state=np.empty(10), R=np.empty((3, 3)), gravity=0.0,
+        k, size = 2 + BEST_SAMPLES + len(hints), KEPT_ROWS
+        call = self.landscape.packed(self.values, ("bounces", len(hints), len(tips), self.reach_default), lambda fn: (
+            machine_code.Arguments(
+                "bounces", fn=fn, state=np.empty(10), R=np.empty((3, 3)), gravity=0.0,
                 radius=0.0, mass=0.0, restitution=0.0, friction=0.0, rest=0.0, t_end=0.0, step=0.0, every=1,
                 enough=-1, dissipated=0.0, hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)),
                 unit=np.linspace(-1.0, 1.0, SAMPLES), reach_default=self.reach_default, iterations=FOOT_ITERATIONS,
@@ -345,7 +325,7 @@ class Surface:
                 nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
                 start_normals=np.empty((k, 3)), start_distances=np.empty(k), row_times=np.empty(size),
                 row_centers=np.empty((size, 3)), row_velocities=np.empty((size, 3)), row_feet=np.empty((size, 2)),
-                row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6))
+                row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6))))
         kept = call.kept
         state = kept["state"]
         state[0], state[1:4], state[4:7], state[7:10] = start.t, start.center, start.velocity, start.omega

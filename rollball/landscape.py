@@ -33,7 +33,7 @@ from .formula import (X, Y, FormulaError, check_constants, check_parameter_names
                       parse_formula)
 from .kernel.interface import landscape_record
 from .landscape_code import LandscapeCode
-from .machine_code import call
+from .machine_code import Arguments, call
 from .text import shown
 
 # The work budget of a formula: its derivatives may hold about this many nodes (operations,
@@ -41,6 +41,10 @@ from .text import shown
 # counted after. Differentiating, simplifying and compiling that much takes a few seconds; a
 # product of 17 factors sin(k*x + y) (180 characters) is about this large.
 MAX_DERIVATIVE_NODES = 100_000
+
+# An evaluation of this many points or fewer reuses its packed call (``Landscape.evaluate``); the
+# packed calls a landscape keeps, per thread (``Landscape.packed``)
+PACKED_POINTS, PACKED_CALLS = 64, 32
 
 # sympy's cached results kept at most (about 300 bytes each): see _bound_sympy_cache
 SYMPY_CACHE_ENTRIES = 20_000
@@ -183,6 +187,7 @@ class Landscape:
             check_constants(e)
         self.source = self._generate_source()
         self._compiled: LandscapeCode | None = None
+        self._packed: dict[tuple, tuple] = {}   # (thread, values, key) -> a packed call, its record (``packed``)
         _bound_sympy_cache()
 
     def __repr__(self) -> str:
@@ -238,18 +243,51 @@ class Landscape:
             raise ValueError(f"{self!r} takes {len(self.parameters)} parameter values, not {values.size}")
         return landscape_record(self.compiled.address, values)
 
+    def packed(self, values, key, make):
+        """A kernel call on this landscape with the parameters' ``values``, packed once (``make(fn)``,
+        fn the address of the landscape's record, made here and kept with it) and kept for this
+        thread under ``key`` (the entry point and the sizes of its arrays), so that the runs of
+        a sweep, or the flights of one, do not pack it anew: the caller writes its inputs into
+        the call's arrays, runs it and copies its outputs before the thread calls again. At most
+        PACKED_CALLS calls are kept (then all are dropped)."""
+        values = np.asarray(values, dtype=float).ravel()
+        full = (threading.get_ident(), tuple(values.tolist()), key)
+        entry = self._packed.get(full)
+        if entry is None:
+            if len(self._packed) >= PACKED_CALLS:
+                self._packed.clear()
+            record = self.record(values)
+            entry = self._packed[full] = (make(record.ctypes.data), record)   # (the record kept while its address is)
+        return entry[0]
+
     def evaluate(self, x, y, values=()) -> np.ndarray:
         """f, f_x, f_y, f_xx, f_xy, f_yy at (x, y) (with the parameters' ``values``): an array of
         shape (6,) + broadcast shape.
 
         The compiled code the integrator uses; points outside the formula's domain give NaN.
+        An evaluation of at most PACKED_POINTS points reuses its call's packed arguments
+        (``packed``): packing costs ten times the evaluation of a point.
         """
-        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
-        out = np.empty((6, x.size))
-        record = self.record(values)
-        call("evaluate_points", fn=record.ctypes.data, xs=np.ascontiguousarray(x).ravel(),
-             ys=np.ascontiguousarray(y).ravel(), out=out, d=np.empty(6))
-        return out.reshape((6,) + x.shape)
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if x.shape != y.shape:   # (broadcast_arrays costs more than a few points' evaluation)
+            x, y = np.broadcast_arrays(x, y)
+        n = x.size
+        if n > PACKED_POINTS:
+            out = np.empty((6, n))
+            record = self.record(values)
+            call("evaluate_points", fn=record.ctypes.data, xs=np.ascontiguousarray(x).ravel(),
+                 ys=np.ascontiguousarray(y).ravel(), out=out, d=np.empty(6))
+            return out.reshape((6,) + x.shape)
+
+        def make(fn):
+            xs, ys, out = np.empty(n), np.empty(n), np.empty((6, n))
+            return Arguments("evaluate_points", fn=fn, xs=xs, ys=ys, out=out, d=np.empty(6)), xs, ys, out
+
+        packed = self.packed(values, ("evaluate_points", n), make)
+        arguments, xs, ys, out = packed
+        xs[:], ys[:] = x.ravel(), y.ravel()
+        arguments()
+        return out.reshape((6,) + x.shape).copy()
 
     def height(self, x, y, values=()) -> np.ndarray:
         return self.evaluate(x, y, values)[0]

@@ -129,9 +129,10 @@ class Arguments:
     """The arguments of the kernel function ``name`` (a key of ``interface.ENTRIES``), each
     given by its declared name, packed into its entry point's slots: an array as its address
     and shape, a number as its bits. Calling runs the function on them, without the GIL;
-    ``set`` changes one. Packing costs microseconds an array, so a caller that runs a function
-    again and again packs once; the arrays are read and written in place and kept alive here
-    (``kept``, by name)."""
+    ``set`` changes one. The slots are a ctypes array (its items written in a tenth of the time
+    a numpy slice takes), and an array's address is read through ctypes too, so packing an
+    argument costs about a microsecond; a caller that runs a function again and again packs
+    once. The arrays are read and written in place and kept alive here (``kept``, by name)."""
 
     def __init__(self, name: str, /, **arguments):
         self.name = name
@@ -141,33 +142,35 @@ class Arguments:
         problems = [f"{word} {', '.join(keys)}" for word, keys in (("missing", missing), ("unknown", unknown)) if keys]
         if problems:
             raise TypeError(f"{name}: {'; '.join(problems)}")
-        self.slots = np.zeros(interface.ENTRY_SLOTS, dtype=np.int64)
-        self._floats = self.slots.view(np.float64)   # (the same memory: a view made once)
-        self.address = self.slots.ctypes.data
+        self.slots = _SLOTS()
+        self._floats = _FLOATS.from_buffer(self.slots)   # (the same memory, as doubles)
+        self.address = ctypes.addressof(self.slots)
         self.kept: dict = {}
         for key, value in arguments.items():
             self.set(key, value)
 
     def set(self, key: str, value) -> None:
         try:
-            kind, i = self.layout[key]
+            kind, i, ndim, dtype = self.layout[key]
         except KeyError:
             raise TypeError(f"{self.name}: no argument {key}") from None
         if kind == interface.FLOAT:
             self._floats[i] = float(value)
-        elif kind in interface.NUMBER_KINDS:
+        elif ndim == 0:
             self.slots[i] = int(value)
         else:
-            ndim = 2 if kind == interface.MATRIX else 1
-            dtype = np.int64 if kind == interface.INTS else np.float64
             if not (isinstance(value, np.ndarray) and value.ndim == ndim and value.dtype == dtype
                     and value.flags.c_contiguous and value.flags.aligned):
-                raise TypeError(f"{self.name}: {key} must be a C-contiguous {kind} of {np.dtype(dtype)}")
-            self.slots[i: i + 3] = _address(value), value.shape[0], value.shape[1] if ndim == 2 else 1
+                raise TypeError(f"{self.name}: {key} must be a C-contiguous {kind} of {dtype}")
+            slots = self.slots
+            slots[i], slots[i + 1], slots[i + 2] = _address(value), value.shape[0], value.shape[1] if ndim == 2 else 1
         self.kept[key] = value
 
     def __call__(self) -> None:
         entries()[self.name](self.address)
+
+
+_SLOTS, _FLOATS = ctypes.c_int64 * interface.ENTRY_SLOTS, ctypes.c_double * interface.ENTRY_SLOTS
 
 
 def _address(array: np.ndarray) -> int:
@@ -180,9 +183,12 @@ def _address(array: np.ndarray) -> int:
 
 
 @functools.cache
-def _layout(name: str) -> dict[str, tuple[str, int]]:
-    """Each argument's kind and first slot, by its name."""
-    return {parameter: (kind, slot) for parameter, kind, slot in interface.layout(name)}
+def _layout(name: str) -> dict[str, tuple[str, int, int, np.dtype | None]]:
+    """Each argument's kind, first slot, and for an array its number of dimensions and dtype, by
+    its name (a number: 0 and None)."""
+    shapes = {interface.VECTOR: (1, np.dtype(np.float64)), interface.MATRIX: (2, np.dtype(np.float64)),
+              interface.INTS: (1, np.dtype(np.int64))}
+    return {parameter: (kind, slot, *shapes.get(kind, (0, None))) for parameter, kind, slot in interface.layout(name)}
 
 
 def call(name: str, /, **arguments) -> None:

@@ -77,3 +77,53 @@ def test_poles_give_inf_or_nan_never_stale_values(text, capfd):
     assert not np.isfinite(values[0, 0]) and not np.isfinite(values[0, 2])
     assert np.isfinite(values[:, 1]).all()
     assert "Exception" not in capfd.readouterr().err
+
+
+def test_small_evaluations_reuse_their_packed_call_and_give_what_a_fresh_call_gives():
+    """``Landscape.evaluate`` of at most PACKED_POINTS points reuses a packed call (per thread,
+    values and size): its numbers are those of an evaluation through a call of its own (more
+    points than PACKED_POINTS), each answer is the caller's own array, parameter values are told
+    apart, and at most PACKED_CALLS calls are kept."""
+    from rollball import landscape as module
+
+    surface = Landscape("a*sin(x) + cos(b*y) + x*y", ("a", "b"))
+    rng = np.random.default_rng(7)
+    x, y = rng.uniform(-2, 2, module.PACKED_POINTS + 1), rng.uniform(-2, 2, module.PACKED_POINTS + 1)
+    for values in ((1.0, 2.0), (0.5, -3.0)):
+        whole = surface.evaluate(x, y, values)   # (one call of its own)
+        for n in (1, 5, module.PACKED_POINTS):
+            first = surface.evaluate(x[:n], y[:n], values)
+            again = surface.evaluate(x[:n], y[:n], values)
+            assert np.array_equal(first, whole[:, :n]) and np.array_equal(again, whole[:, :n])
+            first[:] = np.nan   # (the caller's own: the next answer is untouched)
+            assert np.array_equal(surface.evaluate(x[:n], y[:n], values), whole[:, :n])
+        assert float(surface.evaluate(x[0], y[0], values)[0]) == whole[0, 0]
+    assert not np.array_equal(surface.evaluate(x[:3], y[:3], (1.0, 2.0)), surface.evaluate(x[:3], y[:3], (0.5, -3.0)))
+    for n in range(1, 3 * module.PACKED_CALLS):
+        surface.evaluate(x[: n % module.PACKED_POINTS + 1], y[: n % module.PACKED_POINTS + 1], (1.0, 2.0))
+        assert len(surface._packed) <= module.PACKED_CALLS
+
+
+def test_threads_evaluating_one_landscape_at_once_each_get_their_own_answers():
+    """Each thread has its own packed calls (``Landscape.packed``): threads evaluating the same
+    landscape at the same time get the numbers a lone evaluation gives."""
+    import threading
+
+    surface = Landscape("exp(-x^2)*sin(3*y) + 0.1*x")
+    points = [(np.full(4, 0.1 * k), np.linspace(-1, 1, 4) + k) for k in range(8)]
+    expected = [surface.evaluate(px, py) for px, py in points]
+    wrong = []
+
+    def work(k):
+        px, py = points[k]
+        for _ in range(300):
+            if not np.array_equal(surface.evaluate(px, py), expected[k]):
+                wrong.append(k)
+                return
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=60)
+    assert not wrong and not any(thread.is_alive() for thread in threads)
