@@ -254,6 +254,15 @@ def row_due(ints, k, every, phase):
 
 
 @JIT
+def record_due(rows, ints, k, t, z, R, probe, p):
+    """The row at the end of this run's grid step k (time t): recorded, counted, and marked as the
+    last recorded step (which ``row_due`` counts from)."""
+    record(rows, ints[I_ROWS], t, z, R, probe, p)
+    ints[I_ROWS] += 1
+    ints[I_LAST_RECORDED] = k
+
+
+@JIT
 def rows_inside(fn, d, p, P, t, hs, theta, z, R, K, rows, ints, Ye, Re, pe, dt, before, kk, k_end, every, phase):
     """The rows due (``row_due``) at the ends of this run's grid steps kk, kk + 1, ... before k_end
     that a stiff pair's step from t of hs passed strictly before t + theta hs, from its dense output
@@ -266,9 +275,7 @@ def rows_inside(fn, d, p, P, t, hs, theta, z, R, K, rows, ints, Ye, Re, pe, dt, 
         if row_due(ints, kk, every, phase):
             state_at(fn, d, p, z, R, hs, P, K, 0.0, (tk - t) / hs, Ye, Re, pe)
             ints[I_EVALS] += 1
-            record(rows, ints[I_ROWS], tk, Ye, Re, pe, p)
-            ints[I_ROWS] += 1
-            ints[I_LAST_RECORDED] = kk
+            record_due(rows, ints, kk, tk, Ye, Re, pe, p)
         kk += 1
     return kk
 
@@ -279,9 +286,7 @@ def row_at_end(rows, ints, t, z, R, probe, p, dt, before, kk, k_end, every, phas
     kk (before k_end): its row where due, and the step counted. Returns the first step ahead."""
     if kk < k_end and (before + kk) * dt == t:
         if row_due(ints, kk, every, phase):
-            record(rows, ints[I_ROWS], t, z, R, probe, p)
-            ints[I_ROWS] += 1
-            ints[I_LAST_RECORDED] = kk
+            record_due(rows, ints, kk, t, z, R, probe, p)
         ints[I_STEPS] = kk
         return kk + 1
     return kk
@@ -502,9 +507,7 @@ def advance(fn, W, P, p, dt, t_start, t_end, n_steps, every, max_steps, z, R, K,
             accept(p, mk, n, z, R, K, last, probe, zn, Rn, pn)
         ints[I_STEPS] = k
         if row_due(ints, k, every, phase) or final:   # (no division in the loop)
-            record(rows, ints[I_ROWS], t, z, R, probe, p)
-            ints[I_ROWS] += 1
-            ints[I_LAST_RECORDED] = k
+            record_due(rows, ints, k, t, z, R, probe, p)
     if stretch:
         fixed_layout(p, z, K, probe)
     if ints[I_STEPS] == own:
