@@ -38,6 +38,9 @@ DRAG_STIFF = 10.0
 # stage iteration converging, no adaptive step small enough)
 STIFF_DRAG_SIGNS = (Reason.UNDEFINED, Reason.ORIENTATION_OVERFLOW, Reason.NOT_CONVERGED, Reason.STEP_UNDERFLOW)
 SHARED_ROWS = 4        # rows a kernel run writing into the mode machine's rows finds free at its start (it grows them)
+# rows beyond the grid's a run whose contact changes mode has room for before its rows grow (a copy of
+# them all): a change's own row, and the row a flight's landing adds, a few each
+CHANGE_ROWS = 64
 
 _STATUS = {code: Status(name) for code, name in enumerate(kernel.KERNEL_STATUSES)
            if code not in (kernel.RUNNING, kernel.TRANSITION)}
@@ -232,8 +235,8 @@ class Simulation:
         self._finished = [0, 0, 0]   # steps, rejected tries and evaluations of the finished kernel runs
         # the runs after the first, where the contact changes mode (``stop_after``: the run ends
         # once it has this many transitions, ``ModeMachine``)
-        self.machine = ModeMachine(self, Mode.SLIDING if slips else Mode.ROLLING, n_rows if self.segmented else 0,
-                                   stop_after=stop_after)
+        self.machine = ModeMachine(self, Mode.SLIDING if slips else Mode.ROLLING,
+                                   min(n_rows + CHANGE_ROWS, MAX_ROWS) if self.segmented else 0, stop_after=stop_after)
         if self.segmented:
             arrays["rows"] = self.machine.shared_rows(False, self._room(n_rows))
             self.machine.new_kernel_run(False)
