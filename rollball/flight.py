@@ -23,9 +23,10 @@ import numpy as np
 from . import kernel, machine_code
 from .geometry import fit_ratio, rotation
 from .kernel.interface import (
-    BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, FOOT_ITERATIONS, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GROW_BY,
+    BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, FOOT_ITERATIONS, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS,
+    GRID_SPACING, GROW_BY,
     LANDING_BATCH, LANDING_FLYING, LANDING_LANDED, MAX_LOOKS, OUT_LANDING, PATH_ITERATIONS, ROW_SIZE, ROW_SLICES,
-    SAMPLE_SLACK, SAMPLES, SHRINK, SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
+    SAMPLE_SLACK, SHRINK, SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
 )
 from .trajectory import SLIP_SPEED
 
@@ -157,14 +158,16 @@ class Surface:
         call()
         return alpha.copy(), normal.copy(), distance.copy()
 
-    def foot(self, center: np.ndarray, guess=None) -> Foot:
+    def foot(self, center: np.ndarray, guess=None, spacing: float = 0.0) -> Foot:
         """The closest surface point to ``center``: the nearest of the feet Newton's method
         finds from ``guess`` (the last foot), from the point below the centre and from the
-        nearest points of a SAMPLES × SAMPLES grid over the square the closest point must lie
-        in (within the distance to the point below, |c_z − f(c_x, c_y)|, of the centre)."""
-        return self.feet_of(np.asarray(center, dtype=float)[None, :], guess)[0]
+        nearest points of a grid over the square the closest point must lie in (within the
+        distance to the point below, |c_z − f(c_x, c_y)|, of the centre), its samples at most
+        ``spacing`` apart and at most SAMPLES per side (``spacing`` 0: SAMPLES per side; a flight
+        of a ball of radius r looks with GRID_SPACING × r, ``kernel.feet.grid_side``)."""
+        return self.feet_of(np.asarray(center, dtype=float)[None, :], guess, spacing)[0]
 
-    def feet_of(self, centers: np.ndarray, guess=None) -> list[Foot]:
+    def feet_of(self, centers: np.ndarray, guess=None, spacing: float = 0.0) -> list[Foot]:
         """``foot`` for each of the centres (n, 3), all at once.
 
         The foot is the nearest (smallest |D|) of the points Newton's method converges to (which
@@ -179,7 +182,7 @@ class Surface:
         c = np.asarray(centers, dtype=float).reshape(-1, 3)
         n = len(c)
         hints = np.array(self.hints).reshape(-1, 3)   # (x, y, the spacing it was found at)
-        alpha, normal, distance, below, sampled, points = self._first_feet(c, guess, hints)
+        alpha, normal, distance, below, sampled, spacings, points = self._first_feet(c, guess, hints, spacing)
         ok = self._plausible(c, below, distance, sampled)
         if not ok.all():   # Newton's method at round-off, its step not below the compiled test's?
             starts = [c[:, None, :2]] + ([] if guess is None else [np.broadcast_to(np.asarray(guess, float),
@@ -188,8 +191,6 @@ class Surface:
             if len(hints):
                 starts.append(np.broadcast_to(hints[None, :, :2], (n, len(hints), 2)))
             starts = np.concatenate(starts, axis=1)
-            reach = np.abs(c[:, 2] - below)
-            reach = np.where(np.isfinite(reach), reach, 2.0 * self.reach_default)
             bad = np.flatnonzero(~ok)
             alpha, normal, distance = alpha.copy(), normal.copy(), distance.copy()
             a2, n2, d2 = self._polish(c[bad], starts[bad])
@@ -199,7 +200,7 @@ class Surface:
             ok[bad] = self._plausible(c[bad], below[bad], distance[bad], sampled[bad])
         if not ok.all():   # the foot was not found from these starts: a search of the samples for starts
             bad = np.flatnonzero(~ok)
-            spacing = np.full((len(bad), BEST_SAMPLES), 1.0) * (2.0 * reach[bad, None] / (SAMPLES - 1))
+            spacing = np.full((len(bad), BEST_SAMPLES), 1.0) * spacings[bad, None]
             points = points[bad]
             if len(hints):
                 shown = np.broadcast_to(hints[None, :, :2], (len(bad), len(hints), 2))
@@ -242,22 +243,24 @@ class Surface:
             found.append(Foot(float(alpha[j, 0]), float(alpha[j, 1]), normal[j], float(distance[j])))
         return found
 
-    def _first_feet(self, c, guess, hints):
+    def _first_feet(self, c, guess, hints, spacing):
         """The first search of ``feet_of``, compiled (``kernel.feet.nearest_feet``): for the
         centres c (n, 3) the feet (n, 2), normals (n, 3), signed distances (n,) Newton's method
-        finds from the point below, ``guess``, the BEST_SAMPLES nearest of the SAMPLES × SAMPLES
-        grid and the ``hints``, the nearest of them with the ``tips`` put in; the heights below
-        (n,), the nearest sampled distance (n,) and those samples' (x, y) (n, BEST_SAMPLES, 2)."""
+        finds from the point below, ``guess``, the BEST_SAMPLES nearest of the grid (its samples
+        at most ``spacing`` apart, at most SAMPLES per side) and the ``hints``, the nearest of them
+        with the ``tips`` put in; the heights below (n,), the nearest sampled distance (n,), the
+        grid's spacing (n,) and those samples' (x, y) (n, BEST_SAMPLES, 2)."""
         n, tips = len(c), np.array(self.tips, dtype=float).reshape(-1, 3)
         guess = np.empty(0) if guess is None else np.array(guess, dtype=float).reshape(2)
         k = 1 + len(guess) // 2 + BEST_SAMPLES + len(hints)
 
         def make(fn):
             out = {"feet": np.empty((n, 2)), "normals": np.empty((n, 3)), "distances": np.empty(n),
-                   "below": np.empty(n), "sampled": np.empty(n), "nearest": np.empty((n, 2 * BEST_SAMPLES))}
+                   "below": np.empty(n), "sampled": np.empty(n), "spacings": np.empty(n),
+                   "nearest": np.empty((n, 2 * BEST_SAMPLES))}
             call = machine_code.Arguments(
                 "nearest_feet", fn=fn, centers=np.empty((n, 3)), guess=guess.copy(),
-                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
+                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), spacing=0.0,
                 reach_default=self.reach_default, **out, start_centers=np.empty((n * k, 3)),
                 start_feet=np.empty((n * k, 2)), start_normals=np.empty((n * k, 3)), start_distances=np.empty(n * k),
                 iterations=FOOT_ITERATIONS, d=np.empty(6))
@@ -268,9 +271,10 @@ class Surface:
         call, out = packed
         kept = call.kept   # (the arguments are written in place: packing costs more than the copies)
         kept["centers"][:], kept["guess"][:], kept["hints"][:], kept["tips"][:] = c, guess, hints, tips
+        call.set("spacing", spacing)
         call()
         return (out["feet"].copy(), out["normals"].copy(), out["distances"].copy(), out["below"].copy(),
-                out["sampled"].copy(), out["nearest"].reshape(n, BEST_SAMPLES, 2).copy())
+                out["sampled"].copy(), out["spacings"].copy(), out["nearest"].reshape(n, BEST_SAMPLES, 2).copy())
 
     def land(self, start: FreeState, *, gravity: float, radius: float, t_end: float):
         """The compiled landing search (``kernel.landing.land``) of a flight in vacuum from ``start``:
@@ -281,10 +285,10 @@ class Surface:
         call = self.landscape.packed(self.values, ("land", len(hints), len(tips), self.reach_default), lambda fn: (
             machine_code.Arguments(
                 "land", fn=fn, start=np.empty(7), gravity=0.0, radius=0.0, t_end=0.0,
-                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), unit=np.linspace(-1.0, 1.0, SAMPLES),
-                reach_default=self.reach_default, iterations=FOOT_ITERATIONS, out=np.empty(OUT_LANDING),
-                times=np.empty(LANDING_BATCH), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
-                normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
+                hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)), reach_default=self.reach_default,
+                iterations=FOOT_ITERATIONS, out=np.empty(OUT_LANDING), times=np.empty(LANDING_BATCH),
+                guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)), normals=np.empty((1, 3)),
+                distances=np.empty(1), below=np.empty(1), sampled=np.empty(1), spacings=np.empty(1),
                 nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
                 start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))))
         kept = call.kept
@@ -317,13 +321,14 @@ class Surface:
                 "bounces", fn=fn, state=np.empty(10), R=np.empty((3, 3)), gravity=0.0,
                 radius=0.0, mass=0.0, restitution=0.0, friction=0.0, rest=0.0, t_end=0.0, step=0.0, every=1,
                 enough=-1, dissipated=0.0, hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)),
-                unit=np.linspace(-1.0, 1.0, SAMPLES), reach_default=self.reach_default, iterations=FOOT_ITERATIONS,
+                reach_default=self.reach_default, iterations=FOOT_ITERATIONS,
                 out=np.empty(kernel.OUT_BOUNCES), landed=np.empty((kernel.BOUNCES_CHAIN, 5)),
                 rows=np.empty((size, ROW_SIZE)), refer=np.empty(size, dtype=np.int64), hit=np.empty(kernel.HIT_SIZE),
                 times=np.empty(LANDING_BATCH), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
                 normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
-                nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
-                start_normals=np.empty((k, 3)), start_distances=np.empty(k), row_times=np.empty(size),
+                spacings=np.empty(1), nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)),
+                start_feet=np.empty((k, 2)), start_normals=np.empty((k, 3)), start_distances=np.empty(k),
+                row_times=np.empty(size),
                 row_centers=np.empty((size, 3)), row_velocities=np.empty((size, 3)), row_feet=np.empty((size, 2)),
                 row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6))))
         kept = call.kept
@@ -352,7 +357,7 @@ class Surface:
         the slip speed of the ball's point nearest the surface."""
         for i in np.flatnonzero(refer):
             row = rows[i]
-            foot = self.foot(row[ROW_SLICES["center"]].copy())
+            foot = self.foot(row[ROW_SLICES["center"]].copy(), spacing=GRID_SPACING * radius)
             row[ROW_SLICES["contact"]] = foot.x, foot.y
             row[SLIP_SPEED] = tangential_slip(row[ROW_SLICES["velocity"]], row[ROW_SLICES["omega"]], foot.normal,
                                               radius)[0]
@@ -581,13 +586,13 @@ class Flight:
     def gap(self, t: float, guess=None) -> tuple[float, Foot]:
         """The centre's distance to the surface minus r at time t, and the foot."""
         center = self.centers(np.array([t]))[0][0]
-        foot = self.surface.foot(center, guess)
+        foot = self.surface.foot(center, guess, GRID_SPACING * self.radius)
         return foot.distance - self.radius, foot
 
     def gaps(self, times: np.ndarray, guess=None, motion=None) -> tuple[np.ndarray, list[Foot]]:
         """``gap`` at each of the times, all at once (``motion``: their ``centers``, where the caller has them)."""
         motion = self.centers(np.asarray(times, dtype=float)) if motion is None else motion
-        feet = self.surface.feet_of(motion[0], guess)
+        feet = self.surface.feet_of(motion[0], guess, GRID_SPACING * self.radius)
         return np.array([foot.distance for foot in feet]) - self.radius, feet
 
     def path_time(self, t: float, length: float, velocity=None) -> float:
@@ -717,7 +722,7 @@ class Flight:
         center = self.centers(np.array([t]))[0][0]
         point = np.array([foot.x, foot.y, float(self.surface.evaluate(foot.x, foot.y)[0])])
         far = float(np.linalg.norm(center - point))
-        own = self.surface.foot(center)
+        own = self.surface.foot(center, spacing=GRID_SPACING * self.radius)
         if not (abs(far - r) <= 2.0 * GRAZE * r and own.distance >= far - 2.0 * GRAZE * r):
             raise OffLandscape(t, center, "false_landing", (foot.x, foot.y), far)
 

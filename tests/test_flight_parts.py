@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq, minimize, minimize_scalar
 
 from rollball.flight import FreeState, Flight, Surface, energy, impact, rest_speed
 from rollball.kernel.interface import ROW_SLICES
@@ -200,12 +200,14 @@ def test_a_look_of_the_landing_search_is_one_compiled_call(monkeypatch):
     assert calls == ["nearest_feet"] and h > 0
 
 
-def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give():
+@pytest.mark.parametrize("spacing", [0.0, 0.05])
+def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give(spacing):
     """Surface._first_feet (kernel.feet.nearest_feet) against the same search written here in numpy:
-    the 21 × 21 grid of half-width |c_z − f| about each centre and the hints sampled, Newton's
-    method (Surface.feet) from the point below, the guess, the three nearest samples and the
-    hints, a tip put in where nearer, the smallest |D| kept: the same numbers."""
-    from rollball.flight import BEST_SAMPLES, SAMPLES
+    the grid of half-width |c_z − f| about each centre (21 × 21; with a spacing, as few samples
+    per side as put them that far apart at most, at least 3 and at most 21) and the hints
+    sampled, Newton's method (Surface.feet) from the point below, the guess, the three nearest
+    samples and the hints, a tip put in where nearer, the smallest |D| kept: the same numbers."""
+    from rollball.flight import BEST_SAMPLES
 
     surface = Surface(landscape_for("0.3*sin(3*x)*cos(2*y) + 0.05*x*y"))
     surface.hints = [np.array([0.4, 0.3, 1e-4]), np.array([-0.2, 0.5, 1e-4])]
@@ -215,13 +217,16 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give():
     centers[0] = [0.7, -0.6, 0.25]   # nearest to the tip
     guess = np.array([0.1, 0.2])
     hints = np.array(surface.hints)
-    alpha, normal, distance, below, sampled, points = surface._first_feet(centers, guess, hints)
-    unit = np.linspace(-1.0, 1.0, SAMPLES)
+    alpha, normal, distance, below, sampled, spacings, points = surface._first_feet(centers, guess, hints, spacing)
+    sides = set()
     for i, c in enumerate(centers):
         f0 = surface.evaluate(c[0], c[1])[0]
         reach = abs(c[2] - f0)
-        gx = np.concatenate([np.repeat(c[0] + reach * unit, SAMPLES), hints[:, 0]])
-        gy = np.concatenate([np.tile(c[1] + reach * unit, SAMPLES), hints[:, 1]])
+        side = 21 if spacing == 0.0 else min(21, max(3, math.ceil(2.0 * reach / spacing) + 1))
+        sides.add(side)
+        unit = np.linspace(-1.0, 1.0, side)
+        gx = np.concatenate([np.repeat(c[0] + reach * unit, side), hints[:, 0]])
+        gy = np.concatenate([np.tile(c[1] + reach * unit, side), hints[:, 1]])
         far = (gx - c[0]) ** 2 + (gy - c[1]) ** 2 + (surface.evaluate(gx, gy)[0] - c[2]) ** 2
         order = np.argsort(far, kind="stable")[:BEST_SAMPLES]
         starts = np.vstack([c[:2], guess, np.column_stack([gx[order], gy[order]]), hints[:, :2]])
@@ -231,10 +236,45 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give():
         nearer = ~(np.abs(d) <= arm)
         a[nearer], n[nearer], d[nearer] = tip[:2], (c - tip) / arm, arm
         k = int(np.argmin(np.where(np.isnan(d), np.inf, np.abs(d))))
-        assert below[i] == f0 and sampled[i] == np.sqrt(far.min())
+        assert below[i] == f0 and sampled[i] == np.sqrt(far.min()) and spacings[i] == 2.0 * reach / (side - 1)
         assert np.array_equal(points[i], np.column_stack([gx[order], gy[order]]))
         assert np.array_equal(alpha[i], a[k]) and np.array_equal(normal[i], n[k]) and distance[i] == d[k]
     assert np.array_equal(alpha[0], surface.tips[0][:2])
+    assert sides == {21} if spacing == 0.0 else len(sides) > 3   # (the reaches 0.3-1.9: sides 13 to 21)
+
+
+@pytest.mark.parametrize("across", [0.11, 0.12])
+def test_a_bump_beside_the_path_is_hit_where_an_independent_distance_says(across):
+    """A ball flying straight (no gravity) 5 cm over a floor passes beside a bump 30 cm tall whose
+    peak is 11-12 cm off its path: nothing under the centre's path comes near (the track sees
+    nothing) and Newton's method from the point below finds the floor, so only the looks' grids
+    can find the bump's flank (looks 5 cm apart, 7 per side, flew past the first bump; 5 per side,
+    past the second). The first contact from an independent distance (the surface sampled densely
+    about the bump, the nearest sample refined by scipy's Nelder-Mead; the first sign change of
+    the gap on a grid in time, then brentq)."""
+    width = 0.03
+    f = flight(f"0.3*exp(-((x-1)^2 + (y-{across})^2)/{width}^2)", (0.0, 0.0, 0.15), (3.0, 0.0, 0.0), gravity=0.0)
+    t, foot = f.landing(1.0)
+
+    def height(x, y):
+        return 0.3 * np.exp(-((x - 1.0) ** 2 + (y - across) ** 2) / width ** 2)
+
+    xs, ys = np.meshgrid(np.linspace(0.8, 1.2, 401), np.linspace(-0.05, 0.3, 351), indexing="ij")
+
+    def gap(time):
+        c = np.array([3.0 * time, 0.0, 0.15])
+        d2 = (xs - c[0]) ** 2 + (ys - c[1]) ** 2 + (height(xs, ys) - c[2]) ** 2
+        i = np.unravel_index(np.argmin(d2), d2.shape)
+        best = minimize(lambda p: (p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + (height(p[0], p[1]) - c[2]) ** 2,
+                        [xs[i], ys[i]], method="Nelder-Mead",
+                        options={"xatol": 1e-13, "fatol": 1e-30, "maxiter": 4000})
+        return math.sqrt(min(best.fun, d2[i], c[2] ** 2)) - R
+
+    grid = np.linspace(0.25, 0.34, 46)
+    first = int(np.flatnonzero(np.array([gap(time) for time in grid]) < 0)[0])
+    expected = brentq(gap, grid[first - 1], grid[first], xtol=1e-15)
+    assert t == pytest.approx(expected, abs=1e-12)
+    assert 0.05 < foot.y < across   # on the bump's flank
 
 
 def test_the_looks_just_after_a_lift_off_are_taken_eight_at_a_time(monkeypatch):
@@ -255,7 +295,7 @@ def test_the_looks_just_after_a_lift_off_are_taken_eight_at_a_time(monkeypatch):
     h0, foot0 = f.gap(0.0)
     calls = []
     original = Surface.feet_of
-    monkeypatch.setattr(Surface, "feet_of", lambda self, c, guess=None: calls.append(len(c)) or original(self, c,
-                                                                                                          guess))
+    monkeypatch.setattr(Surface, "feet_of", lambda self, c, guess=None, spacing=0.0: calls.append(len(c))
+                        or original(self, c, guess, spacing))
     s, h, foot = f._clear_off(0.0, h0, foot0, 1.0)
     assert s == t and h == pytest.approx(1e-2 * t - 0.5 * G * t * t, rel=1e-6) and calls == [8, 8]

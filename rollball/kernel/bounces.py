@@ -80,9 +80,9 @@ def impact(hit):
 
 @EXACT
 def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_end, step, every, enough, dissipated,
-            hints, tips, unit, reach_default, iterations, out, landed, rows, refer, hit, times, guess, centers, feet,
-            normals, distances, below, sampled, nearest, start_centers, start_feet, start_normals, start_distances,
-            row_times, row_centers, row_velocities, row_feet, row_normals, row_distances, turn, d):
+            hints, tips, reach_default, iterations, out, landed, rows, refer, hit, times, guess, centers, feet,
+            normals, distances, below, sampled, spacings, nearest, start_centers, start_feet, start_normals,
+            start_distances, row_times, row_centers, row_velocities, row_feet, row_normals, row_distances, turn, d):
     """The mode machine's ``fly`` for a ball in vacuum from ``state`` (t0, c0 (3), c0' (3), omega (3))
     with the orientation R (3, 3), flight after flight, its rows at the recording times (the
     multiples k·every·step, ``ModeMachine.record_times``) written to ``rows`` from row 0 (``refer``:
@@ -112,9 +112,9 @@ def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_
         mass, radius, restitution, friction, rest)
     while True:
         t0 = state[0]
-        land(fn, state[:7], gravity, radius, t_end, hints, tips, unit, reach_default, iterations, lout, times, guess,
-             centers, feet, normals, distances, below, sampled, nearest, start_centers, start_feet, start_normals,
-             start_distances, d)
+        land(fn, state[:7], gravity, radius, t_end, hints, tips, reach_default, iterations, lout, times, guess,
+             centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet,
+             start_normals, start_distances, d)
         if lout[0] == LANDING_REFER:
             out[0] = BOUNCES_REFER
             break

@@ -5,16 +5,39 @@ from __future__ import annotations
 
 import math
 
-from .lowlevel import EXACT, data_pointer, landscape
+from .interface import SAMPLES, SAMPLES_LEAST
+from .lowlevel import EXACT, JIT, data_pointer, landscape
 from .physics import closest_points
 
 
+@JIT
+def grid_side(reach, spacing):
+    """The samples per side of a look's grid over a square of half-width ``reach``: as many as
+    put them at most ``spacing`` apart, at least SAMPLES_LEAST and at most SAMPLES (``spacing`` 0,
+    a reach not finite: SAMPLES)."""
+    if not spacing > 0.0:
+        return SAMPLES
+    wanted = 2.0 * reach / spacing
+    if not wanted < SAMPLES - 1:   # (NaN and inf too)
+        return SAMPLES
+    return max(SAMPLES_LEAST, int(math.ceil(wanted)) + 1)
+
+
+@JIT
+def grid_unit(a, side):
+    """The a-th of ``side`` points from -1 to 1 evenly spaced, as numpy's linspace gives it."""
+    if a == side - 1:
+        return 1.0
+    return a * (2.0 / (side - 1)) + -1.0
+
+
 @EXACT
-def nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, normals, distances, below, sampled,
-                 nearest, start_centers, start_feet, start_normals, start_distances, iterations, d):
-    """For each centre (n, 3): the surface below it (``below``), the square grid unit × unit of
-    half-width reach = |c_z − f(c_x, c_y)| (2 ``reach_default`` where that is not finite) about
-    it and the ``hints`` (m, 3: x, y, spacing) sampled, the distance to the nearest sample
+def nearest_feet(fn, centers, guess, hints, tips, spacing, reach_default, feet, normals, distances, below, sampled,
+                 spacings, nearest, start_centers, start_feet, start_normals, start_distances, iterations, d):
+    """For each centre (n, 3): the surface below it (``below``), a square grid of half-width
+    reach = |c_z − f(c_x, c_y)| (2 ``reach_default`` where that is not finite) about it, its samples
+    at most ``spacing`` apart (``grid_side``; the spacing they are at in ``spacings``), and the
+    ``hints`` (m, 3: x, y, spacing) sampled, the distance to the nearest sample
     (``sampled``) and the b nearest samples' (x, y) (``nearest``, (n, 2 b), b ≤ 3: nearest first,
     the earlier first among equals); then Newton's method (``closest_points``) from
     the k starts of each centre (start_* (n k, ·)): the point below it, ``guess`` (none or one
@@ -23,8 +46,7 @@ def nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, nor
     to c); of the k, the nearest (smallest |D|, the first among equals) is the centre's foot:
     ``feet``, ``normals``, ``distances`` (NaN where none converged). What flight.Surface.feet_of
     computes in numpy, number for number (EXACT), except which of equally near samples start."""
-    n, m, side, best_samples = centers.shape[0], hints.shape[0], unit.shape[0], nearest.shape[1] // 2
-    count = side * side + m
+    n, m, best_samples = centers.shape[0], hints.shape[0], nearest.shape[1] // 2
     guessed = 1 if guess.shape[0] == 2 else 0
     k = 1 + guessed + best_samples + m
     for i in range(n):
@@ -34,12 +56,15 @@ def nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, nor
         reach = abs(cz - d[0])
         if not math.isfinite(reach):
             reach = 2.0 * reach_default
+        side = grid_side(reach, spacing)
+        spacings[i] = 2.0 * reach / (side - 1)
+        count = side * side + m
         best = math.inf
         f0 = f1 = f2 = math.inf
         j0 = j1 = j2 = -1
         for j in range(count):
             if j < side * side:
-                x, y = cx + reach * unit[j // side], cy + reach * unit[j % side]
+                x, y = cx + reach * grid_unit(j // side, side), cy + reach * grid_unit(j % side, side)
             else:
                 x, y = hints[j - side * side, 0], hints[j - side * side, 1]
             landscape(fn, x, y, data_pointer(d))
@@ -69,7 +94,7 @@ def nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, nor
                 else:
                     j2 = j
             if j < side * side:
-                x, y = cx + reach * unit[j // side], cy + reach * unit[j % side]
+                x, y = cx + reach * grid_unit(j // side, side), cy + reach * grid_unit(j % side, side)
             else:
                 x, y = hints[j - side * side, 0], hints[j - side * side, 1]
             nearest[i, 2 * s], nearest[i, 2 * s + 1] = x, y

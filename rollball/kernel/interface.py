@@ -57,25 +57,26 @@ ENTRIES = {
     "closest_points": (("fn", ADDRESS), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX),
                        ("distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
     "nearest_feet": (("fn", ADDRESS), ("centers", MATRIX), ("guess", VECTOR), ("hints", MATRIX), ("tips", MATRIX),
-                     ("unit", VECTOR), ("reach_default", FLOAT), ("feet", MATRIX), ("normals", MATRIX),
-                     ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
-                     ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
+                     ("spacing", FLOAT), ("reach_default", FLOAT), ("feet", MATRIX), ("normals", MATRIX),
+                     ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("spacings", VECTOR),
+                     ("nearest", MATRIX), ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
                      ("start_distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
     "land": (("fn", ADDRESS), ("start", VECTOR), ("gravity", FLOAT), ("radius", FLOAT), ("t_end", FLOAT),
-             ("hints", MATRIX), ("tips", MATRIX), ("unit", VECTOR), ("reach_default", FLOAT), ("iterations", INT),
+             ("hints", MATRIX), ("tips", MATRIX), ("reach_default", FLOAT), ("iterations", INT),
              ("out", VECTOR), ("times", VECTOR), ("guess", VECTOR), ("centers", MATRIX), ("feet", MATRIX),
-             ("normals", MATRIX), ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX),
-             ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
+             ("normals", MATRIX), ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("spacings", VECTOR),
+             ("nearest", MATRIX), ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
              ("start_distances", VECTOR), ("d", VECTOR)),
     "impact": (("hit", VECTOR),),
     "bounces": (("fn", ADDRESS), ("state", VECTOR), ("R", MATRIX), ("gravity", FLOAT), ("radius", FLOAT),
                 ("mass", FLOAT), ("restitution", FLOAT), ("friction", FLOAT), ("rest", FLOAT), ("t_end", FLOAT),
                 ("step", FLOAT), ("every", INT), ("enough", INT), ("dissipated", FLOAT), ("hints", MATRIX),
-                ("tips", MATRIX), ("unit", VECTOR), ("reach_default", FLOAT), ("iterations", INT), ("out", VECTOR),
+                ("tips", MATRIX), ("reach_default", FLOAT), ("iterations", INT), ("out", VECTOR),
                 ("landed", MATRIX), ("rows", MATRIX), ("refer", INTS), ("hit", VECTOR), ("times", VECTOR),
                 ("guess", VECTOR), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX), ("distances", VECTOR),
-                ("below", VECTOR), ("sampled", VECTOR), ("nearest", MATRIX), ("start_centers", MATRIX),
-                ("start_feet", MATRIX), ("start_normals", MATRIX), ("start_distances", VECTOR),
+                ("below", VECTOR), ("sampled", VECTOR), ("spacings", VECTOR), ("nearest", MATRIX),
+                ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
+                ("start_distances", VECTOR),
                 ("row_times", VECTOR), ("row_centers", MATRIX), ("row_velocities", MATRIX), ("row_feet", MATRIX),
                 ("row_normals", MATRIX), ("row_distances", VECTOR), ("turn", MATRIX), ("d", VECTOR)),
     "flight_rows": (("fn", ADDRESS), ("count", INT), ("centers", MATRIX), ("velocities", MATRIX), ("times", VECTOR),
@@ -146,7 +147,9 @@ GRAZE = 1e-6             # × r: a gap below this is contact (a graze, or just a
 GRAZE_LOOKS = 8          # certified looks within it while the gap still falls, before it is contact
 CLEAR_MARGIN = 1e-13     # × r: the share of a gap a certified step keeps for round-off
 PATH_ITERATIONS = 8      # Newton's iterations for the time a path length takes
-SAMPLES = 21             # the grid a closest point is looked for on, per side...
+GRID_SPACING = 0.25      # × r: the samples of the grid a closest point is looked for on at most this far apart...
+SAMPLES = 21             # ...and at most this many per side (a wider square: a tenth of its half-width apart)...
+SAMPLES_LEAST = 3        # ...and at least this many...
 BEST_SAMPLES = 3         # ...and how many of its nearest points Newton's method starts from
 SAMPLE_SLACK = 1e-9      # a foot may be this share farther than the nearest surface sample (round-off)
 TRACK = 1e-3             # × r: the spacing of the surface samples under the centre's path (``Flight.track``)

@@ -18,7 +18,8 @@ import math
 
 from .feet import nearest_feet
 from .interface import (
-    BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GROW_BY, LANDING_BATCH,
+    BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GRID_SPACING, GROW_BY,
+    LANDING_BATCH,
     LANDING_FLYING, LANDING_LANDED, LANDING_REFER, MAX_LOOKS, OUT_LANDING, PATH_ITERATIONS, SAMPLE_SLACK, SHRINK,
     SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
 )
@@ -129,16 +130,17 @@ def retry(start, gravity, r, t, s, h, h_s, speed):
 
 
 @JIT
-def gap_at(fn, start, gravity, r, t, guess, hints, tips, unit, reach_default, iterations, work):
+def gap_at(fn, start, gravity, r, t, guess, hints, tips, spacing, reach_default, iterations, work):
     """One look at t (``Surface.feet_of``'s first search for the centre then): the gap, the foot in
     work's feet, normals and distances (their one row); NaN where the foot is not plausible
     (``Surface._plausible``), where flight.py's search would look further."""
-    centers, feet, normals, distances, below, sampled, nearest, s_centers, s_feet, s_normals, s_distances, d = work
+    (centers, feet, normals, distances, below, sampled, spacings, nearest, s_centers, s_feet, s_normals, s_distances,
+     d) = work
     cx, cy, cz, _, _, _ = motion(start, gravity, t)
     centers[0, 0], centers[0, 1], centers[0, 2] = cx, cy, cz
     k = 1 + guess.shape[0] // 2 + BEST_SAMPLES + hints.shape[0]
-    nearest_feet(fn, centers, guess, hints, tips, unit, reach_default, feet, normals, distances, below, sampled,
-                 nearest, s_centers[:k], s_feet[:k], s_normals[:k], s_distances[:k], iterations, d)
+    nearest_feet(fn, centers, guess, hints, tips, spacing, reach_default, feet, normals, distances, below, sampled,
+                 spacings, nearest, s_centers[:k], s_feet[:k], s_normals[:k], s_distances[:k], iterations, d)
     distance = distances[0]
     if not (math.isfinite(distance) and abs(distance) <= sampled[0] * (1.0 + SAMPLE_SLACK)):
         return math.nan
@@ -159,18 +161,18 @@ def foot_out(out, status, t, work):
 
 
 @EXACT   # (compiled once, called from three places: inlined, the search took three times as long to compile)
-def locate(fn, start, gravity, r, a, b, guess, hints, tips, unit, reach_default, iterations, work, out):
+def locate(fn, start, gravity, r, a, b, guess, hints, tips, spacing, reach_default, iterations, work, out):
     """``Flight._locate``: the root of the gap in [a, b] by Brent's method (scipy's brentq,
     step for step), then the look there; LANDING_REFER where a gap is not found or the bracket
     holds no sign change."""
-    fa = gap_at(fn, start, gravity, r, a, guess, hints, tips, unit, reach_default, iterations, work)
+    fa = gap_at(fn, start, gravity, r, a, guess, hints, tips, spacing, reach_default, iterations, work)
     if math.isnan(fa):
         return LANDING_REFER
     t = a
     if fa > 0.0:
         xtol, rtol = 4 * EPS * max(abs(b), 1.0), 4 * EPS
         xpre, xcur, fpre = a, b, fa
-        fcur = gap_at(fn, start, gravity, r, b, guess, hints, tips, unit, reach_default, iterations, work)
+        fcur = gap_at(fn, start, gravity, r, b, guess, hints, tips, spacing, reach_default, iterations, work)
         if math.isnan(fcur):
             return LANDING_REFER
         xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
@@ -210,19 +212,19 @@ def locate(fn, start, gravity, r, a, b, guess, hints, tips, unit, reach_default,
                     xcur += scur
                 else:
                     xcur += delta if sbis > 0 else -delta
-                fcur = gap_at(fn, start, gravity, r, xcur, guess, hints, tips, unit, reach_default, iterations,
+                fcur = gap_at(fn, start, gravity, r, xcur, guess, hints, tips, spacing, reach_default, iterations,
                               work)
                 if math.isnan(fcur):
                     return LANDING_REFER
         if math.isnan(t):
             return LANDING_REFER
-    if math.isnan(gap_at(fn, start, gravity, r, t, guess, hints, tips, unit, reach_default, iterations, work)):
+    if math.isnan(gap_at(fn, start, gravity, r, t, guess, hints, tips, spacing, reach_default, iterations, work)):
         return LANDING_REFER
     return foot_out(out, LANDING_LANDED, t, work)
 
 
 @JIT
-def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, iterations, times, guess, work, out):
+def search(fn, start, gravity, r, t_end, hints, tips, spacing, reach_default, iterations, times, guess, work, out):
     """``Flight._search`` (with ``_clear_off`` and ``_touch``): LANDING_LANDED (out: t, the foot),
     LANDING_FLYING (still flying at t_end) or LANDING_REFER. flight.py looks at a batch of times
     at once (one vectorised call) and uses them in turn up to the first that ends the batch; here
@@ -232,7 +234,7 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
     none, one = guess[:0], guess[:2]
     tol, floor = GAP_TOLERANCE * r, GRAZE * r
     t = start[0]
-    h = gap_at(fn, start, gravity, r, t, none, hints, tips, unit, reach_default, iterations, work)
+    h = gap_at(fn, start, gravity, r, t, none, hints, tips, spacing, reach_default, iterations, work)
     if math.isnan(h):
         return LANDING_REFER
     fx, fy, dd = feet[0, 0], feet[0, 1], distances[0]
@@ -252,12 +254,12 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
             guess[0], guess[1] = fx, fy
             for i in range(n):
                 s = times[i]
-                h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, work)
+                h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, spacing, reach_default, iterations, work)
                 if math.isnan(h_s):
                     return LANDING_REFER
                 if h_s < -tol:
                     guess[0], guess[1] = fx, fy
-                    return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations,
+                    return locate(fn, start, gravity, r, t, s, one, hints, tips, spacing, reach_default, iterations,
                                   work, out)
                 if h_s > floor or s - start[0] > CLEAR_WITHIN:
                     if h_s <= floor:   # it never left the surface
@@ -289,12 +291,12 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
                     times[k] = min(t + (1.1, 2.0, 4.0, 8.0)[k] * h / -rate, t_end)
                 for k in range(4):
                     b = times[k]
-                    h_b = gap_at(fn, start, gravity, r, b, one, hints, tips, unit, reach_default, iterations,
+                    h_b = gap_at(fn, start, gravity, r, b, one, hints, tips, spacing, reach_default, iterations,
                                  work)
                     if math.isnan(h_b):
                         return LANDING_REFER
                     if h_b < -tol:
-                        return locate(fn, start, gravity, r, t, b, one, hints, tips, unit, reach_default, iterations,
+                        return locate(fn, start, gravity, r, t, b, one, hints, tips, spacing, reach_default, iterations,
                                       work, out)
                     if b >= t_end:
                         return LANDING_FLYING if h_b > tol else foot_out(out, LANDING_LANDED, b, work)
@@ -305,7 +307,7 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
         if t + sure >= t_end:
             return LANDING_FLYING
         if math.isnan(chosen):
-            chosen = proposal(fn, work[11], r, gravity, h, fx, fy, speed, rate)
+            chosen = proposal(fn, work[12], r, gravity, h, fx, fy, speed, rate)
         step = min(chosen, GROW_BY * last)
         step = min(step, r / speed if speed > 0 else step, cap)
         step = max(step, sure)
@@ -323,13 +325,13 @@ def search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, itera
             count = n + 1
         for i in range(count):
             s = times[i]
-            h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, unit, reach_default, iterations, work)
+            h_s = gap_at(fn, start, gravity, r, s, one, hints, tips, spacing, reach_default, iterations, work)
             if math.isnan(h_s):
                 return LANDING_REFER
             certified = h_s > -tol and h_s > 0.0 and clear(start, gravity, r, t, s, h, h_s)
             if not certified:
                 if h_s < -tol and s <= t + sure:
-                    return locate(fn, start, gravity, r, t, s, one, hints, tips, unit, reach_default, iterations,
+                    return locate(fn, start, gravity, r, t, s, one, hints, tips, spacing, reach_default, iterations,
                                   work, out)
                 certified = h_s > -tol and s <= t + sure
             if not certified:
@@ -364,8 +366,8 @@ def track_clear(fn, start, gravity, r, t, s, d):
 
 
 @EXACT
-def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, iterations, out, times, guess,
-         centers, feet, normals, distances, below, sampled, nearest, start_centers, start_feet, start_normals,
+def land(fn, start, gravity, radius, t_end, hints, tips, reach_default, iterations, out, times, guess,
+         centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet, start_normals,
          start_distances, d):
     """``Flight.landing`` for a ball in vacuum from ``start`` (t₀, c₀ (3), ċ₀ (3)) until t_end, on
     the surface ``fn`` with flight.py's ``Surface`` hints and tips: out[0] LANDING_LANDED (out[1]
@@ -373,11 +375,12 @@ def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, it
     at t_end) or LANDING_REFER (flight.py searches this flight itself: see the module). times:
     LANDING_BATCH; the rest: work arrays for a look (``feet.nearest_feet``'s, with room for its starts)."""
     r = radius
-    work = (centers, feet, normals, distances, below, sampled, nearest, start_centers, start_feet, start_normals,
-            start_distances, d)
+    spacing = GRID_SPACING * r   # (the looks' grids)
+    work = (centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet,
+            start_normals, start_distances, d)
     for k in range(OUT_LANDING):
         out[k] = math.nan
-    status = search(fn, start, gravity, r, t_end, hints, tips, unit, reach_default, iterations, times, guess, work,
+    status = search(fn, start, gravity, r, t_end, hints, tips, spacing, reach_default, iterations, times, guess, work,
                     out)
     if status == LANDING_REFER:
         out[0] = status
@@ -394,7 +397,7 @@ def land(fn, start, gravity, radius, t_end, hints, tips, unit, reach_default, it
     cx, cy, cz, _, _, _ = motion(start, gravity, t)
     landscape(fn, x, y, data_pointer(d))
     far = math.sqrt((cx - x) * (cx - x) + (cy - y) * (cy - y) + (cz - d[0]) * (cz - d[0]))
-    if math.isnan(gap_at(fn, start, gravity, r, t, guess[:0], hints, tips, unit, reach_default, iterations, work)):
+    if math.isnan(gap_at(fn, start, gravity, r, t, guess[:0], hints, tips, spacing, reach_default, iterations, work)):
         out[0] = LANDING_REFER
         return
     if not (abs(far - r) <= 2.0 * GRAZE * r and distances[0] >= far - 2.0 * GRAZE * r):
