@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel, machine_code
-from .geometry import fit_ratio, rotation
+from .geometry import cross, fit_ratio, rotation
 from .kernel.interface import (
     BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, FOOT_ITERATIONS, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS,
     GRID_SPACING, GROW_BY,
@@ -942,14 +942,6 @@ def energy(velocity, omega, height, mass, radius, gravity):
     v2 = np.sum(np.asarray(velocity) ** 2, axis=-1)
     w2 = np.sum(np.asarray(omega) ** 2, axis=-1)
     return 0.5 * mass * v2 + 0.2 * mass * radius * radius * w2 + mass * gravity * np.asarray(height)
-
-
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a × b over the last axis (of 3), the products and differences ``np.cross`` takes, in the
-    same order (the same numbers), without its setup, which costs more than a flight's few vectors."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def tangential_slip(velocity, omega, normal, radius):

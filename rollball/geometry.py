@@ -12,6 +12,20 @@ import math
 import numpy as np
 
 
+def cross(a, b) -> np.ndarray:
+    """a × b over the last axis (of 3), the products and differences ``np.cross`` takes, in the
+    same order (the same numbers), without its setup, which costs more than a flight's few
+    vectors; two 3-vectors in Python's floats (a twentieth of np.cross's time)."""
+    a, b = np.asarray(a), np.asarray(b)
+    if a.shape == b.shape == (3,):
+        a0, a1, a2 = float(a[0]), float(a[1]), float(a[2])
+        b0, b1, b2 = float(b[0]), float(b[1]), float(b[2])
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def unit_normal(d: np.ndarray) -> np.ndarray:
     """N = (-f_x, -f_y, 1) / sqrt(1 + f_x² + f_y²), shape (3,) + grid shape."""
     fx, fy = d[1], d[2]

@@ -45,6 +45,7 @@ STIFF_METHOD = "dop853"
 STIFF_TOLERANCE = 1e-13   # (a rest after a turning point slower than 10⁻⁴ m/s moves 10³ times its error)
 STIFF_WINDOW = 16
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
+RING_COS, RING_SIN = np.cos(np.arange(8) * (np.pi / 4)), np.sin(np.arange(8) * (np.pi / 4))   # (``_at_tip``)
 SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
 # What ``ModeMachine._bounces`` leaves ``_fly`` to do: nothing (DONE), or search the current
 # flight's landing with flight.py's own search (SEARCH)
@@ -318,7 +319,8 @@ class ModeMachine:
 
     def _carried(self, rows: np.ndarray) -> np.ndarray:
         """A flight's rows with the energy the causes took before it added to what they take in it."""
-        rows[:, CAUSES] += self.causes
+        if any(self.causes):   # (nothing to add to the rows of a run that has lost nothing to them)
+            rows[:, CAUSES] += self.causes
         return rows
 
     def _enough(self) -> bool:
@@ -513,11 +515,9 @@ class ModeMachine:
         surface's by about its curvature times 10⁻⁶)."""
         run = self.run
         ring = 1e-6 * (1.0 + abs(x) + abs(y))
-        angles = np.arange(8) * (np.pi / 4)
-        d = run.landscape.evaluate(x + ring * np.cos(angles), y + ring * np.sin(angles), run.scene.parameter_values)
-        normals = unit_normal(d).T
-        spread = np.linalg.norm(normals[:, None, :] - normals[None, :, :], axis=2)
-        return bool(np.nanmax(spread) > 1e-2) if np.isfinite(spread).any() else False
+        d = run.landscape.evaluate(x + ring * RING_COS, y + ring * RING_SIN, run.scene.parameter_values)
+        normals = unit_normal(d).T.tolist()   # (a pair with a normal not finite: a NaN apart, not counted)
+        return any(math.dist(a, b) > 1e-2 for i, a in enumerate(normals) for b in normals[i + 1:])
 
     def _pivot_force(self, start: FreeState, x: float, y: float) -> float:
         """F·N (N) the ball at ``start`` would need to turn about the tip at (x, y): its centre on

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel
-from .geometry import unit_normal
+from .geometry import cross, unit_normal
 
 
 @dataclass(frozen=True)
@@ -45,11 +45,11 @@ class BallState:
 
     def slip_velocity(self, normal: np.ndarray, radius: float) -> np.ndarray:
         """The velocity of the ball's material point at the contact, c' + omega x (-r N)."""
-        return np.asarray(self.velocity) - radius * np.cross(self.omega, normal)
+        return np.asarray(self.velocity) - radius * cross(self.omega, normal)
 
     def momentum(self, normal: np.ndarray, radius: float, mass: float) -> np.ndarray:
         """The angular momentum about the contact point, (2/5) m r² omega + m r N x c'."""
-        return 0.4 * mass * radius * radius * np.asarray(self.omega) + mass * radius * np.cross(normal, self.velocity)
+        return 0.4 * mass * radius * radius * np.asarray(self.omega) + mass * radius * cross(normal, self.velocity)
 
 
 def rolling_omega(v: np.ndarray, normal: np.ndarray, radius: float, mass: float) -> np.ndarray:
@@ -72,7 +72,7 @@ def stopped_state(z: np.ndarray, R: np.ndarray, p: np.ndarray, normal: np.ndarra
         dissipated = float(z[kernel.S_DISSIPATED])
     else:
         o = rolling_omega(z[2:5], normal, r, m)
-        velocity = r * np.cross(o, normal)
+        velocity = r * cross(o, normal)
         dissipated = float(p[kernel.P_DISSIPATED])
     if n in (kernel.CLASSIC_SIZE, kernel.SLIDING_CLASSIC_SIZE):   # (the classic scheme holds R in z)
         R = z[n - 9:n].reshape(3, 3)

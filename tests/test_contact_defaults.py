@@ -61,5 +61,17 @@ def test_explicit_defaults_are_the_defaults():
     assert plain[kernel.P_MU] == np.inf and plain[kernel.P_FLY] == 0.0
 
 
+@pytest.mark.parametrize("gravity", [9.81, -3.7, 0.0])
+def test_one_runs_parameters_are_a_sweeps_column(gravity):
+    """A run's parameters (floats: the quick path) are the numbers a sweep's column of them gives
+    (arrays), bit for bit, with every option set (and without gravity: the time unit inf)."""
+    options = dict(friction=0.3, fly=True, dissipated=0.25, stiff=True, rolling_resistance=0.01, spin_friction=0.02,
+                   air=1e-3, causes=(0.1, 0.05, 0.1))
+    for args, kw in (((0.1, 1.3, gravity, 1e-8), options), ((0.1, 1.3, gravity), {})):
+        one = kernel.parameters(*args, **kw)
+        column = kernel.parameters(*(np.array([a, a]) for a in args), **kw)
+        assert one.dtype == column.dtype and np.array_equal(one, column[:, 0])
+
+
 if __name__ == "__main__" and sys.argv[1:] == ["--record"]:
     DATA.write_text(json.dumps({_key(case): _run(*case)[1] for case in CASES}, indent=1) + "\n")

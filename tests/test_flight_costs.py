@@ -5,7 +5,8 @@ closed form's, the cross products equal to numpy's."""
 import numpy as np
 import pytest
 
-from rollball.flight import FreeState, Flight, Surface, cross
+from rollball.flight import FreeState, Flight, Surface
+from rollball.geometry import cross
 from rollball.landscape import landscape_for
 
 G, R, M = 9.81, 0.1, 1.3

@@ -242,13 +242,22 @@ def parameters(radius: float, mass: float, gravity: float, turn: float = 0.0, fr
     ``resisted``) feels them; any other leaves them unread. Last the ball's time unit sqrt(r / |g0|)
     (inf without gravity), which the stiffness bounds and the couples' zero are measured in."""
     r, m, g0 = radius, mass, gravity
-    zero = 0.0 * r   # (+ 0 r: a column like the others where r is an array, sweeps)
     mu = np.inf if friction is None else friction
+    # (one run's are floats: checked and packed without numpy's per-call cost, the same numbers)
+    floats = all(isinstance(value, float | int) for value in (r, m, g0, turn, mu, dissipated, rolling_resistance,
+                                                                spin_friction, air))
     for name, value in (("rolling_resistance", rolling_resistance), ("spin_friction", spin_friction), ("air", air)):
-        if not np.all(np.asarray(value) >= 0.0):
+        if not (value >= 0.0 if floats else np.all(np.asarray(value) >= 0.0)):
             raise ValueError(f"{name} must be a number >= 0, not {value!r}")
     if len(causes) != QUADRATURES:
         raise ValueError(f"causes holds the energy to rolling resistance, spin friction and air (3), not {causes!r}")
+    if floats:
+        r, m, g0 = float(r), float(m), float(g0)
+        unit = math.sqrt(r / abs(g0)) if g0 != 0.0 else math.inf
+        return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn, mu, 1.0 if fly else 0.0,
+                         dissipated, 1.0 if stiff else 0.0, rolling_resistance, spin_friction, air,
+                         *(float(c) for c in causes), unit], dtype=float)
+    zero = 0.0 * r   # (+ 0 r: a column like the others where r is an array, sweeps)
     with np.errstate(divide="ignore"):
         unit = np.sqrt(np.divide(r, np.abs(g0)))
     return np.array([r, m, g0, 5.0 / (7.0 * m * r * r), m * r, m * r * r, m * g0, turn + zero, mu + zero,
