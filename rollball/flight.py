@@ -546,6 +546,7 @@ class Flight:
         self.surface, self.start = surface, start
         self.radius, self.mass, self.gravity = radius, mass, gravity
         self.g = np.array([0.0, 0.0, -gravity])
+        self.spacing = GRID_SPACING * radius   # (its looks' grids: ``Surface.foot``)
 
     def state(self, t: float) -> FreeState:
         s = self.start
@@ -586,13 +587,13 @@ class Flight:
     def gap(self, t: float, guess=None) -> tuple[float, Foot]:
         """The centre's distance to the surface minus r at time t, and the foot."""
         center = self.centers(np.array([t]))[0][0]
-        foot = self.surface.foot(center, guess, GRID_SPACING * self.radius)
+        foot = self.surface.foot(center, guess, self.spacing)
         return foot.distance - self.radius, foot
 
     def gaps(self, times: np.ndarray, guess=None, motion=None) -> tuple[np.ndarray, list[Foot]]:
         """``gap`` at each of the times, all at once (``motion``: their ``centers``, where the caller has them)."""
         motion = self.centers(np.asarray(times, dtype=float)) if motion is None else motion
-        feet = self.surface.feet_of(motion[0], guess, GRID_SPACING * self.radius)
+        feet = self.surface.feet_of(motion[0], guess, self.spacing)
         return np.array([foot.distance for foot in feet]) - self.radius, feet
 
     def path_time(self, t: float, length: float, velocity=None) -> float:
@@ -722,7 +723,7 @@ class Flight:
         center = self.centers(np.array([t]))[0][0]
         point = np.array([foot.x, foot.y, float(self.surface.evaluate(foot.x, foot.y)[0])])
         far = float(np.linalg.norm(center - point))
-        own = self.surface.foot(center, spacing=GRID_SPACING * self.radius)
+        own = self.surface.foot(center, spacing=self.spacing)
         if not (abs(far - r) <= 2.0 * GRAZE * r and own.distance >= far - 2.0 * GRAZE * r):
             raise OffLandscape(t, center, "false_landing", (foot.x, foot.y), far)
 
