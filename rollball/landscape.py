@@ -187,7 +187,7 @@ class Landscape:
             check_constants(e)
         self.source = self._generate_source()
         self._compiled: LandscapeCode | None = None
-        self._packed: dict[tuple, tuple] = {}   # (thread, values, key) -> a packed call, its record (``packed``)
+        self._packed = threading.local()   # .calls: (values, key) -> a packed call, its record (``packed``)
         _bound_sympy_cache()
 
     def __repr__(self) -> str:
@@ -248,16 +248,20 @@ class Landscape:
         fn the address of the landscape's record, made here and kept with it) and kept for this
         thread under ``key`` (the entry point and the sizes of its arrays), so that the runs of
         a sweep, or the flights of one, do not pack it anew: the caller writes its inputs into
-        the call's arrays, runs it and copies its outputs before the thread calls again. At most
-        PACKED_CALLS calls are kept (then all are dropped)."""
+        the call's arrays, runs it and copies its outputs before the thread calls again. Each
+        thread keeps its own calls (at most PACKED_CALLS, then all are dropped): the record a
+        call reads lives until its own thread drops it, never while another thread runs it."""
         values = np.asarray(values, dtype=float).ravel()
-        full = (threading.get_ident(), tuple(values.tolist()), key)
-        entry = self._packed.get(full)
+        calls = getattr(self._packed, "calls", None)
+        if calls is None:
+            calls = self._packed.calls = {}
+        full = (tuple(values.tolist()), key)
+        entry = calls.get(full)
         if entry is None:
-            if len(self._packed) >= PACKED_CALLS:
-                self._packed.clear()
+            if len(calls) >= PACKED_CALLS:
+                calls.clear()
             record = self.record(values)
-            entry = self._packed[full] = (make(record.ctypes.data), record)   # (the record kept while its address is)
+            entry = calls[full] = (make(record.ctypes.data), record)   # (the record kept while its address is)
         return entry[0]
 
     def evaluate(self, x, y, values=()) -> np.ndarray:
