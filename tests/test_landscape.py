@@ -107,8 +107,6 @@ def test_small_evaluations_reuse_their_packed_call_and_give_what_a_fresh_call_gi
 def test_threads_evaluating_one_landscape_at_once_each_get_their_own_answers():
     """Each thread has its own packed calls (``Landscape.packed``): threads evaluating the same
     landscape at the same time get the numbers a lone evaluation gives."""
-    import threading
-
     surface = Landscape("exp(-x^2)*sin(3*y) + 0.1*x")
     points = [(np.full(4, 0.1 * k), np.linspace(-1, 1, 4) + k) for k in range(8)]
     expected = [surface.evaluate(px, py) for px, py in points]
@@ -121,13 +119,20 @@ def test_threads_evaluating_one_landscape_at_once_each_get_their_own_answers():
                 wrong.append(k)
                 return
 
-    threads = [threading.Thread(target=work, args=(k,)) for k in range(8)]
+    assert all_finished(work, 8) and not wrong
+
+
+def all_finished(work, count: int, timeout: float = 120.0) -> bool:
+    """Whether ``work(k)`` for k < count, each in a thread of its own, all at once, finished
+    within ``timeout`` seconds each."""
+    import threading
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(count)]
     for thread in threads:
         thread.start()
     for thread in threads:
-        thread.join(timeout=60)
-    assert not wrong and not any(thread.is_alive() for thread in threads)
-
+        thread.join(timeout=timeout)
+    return not any(thread.is_alive() for thread in threads)
 
 
 def test_threads_evaluating_one_landscape_with_many_parameter_values_each_keep_their_own_records():
@@ -137,8 +142,6 @@ def test_threads_evaluating_one_landscape_with_many_parameter_values_each_keep_t
     calls were kept together, one thread's drop freed the records of calls other threads were
     running: 4 threads of 500 evaluations crashed the process in each of ten runs.) Each answer
     is checked against the formula."""
-    import threading
-
     surface, wrong = Landscape("a*x^2 + b*y", ("a", "b")), []
 
     def work(seed):
@@ -148,9 +151,4 @@ def test_threads_evaluating_one_landscape_with_many_parameter_values_each_keep_t
             if abs(f - (a * x * x + b * y)) > 1e-12 or abs(fx - 2 * a * x) > 1e-12 or fy != b:
                 wrong.append((a, b, x, y))
 
-    threads = [threading.Thread(target=work, args=(seed,)) for seed in range(4)]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
-        thread.join(timeout=120)
-    assert not wrong and not any(thread.is_alive() for thread in threads)
+    assert all_finished(work, 4) and not wrong
