@@ -240,6 +240,7 @@ class Simulation:
         if self.segmented:
             arrays["rows"] = self.machine.shared_rows(False, self._room(n_rows))
             self.machine.new_kernel_run(False)
+        self._kernel: machine_code.Arguments | None = None   # the kernel call of the current kernel run
         self._arm(arrays, 0.0)
         self.status: Status | None = None
         s = scene.start
@@ -283,7 +284,12 @@ class Simulation:
             self._run_before, self._run_steps = before, max(1, n_steps - before)
         self._z, self._R, self._K, self._rows = arrays["z"], arrays["R"], arrays["K"], arrays["rows"]
         self._ints, self._info, self._probe = arrays["ints"], arrays["info"], arrays["probe"]
-        if self.adaptive:
+        if self._kernel is not None:   # (a later kernel run of this run: its own arrays, state and start)
+            for key, value in arrays.items():
+                self._kernel.set(key, value)
+            self._kernel.set("p", self._p)
+            self._kernel.set("t_start", t_start)
+        elif self.adaptive:
             self._kernel = machine_code.Arguments(
                 "advance_adaptive", fn=self._fn, W=self._W, E=self._E, P=self._P, p=self._p, err_kind=self._error_kind,
                 err_exp=self.tableau.error_exponent, t_start=t_start, t_end=t_end, record_dt=self.record_dt or 0.0,
