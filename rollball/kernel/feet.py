@@ -31,6 +31,37 @@ def grid_unit(a, side):
     return a * (2.0 / (side - 1)) + -1.0
 
 
+@JIT
+def nearer(fn, d, x, y, cx, cy, cz, j, f0, f1, f2, j0, j1, j2):
+    """The three nearest samples so far (squared distances f, indices j; inf and -1 for none) with
+    the sample j at (x, y) taken in: evaluated only where it could be among them. Among equally
+    near samples the smaller index first; a sample whose distance is not finite is never taken."""
+    dx, dy = x - cx, y - cy
+    if dx * dx + dy * dy > f2:
+        return f0, f1, f2, j0, j1, j2
+    landscape(fn, x, y, data_pointer(d))
+    dz = d[0] - cz
+    far = dx * dx + dy * dy + dz * dz
+    if not far < math.inf:   # (NaN too)
+        return f0, f1, f2, j0, j1, j2
+    if far < f0 or far == f0 and j < j0:
+        return far, f0, f1, j, j0, j1
+    if far < f1 or far == f1 and j < j1:
+        return f0, far, f1, j0, j, j1
+    if far < f2 or far == f2 and j < j2:
+        return f0, f1, far, j0, j1, j
+    return f0, f1, f2, j0, j1, j2
+
+
+@JIT
+def ring_beyond(reach, side, lo, hi, f2):
+    """Whether every sample of the ring of grid points lo..hi (and so every ring outside it) is
+    horizontally farther from the grid's middle than sqrt(f2): its nearest side's offset, taken
+    a millionth short for round-off, squared beyond f2."""
+    near = reach * min(abs(grid_unit(lo, side)), abs(grid_unit(hi, side))) * (1.0 - 1e-6)
+    return near * near > f2
+
+
 @EXACT
 def nearest_feet(fn, centers, guess, hints, tips, spacing, reach_default, feet, normals, distances, below, sampled,
                  spacings, nearest, start_centers, start_feet, start_normals, start_distances, iterations, d):
@@ -58,27 +89,30 @@ def nearest_feet(fn, centers, guess, hints, tips, spacing, reach_default, feet, 
             reach = 2.0 * reach_default
         side = grid_side(reach, spacing)
         spacings[i] = 2.0 * reach / (side - 1)
-        count = side * side + m
-        best = math.inf
+        # the grid's samples ring by ring (of grid points) from its middle outwards, each evaluated
+        # only where it could be among the b nearest (``nearer``): a sample horizontally farther
+        # than the b-th nearest so far (dx² + dy² > f2) is farther in space too (a sum of squares
+        # rounds monotonically, so round-off cannot make it nearer), and a ring wholly beyond that
+        # (``ring_beyond``) ends the grid. The same b samples as every sample taken in order of
+        # their index j (equally near ones kept in that order), for about 1 - π/4 fewer evaluations
+        # where the surface below is level, more where it slopes.
         f0 = f1 = f2 = math.inf
         j0 = j1 = j2 = -1
-        for j in range(count):
-            if j < side * side:
-                x, y = cx + reach * grid_unit(j // side, side), cy + reach * grid_unit(j % side, side)
-            else:
-                x, y = hints[j - side * side, 0], hints[j - side * side, 1]
-            landscape(fn, x, y, data_pointer(d))
-            dx, dy, dz = x - cx, y - cy, d[0] - cz
-            far = dx * dx + dy * dy + dz * dz
-            if math.isnan(far):
-                far = math.inf
-            best = min(best, far)
-            if far < f0:
-                f0, f1, f2, j0, j1, j2 = far, f0, f1, j, j0, j1
-            elif far < f1:
-                f1, f2, j1, j2 = far, f1, j, j1
-            elif far < f2:
-                f2, j2 = far, j
+        lo0, hi0 = (side - 1) // 2, side // 2
+        for ring in range(lo0 + 1):
+            if ring_beyond(reach, side, lo0 - ring, hi0 + ring, f2):
+                break
+            for a in range(lo0 - ring, hi0 + ring + 1):
+                edge = a == lo0 - ring or a == hi0 + ring
+                b = lo0 - ring
+                while b <= hi0 + ring:
+                    x, y = cx + reach * grid_unit(a, side), cy + reach * grid_unit(b, side)
+                    f0, f1, f2, j0, j1, j2 = nearer(fn, d, x, y, cx, cy, cz, a * side + b, f0, f1, f2, j0, j1, j2)
+                    b += 1 if edge or b == hi0 + ring else hi0 + ring - b
+        for q in range(m):
+            f0, f1, f2, j0, j1, j2 = nearer(fn, d, hints[q, 0], hints[q, 1], cx, cy, cz, side * side + q,
+                                            f0, f1, f2, j0, j1, j2)
+        best = f0
         sampled[i] = math.sqrt(best)
         # (fewer finite samples than b: the first others, as a sort would give them)
         for s in range(best_samples):
