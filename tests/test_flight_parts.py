@@ -201,24 +201,32 @@ def test_a_look_of_the_landing_search_is_one_compiled_call(monkeypatch):
 
 
 @pytest.mark.parametrize("spacing", [0.0, 0.05])
-def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give(spacing):
+@pytest.mark.parametrize("symmetric", [False, True])
+def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give(spacing, symmetric):
     """Surface._first_feet (kernel.feet.nearest_feet) against the same search written here in numpy:
     the grid of half-width |c_z − f| about each centre (21 × 21; with a spacing, as few samples
     per side as put them that far apart at most, at least 3 and at most 21) and the hints
     sampled, Newton's method (Surface.feet) from the point below, the guess, the three nearest
-    samples and the hints, a tip put in where nearer, the smallest |D| kept: the same numbers."""
+    samples and the hints, a tip put in where nearer, the smallest |D| kept: the same numbers.
+    The kernel samples its grid from the middle outwards and skips samples that cannot be among
+    the three nearest; on a surface symmetric in x and y, centres on the diagonal have samples
+    exactly as near as their mirror images, and the three nearest are still those of a stable sort."""
     from rollball.flight import BEST_SAMPLES
 
-    surface = Surface(landscape_for("0.3*sin(3*x)*cos(2*y) + 0.05*x*y"))
+    formula = "0.3*cos(3*x)*cos(3*y) + 0.05*x*y" if symmetric else "0.3*sin(3*x)*cos(2*y) + 0.05*x*y"
+    surface = Surface(landscape_for(formula))
     surface.hints = [np.array([0.4, 0.3, 1e-4]), np.array([-0.2, 0.5, 1e-4])]
     surface.tips = [np.array([0.7, -0.6, 0.2])]
     rng = np.random.default_rng(7)
     centers = np.column_stack([rng.uniform(-1, 1, 12), rng.uniform(-1, 1, 12), rng.uniform(0.3, 0.9, 12)])
     centers[0] = [0.7, -0.6, 0.25]   # nearest to the tip
+    if symmetric:   # (the grid's x and y offsets the same numbers: mirror samples tie exactly)
+        centers[1:6, 1] = centers[1:6, 0] = [0.0, 0.0, 0.35, -0.5, 0.8]
+        centers[1:6, 2] = [0.95, 1.3, 0.9, 0.6, 1.5]
     guess = np.array([0.1, 0.2])
     hints = np.array(surface.hints)
     alpha, normal, distance, below, sampled, spacings, points = surface._first_feet(centers, guess, hints, spacing)
-    sides = set()
+    sides, ties = set(), 0   # (centres whose three nearest samples tie among themselves or with the next)
     for i, c in enumerate(centers):
         f0 = surface.evaluate(c[0], c[1])[0]
         reach = abs(c[2] - f0)
@@ -229,6 +237,7 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give(sp
         gy = np.concatenate([np.tile(c[1] + reach * unit, side), hints[:, 1]])
         far = (gx - c[0]) ** 2 + (gy - c[1]) ** 2 + (surface.evaluate(gx, gy)[0] - c[2]) ** 2
         order = np.argsort(far, kind="stable")[:BEST_SAMPLES]
+        ties += int(np.sum(far <= far[order[-1]]) > BEST_SAMPLES or len(set(far[order])) < BEST_SAMPLES)
         starts = np.vstack([c[:2], guess, np.column_stack([gx[order], gy[order]]), hints[:, :2]])
         a, n, d = surface.feet(np.repeat(c[None], len(starts), 0), starts)
         tip = surface.tips[0]
@@ -241,6 +250,7 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give(sp
         assert np.array_equal(alpha[i], a[k]) and np.array_equal(normal[i], n[k]) and distance[i] == d[k]
     assert np.array_equal(alpha[0], surface.tips[0][:2])
     assert sides == {21} if spacing == 0.0 else len(sides) > 3   # (the reaches 0.3-1.9: sides 13 to 21)
+    assert ties >= (5 if symmetric else 0)
 
 
 @pytest.mark.parametrize("across", [0.11, 0.12])
