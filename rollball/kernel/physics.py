@@ -131,9 +131,8 @@ def turning_point(t1, t2, t3, r1, r2, r3, cap, unit, h):
     sideways (the path curving ever faster as the speed falls). A line through 0 itself (closer
     than ``couple_sides`` tells from 0) is a stop or a reversal along a line, which the rest's event
     places."""
-    ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
     rate2 = r1 * r1 + r2 * r2 + r3 * r3
-    if not (ts > 0.0 and rate2 > 0.0 and unit < math.inf):
+    if not (t1 * t1 + t2 * t2 + t3 * t3 > 0.0 and rate2 > 0.0 and unit < math.inf):
         return False
     tau = min(h, max(0.0, -(t1 * r1 + t2 * r2 + t3 * r3) / rate2))
     m1, m2, m3 = t1 + r1 * tau, t2 + r2 * tau, t3 + r3 * tau
@@ -146,16 +145,18 @@ def turning_point(t1, t2, t3, r1, r2, r3, cap, unit, h):
 
 
 @JIT
-def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3):
+def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3, ts):
     """The rolling resistance's couple for omega's tangential part t, at most ``cap`` = c_rr r F_n
     (docs/design.md §1, "Dissipation"): -cap t/|t|, kept on the side of r (omega_t at the step's
     start, ``couple_sides``: past its zero inside the step the couple goes on smoothly, and the zero
     is located on the step's dense output); where r is zero (the ball does not roll at the step's
     start), the static couple -q that holds omega_t at 0 against the pull q (the rate the angular
     momentum's tangential part would have without the couple), or -cap q/|q| where q exceeds cap:
-    the ball starts to roll the way it is pulled."""
+    the ball starts to roll the way it is pulled. ``ts``: |t| where the caller has it (the air's
+    speed reads it), else negative (taken here where it is needed)."""
     if r1 != 0.0 or r2 != 0.0 or r3 != 0.0:
-        ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+        if ts < 0.0:
+            ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         if ts == 0.0:
             return 0.0, 0.0, 0.0
         c = -cap / (ts if t1 * r1 + t2 * r2 + t3 * r3 >= 0.0 else -ts)   # (one division)
@@ -223,9 +224,10 @@ def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2
     omega.N)."""
     r, k = p[0], p[P_AIR]
     # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F
-    speed = 0.0
+    speed, ts = 0.0, -1.0
     if k != 0.0:   # (no air: nothing to add)
-        speed = r * math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)
+        ts = math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)   # |omega x N| = |omega_t|: the rolling couple's too
+        speed = r * ts
         a = -k * speed * r   # F = a w
         e1 = e1 + r * a * (n2 * w3 - n3 * w2)
         e2 = e2 + r * a * (n3 * w1 - n1 * w3)
@@ -236,9 +238,11 @@ def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2
     ms = spin_couple(p[P_SPIN] * r * fa, spin_side, pull)
     e1, e2, e3 = e1 + ms * n1, e2 + ms * n2, e3 + ms * n3
     # rolling resistance against omega's tangential part, pulled by v''s
-    en = e1 * n1 + e2 * n2 + e3 * n3
-    m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, s1, s2, s3,
-                                e1 - en * n1, e2 - en * n2, e3 - en * n3)
+    m1, m2, m3 = 0.0, 0.0, 0.0
+    if p[P_RESISTANCE] != 0.0:   # (none: a couple of 0)
+        en = e1 * n1 + e2 * n2 + e3 * n3
+        m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, s1, s2, s3,
+                                    e1 - en * n1, e2 - en * n2, e3 - en * n3, ts)
     return e1 + m1, e2 + m2, e3 + m3, m1, m2, m3, ms, on, speed, pull
 
 
@@ -448,7 +452,7 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
         b1, b2, b3 = b1 + air * c1 / m, b2 + air * c2 / m, b3 + air * c3 / m
         if d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0:
             m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3,
-                                        d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], 0.0, 0.0, 0.0)
+                                        d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2], 0.0, 0.0, 0.0, -1.0)
             w = 2.5 * r / p[5]
             b1 -= w * (m2 * n3 - m3 * n2)
             b2 -= w * (m3 * n1 - m1 * n3)
@@ -521,7 +525,7 @@ def sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2,
     r, m, mr2 = p[0], p[1], p[5]
     ms = spin_couple(p[P_SPIN] * r * fa, d[D_SIDE + 3], 0.0)   # (sliding friction pulls on omega.N not at all)
     m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d[D_SIDE],
-                                d[D_SIDE + 1], d[D_SIDE + 2], f1, f2, f3)
+                                d[D_SIDE + 1], d[D_SIDE + 2], f1, f2, f3, -1.0)
     a = air / m
     K[row, 2] += a * c1
     K[row, 3] += a * c2
