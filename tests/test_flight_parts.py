@@ -250,7 +250,8 @@ def test_the_compiled_first_search_finds_the_feet_the_samples_and_newton_give(sp
         assert np.array_equal(alpha[i], a[k]) and np.array_equal(normal[i], n[k]) and distance[i] == d[k]
     assert np.array_equal(alpha[0], surface.tips[0][:2])
     assert sides == {21} if spacing == 0.0 else len(sides) > 3   # (the reaches 0.3-1.9: sides 13 to 21)
-    assert ties >= (5 if symmetric else 0)
+    if symmetric:   # (the tie order exercised: the random centres of the other surface need not tie)
+        assert ties >= 5
 
 
 @pytest.mark.parametrize("across", [0.11, 0.12])
