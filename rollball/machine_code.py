@@ -266,7 +266,7 @@ def _shipped(folder=None) -> tuple[bytes, dict]:
     """The shipped bitcode and its stamp (``kernel.json``, in ``folder``: the package's by
     default) where they fit this machine, this kernel and its interface, and each other; else
     ``_Unusable``, saying why."""
-    if os.environ.get("ROLLBALL_MACHINE_CODE") == "numba":   # (CI's run of the other way)
+    if os.environ.get("ROLLBALL_MACHINE_CODE") == "numba":   # (numba's way forced: the bench measures it so)
         raise _Unusable("ROLLBALL_MACHINE_CODE=numba")
     folder = resources.files("rollball") if folder is None else folder
     try:

@@ -55,8 +55,8 @@ def _shipped_or_skip(folder=None):
     try:
         return machine_code._shipped(folder)
     except machine_code._Unusable as error:
-        pytest.skip(f"the shipped code does not fit here ({error}): numba's way is tested with "
-                    f"ROLLBALL_MACHINE_CODE=numba in test_warmup.py")
+        pytest.skip(f"the shipped code does not fit here ({error}): numba's way is used instead (every run "
+                    f"compiles the kernel with numba once)")
 
 
 def test_arguments_run_the_kernel_and_one_can_be_changed_by_name():
