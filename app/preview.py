@@ -59,7 +59,7 @@ def compute(scene: Scene, cancel=None) -> Preview:
     while not simulation.done:
         if cancel is not None and cancel.is_set():
             raise Cancelled
-        simulation.advance(CHUNK_STEPS)
+        simulation.advance(CHUNK_STEPS, rows=False)
     rows = simulation.rows
     points = rows[:, CENTER].copy()
     t_end = float(rows[-1, T]) if len(rows) else 0.0

@@ -151,7 +151,7 @@ def stream(simulations, derives, warm_ups=(), seconds: list | None = None) -> Ca
     def compute(progress, cancel) -> None:
         with compile_notice(lambda: progress(COMPILING)):
             for warm_up in warm_ups:
-                warm_up.advance()
+                warm_up.advance(rows=False)
             steps = [4096] * len(sims)
             while not cancel.is_set():
                 pending = [i for i, sim in enumerate(sims) if not sim.done]

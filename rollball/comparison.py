@@ -166,7 +166,7 @@ def _advance(run: Simulation, cancel: threading.Event | None) -> float:
     seconds = 0.0
     while not run.done:
         start = compute_clock()
-        run.advance(CHUNK)
+        run.advance(CHUNK, rows=False)
         seconds += compute_clock() - start
         if cancel is not None and cancel.is_set():
             raise Cancelled()

@@ -63,7 +63,7 @@ def _run_from(run, row: np.ndarray, mode: Mode, duration: float, **options):
                 return None
             redo = type(run)(dataclasses.replace(run.scene, start=start, duration=duration), **options)
             redo.judge_energy = False  # (the check's own runs are not checked)
-            redo.advance()
+            redo.advance(rows=False)
     except ValueError:   # (a SceneError too: an interval shorter than its first step's delay)
         return None
     return redo if redo.status is Status.OK and len(redo.rows) >= 2 else None

@@ -422,9 +422,11 @@ class Simulation:
         are the turn's (integrated apart from the kernel, rolling about the edge or tip)."""
         return self.machine.turns
 
-    def advance(self, max_steps: int | None = None) -> np.ndarray:
+    def advance(self, max_steps: int | None = None, *, rows: bool = True) -> np.ndarray | None:
         """Run up to ``max_steps`` more steps (a whole number >= 1; all remaining if None);
-        return the new rows. Raises ``RuntimeError`` if another thread is advancing this run."""
+        return the new rows (a copy), or with ``rows=False`` nothing (for a caller that reads the
+        trajectory at the end, or nothing: a whole run's copy of its rows is saved). Raises
+        ``RuntimeError`` if another thread is advancing this run."""
         if max_steps is not None:
             if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
                 raise ValueError(f"max_steps must be a whole number of 1 or more, not {max_steps!r}")
@@ -433,14 +435,16 @@ class Simulation:
             raise RuntimeError("this Simulation is being advanced by another thread; "
                                "advance one Simulation from one thread at a time")
         try:
-            return self._advance(max_steps)
+            first = self._advance(max_steps)
+            return self.rows[first:].copy() if rows else None
         finally:
             self._busy.release()
 
-    def _advance(self, max_steps: int | None) -> np.ndarray:
-        if self.done:
-            return self.rows[:0]
+    def _advance(self, max_steps: int | None) -> int:
+        """Run as ``advance`` says; returns the number of rows before (the new rows' first)."""
         first = self._row_count()
+        if self.done:
+            return first
         if max_steps is not None:
             remaining = max_steps
         else:
@@ -489,7 +493,7 @@ class Simulation:
             # (here, where the run runs: never in the thread that reads the trajectory)
             self._energy_check = energy_check(self)
             self._transition_check = check_transitions(self)
-        return self.rows[first:].copy()
+        return first
 
     # -- the kernel runs of a run whose contact changes mode (mode_machine) -------------------
 
@@ -532,7 +536,7 @@ class Simulation:
         run.judge_energy = False
         run.machine.restart(mode)
         run._start_kernel_run(state, t, slides=mode == Mode.SLIDING, repeat=False)
-        run.advance()
+        run.advance(rows=False)
         return run
 
     def cancel(self) -> None:
@@ -651,5 +655,5 @@ def simulate(scene: Scene | str | os.PathLike, *, method: str | None = None, mun
     """
     run = Simulation(scene, method=method, munthe_kaas=munthe_kaas, dt=dt, t_end=t_end,
                      record_every=record_every, rtol=rtol, atol=atol, record_dt=record_dt)
-    run.advance()
+    run.advance(rows=False)
     return run.trajectory()

@@ -66,7 +66,7 @@ def run_for(scene: Scene, track: Track) -> Trajectory:
     without the energy and transition checks (the track is the check here)."""
     run = Simulation(scene, t_end=float(track.t[-1]))
     run.judge_energy = False
-    run.advance()
+    run.advance(rows=False)
     return run.trajectory()
 
 

@@ -146,8 +146,8 @@ def test_a_run_with_the_three_dissipations_is_timed_against_the_same_run_without
     evaluations = []
 
     class Counted(Simulation):
-        def advance(self, max_steps=None):
-            rows = super().advance(max_steps)
+        def advance(self, max_steps=None, **options):
+            rows = super().advance(max_steps, **options)
             evaluations.append(self.evaluations)
             return rows
 

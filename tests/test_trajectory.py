@@ -61,6 +61,26 @@ def test_chunked_run_equals_one_run_and_can_be_cancelled(scene_factory):
     assert len(run.advance(10)) == 0
 
 
+@pytest.mark.parametrize("name", ["hills", "ridge_jump"])   # (one kernel run; a run that flies and lands)
+def test_rows_are_handed_back_as_copies_or_not_at_all(name):
+    """``advance`` returns the new rows as an array of the caller's own; with ``rows=False``
+    nothing, and the run records the same rows, chunk by chunk or at once."""
+    from rollball.examples import scene_path
+    from rollball.scene import Scene
+
+    scene = Scene.load(scene_path(name))
+    whole = Simulation(scene, t_end=0.8)
+    returned = whole.advance()
+    assert np.array_equal(returned, whole.rows) and len(returned) > 100
+    returned[:] = np.nan   # (the caller's own: the run's rows are untouched)
+    assert np.isfinite(whole.rows).all()
+    quiet = Simulation(scene, t_end=0.8)
+    while not quiet.done:
+        assert quiet.advance(57, rows=False) is None
+    assert np.array_equal(quiet.rows, whole.rows)
+    assert np.array_equal(quiet.trajectory().data, whole.trajectory().data)
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(dt=0), "dt"), (dict(dt=-1e-3), "dt"), (dict(dt=float("nan")), "dt"), (dict(dt="1e-3"), "dt"),
     (dict(t_end=float("inf")), "t_end"), (dict(t_end=0), "t_end"),

@@ -29,7 +29,7 @@ HILLS = EXAMPLES_DIR / "hills.json"
 def _ns_per_step(scene: Scene, **options) -> float:
     run = Simulation(scene, **options)
     start = time.perf_counter()
-    run.advance()
+    run.advance(rows=False)
     return (time.perf_counter() - start) / run.steps * 1e9
 
 
@@ -46,7 +46,7 @@ def c_ratio(repeats: int, steps: int) -> dict:
         return {"ns_ours": float(np.median(ours)), "ns_c": None, "ratio": None, "same_step": None}
     # the same step: after 1000 steps both agree to round-off
     short = Simulation(scene, t_end=1.0, **options)
-    short.advance()
+    short.advance(rows=False)
     _, x, y = c.run(b.radius, b.mass, scene.gravity, s.x, s.y, 1e-3, 1000)
     same = float(np.abs(short.rows[-1, CONTACT] - [x, y]).max())
     ours, theirs = [], []
@@ -152,7 +152,7 @@ for module in (simulation, mode_machine):
 scene = Scene.load({hills!r})
 scene = dataclasses.replace(scene, contact=Contact(friction=1.0), duration=1e6)
 run = simulation.Simulation(scene, method="dopri5", rtol=1e-12, atol=1e-12, record_dt=None)
-run.advance()
+run.advance(rows=False)
 traj = run.trajectory()
 assert run.segmented and str(traj.status) == "row_limit" and len(traj) > 0.99 * {rows}, traj.message
 """ + _HIGH_WATER
@@ -251,7 +251,7 @@ def _run_cpu(scene: Scene) -> float:
     run = Simulation(scene)
     run.judge_energy = False
     start = time.process_time()
-    run.advance()
+    run.advance(rows=False)
     return time.process_time() - start
 
 

@@ -139,7 +139,7 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     and where and when it came to rest (the basin is left NaN: ``runner.sweep`` gives it)."""
     simulation = Simulation(scene, record_every=1)
     simulation.judge_energy = False
-    simulation.advance()
+    simulation.advance(rows=False)
     traj = simulation.trajectory()
     out = np.full(len(OUTCOMES), np.nan)
     if len(traj):
