@@ -9,6 +9,7 @@ first batch, and keeps it for the rest.
 
 from __future__ import annotations
 
+import math
 import threading
 from dataclasses import dataclass
 from functools import lru_cache
@@ -17,7 +18,7 @@ import numpy as np
 
 from .. import kernel, machine_code
 from ..landscape import landscape_of
-from ..modes import MODES, ROLLING, SLIDING, Change
+from ..modes import ROLLING, SLIDING, Change
 from ..run_size import step_count
 from ..scene import Scene, SceneError
 from ..simulation import Simulation, initial_momentum
@@ -142,16 +143,23 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     simulation.advance(rows=False)
     traj = simulation.trajectory()
     out = np.full(len(OUTCOMES), np.nan)
-    if len(traj):
-        speeds = np.linalg.norm(traj.velocity, axis=1)
-        path = float(np.sum(np.linalg.norm(np.diff(traj.center, axis=0), axis=1)))
+    rows = len(traj)
+    if rows:
+        (vx, vy, vz), centre = traj.velocity.T, traj.center
+        step = centre[1:] - centre[:-1]   # (the sums of squares in the order np.linalg.norm takes them)
+        dx, dy, dz = step.T
+        path = float(np.sum(np.sqrt(dx * dx + dy * dy + dz * dz)))
         out[:len(kernel.OUTCOMES)] = (traj.t[-1], np.nan if traj.liftoff_time is None else traj.liftoff_time,
                                       traj.contact[-1, 0], traj.contact[-1, 1], traj.energy_drift,
-                                      float(np.min(traj.normal_force)), float(np.max(speeds)), path)
-        out[O_END_MODE] = MODES.index(str(traj.mode[-1]))
+                                      float(np.min(traj.normal_force)),
+                                      math.sqrt(float(np.max(vx * vx + vy * vy + vz * vz))), path)
+    modes = traj.modes
+    first_mode, end_mode = (ROLLING, ROLLING) if modes is None or not rows else (int(modes[0]), int(modes[rows - 1]))
+    if rows:
+        out[O_END_MODE] = end_mode
     out[O_LANDINGS] = traj.landings
     # a ball that slides from its start (a start.omega that does not roll) slips at t = 0
-    slips = [float(traj.t[0])] if len(traj) and str(traj.mode[0]) == MODES[SLIDING] else []
+    slips = [float(traj.t[0])] if rows and first_mode == SLIDING else []
     slips += [change.time for change in traj.transitions if change.kind is Change.SLIP]
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
     grips = [change.time for change in traj.transitions if change.kind is Change.GRIP]
