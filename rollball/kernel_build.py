@@ -14,7 +14,7 @@ import sys
 
 from numba.core import event
 
-from .files import atomic_write_bytes, atomic_write_text
+from .files import atomic_write_bytes, atomic_write_text, check_outputs
 from .machine_code import SHIPPED, STAMP, compile_with_numba, raw_digest, stamp
 
 
@@ -61,9 +61,16 @@ class Compiles(event.Listener):
         return {name: sorted(counts[name]) for name in sorted(counts)}
 
 
-def main() -> int:
-    """Make kernel.bc and kernel.json anew in the package's folder."""
-    folder = os.path.dirname(os.path.abspath(__file__))
+def main(folder: str | None = None) -> int:
+    """Make kernel.bc and kernel.json anew in the package's folder (or ``folder``), which is
+    checked first: a folder the files cannot be written into is said before the compile, not
+    after it."""
+    folder = folder or os.path.dirname(os.path.abspath(__file__))
+    try:
+        check_outputs(folder, (SHIPPED, STAMP))
+    except OSError as e:
+        print(f"rollball: cannot write the kernel's code into {folder}: {e}", file=sys.stderr)
+        return 1
     print("rollball: compiling the kernel's entry points with numba (several minutes) ...", file=sys.stderr)
     facts = build(folder)
     size = os.path.getsize(os.path.join(folder, SHIPPED))

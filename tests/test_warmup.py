@@ -200,3 +200,19 @@ def test_the_shipped_code_is_made_from_this_kernel():
     assert facts["interface"] == here["interface"], "run: python -m rollball.kernel_build"
     assert set(facts["entries"]) == set(kernel.ENTRIES)
     assert machine_code._shipped()[1]["bitcode"] == facts["bitcode"]
+
+
+def test_making_the_shipped_code_checks_its_folder_before_the_long_compile(tmp_path, monkeypatch, capsys):
+    # the compile takes minutes: a folder the files cannot be written into is said first
+    from rollball import kernel_build
+
+    def compile_not_expected(folder):
+        raise AssertionError("compiled before the folder was checked")
+
+    monkeypatch.setattr(kernel_build, "build", compile_not_expected)
+    not_a_folder = tmp_path / "kernel.bc"
+    not_a_folder.write_text("a file where the folder should be")
+    assert kernel_build.main(str(not_a_folder)) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("rollball: cannot write the kernel's code into") and str(not_a_folder) in err
+    assert err.count("\n") == 1
