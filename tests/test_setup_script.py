@@ -45,6 +45,10 @@ echo "$*" >> "$CALLS"
 """
 
 
+CORE_IMPORTS = "-c import rollball.cli, rollball.simulation, rollball.comparison, rollball.sweeps, rollball.fitting"
+APP_IMPORTS = ", rollball_app.main, rollball_app.window, rollball_app.compare_runs"
+
+
 def _setup(folder: Path, *names: str) -> tuple[subprocess.CompletedProcess, list[str]]:
     calls = folder / "calls.txt"
     calls.write_text("")
@@ -67,7 +71,8 @@ def test_setup_installs_groups_with_pip_s_group_option_and_only_what_changed(tmp
     assert result.returncode == 0, result.stderr
     assert [call.split()[-1] for call in calls[:1]] == ["pip>=25.1"]   # pip reads groups from 25.1 on
     assert calls[1].startswith("-m pip install") and calls[1].endswith("--no-compile -e . --group test")
-    assert calls[2:] == [warm_up]
+    # the bytecode of what RollBall and (with the test group) its app import, then the warm-up
+    assert calls[2:] == [CORE_IMPORTS + APP_IMPORTS, warm_up]
     # the app and the Dask extras came with the test group: nothing more to install
     assert _setup(tmp_path, "app")[1] == [warm_up]
     assert _setup(tmp_path, "dask", "test")[1] == [warm_up]
@@ -75,12 +80,17 @@ def test_setup_installs_groups_with_pip_s_group_option_and_only_what_changed(tmp
     (tmp_path / ".venv" / "rollball-installed").write_text(
         (tmp_path / ".venv" / "rollball-installed").read_text().replace("extra dask\n", ""))
     result, calls = _setup(tmp_path, "dask")
-    assert len(calls) == 2 and calls[0].endswith('--no-compile -e .[dask]') and calls[1] == warm_up
+    assert len(calls) == 3 and calls[0].endswith('--no-compile -e .[dask]') and calls[2] == warm_up
+    assert calls[1] == CORE_IMPORTS + APP_IMPORTS   # (the app was installed before)
     # a changed pyproject.toml: installed again
     with open(tmp_path / "pyproject.toml", "a") as file:
         file.write("\n")
-    assert _setup(tmp_path, "app")[1][-2:] == ["-m pip install --disable-pip-version-check --progress-bar off "
-                                              "--no-compile -e .[app]", warm_up]
+    assert _setup(tmp_path, "app")[1][-3:] == ["-m pip install --disable-pip-version-check --progress-bar off "
+                                              "--no-compile -e .[app]", CORE_IMPORTS + APP_IMPORTS, warm_up]
+    # the core alone: the core's bytecode
+    (tmp_path / ".venv" / "rollball-installed").unlink()
+    assert _setup(tmp_path)[1] == ["-m pip install --disable-pip-version-check --progress-bar off --no-compile -e .",
+                                   CORE_IMPORTS, warm_up]
 
 
 def test_setup_refuses_a_name_that_is_neither_a_group_nor_an_extra(tmp_path):
