@@ -153,13 +153,11 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
                                       traj.contact[-1, 0], traj.contact[-1, 1], traj.energy_drift,
                                       float(np.min(traj.normal_force)),
                                       math.sqrt(float(np.max(vx * vx + vy * vy + vz * vz))), path)
-    modes = traj.modes
-    first_mode, end_mode = (ROLLING, ROLLING) if modes is None or not rows else (int(modes[0]), int(modes[rows - 1]))
-    if rows:
-        out[O_END_MODE] = end_mode
+        out[O_END_MODE] = ROLLING if traj.modes is None else traj.modes[rows - 1]   # (no modes: it rolls)
     out[O_LANDINGS] = traj.landings
     # a ball that slides from its start (a start.omega that does not roll) slips at t = 0
-    slips = [float(traj.t[0])] if rows and first_mode == SLIDING else []
+    slides = rows and traj.modes is not None and traj.modes[0] == SLIDING
+    slips = [float(traj.t[0])] if slides else []
     slips += [change.time for change in traj.transitions if change.kind is Change.SLIP]
     out[O_FIRST_SLIP] = slips[0] if slips else np.nan
     grips = [change.time for change in traj.transitions if change.kind is Change.GRIP]
