@@ -290,7 +290,8 @@ class Surface:
                 guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)), normals=np.empty((1, 3)),
                 distances=np.empty(1), below=np.empty(1), sampled=np.empty(1), spacings=np.empty(1),
                 nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
-                start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6))))
+                start_normals=np.empty((k, 3)), start_distances=np.empty(k), d=np.empty(6),
+                tape=self.landscape.tape, bounds=np.empty((len(self.landscape.tape), 2)))))
         kept = call.kept
         kept["start"][0], kept["start"][1:4], kept["start"][4:7] = start.t, start.center, start.velocity
         kept["hints"][:], kept["tips"][:] = hints, tips
@@ -307,13 +308,14 @@ class Surface:
 
     def bounces(self, start: FreeState, *, gravity: float, radius: float, mass: float, restitution: float,
                 friction: float, rest: float, t_end: float, every: int, step: float, enough: int,
-                dissipated: float) -> "Bounces":
+                dissipated: float, feet_after: float = -math.inf) -> "Bounces":
         """The compiled flights of a ball in vacuum from ``start`` (``kernel.bounces.bounces``):
         landing, rows at the recording times (every ``every``-th multiple of ``step``), impact
         (``impact``, a rebound at most ``rest`` settling) and the next flight, until the ball
         settles, flies to t_end, makes ``enough`` landings (-1: no limit), makes BOUNCES_CHAIN of
         them, or leaves a flight to flight.py (see ``Bounces``). Rows whose foot the kernel
-        refers are searched here (``refer_rows``)."""
+        refers are searched here (``refer_rows``); rows at times before ``feet_after`` are written
+        without their foot (``kernel.flight_rows``)."""
         hints, tips = np.array(self.hints, dtype=float).reshape(-1, 3), np.array(self.tips, dtype=float).reshape(-1, 3)
         k, size = 2 + BEST_SAMPLES + len(hints), KEPT_ROWS
         call = self.landscape.packed(self.values, ("bounces", len(hints), len(tips), self.reach_default), lambda fn: (
@@ -330,14 +332,15 @@ class Surface:
                 start_feet=np.empty((k, 2)), start_normals=np.empty((k, 3)), start_distances=np.empty(k),
                 row_times=np.empty(size),
                 row_centers=np.empty((size, 3)), row_velocities=np.empty((size, 3)), row_feet=np.empty((size, 2)),
-                row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6))))
+                row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6),
+                tape=self.landscape.tape, bounds=np.empty((len(self.landscape.tape), 2)), feet_after=-math.inf)))
         kept = call.kept
         state = kept["state"]
         state[0], state[1:4], state[4:7], state[7:10] = start.t, start.center, start.velocity, start.omega
         kept["R"][:], kept["hints"][:], kept["tips"][:] = start.R, hints, tips
         for key, value in (("gravity", gravity), ("radius", radius), ("mass", mass), ("restitution", restitution),
                            ("friction", friction), ("rest", rest), ("t_end", t_end), ("step", step), ("every", every),
-                           ("enough", enough), ("dissipated", dissipated)):
+                           ("enough", enough), ("dissipated", dissipated), ("feet_after", feet_after)):
             call.set(key, value)
         call()
         out = kept["out"]
@@ -379,7 +382,7 @@ class Surface:
                 R=np.empty((3, 3)), guess=np.empty(2), tips=np.empty((len(tips), 3)), mass=0.0, radius=0.0,
                 gravity=0.0, dissipated=0.0, rows=np.empty((size, ROW_SIZE)), refer=np.empty(size, dtype=np.int64),
                 feet=np.empty((size, 2)), normals=np.empty((size, 3)), distances=np.empty(size), turn=np.empty((3, 3)),
-                iterations=FOOT_ITERATIONS, d=np.empty(6))
+                iterations=FOOT_ITERATIONS, d=np.empty(6), feet_after=-math.inf)
             if size <= KEPT_ROWS:
                 self._rows_call = call
         kept = call.kept

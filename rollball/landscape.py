@@ -17,6 +17,7 @@ import sys
 import threading
 import warnings
 import weakref
+import functools
 from functools import lru_cache
 
 import numpy as np
@@ -27,7 +28,7 @@ from sympy.functions.elementary.miscellaneous import MinMaxBase
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.pycode import PythonCodePrinter
 
-from . import landscape_code
+from . import landscape_code, landscape_tape
 from .cache import cache_dir
 from .formula import (X, Y, FormulaError, check_constants, check_parameter_names, code_constant, parameter_symbol,
                       parse_formula)
@@ -233,6 +234,22 @@ class Landscape:
                     code = _compile_or_refuse(self.source)
                 code = self._compiled = _COMPILED[self.source] = code
         return code
+
+    @functools.cached_property
+    def tape(self) -> np.ndarray:
+        """f's operations as the kernel bounds f over a box by them (landscape_tape.py; no rows
+        where an operation is not known)."""
+        return landscape_tape.tape(self.derivatives[0], len(self.parameters))
+
+    def bounds(self, boxes, values=()) -> np.ndarray:
+        """Bounds of f over each box (m, 4: x_lo, x_hi, y_lo, y_hi), as (m, 2): the interval the
+        kernel computes from ``tape`` (``kernel.bounds``), which holds every value the compiled code
+        gives in the box; NaN where nothing is known (no tape, a box partly outside f's domain)."""
+        boxes = np.ascontiguousarray(boxes, dtype=float).reshape(-1, 4)
+        out, record = np.empty((len(boxes), 2)), self.record(values)   # (the record held while the kernel reads it)
+        call("bound_boxes", fn=record.ctypes.data, tape=self.tape, boxes=boxes, out=out,
+             work=np.empty((max(len(self.tape), 1), 2)))
+        return out
 
     def record(self, values=()) -> np.ndarray:
         """What the kernel takes as the landscape (``fn`` is its address): the compiled code's

@@ -716,11 +716,12 @@ class ModeMachine:
         done = self.surface.bounces(flight.start, gravity=scene.gravity, radius=ball.radius, mass=ball.mass,
                                     restitution=contact.restitution, friction=friction_of(contact),
                                     rest=rest_speed(ball.radius, scene.gravity), t_end=run.t_end, every=every,
-                                    step=step, enough=enough, dissipated=self.dissipated)
+                                    step=step, enough=enough, dissipated=self.dissipated,
+                                    feet_after=-math.inf if run.flight_contacts else run.t_end)
         self.append(self._carried(done.rows))
         self.dissipated = done.dissipated
-        self.transitions.extend(Transition(float(t), Change.LANDING, float(x), float(y), float(speed), float(lost))
-                                for t, x, y, speed, lost in done.landings)
+        self.transitions.extend(Transition(t, Change.LANDING, x, y, speed, lost)
+                                for t, x, y, speed, lost in done.landings.tolist())
         status = done.status
         if status in (kernel.BOUNCES_FLYING, kernel.BOUNCES_DONE, kernel.BOUNCES_ENOUGH):
             self.flight, run.status = None, Status.OK

@@ -252,6 +252,10 @@ class Simulation:
         self._energy_check: EnergyCheck | None = None
         self._transition_check: TransitionCheck | None = None
         self.judge_energy = True  # whether the finished run looks at whose its energy error is (and its transitions)
+        # whether the rows of a flight the kernel takes (in vacuum) hold their contact point; a
+        # sweep's runs read only their last row's (``sweeps.batch.run_one``), and leave the others
+        # NaN (their contact and slip speed), for the feet searched no more
+        self.flight_contacts = True
 
     def _room(self, rows: float) -> int:
         """The rows a kernel run of a run whose contact changes mode finds free in the mode machine's,

@@ -18,6 +18,7 @@ from rollball.flight import FreeState, Surface, rest_speed
 from rollball.kernel import interface
 from rollball.landscape import landscape_for
 from rollball.mode_machine import SEARCH, ModeMachine
+from rollball.modes import FLYING
 from rollball.scene import Contact, Start
 
 G, R, M = 9.81, 0.1, 1.3
@@ -158,3 +159,31 @@ def test_a_run_that_flies_writes_its_rows_where_it_made_room_for_them(name, monk
     grid = run.n_steps // run.record_every + 1
     assert grid < len(traj) <= grid + simulation.CHANGE_ROWS
     assert np.all(np.diff(traj.t) > 0)
+
+
+@pytest.mark.parametrize("scene", [
+    Scene.load(EXAMPLES_DIR / "ridge_jump.json"),   # nine landings, then it rolls
+    # off the top of a hill too steep to come back to, in 3-D: it flies to the end
+    Scene.from_dict({**json.loads((EXAMPLES_DIR / "liftoff.json").read_text()), "landscape": "-0.5*x^2 - 0.1*y",
+                     "start": {"x": -0.2, "y": 0.1, "vx": 4.0, "vy": 0.5}, "duration": 0.8}),
+], ids=["ridge_jump", "away"])
+def test_a_runs_flights_without_their_rows_contacts_are_the_same_run_the_last_row_whole(scene):
+    """A sweep's runs (``Simulation.flight_contacts`` False) leave a flight's rows without their
+    contact point and slip speed (NaN), but the run's last row: every other number the same."""
+    runs = []
+    for contacts in (True, False):
+        run = Simulation(scene)
+        run.judge_energy, run.flight_contacts = False, contacts
+        run.advance()
+        runs.append(run.trajectory())
+    full, lean = runs
+    assert full.transitions == lean.transitions and full.status == lean.status
+    flying = np.flatnonzero(full.modes == FLYING)
+    flying = flying[flying < len(full) - 1]
+    assert len(flying) > 100
+    blank = [*range(interface.ROW_SLICES["contact"].start, interface.ROW_SLICES["contact"].stop), interface.ROW_SLIP]
+    assert np.isnan(lean.data[np.ix_(flying, blank)]).all() and np.isfinite(full.data[np.ix_(flying, blank)]).all()
+    kept = np.ones(full.data.shape, dtype=bool)
+    kept[np.ix_(flying, blank)] = False
+    np.testing.assert_array_equal(lean.data[kept], full.data[kept])
+    np.testing.assert_array_equal(lean.data[-1], full.data[-1])

@@ -26,7 +26,7 @@ LIFTOFF = Scene.load(EXAMPLES_DIR / "liftoff.json")
 def _outcomes_of(traj):
     """The sweep's outcomes, computed independently from a full recorded trajectory."""
     speed = np.linalg.norm(traj.velocity, axis=1)
-    return {"t_reached": traj.t[-1], "liftoff_time": traj.liftoff_time or np.nan,
+    return {"t_reached": traj.t[-1], "liftoff_time": np.nan if traj.liftoff_time is None else traj.liftoff_time,
             "x_end": traj.contact[-1, 0], "y_end": traj.contact[-1, 1], "energy_drift": traj.energy_drift,
             "min_normal_force": traj.normal_force.min(), "max_speed": speed.max(),
             "path_length": np.linalg.norm(np.diff(traj.center, axis=0), axis=1).sum()}
@@ -36,7 +36,13 @@ def _outcomes_of(traj):
     (LIFTOFF, {"start.vx": [3.0, 4.5, 6.0], "start.spin": [-4.0, 2.0]}),        # with and without lift-off
     (Scene.load(EXAMPLES_DIR / "too_big.json"), {"ball.radius": [0.05, 0.2]}),   # does not fit
     (Scene.load(EXAMPLES_DIR / "hills.json"), {"integrator.dt": [0.003, 0.0021], "duration": [0.5, 1.0]}),
-], ids=["liftoff", "too_big", "steps"])
+    # runs that fly, bounce and roll, or fly to the end (their flights' rows without contacts, ``run_one``)
+    (Scene.load(EXAMPLES_DIR / "ridge_jump.json"), {"start.vx": [3.3, 3.6], "contact.restitution": [0.2, 0.5]}),
+    (Scene.from_dict({**LIFTOFF.to_dict(), "landscape": "-0.5*x^2 - 0.1*y", "duration": 0.8,
+                      "start": {"x": -0.2, "y": 0.1, "vx": 4.0, "vy": 0.5},
+                      "contact": {"friction": None, "restitution": 0.0, "after_liftoff": "fly"}}),
+     {"start.vy": [0.0, 0.5]}),
+], ids=["liftoff", "too_big", "steps", "ridge_jump", "away"])
 def test_every_run_ends_where_simulate_ends_it(scene, vary):
     table = sweep(scene, vary, workers=1)
     values = table.grid.values()

@@ -19,15 +19,15 @@ ball's state is (x, y), the centre velocity (3), omega (3) and the energy dissip
 same orientation parts (``interface``: its length tells which). Stage derivatives
 are the rows of K; the hot loop indexes whole arrays and never slices them.
 
-The modules, from the bottom layer up (each imports only those before it): ``interface``
-(data), ``lowlevel`` (compile options, intrinsics), ``physics`` (landscape, dynamics, dexp⁻¹,
-curvatures, Rodrigues), ``dense`` (interpolation, omega's polynomial, the turn of R),
-``recording`` (rows, the start, failures), ``explicit`` and ``collocation`` (the steps),
-``steps`` (choosing a step, error norm, acceptance), ``feet`` (a flying ball's closest surface
-points), ``landing``, ``flight_rows`` and ``bounces`` (a flight's landing search, its rows, its
-impact and, in vacuum, flight after flight), ``events`` (locating lift-off, breaks, the fold,
-the changes of contact mode), ``unpacking`` (slots and scratch, generated), ``loops`` (the
-stepping loops), ``entries`` (the entry points).
+The modules, from the bottom layer up (each imports only those before it): ``interface`` (data),
+``lowlevel`` (compile options, intrinsics), ``physics`` (landscape, dynamics, dexp⁻¹, curvatures,
+Rodrigues), ``dense`` (interpolation, omega's polynomial, the turn of R), ``recording`` (rows, the
+start, failures), ``explicit`` and ``collocation`` (the steps), ``steps`` (choosing a step, error
+norm, acceptance), ``bounds`` (the landscape's bounds over a box, from its tape), ``feet`` (a flying
+ball's closest surface points), ``landing``, ``flight_rows`` and ``bounces`` (a flight's landing
+search, its rows, its impact and, in vacuum, flight after flight), ``events`` (locating lift-off,
+breaks, the fold, the changes of contact mode), ``unpacking`` (slots and scratch, generated),
+``loops`` (the stepping loops), ``entries`` (the entry points).
 """
 
 # The names the rest of the core reads the kernel by (it imports rollball.kernel and

@@ -82,7 +82,8 @@ def impact(hit):
 def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_end, step, every, enough, dissipated,
             hints, tips, reach_default, iterations, out, landed, rows, refer, hit, times, guess, centers, feet,
             normals, distances, below, sampled, spacings, nearest, start_centers, start_feet, start_normals,
-            start_distances, row_times, row_centers, row_velocities, row_feet, row_normals, row_distances, turn, d):
+            start_distances, row_times, row_centers, row_velocities, row_feet, row_normals, row_distances, turn, d,
+            tape, bounds, feet_after):
     """The mode machine's ``fly`` for a ball in vacuum from ``state`` (t0, c0 (3), c0' (3), omega (3))
     with the orientation R (3, 3), flight after flight, its rows at the recording times (the
     multiples k·every·step, ``ModeMachine.record_times``) written to ``rows`` from row 0 (``refer``:
@@ -102,8 +103,9 @@ def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_
       from there.
 
     out[1]: rows written; out[2]: landings made; out[3]: ``dissipated`` then. hit: HIT_* (its m,
-    r, e, mu and rest are set here); the rest: scratch (``land``'s and ``flight_rows``' arrays,
-    row_* of the rows' capacity)."""
+    r, e, mu and rest are set here); tape: the landscape's (``Landscape.tape``); feet_after: the
+    rows before that time have no foot (``flight_rows``; -inf: all have theirs); the rest: scratch
+    (``land``'s and ``flight_rows``' arrays, row_* of the rows' capacity, bounds the tape's)."""
     lout = out[8:8 + OUT_LANDING]
     capacity = rows.shape[0]
     spacing = every * step
@@ -114,7 +116,7 @@ def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_
         t0 = state[0]
         land(fn, state[:7], gravity, radius, t_end, hints, tips, reach_default, iterations, lout, times, guess,
              centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet,
-             start_normals, start_distances, d)
+             start_normals, start_distances, d, tape, bounds)
         if lout[0] == LANDING_REFER:
             out[0] = BOUNCES_REFER
             break
@@ -140,7 +142,7 @@ def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_
             row_velocities[i, 0], row_velocities[i, 1], row_velocities[i, 2] = vx, vy, vz
         flight_rows(fn, n, row_centers, row_velocities, row_times, t0, state[7:10], R, state[1:3], tips, mass, radius,
                     gravity, lost, rows[count:], refer[count:], row_feet, row_normals, row_distances, turn,
-                    iterations, d)
+                    iterations, d, feet_after)
         count += n
         if flying:
             out[0] = BOUNCES_FLYING
@@ -176,7 +178,7 @@ def bounces(fn, state, R, gravity, radius, mass, restitution, friction, rest, t_
             row_centers[0, q], row_velocities[0, q] = state[1 + q], state[4 + q]
         flight_rows(fn, np.int64(1), row_centers, row_velocities, row_times, t, state[7:10], R, state[1:3], tips,
                     mass, radius, gravity, lost, rows[count:], refer[count:], row_feet, row_normals, row_distances,
-                    turn, iterations, d)
+                    turn, iterations, d, feet_after)
         count += 1
         if t >= t_end:
             out[0] = BOUNCES_DONE

@@ -6,6 +6,7 @@ compiles nothing."""
 from __future__ import annotations
 
 from .bounces import bounces, impact
+from .bounds import bound_boxes
 from .feet import nearest_feet
 from .flight_rows import flight_rows
 from .landing import land
@@ -16,7 +17,7 @@ from .unpacking import ENTRY_SIGNATURE, make_entry
 FUNCTIONS = {"advance": advance, "advance_adaptive": advance_adaptive, "advance_batch": advance_batch,
              "evaluate_points": evaluate_points, "closest_points": closest_points,
              "nearest_feet": nearest_feet, "land": land, "flight_rows": flight_rows,
-             "impact": impact, "bounces": bounces}
+             "impact": impact, "bounces": bounces, "bound_boxes": bound_boxes}
 ENTRIES = {name: make_entry(name, function) for name, function in FUNCTIONS.items()}
 
 __all__ = ["ENTRIES", "ENTRY_SIGNATURE", "FUNCTIONS"]

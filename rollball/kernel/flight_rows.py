@@ -16,7 +16,7 @@ from .physics import closest_points, rodrigues
 
 @EXACT
 def flight_rows(fn, count, centers, velocities, times, start_time, omega, R, guess, tips, mass, radius, gravity,
-                dissipated, rows, refer, feet, normals, distances, turn, iterations, d):
+                dissipated, rows, refer, feet, normals, distances, turn, iterations, d, feet_after):
     """rows[:count] (``interface.ROW_FIELDS``) at times[:count], where the centre is centers[i]
     and moves at velocities[i]: the contact columns the centre's closest surface point (Newton's
     method from ``guess``, a ``tips`` point put in where it is nearer), R = exp(A(ω) τ) R
@@ -24,27 +24,37 @@ def flight_rows(fn, count, centers, velocities, times, start_time, omega, R, gue
     speed of the ball's point nearest the surface, ``dissipated``; the rest 0. refer[i] = 1 where
     that foot is not found or cannot be the nearest point (farther than the point below the
     centre, or on the far side of the surface): there flight.py searches the foot and sets the
-    contact and slip columns. feet, normals, distances: scratch of at least ``count`` rows; turn (3, 3)."""
+    contact and slip columns. Rows at times before ``feet_after`` are written without their foot
+    (contact and slip NaN, refer 0: a sweep's runs read only the last row's, ``sweeps.batch``);
+    -inf: every row has its foot (each row's foot is its own Newton's method, so a row has the
+    same foot either way). feet, normals, distances: scratch of at least ``count`` rows; turn (3, 3)."""
     n = count
+    first = 0   # (the rows from here on have their foot: times increase)
+    while first < n and times[first] < feet_after:
+        first += 1
     for i in range(n):
         feet[i, 0], feet[i, 1] = guess[0], guess[1]
-    closest_points(fn, centers[:n], feet[:n], normals[:n], distances[:n], iterations, d)
+    closest_points(fn, centers[first:n], feet[first:n], normals[first:n], distances[first:n], iterations, d)
+    for i in range(first):
+        feet[i, 0] = feet[i, 1] = normals[i, 0] = normals[i, 1] = normals[i, 2] = distances[i] = math.nan
     w1, w2, w3 = omega[0], omega[1], omega[2]
     spin = 0.2 * mass * radius * radius * (w1 * w1 + w2 * w2 + w3 * w3)
     for i in range(n):
         cx, cy, cz = centers[i, 0], centers[i, 1], centers[i, 2]
-        for q in range(tips.shape[0]):   # (``Surface._nearer_tips``)
+        for q in range(tips.shape[0] if i >= first else 0):   # (``Surface._nearer_tips``)
             a1, a2, a3 = cx - tips[q, 0], cy - tips[q, 1], cz - tips[q, 2]
             far = math.sqrt(a1 * a1 + a2 * a2 + a3 * a3)
             if not abs(distances[i]) <= far and far > 0.0:
                 feet[i, 0], feet[i, 1] = tips[q, 0], tips[q, 1]
                 normals[i, 0], normals[i, 1], normals[i, 2] = a1 / far, a2 / far, a3 / far
                 distances[i] = far
-        landscape(fn, cx, cy, data_pointer(d))
-        below, distance = d[0], distances[i]
-        plausible = (math.isfinite(distance) and abs(distance) <= abs(cz - below) * (1.0 + SAMPLE_SLACK)
-                     and not ((distance > 0.0 and cz < below) or (distance < 0.0 and cz > below)))
-        refer[i] = 0 if plausible and not math.isnan(feet[i, 0]) else 1
+        refer[i] = 0
+        if i >= first:
+            landscape(fn, cx, cy, data_pointer(d))
+            below, distance = d[0], distances[i]
+            plausible = (math.isfinite(distance) and abs(distance) <= abs(cz - below) * (1.0 + SAMPLE_SLACK)
+                         and not ((distance > 0.0 and cz < below) or (distance < 0.0 and cz > below)))
+            refer[i] = 0 if plausible and not math.isnan(feet[i, 0]) else 1
         for k in range(ROW_SIZE):
             rows[i, k] = 0.0
         vx, vy, vz = velocities[i, 0], velocities[i, 1], velocities[i, 2]

@@ -66,7 +66,8 @@ ENTRIES = {
              ("out", VECTOR), ("times", VECTOR), ("guess", VECTOR), ("centers", MATRIX), ("feet", MATRIX),
              ("normals", MATRIX), ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("spacings", VECTOR),
              ("nearest", MATRIX), ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
-             ("start_distances", VECTOR), ("d", VECTOR)),
+             ("start_distances", VECTOR), ("d", VECTOR), ("tape", MATRIX), ("bounds", MATRIX)),
+    "bound_boxes": (("fn", ADDRESS), ("tape", MATRIX), ("boxes", MATRIX), ("out", MATRIX), ("work", MATRIX)),
     "impact": (("hit", VECTOR),),
     "bounces": (("fn", ADDRESS), ("state", VECTOR), ("R", MATRIX), ("gravity", FLOAT), ("radius", FLOAT),
                 ("mass", FLOAT), ("restitution", FLOAT), ("friction", FLOAT), ("rest", FLOAT), ("t_end", FLOAT),
@@ -78,12 +79,13 @@ ENTRIES = {
                 ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
                 ("start_distances", VECTOR),
                 ("row_times", VECTOR), ("row_centers", MATRIX), ("row_velocities", MATRIX), ("row_feet", MATRIX),
-                ("row_normals", MATRIX), ("row_distances", VECTOR), ("turn", MATRIX), ("d", VECTOR)),
+                ("row_normals", MATRIX), ("row_distances", VECTOR), ("turn", MATRIX), ("d", VECTOR), ("tape", MATRIX),
+                ("bounds", MATRIX), ("feet_after", FLOAT)),
     "flight_rows": (("fn", ADDRESS), ("count", INT), ("centers", MATRIX), ("velocities", MATRIX), ("times", VECTOR),
                     ("start_time", FLOAT), ("omega", VECTOR), ("R", MATRIX), ("guess", VECTOR), ("tips", MATRIX),
                     ("mass", FLOAT), ("radius", FLOAT), ("gravity", FLOAT), ("dissipated", FLOAT), ("rows", MATRIX),
                     ("refer", INTS), ("feet", MATRIX), ("normals", MATRIX), ("distances", VECTOR), ("turn", MATRIX),
-                    ("iterations", INT), ("d", VECTOR)),
+                    ("iterations", INT), ("d", VECTOR), ("feet_after", FLOAT)),
 }
 
 
@@ -155,6 +157,21 @@ SAMPLE_SLACK = 1e-9      # a foot may be this share farther than the nearest sur
 TRACK = 1e-3             # × r: the spacing of the surface samples under the centre's path (``Flight.track``)
 TRACK_MOST = 100_000     # (the samples taken at once)
 TRACK_SLACK = 1e-9       # × r: a sample this much nearer than r is inside the ball (round-off)
+# The track certifies stretches of its samples at once where the landscape's bounds over the box
+# the stretch's path lies in (``bounds.box_bounds``, from the landscape's tape) put the whole
+# surface there more than r below the centre; the rest it samples, TRACK_LEAF at least at once, and
+# where the bounds fail in a row, twice as many samples each time before it tries them again (at
+# most TRACK_BLIND).
+TRACK_LEAF, TRACK_BLIND = 16, 4096
+# A landscape's tape (``Landscape.tape``, ``bounds.box_bounds``): f's operations in order, one row
+# of TAPE_COLUMNS floats each: the operation, its operands' rows (a, b), an integer k (a power, a
+# parameter's index, or how many terms share the sum or product the row is part of) and two numbers
+# (a constant's value as its interval, a real power). An operation's interval encloses every value
+# the landscape's own code computes there for (x, y) in the box, its round-off included.
+TAPE_COLUMNS = 6
+(TAPE_CONST, TAPE_X, TAPE_Y, TAPE_PARAMETER, TAPE_ADD, TAPE_MUL, TAPE_POWER, TAPE_REAL_POWER, TAPE_POW,
+ TAPE_EXP, TAPE_LOG, TAPE_SQRT, TAPE_SIN, TAPE_COS, TAPE_TANH, TAPE_ATAN, TAPE_SINH, TAPE_ASINH, TAPE_COSH,
+ TAPE_ABS, TAPE_MIN, TAPE_MAX, TAPE_ASIN, TAPE_ACOS, TAPE_ATANH, TAPE_ACOSH) = range(26)
 # ``landing.land`` writes its answer into OUT_LANDING floats: LANDING_LANDED (then the time, the
 # foot's x, y, the normal there (3) and the centre's signed distance), LANDING_FLYING (still in
 # the air at t_end), or LANDING_REFER (flight.py searches this flight itself).

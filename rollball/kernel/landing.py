@@ -16,12 +16,13 @@ from __future__ import annotations
 
 import math
 
+from .bounds import box_bounds
 from .feet import nearest_feet
 from .interface import (
     BEST_SAMPLES, CLEAR_MARGIN, CLEAR_WITHIN, FIRST_STEP, GAP_TOLERANCE, GRAZE, GRAZE_LOOKS, GRID_SPACING, GROW_BY,
     LANDING_BATCH,
     LANDING_FLYING, LANDING_LANDED, LANDING_REFER, MAX_LOOKS, OUT_LANDING, PATH_ITERATIONS, SAMPLE_SLACK, SHRINK,
-    SHRINK_MOST, TRACK, TRACK_MOST, TRACK_SLACK,
+    SHRINK_MOST, TRACK, TRACK_BLIND, TRACK_LEAF, TRACK_MOST, TRACK_SLACK,
 )
 from .lowlevel import EXACT, JIT, data_pointer, landscape
 from .physics import curvatures
@@ -348,32 +349,62 @@ def search(fn, start, gravity, r, t_end, hints, tips, spacing, reach_default, it
 
 
 @JIT
-def track_clear(fn, start, gravity, r, t, s, d):
+def track_clear(fn, start, gravity, r, t, s, d, tape, bounds):
     """``Flight.track`` finds nothing: no surface sample under the centre's path between t and s
-    (every TRACK × r of its length) within r below the centre."""
+    (every TRACK × r of its length) within r below the centre. The same answer as taking every
+    sample: where the landscape has a tape (``Landscape.tape``; none: every sample is taken), a
+    stretch of samples is passed over when the landscape's bounds over the box its path lies in
+    (``bounds.box_bounds``, sound for the values the samples would compute) put the surface there
+    below every centre of the stretch by more than the samples' threshold. The stretches double
+    while they are passed over and halve, down to TRACK_LEAF samples, where they are not; those
+    are sampled, and as many again as the bounds failed in a row before (at most TRACK_BLIND), so
+    that where they never succeed (the path low over a rough surface, a domain's edge) they cost
+    little beside the samples."""
     if not s > t:
         return True
     _, _, _, ax, ay, az = motion(start, gravity, t)
     _, _, _, bx, by, bz = motion(start, gravity, s)
     speed = max(math.sqrt(ax * ax + ay * ay + az * az), math.sqrt(bx * bx + by * by + bz * bz))
     count = int(min(math.ceil(speed * (s - t) / (TRACK * r)), 100.0 * TRACK_MOST)) + 1
-    for k in range(1, count + 1):
-        cx, cy, cz, _, _, _ = motion(start, gravity, t + (s - t) * (k / count))
-        landscape(fn, cx, cy, data_pointer(d))
-        if cz - d[0] < r * (1.0 - TRACK_SLACK):
-            return False
+    near = r * (1.0 - TRACK_SLACK)
+    first, stretch, blind, after = 1, TRACK_LEAF, TRACK_LEAF, 0   # (after: the sample the bounds are tried from)
+    while first <= count:
+        last = min(first + stretch - 1, count)
+        if tape.shape[0] > 0 and first >= after and last - first + 1 >= TRACK_LEAF:
+            t0, t1 = t + (s - t) * (first / count), t + (s - t) * (last / count)
+            x0, y0, z0, _, _, _ = motion(start, gravity, t0)
+            x1, y1, z1, _, _, _ = motion(start, gravity, t1)
+            # the samples' centres lie in the box (x and y are monotonic in time, rounded too); z
+            # is concave, so lowest at an end, the samples' rounded values within a few ulps of it
+            tau = max(abs(t0 - start[0]), abs(t1 - start[0]))
+            low = min(z0, z1) - 8.0 * EPS * (abs(start[3]) + abs(start[6]) * tau + gravity * tau * tau) - 1e-300
+            _, f_hi = box_bounds(fn, tape, bounds, min(x0, x1), max(x0, x1), min(y0, y1), max(y0, y1))
+            if f_hi < low - near - 8.0 * EPS * (abs(low) + abs(f_hi) + r):
+                first, stretch, blind = last + 1, 2 * stretch, TRACK_LEAF
+                continue
+            if stretch > TRACK_LEAF:
+                stretch = max(stretch // 2, TRACK_LEAF)
+                continue
+            after, blind = first + blind, min(2 * blind, TRACK_BLIND)
+        for k in range(first, last + 1):
+            cx, cy, cz, _, _, _ = motion(start, gravity, t + (s - t) * (k / count))
+            landscape(fn, cx, cy, data_pointer(d))
+            if cz - d[0] < near:
+                return False
+        first = last + 1
     return True
 
 
 @EXACT
 def land(fn, start, gravity, radius, t_end, hints, tips, reach_default, iterations, out, times, guess,
          centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet, start_normals,
-         start_distances, d):
+         start_distances, d, tape, bounds):
     """``Flight.landing`` for a ball in vacuum from ``start`` (t₀, c₀ (3), ċ₀ (3)) until t_end, on
     the surface ``fn`` with flight.py's ``Surface`` hints and tips: out[0] LANDING_LANDED (out[1]
     the time, out[2:8] the foot: x, y, normal (3), signed distance), LANDING_FLYING (still flying
     at t_end) or LANDING_REFER (flight.py searches this flight itself: see the module). times:
-    LANDING_BATCH; the rest: work arrays for a look (``feet.nearest_feet``'s, with room for its starts)."""
+    LANDING_BATCH; the rest: work arrays for a look (``feet.nearest_feet``'s, with room for its starts);
+    tape: the landscape's (``Landscape.tape``), bounds its scratch (``track_clear``)."""
     r = radius
     spacing = GRID_SPACING * r   # (the looks' grids)
     work = (centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet,
@@ -386,7 +417,7 @@ def land(fn, start, gravity, radius, t_end, hints, tips, reach_default, iteratio
         out[0] = status
         return
     end = t_end if status == LANDING_FLYING else out[1]
-    if not track_clear(fn, start, gravity, r, start[0], end, d):
+    if not track_clear(fn, start, gravity, r, start[0], end, d, tape, bounds):
         out[0] = LANDING_REFER
         return
     if status == LANDING_FLYING:

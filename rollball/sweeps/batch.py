@@ -135,11 +135,12 @@ _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status
 
 
 def run_one(scene: Scene) -> tuple[int, np.ndarray]:
-    """A run of a scene whose contact changes mode, through ``Simulation`` (every step a row),
+    """A run of a scene whose contact changes mode, through ``Simulation`` (every step a row; a
+    flight's rows in vacuum without their contact point but the last, which the outcomes read),
     and its status code and outcomes: those of the batch loop, from the rows, then the contact's
     and where and when it came to rest (the basin is left NaN: ``runner.sweep`` gives it)."""
     simulation = Simulation(scene, record_every=1)
-    simulation.judge_energy = False
+    simulation.judge_energy = simulation.flight_contacts = False
     simulation.advance(rows=False)
     traj = simulation.trajectory()
     out = np.full(len(OUTCOMES), np.nan)
