@@ -178,8 +178,15 @@ def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeyp
     figures = targets.hybrid_sweeps(1, runs=6)
     assert set(figures) == {"cylinder"} and figures["cylinder"]["runs"] == 6
     assert figures["cylinder"]["hybrid_s"] > 0.0 and figures["cylinder"]["glued_s"] > 0.0
-    assert len(landed) == 12 and min(landed) >= 1, landed   # (the warm-up's and the timed sweep's runs)
-    assert "missed" not in _targets(hybrid_sweeps={"cylinder": {**figures["cylinder"], "ratio": 3.0}})
-    missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**figures["cylinder"], "ratio": 5.0}}).splitlines()
+    # (the warm-up's, the timed sweep's on one worker and on every core)
+    assert len(landed) == 18 and min(landed) >= 1, landed
+    assert figures["cylinder"]["hybrid_all_s"] > 0.0 and figures["cylinder"]["glued_all_s"] > 0.0
+    assert figures["cylinder"]["workers"] >= 1
+    met = {**figures["cylinder"], "ratio": 3.0, "ratio_all": 3.5}
+    assert "missed" not in _targets(hybrid_sweeps={"cylinder": met})
+    missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio": 5.0}}).splitlines()
               if "missed" in line]
     assert len(missed) == 1 and "| cylinder | 6 |" in missed[0]
+    missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio_all": 4.5}}).splitlines()
+              if "missed" in line]
+    assert len(missed) == 1 and "| cylinder |" in missed[0] and "4.5×" in missed[0]

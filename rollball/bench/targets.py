@@ -282,14 +282,22 @@ def hybrid_costs(repeats: int) -> dict:
 def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
     """CPU time of a sweep of ``runs`` runs of each example that flies, over its start speed vx
     (±5 %: every run lifts off), on one worker, against the same sweep glued (the compiled batch
-    path), the two in turn: medians and the median of the ratios. (A sweep whose contact changes
-    mode runs one ``Simulation`` a point.)"""
+    path), the two in turn: medians and the median of the ratios; and the same sweeps' wall time
+    on every core (a sweep's default, ``local_workers`` threads: ``workers``, ``hybrid_all_s``,
+    ``glued_all_s``, ``ratio_all``). (A sweep whose contact changes mode runs one ``Simulation``
+    a point, whose Python holds the interpreter's lock between its kernel calls.)"""
     from ..sweeps import sweep   # (sweeps load on demand)
+    from ..sweeps.runner import local_workers
 
     def cpu(scene, vary) -> float:
         started = time.process_time()
         sweep(scene, vary, workers=1)
         return time.process_time() - started
+
+    def wall(scene, vary) -> float:
+        started = time.perf_counter()
+        sweep(scene, vary)
+        return time.perf_counter() - started
 
     out = {}
     for name in HYBRID:
@@ -301,6 +309,11 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
         hybrid, plain = (np.array(column) for column in zip(*pairs))
         out[name] = {"runs": runs, "hybrid_s": float(np.median(hybrid)), "glued_s": float(np.median(plain)),
                      "ratio": float(np.median(hybrid / np.maximum(plain, 1e-9)))}
+        pairs = [(wall(scene, vary), wall(glued, vary)) for _ in range(repeats)]
+        hybrid, plain = (np.array(column) for column in zip(*pairs))
+        out[name].update(workers=local_workers(), hybrid_all_s=float(np.median(hybrid)),
+                         glued_all_s=float(np.median(plain)),
+                         ratio_all=float(np.median(hybrid / np.maximum(plain, 1e-9))))
     return out
 
 
