@@ -17,8 +17,7 @@ import sys
 import threading
 import warnings
 import weakref
-import functools
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 import sympy as sp
@@ -235,7 +234,7 @@ class Landscape:
                 code = self._compiled = _COMPILED[self.source] = code
         return code
 
-    @functools.cached_property
+    @cached_property
     def tape(self) -> np.ndarray:
         """f's operations as the kernel bounds f over a box by them (landscape_tape.py; no rows
         where an operation is not known)."""
