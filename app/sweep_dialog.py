@@ -247,7 +247,8 @@ class SweepDialog(QtWidgets.QDialog):
         counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
         done = int(table.done.sum())
         self.status.setText(f"{done:,} runs in {table.seconds:.2f} s ({counts})"
-                            + (" — cancelled" if table.partial else "")
+                            + (f" — stopped early: {table.error}" if table.error
+                               else " — cancelled" if table.partial else "")
                             + ". Click a run to load its start into the main window.")
         self._show()
 

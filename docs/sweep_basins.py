@@ -57,7 +57,9 @@ def summary(table, remote) -> dict:
         "basins": {str(int(b)): int(n) for b, n in zip(basins, counts)},
         "rest_time": {"min": float(np.min(rest_time)), "median": float(np.median(rest_time)),
                       "max": float(np.max(rest_time))} if rested.any() else None,
-        "seconds": table.seconds, "workers": table.workers, "runs_per_second": len(table) / table.seconds,
+        "seconds": table.seconds, "workers": table.workers,
+        "local": "worker processes" if table.processes else "threads",
+        "runs_per_second": len(table) / table.seconds,
         "dask_seconds": remote.seconds, "dask_workers": remote.workers,
         "dask_same_table": bool(np.array_equal(table.codes, remote.codes)
                                 and np.array_equal(table.outcomes, remote.outcomes, equal_nan=True)
@@ -73,7 +75,8 @@ def markdown(s: dict) -> str:
              "- the minima: " + "; ".join(f"{m['number']} at ({m['x']:.4f}, {m['y']:.4f}), f = {m['f']:.4f}"
                                           for m in s["minima"]),
              "- runs per basin: " + ", ".join(f"{b}: {n:,}" for b, n in s["basins"].items()),
-             f"- wall time {s['seconds']:.1f} s on {s['workers']} threads ({s['runs_per_second']:.0f} runs/s); "
+             f"- wall time {s['seconds']:.1f} s on {s['workers']} local {s['local']} "
+             f"({s['runs_per_second']:.0f} runs/s); "
              f"on Dask ({s['dask_workers']} worker processes on this machine) {s['dask_seconds']:.1f} s, "
              f"{'the same table to the last bit' if s['dask_same_table'] else 'A DIFFERENT TABLE'}"]
     return "\n".join(lines) + "\n"
@@ -85,7 +88,8 @@ def main() -> None:
     scene = Scene.load(scene_path("wells"))
     started = time.perf_counter()
     table = sweep(scene, VARY)
-    print(f"{len(table):,} runs in {time.perf_counter() - started:.1f} s on {table.workers} threads", file=sys.stderr)
+    print(f"{len(table):,} runs in {time.perf_counter() - started:.1f} s on {table.workers} "
+          f"{'worker processes' if table.processes else 'threads'}", file=sys.stderr)
     remote = on_dask(scene, VARY, local_workers())
     print(f"the same on Dask in {remote.seconds:.1f} s", file=sys.stderr)
     s = summary(table, remote)

@@ -153,7 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "(default liftoff_time; basin: a colour per minimum)")
     where = sweep.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_positive_int, metavar="N",
-                       help="local threads (default: every core)")
+                       help="local workers (default: every core): threads, or processes for the "
+                            "runs whose contact changes mode")
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
                             "(needs pip install 'rollball[dask]')")
@@ -405,7 +406,8 @@ def _sweep(args) -> int:
         return _fail(f"cannot write {shown(e.filename or out)}: {e.strerror or e}; "
                      f"none of {', '.join(sweep_files.FILES)} was replaced")
     counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
-    where = f"Dask workers at {table.scheduler}" if table.scheduler else "local threads"
+    where = (f"Dask workers at {table.scheduler}" if table.scheduler
+             else "local processes" if table.processes else "local threads")
     print(f"{done:,} of {len(table):,} runs in {table.seconds:.3g} s "
           f"({done / max(table.seconds, 1e-9):,.0f} runs/s on {table.workers} {where}): {counts}; "
           f"wrote {', '.join(str(f) for f in files)}")

@@ -143,7 +143,17 @@ def test_bad_grids_are_refused():
         sweep(LIFTOFF, {"start.vx": [1.0]}, workers=0)
 
 
-def test_threads_give_the_same_table_bit_for_bit_and_report_progress():
+def _sweep_processes() -> list:
+    """This process's worker processes that run sweeps (loky's)."""
+    import psutil
+
+    return [p for p in psutil.Process().children(recursive=True)
+            if "loky" in " ".join(p.cmdline()) and "resource_tracker" not in " ".join(p.cmdline())]
+
+
+def test_processes_give_the_same_table_bit_for_bit_and_report_progress():
+    """The liftoff example flies: its runs hold the GIL, and on two workers its batches run in
+    worker processes; the table is that of one worker (in this process) bit for bit."""
     vary = {"start.vx": np.linspace(3, 6, 13), "start.spin": np.linspace(-4, 4, 5)}
     calls = []
     one = sweep(LIFTOFF, vary, workers=1)
@@ -151,7 +161,38 @@ def test_threads_give_the_same_table_bit_for_bit_and_report_progress():
     np.testing.assert_array_equal(one.codes, two.codes)
     np.testing.assert_array_equal(one.outcomes, two.outcomes)   # NaN in the same places too
     assert calls[-1] == (65, 65) and [d for d, _ in calls] == sorted(d for d, _ in calls)
-    assert not two.partial and two.workers == 2
+    assert not two.partial and two.workers == 2 and two.error is None
+    assert len(_sweep_processes()) == 2
+
+
+def test_without_processes_the_runs_go_on_threads(monkeypatch):
+    from rollball.sweeps import processes
+
+    def refused(workers):
+        raise OSError("no semaphores here")
+
+    vary = {"start.vx": np.linspace(3, 6, 9)}
+    monkeypatch.setattr(processes, "pool", refused)
+    threads = sweep(LIFTOFF, vary, workers=2)
+    monkeypatch.undo()
+    np.testing.assert_array_equal(threads.outcomes, sweep(LIFTOFF, vary, workers=1).outcomes)
+    assert threads.error is None and threads.done.all()
+
+
+def test_a_worker_process_that_dies_stops_the_sweep_keeping_the_finished_runs():
+    killed = []
+
+    def progress(done, total, text):   # after the first batch: one of the workers is killed
+        if not killed:
+            victim = _sweep_processes()[0]
+            victim.kill()
+            killed.append(victim.pid)
+
+    table = sweep(LIFTOFF, {"start.vx": np.linspace(3, 6, 4000)}, workers=2, progress=progress)
+    assert killed and table.partial and "worker process ended unexpectedly" in table.error
+    assert 0 < table.done.sum() < len(table) and set(table["status"][table.done]) == {"ok"}
+    again = sweep(LIFTOFF, {"start.vx": np.linspace(3, 6, 9)}, workers=2)   # a new pool
+    assert again.done.all() and again.error is None
 
 
 def test_cancel_stops_early_and_keeps_the_finished_runs(tmp_path):
@@ -236,6 +277,43 @@ def test_ctrl_c_writes_the_finished_runs_marked_partial(tmp_path, capsys):
     assert info["partial"] is True and 0 < info["finished"] < 20000
     assert len((out / "sweep.csv").read_text().splitlines()) == 1 + info["finished"]
     assert "stopped early" in capsys.readouterr().err
+
+
+def test_ctrl_c_in_a_terminal_stops_a_sweep_on_worker_processes_keeping_the_finished_runs(tmp_path):
+    """Ctrl-C in a terminal interrupts the whole process group, the sweep's worker processes
+    too, here while they start: they never see it, finish their batches, and the command
+    writes the finished runs."""
+    import subprocess
+    import sys
+    import time
+
+    import psutil
+
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "rollball", "sweep", str(EXAMPLES_DIR / "liftoff.json"),
+               "--vary", "start.vx=3:6:100000", "--workers", "2", "--out", str(out)]
+    process = subprocess.Popen(command, start_new_session=True, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and process.poll() is None:   # the workers started
+            workers = [p for p in psutil.Process(process.pid).children(recursive=True)
+                       if "popen_loky" in " ".join(p.cmdline())]
+            if len(workers) == 2:
+                break
+            time.sleep(0.01)
+        assert process.poll() is None, process.communicate()
+        os.killpg(process.pid, signal.SIGINT)
+        _, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 130, err
+    info = json.loads((out / "sweep.json").read_text())
+    assert info["partial"] is True and 0 < info["finished"] < 100000 and info["error"] is None
+    assert len((out / "sweep.csv").read_text().splitlines()) == 1 + info["finished"]
+    assert "stopped early" in err and "Traceback" not in err
 
 
 def test_the_batch_loop_reads_the_columns_the_trajectory_names():

@@ -1,7 +1,9 @@
 """Running a sweep: the grid cut into batches, run on local threads or a Dask cluster.
 
 Locally, a pool of threads runs the batches: the compiled loop releases the GIL, so the
-threads run on all cores at once, sharing one compiled landscape. With a scheduler
+threads run on all cores at once, sharing one compiled landscape. Runs whose contact changes
+mode go through ``Simulation``, whose Python holds the GIL: their batches run in worker
+processes (``processes``), each compiling the landscape once. With a scheduler
 address the batches go to a Dask distributed cluster (``client.map`` over the batches,
 results taken ``as_completed``); each worker process compiles the landscape on its first
 batch. A batch is sized to take a few tenths of a second (Dask's advice: tasks of 100 ms or
@@ -15,6 +17,7 @@ import os
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Callable
 
 import numpy as np
@@ -22,7 +25,7 @@ import numpy as np
 from ..basins import Basins
 from ..scene import Scene
 from ..run_size import MAX_STEPS, step_count
-from . import batch
+from . import batch, processes
 from .grid import PARAMETER_PREFIX, Grid, check_keys
 from .options import CONNECT_TIMEOUT, WORKER_TIMEOUT
 from .outcomes import NOT_RUN, O_BASIN, O_REST_X, O_REST_Y, OUTCOMES
@@ -93,7 +96,7 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
 
     vary: a mapping from dotted scene keys (``start.vx``, ``ball.radius``, ... see
     ``grid.KEYS``) to their values; the runs are the full grid, the last key varying
-    fastest. Local by default, on ``workers`` threads (default: every core); with
+    fastest. Local by default, on ``workers`` threads or processes (default: every core); with
     ``scheduler`` (a Dask address, ``tcp://host:8786``) on that cluster instead: the scheduler
     must answer within ``connect_timeout`` seconds and have a worker within ``worker_timeout``
     (and get one back within that time if all leave), else ValueError saying which; setting
@@ -133,7 +136,8 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
     started = time.perf_counter()
     if scheduler is None:
         table.workers = workers or local_workers()
-        _run_local(_tasks(scene, grid, table.workers), table.workers, take, cancel)
+        table.processes, table.error = _run_local(_tasks(scene, grid, table.workers), table.workers, take,
+                                                  cancel, batch.changes_mode(scene, grid.keys))
     else:
         table.scheduler = str(scheduler)
         table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel,
@@ -162,25 +166,49 @@ def _tasks(scene: Scene, grid: Grid, workers: int) -> list[batch.Task]:
     return [batch.Task(scene, grid, lo, min(lo + size, grid.size)) for lo in range(0, grid.size, size)]
 
 
-def _run_local(tasks, workers: int, take, cancel: threading.Event) -> None:
-    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rollball-sweep") as pool:
-        pending = {pool.submit(batch.run, task) for task in tasks}
+def _run_local(tasks, workers: int, take, cancel: threading.Event, hold_lock: bool) -> tuple[bool, str | None]:
+    """Run the batches on ``workers`` threads, or processes if their runs hold the GIL
+    (``hold_lock``; ``processes``) and there are two workers and two batches or more: where
+    this system cannot start processes, on threads. Returns whether they ran on processes, and
+    why the sweep stopped early if a worker process died (the batches finished before are
+    kept), else None."""
+    if hold_lock and workers > 1 and len(tasks) > 1:
         try:
-            while pending:
-                finished, pending = wait(pending, timeout=0.1, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    if not future.cancelled():
-                        take(future.result())
-                if cancel.is_set():
-                    for future in pending:
-                        future.cancel()  # those not started; the running ones finish
-                    for future in wait(pending).done:
-                        if not future.cancelled():
-                            take(future.result())
-                    break
-        finally:  # an error in a batch: do not start the rest
-            for future in pending:
-                future.cancel()
+            pool = processes.pool(workers)
+        except (OSError, ImportError, NotImplementedError):
+            pass
+        else:
+            return True, _drain(pool, tasks, take, cancel)
+    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rollball-sweep") as pool:
+        return False, _drain(pool, tasks, take, cancel)
+
+
+def _drain(pool, tasks, take, cancel: threading.Event) -> str | None:
+    """Send the batches to ``pool`` and ``take`` their results as they come; on ``cancel``
+    the batches not started are dropped, those under way taken."""
+    with processes.held_interrupts():
+        pending = {pool.submit(batch.run, task) for task in tasks}
+    try:
+        while pending:
+            finished, pending = wait(pending, timeout=0.1, return_when=FIRST_COMPLETED)
+            if cancel.is_set():
+                for future in pending:
+                    future.cancel()  # those not started; the running ones finish
+                finished |= wait(pending).done
+                pending = set()
+            for future in sorted(finished, key=lambda f: f.cancelled() or f.exception() is not None):
+                if not future.cancelled():   # (the batches that ran first: an error after them)
+                    take(future.result())
+    except BrokenProcessPool as error:
+        processes.discard(pool)
+        for future in pending:   # (those finished before it that were not taken above)
+            if future.done() and not future.cancelled() and future.exception() is None:
+                take(future.result())
+        return f"a sweep's worker process ended unexpectedly ({error or 'it was killed'})"
+    finally:  # an error in a batch: do not start the rest
+        for future in pending:
+            future.cancel()
+    return None
 
 
 def _probe(address: str, timeout: float, cancel: threading.Event | None = None) -> None:

@@ -47,10 +47,11 @@ class SweepTable:
     outcomes: np.ndarray               # (runs, len(OUTCOMES))
     messages: dict[int, str] = field(default_factory=dict)   # why a run's scene was refused
     seconds: float = 0.0               # wall time of the sweep
-    workers: int | None = None         # local threads, or the cluster's workers
+    workers: int | None = None         # local threads or processes, or the cluster's workers
+    processes: bool = False            # the local workers were processes (runs that hold the GIL)
     scheduler: str | None = None       # Dask scheduler address, or None for a local sweep
     machine: str = ""
-    error: str | None = None           # why a sweep on a cluster stopped early
+    error: str | None = None           # why a sweep stopped early: its cluster or a worker process failed
     minima: tuple | None = None        # the landscape's minima the basins are numbered by (basins.Minimum)
 
     @property
@@ -116,7 +117,8 @@ class SweepTable:
             "runs": len(self), "finished": done, "partial": self.partial, "error": self.error,
             "outcomes": list(OUTCOMES), "status": self.counts(),
             "method": self.scene.integrator.method,
-            "machine": self.machine, "workers": self.workers, "scheduler": self.scheduler,
+            "machine": self.machine, "workers": self.workers,
+            "processes": self.processes, "scheduler": self.scheduler,
             "seconds": self.seconds,
             "runs_per_second": done / self.seconds if self.seconds > 0 else None,
             **({} if self.minima is None else {"minima": [m.to_dict() for m in self.minima]}),
