@@ -184,7 +184,7 @@ def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeyp
     assert len(landed) == (18 if local_workers() == 1 else 12) and min(landed) >= 1, landed
     assert figures["cylinder"]["hybrid_all_s"] > 0.0 and figures["cylinder"]["glued_all_s"] > 0.0
     assert figures["cylinder"]["workers"] >= 1
-    met = {**figures["cylinder"], "ratio": 3.0, "ratio_all": 3.5}
+    met = {**figures["cylinder"], "ratio": 3.0, "ratio_all": 3.5, "ratio_dask": 3.5}
     assert "missed" not in _targets(hybrid_sweeps={"cylinder": met})
     missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio": 5.0}}).splitlines()
               if "missed" in line]
@@ -192,3 +192,7 @@ def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeyp
     missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio_all": 4.5}}).splitlines()
               if "missed" in line]
     assert len(missed) == 1 and "| cylinder |" in missed[0] and "4.5×" in missed[0]
+    assert figures["cylinder"]["hybrid_dask_s"] > 0.0 and figures["cylinder"]["dask_workers"] == local_workers()
+    missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio_dask": 4.6}}).splitlines()
+              if "missed" in line]
+    assert len(missed) == 1 and "| cylinder |" in missed[0] and "4.6×" in missed[0]

@@ -55,8 +55,9 @@ def test_the_manual_quotes_what_the_script_measured():
         f"{number(s['basins']['1'])} in well 1, {number(s['basins']['2'])} in well 2, "
         f"{number(s['basins']['3'])} in well 3, none beside a saddle (basin 0)",
         "Every run ends `ok`" if ok == s["runs"] else f"{number(s['runs'] - ok)} end otherwise",
-        f"Wall time **{s['seconds']:.1f} s** on the 2 threads ({s['runs_per_second']:.0f} runs/s); on Dask "
-        f"**{s['dask_seconds']:.1f} s**, the same table to the last bit",
+        f"Wall time **{s['seconds']:.1f} s** on the {s['workers']} local {s['local']} "
+        f"({s['runs_per_second']:.0f} runs/s",
+        f"on Dask **{s['dask_seconds']:.1f} s**, the same table to the last bit",
     ]
     for text in quoted:
         assert text in MANUAL, text

@@ -402,3 +402,35 @@ def test_the_contacts_outcomes_are_drawn_where_the_contact_changes_and_named_in_
         main(["sweep", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert all(name in text for name in OUTCOMES) and all(name in text for name in CONTACT_OUTCOMES)
+
+
+def test_a_process_that_ends_during_a_sweep_on_worker_processes_waits_only_for_the_batches_in_flight():
+    """The batches sent to worker processes are run even when the sweep's process exits (loky
+    finishes them): a sweep sends a few at a time, so a program that ends (the app closed in
+    mid-sweep) waits seconds, not for the whole sweep (here some 200 s of batches)."""
+    import subprocess
+    import sys
+    import time
+
+    code = """if True:
+        import threading, time
+        import numpy as np
+        from rollball import Scene, sweep
+        from rollball.examples import EXAMPLES_DIR
+        scene = Scene.load(EXAMPLES_DIR / "liftoff.json")
+        started = threading.Event()
+        run = lambda: sweep(scene, {"start.vx": np.linspace(3, 6, 400000)}, workers=2,
+                            progress=lambda done, total, text: started.set())
+        threading.Thread(target=run, daemon=True).start()
+        started.wait(120)
+        print("exiting", flush=True)
+    """
+    process = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline().strip() == "exiting"   # (a batch has finished)
+        exiting = time.monotonic()
+        process.wait(timeout=60)
+        assert time.monotonic() - exiting < 60 and process.returncode == 0
+    finally:
+        process.kill()
+        process.wait()

@@ -130,6 +130,13 @@ def _targets(t: dict) -> list[str]:
             lines += [f"| {name} | {h['hybrid_all_s']:.2f} s | {h['glued_all_s']:.2f} s | **{h['ratio_all']:.1f}×**"
                       f"{_missed(h['ratio_all'] <= HYBRID_GOAL)} | ≤ {HYBRID_GOAL:g}× | "
                       f"{h.get('hybrid_first_s', math.nan):.2f} s |" for name, h in every]
+        dask = [(name, h) for name, h in sweeps.items() if "ratio_dask" in h]
+        if dask:
+            lines += ["", f"The same sweeps on a Dask cluster of {dask[0][1]['dask_workers']} worker processes on "
+                          "this machine, wall time, medians, the two in turn:", "",
+                      "| scene | changes mode | glued | ratio | goal |", "|---|---|---|---|---|"]
+            lines += [f"| {name} | {h['hybrid_dask_s']:.2f} s | {h['glued_dask_s']:.2f} s | **{h['ratio_dask']:.1f}×**"
+                      f"{_missed(h['ratio_dask'] <= HYBRID_GOAL)} | ≤ {HYBRID_GOAL:g}× |" for name, h in dask]
     cost = t.get("dissipation")
     if cost:
         lines += ["", "The wells example to 16 s (rk4, dt 2e-3: 20 turning points) with rolling resistance, spin "

@@ -4,6 +4,7 @@ the two in one run, so both see the same load on a shared machine."""
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
@@ -287,9 +288,10 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
     ``glued_all_s``, ``ratio_all``), the hybrid one on worker processes (its runs, one
     ``Simulation`` a point, hold the interpreter's lock between their kernel calls), the glued one
     on threads; ``hybrid_first_s``: the first hybrid sweep on every core, which starts the worker
-    processes (the others find them started, as sweeps in a row do)."""
-    from ..sweeps import sweep   # (sweeps load on demand)
-    from ..sweeps import processes
+    processes (the others find them started, as sweeps in a row do). Where Dask distributed is
+    installed, the same on a Dask cluster of ``local_workers`` processes on this machine
+    (``dask_workers``, ``hybrid_dask_s``, ``glued_dask_s``, ``ratio_dask``)."""
+    from ..sweeps import processes, sweep   # (sweeps load on demand)
     from ..sweeps.runner import local_workers
 
     def cpu(scene, vary) -> float:
@@ -297,30 +299,50 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
         sweep(scene, vary, workers=1)
         return time.process_time() - started
 
-    def wall(scene, vary) -> float:
+    def wall(scene, vary, **where) -> float:
         started = time.perf_counter()
-        sweep(scene, vary)
+        sweep(scene, vary, **where)
         return time.perf_counter() - started
 
+    def in_turn(scene, glued, vary, timed, **where) -> tuple[float, float, float]:
+        pairs = [(timed(scene, vary, **where), timed(glued, vary, **where)) for _ in range(repeats)]
+        hybrid, plain = (np.array(column) for column in zip(*pairs))
+        return float(np.median(hybrid)), float(np.median(plain)), float(np.median(hybrid / np.maximum(plain, 1e-9)))
+
     out = {}
-    for name in HYBRID:
-        scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
-        vary = {"start.vx": np.linspace(0.95 * scene.start.vx, 1.05 * scene.start.vx, runs)}
-        glued = _glued(scene)
-        cpu(scene, vary), cpu(glued, vary)   # (compiled, the landscape too)
-        pairs = [(cpu(scene, vary), cpu(glued, vary)) for _ in range(repeats)]
-        hybrid, plain = (np.array(column) for column in zip(*pairs))
-        out[name] = {"runs": runs, "hybrid_s": float(np.median(hybrid)), "glued_s": float(np.median(plain)),
-                     "ratio": float(np.median(hybrid / np.maximum(plain, 1e-9)))}
-        processes.close()
-        first = wall(scene, vary)
-        wall(glued, vary)
-        pairs = [(wall(scene, vary), wall(glued, vary)) for _ in range(repeats)]
-        hybrid, plain = (np.array(column) for column in zip(*pairs))
-        out[name].update(workers=local_workers(), hybrid_first_s=first, hybrid_all_s=float(np.median(hybrid)),
-                         glued_all_s=float(np.median(plain)),
-                         ratio_all=float(np.median(hybrid / np.maximum(plain, 1e-9))))
+    with _local_cluster(local_workers()) as cluster:
+        for name in HYBRID:
+            scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
+            vary = {"start.vx": np.linspace(0.95 * scene.start.vx, 1.05 * scene.start.vx, runs)}
+            glued = _glued(scene)
+            cpu(scene, vary), cpu(glued, vary)   # (compiled, the landscape too)
+            figures = out[name] = {"runs": runs, "workers": local_workers()}
+            figures["hybrid_s"], figures["glued_s"], figures["ratio"] = in_turn(scene, glued, vary, cpu)
+            processes.close()
+            figures["hybrid_first_s"] = wall(scene, vary)
+            wall(glued, vary)
+            figures["hybrid_all_s"], figures["glued_all_s"], figures["ratio_all"] = in_turn(scene, glued, vary, wall)
+            if cluster is not None:
+                where = {"scheduler": cluster.scheduler_address}
+                wall(scene, vary, **where), wall(glued, vary, **where)   # (each worker compiles the landscape)
+                figures["dask_workers"] = len(cluster.workers)
+                figures["hybrid_dask_s"], figures["glued_dask_s"], figures["ratio_dask"] = in_turn(
+                    scene, glued, vary, wall, **where)
     return out
+
+
+@contextlib.contextmanager
+def _local_cluster(workers: int):
+    """A Dask cluster of ``workers`` processes of one thread on this machine, or None without
+    Dask distributed."""
+    try:
+        from distributed import LocalCluster
+    except ImportError:
+        yield None
+        return
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=":0", worker_dashboard_address=":0") as cluster:
+        yield cluster
 
 
 DISSIPATION_GOAL = 1.5   # a run with rolling resistance, spin friction and air against the same run without

@@ -34,6 +34,7 @@ from .table import SweepTable
 # Landscape evaluations per batch: about 0.2 s on a 2020s core for a small formula.
 BATCH_EVALUATIONS = 3_000_000
 BATCHES_PER_WORKER = 4
+IN_FLIGHT = 2            # batches sent to a worker at a time (one running, one waiting)
 POLL = 0.2               # seconds between looks at the cancel event while waiting on a cluster
 SCHEMES = ("tcp",)       # the Dask transports a sweep connects by (inproc too, in-process)
 
@@ -178,17 +179,25 @@ def _run_local(tasks, workers: int, take, cancel: threading.Event, hold_lock: bo
         except (OSError, ImportError, NotImplementedError):
             pass
         else:
-            return True, _drain(pool, tasks, take, cancel)
+            return True, _drain(pool, tasks, workers, take, cancel)
     with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rollball-sweep") as pool:
-        return False, _drain(pool, tasks, take, cancel)
+        return False, _drain(pool, tasks, workers, take, cancel)
 
 
-def _drain(pool, tasks, take, cancel: threading.Event) -> str | None:
-    """Send the batches to ``pool`` and ``take`` their results as they come; on ``cancel``
-    the batches not started are dropped, those under way taken."""
-    with processes.held_interrupts():
-        pending = {pool.submit(batch.run, task) for task in tasks}
+def _drain(pool, tasks, workers: int, take, cancel: threading.Event) -> str | None:
+    """Send the batches to ``pool``, at most ``IN_FLIGHT`` per worker at a time, and ``take``
+    their results as they come; on ``cancel`` the batches not started are dropped, those under
+    way taken. (A process pool's batches sent are run even when this process exits: the few in
+    flight, not the whole sweep.)"""
+    waiting, pending = list(reversed(tasks)), set()
+
+    def send() -> None:
+        with processes.held_interrupts():
+            while waiting and len(pending) < IN_FLIGHT * workers and not cancel.is_set():
+                pending.add(pool.submit(batch.run, waiting.pop()))
+
     try:
+        send()
         while pending:
             finished, pending = wait(pending, timeout=0.1, return_when=FIRST_COMPLETED)
             if cancel.is_set():
@@ -199,6 +208,7 @@ def _drain(pool, tasks, take, cancel: threading.Event) -> str | None:
             for future in sorted(finished, key=lambda f: f.cancelled() or f.exception() is not None):
                 if not future.cancelled():   # (the batches that ran first: an error after them)
                     take(future.result())
+            send()
     except BrokenProcessPool as error:
         processes.discard(pool)
         for future in pending:   # (those finished before it that were not taken above)
