@@ -246,7 +246,8 @@ class SweepDialog(QtWidgets.QDialog):
         self.table = table
         counts = ", ".join(f"{n:,} {name}" for name, n in table.counts().items())
         done = int(table.done.sum())
-        self.status.setText(f"{done:,} runs in {table.seconds:.2f} s ({counts})"
+        where = f"{table.workers} worker {'processes' if table.processes else 'threads'}"
+        self.status.setText(f"{done:,} runs in {table.seconds:.2f} s on {where} ({counts})"
                             + (f" — stopped early: {table.error}" if table.error
                                else " — cancelled" if table.partial else "")
                             + ". Click a run to load its start into the main window.")

@@ -7,6 +7,7 @@ import subprocess
 import sys
 import time
 
+import pytest
 from rollball_app.worker import WAIT_SECONDS, Worker
 
 from .guitools import set_field
@@ -48,7 +49,7 @@ from rollball.examples import EXAMPLES_DIR
 
 app = application()
 window = MainWindow(Preferences(QtCore.QSettings(sys.argv[1], QtCore.QSettings.Format.IniFormat)))
-window.files.open_scene(EXAMPLES_DIR / "hills.json", remember=False)
+window.files.open_scene(EXAMPLES_DIR / sys.argv[2], remember=False)
 window.show()
 window.compare_action.setChecked(True)
 window.runs.start()
@@ -70,8 +71,9 @@ print("closed", code)
 """
 
 
-def test_the_app_closed_with_work_in_flight_exits_0(tmp_path):
-    result = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "preferences.ini")],
+@pytest.mark.parametrize("example", ["hills.json", "liftoff.json"])   # (liftoff's sweep: worker processes)
+def test_the_app_closed_with_work_in_flight_exits_0(tmp_path, example):
+    result = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "preferences.ini"), example],
                             capture_output=True, text=True, timeout=120, env=dict(os.environ))
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ["closed", "0"]

@@ -143,3 +143,18 @@ def test_friction_and_restitution_are_swept_with_their_own_ranges(qtbot, window)
     assert table.keys == ("contact.friction",) and table.done.all() and set(table["status"]) == {"ok"}
     np.testing.assert_array_equal(table["first_slip_time"], 0.0)   # struck without spin: it slides at once
     dialog.close()
+
+
+def test_a_sweep_of_runs_that_fly_goes_to_worker_processes_and_says_so(qtbot, window):
+    from rollball.examples import EXAMPLES_DIR
+
+    window.files.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
+    dialog = _open(qtbot, window)
+    dialog.rows[1].enabled.setChecked(False)
+    _set_row(dialog.rows[0], "start.vx", 3.0, 6.0, 12)
+    _run(qtbot, dialog)
+    table = dialog.table
+    assert table.done.all() and table.error is None and (table["landings"] >= 0).all()
+    where = "worker processes" if table.workers > 1 else "worker threads"
+    assert table.processes == (table.workers > 1) and f"on {table.workers} {where}" in dialog.status.text()
+    dialog.close()
