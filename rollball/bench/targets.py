@@ -309,25 +309,28 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
         hybrid, plain = (np.array(column) for column in zip(*pairs))
         return float(np.median(hybrid)), float(np.median(plain)), float(np.median(hybrid / np.maximum(plain, 1e-9)))
 
-    out = {}
-    with _local_cluster(local_workers()) as cluster:
-        for name in HYBRID:
-            scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
-            vary = {"start.vx": np.linspace(0.95 * scene.start.vx, 1.05 * scene.start.vx, runs)}
-            glued = _glued(scene)
-            cpu(scene, vary), cpu(glued, vary)   # (compiled, the landscape too)
-            figures = out[name] = {"runs": runs, "workers": local_workers()}
-            figures["hybrid_s"], figures["glued_s"], figures["ratio"] = in_turn(scene, glued, vary, cpu)
-            processes.close()
-            figures["hybrid_first_s"] = wall(scene, vary)
-            wall(glued, vary)
-            figures["hybrid_all_s"], figures["glued_all_s"], figures["ratio_all"] = in_turn(scene, glued, vary, wall)
-            if cluster is not None:
-                where = {"scheduler": cluster.scheduler_address}
-                wall(scene, vary, **where), wall(glued, vary, **where)   # (each worker compiles the landscape)
-                figures["dask_workers"] = len(cluster.workers)
-                figures["hybrid_dask_s"], figures["glued_dask_s"], figures["ratio_dask"] = in_turn(
-                    scene, glued, vary, wall, **where)
+    out, scenes = {}, {}
+    for name in HYBRID:
+        scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
+        vary = {"start.vx": np.linspace(0.95 * scene.start.vx, 1.05 * scene.start.vx, runs)}
+        glued = _glued(scene)
+        scenes[name] = scene, glued, vary
+        cpu(scene, vary), cpu(glued, vary)   # (compiled, the landscape too)
+        figures = out[name] = {"runs": runs, "workers": local_workers()}
+        figures["hybrid_s"], figures["glued_s"], figures["ratio"] = in_turn(scene, glued, vary, cpu)
+        processes.close()
+        figures["hybrid_first_s"] = wall(scene, vary)
+        wall(glued, vary)
+        figures["hybrid_all_s"], figures["glued_all_s"], figures["ratio_all"] = in_turn(scene, glued, vary, wall)
+    processes.close()
+    with _local_cluster(local_workers()) as cluster:   # (afterwards: an idle cluster takes some CPU time)
+        for name, (scene, glued, vary) in scenes.items() if cluster is not None else ():
+            where = {"scheduler": cluster.scheduler_address}
+            wall(scene, vary, **where), wall(glued, vary, **where)   # (each worker compiles the landscape)
+            figures = out[name]
+            figures["dask_workers"] = len(cluster.workers)
+            figures["hybrid_dask_s"], figures["glued_dask_s"], figures["ratio_dask"] = in_turn(
+                scene, glued, vary, wall, **where)
     return out
 
 
