@@ -154,15 +154,24 @@ def _sweep_processes() -> list:
 def test_processes_give_the_same_table_bit_for_bit_and_report_progress():
     """The liftoff example flies: its runs hold the GIL, and on two workers its batches run in
     worker processes; the table is that of one worker (in this process) bit for bit."""
-    vary = {"start.vx": np.linspace(3, 6, 13), "start.spin": np.linspace(-4, 4, 5)}
+    vary = {"start.vx": np.linspace(3, 6, 26), "start.spin": np.linspace(-4, 4, 5)}
     calls = []
     one = sweep(LIFTOFF, vary, workers=1)
     two = sweep(LIFTOFF, vary, workers=2, progress=lambda done, total, text: calls.append((done, total)))
     np.testing.assert_array_equal(one.codes, two.codes)
     np.testing.assert_array_equal(one.outcomes, two.outcomes)   # NaN in the same places too
-    assert calls[-1] == (65, 65) and [d for d, _ in calls] == sorted(d for d, _ in calls)
-    assert not two.partial and two.workers == 2 and two.error is None
+    assert calls[-1] == (130, 130) and [d for d, _ in calls] == sorted(d for d, _ in calls)
+    assert not two.partial and two.workers == 2 and two.error is None and two.processes and not one.processes
     assert len(_sweep_processes()) == 2
+
+
+def test_a_sweep_too_small_to_repay_starting_processes_runs_on_threads():
+    from rollball.sweeps.runner import PROCESS_EVALUATIONS, run_evaluations
+
+    vary = {"start.vx": np.linspace(3, 6, 12)}   # (liftoff: 4 000 evaluations a run, 48 000 in all)
+    assert 12 * run_evaluations(LIFTOFF, Grid.of(vary)) < PROCESS_EVALUATIONS
+    small = sweep(LIFTOFF, vary, workers=2)
+    assert not small.processes and small.done.all()
 
 
 def test_without_processes_the_runs_go_on_threads(monkeypatch):
@@ -171,12 +180,12 @@ def test_without_processes_the_runs_go_on_threads(monkeypatch):
     def refused(workers):
         raise OSError("no semaphores here")
 
-    vary = {"start.vx": np.linspace(3, 6, 9)}
+    vary = {"start.vx": np.linspace(3, 6, 200)}
     monkeypatch.setattr(processes, "pool", refused)
     threads = sweep(LIFTOFF, vary, workers=2)
     monkeypatch.undo()
     np.testing.assert_array_equal(threads.outcomes, sweep(LIFTOFF, vary, workers=1).outcomes)
-    assert threads.error is None and threads.done.all()
+    assert threads.error is None and threads.done.all() and not threads.processes
 
 
 def test_a_worker_process_that_dies_stops_the_sweep_keeping_the_finished_runs():
@@ -191,8 +200,8 @@ def test_a_worker_process_that_dies_stops_the_sweep_keeping_the_finished_runs():
     table = sweep(LIFTOFF, {"start.vx": np.linspace(3, 6, 4000)}, workers=2, progress=progress)
     assert killed and table.partial and "worker process ended unexpectedly" in table.error
     assert 0 < table.done.sum() < len(table) and set(table["status"][table.done]) == {"ok"}
-    again = sweep(LIFTOFF, {"start.vx": np.linspace(3, 6, 9)}, workers=2)   # a new pool
-    assert again.done.all() and again.error is None
+    again = sweep(LIFTOFF, {"start.vx": np.linspace(3, 6, 200)}, workers=2)   # a new pool
+    assert again.done.all() and again.error is None and again.processes
 
 
 def test_cancel_stops_early_and_keeps_the_finished_runs(tmp_path):

@@ -35,6 +35,11 @@ from .table import SweepTable
 BATCH_EVALUATIONS = 3_000_000
 BATCHES_PER_WORKER = 4
 IN_FLIGHT = 2            # batches sent to a worker at a time (one running, one waiting)
+# A sweep whose runs hold the GIL goes to worker processes from this many evaluations (counted
+# as ``run_evaluations`` does: 100 runs of liftoff, about 0.1 s of them on one core). A smaller
+# one takes no longer on threads, where processes could save hundredths of a second and cost a
+# second where they have yet to start.
+PROCESS_EVALUATIONS = 400_000
 POLL = 0.2               # seconds between looks at the cancel event while waiting on a cluster
 SCHEMES = ("tcp",)       # the Dask transports a sweep connects by (inproc too, in-process)
 
@@ -49,9 +54,9 @@ def local_workers() -> int:
         return os.cpu_count() or 1
 
 
-def batch_size(scene: Scene, grid: Grid, workers: int) -> int:
-    """Runs per batch: about BATCH_EVALUATIONS landscape evaluations for the longest run,
-    and at least BATCHES_PER_WORKER batches per worker."""
+def run_evaluations(scene: Scene, grid: Grid) -> int:
+    """The landscape evaluations of the grid's longest run, as its fixed steps count them
+    (a run that changes mode takes more: its flights' and stiff stretches')."""
     def extreme(key, pick, smallest=0.0):
         if key in grid.keys:
             values = grid.axes[grid.keys.index(key)]
@@ -62,10 +67,15 @@ def batch_size(scene: Scene, grid: Grid, workers: int) -> int:
     # steps too small for the longest run are refused run by run (status invalid), not sized for
     dt = extreme("integrator.dt", np.min, t_end / MAX_STEPS) or scene.integrator.dt
     try:
-        evaluations = step_count(dt, t_end) * batch.sweep_method(scene).stages
+        return step_count(dt, t_end) * batch.sweep_method(scene).stages
     except ValueError:
-        evaluations = BATCH_EVALUATIONS
-    runs = max(1, BATCH_EVALUATIONS // evaluations)
+        return BATCH_EVALUATIONS
+
+
+def batch_size(scene: Scene, grid: Grid, workers: int) -> int:
+    """Runs per batch: about BATCH_EVALUATIONS landscape evaluations for the longest run,
+    and at least BATCHES_PER_WORKER batches per worker."""
+    runs = max(1, BATCH_EVALUATIONS // run_evaluations(scene, grid))
     return max(1, min(runs, math.ceil(grid.size / (BATCHES_PER_WORKER * workers))))
 
 
@@ -137,8 +147,10 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
     started = time.perf_counter()
     if scheduler is None:
         table.workers = workers or local_workers()
+        hold_lock = (batch.changes_mode(scene, grid.keys)
+                     and grid.size * run_evaluations(scene, grid) >= PROCESS_EVALUATIONS)
         table.processes, table.error = _run_local(_tasks(scene, grid, table.workers), table.workers, take,
-                                                  cancel, batch.changes_mode(scene, grid.keys))
+                                                  cancel, hold_lock)
     else:
         table.scheduler = str(scheduler)
         table.workers, table.error = _run_dask(scene, grid, str(scheduler), take, cancel,
@@ -169,7 +181,8 @@ def _tasks(scene: Scene, grid: Grid, workers: int) -> list[batch.Task]:
 
 def _run_local(tasks, workers: int, take, cancel: threading.Event, hold_lock: bool) -> tuple[bool, str | None]:
     """Run the batches on ``workers`` threads, or processes if their runs hold the GIL
-    (``hold_lock``; ``processes``) and there are two workers and two batches or more: where
+    (``hold_lock``, for a sweep worth starting them; ``processes``) and there are two workers
+    and two batches or more: where
     this system cannot start processes, on threads. Returns whether they ran on processes, and
     why the sweep stopped early if a worker process died (the batches finished before are
     kept), else None."""

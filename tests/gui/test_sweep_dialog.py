@@ -151,7 +151,7 @@ def test_a_sweep_of_runs_that_fly_goes_to_worker_processes_and_says_so(qtbot, wi
     window.files.open_scene(EXAMPLES_DIR / "liftoff.json", remember=False)
     dialog = _open(qtbot, window)
     dialog.rows[1].enabled.setChecked(False)
-    _set_row(dialog.rows[0], "start.vx", 3.0, 6.0, 12)
+    _set_row(dialog.rows[0], "start.vx", 3.0, 6.0, 120)   # (enough to go to worker processes)
     _run(qtbot, dialog)
     table = dialog.table
     assert table.done.all() and table.error is None and (table["landings"] >= 0).all()
