@@ -21,7 +21,7 @@ OTHERS = [*sorted((ROOT / "docs" / "reference").glob("*.md")), ROOT / "docs" / "
           ROOT / "docs" / "maintainers.md"]
 NOT_RUN = {
     "scripts/run": "opens the app's window and waits for its user (tests/gui drive the app)",
-    "scripts/test": "runs the whole test suite (about 6 minutes), this test among it",
+    "scripts/test": "runs the whole test suite (about 7 minutes), this test among it",
     ".venv/bin/rollball-app": "opens the app's window to record a video (tests/gui record one)",
 }
 FENCE = re.compile(r"^( *)```(\w*)\n(.*?)^\1```$", re.M | re.S)
