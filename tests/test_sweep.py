@@ -443,3 +443,20 @@ def test_a_process_that_ends_during_a_sweep_on_worker_processes_waits_only_for_t
     finally:
         process.kill()
         process.wait()
+
+
+def test_a_glued_sweep_on_every_core_starts_no_process():
+    """The 2011 model's runs release the GIL in the compiled batch loop: their sweep runs on
+    threads and starts nothing (no worker, no resource tracker)."""
+    import subprocess
+    import sys
+
+    code = """if True:
+        import numpy as np, psutil
+        from rollball import Scene, sweep
+        from rollball.examples import EXAMPLES_DIR
+        table = sweep(Scene.load(EXAMPLES_DIR / "hills.json"), {"start.x": np.linspace(-1, 1, 400)}, workers=2)
+        print(table.processes, len(psutil.Process().children(recursive=True)))
+    """
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert result.stdout.split() == ["False", "0"], result.stderr

@@ -12,6 +12,7 @@ more), and there are at least four per worker so that the load evens out.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import threading
@@ -182,30 +183,30 @@ def _tasks(scene: Scene, grid: Grid, workers: int) -> list[batch.Task]:
 def _run_local(tasks, workers: int, take, cancel: threading.Event, hold_lock: bool) -> tuple[bool, str | None]:
     """Run the batches on ``workers`` threads, or processes if their runs hold the GIL
     (``hold_lock``, for a sweep worth starting them; ``processes``) and there are two workers
-    and two batches or more: where
-    this system cannot start processes, on threads. Returns whether they ran on processes, and
-    why the sweep stopped early if a worker process died (the batches finished before are
-    kept), else None."""
+    and two batches or more: where this system cannot start processes, on threads. Returns
+    whether they ran on processes, and why the sweep stopped early if a worker process died
+    (the batches finished before are kept), else None."""
     if hold_lock and workers > 1 and len(tasks) > 1:
         try:
             pool = processes.pool(workers)
         except (OSError, ImportError, NotImplementedError):
             pass
         else:
-            return True, _drain(pool, tasks, workers, take, cancel)
+            return True, _drain(pool, tasks, workers, take, cancel, processes.held_interrupts)
     with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rollball-sweep") as pool:
-        return False, _drain(pool, tasks, workers, take, cancel)
+        return False, _drain(pool, tasks, workers, take, cancel, contextlib.nullcontext)
 
 
-def _drain(pool, tasks, workers: int, take, cancel: threading.Event) -> str | None:
-    """Send the batches to ``pool``, at most ``IN_FLIGHT`` per worker at a time, and ``take``
-    their results as they come; on ``cancel`` the batches not started are dropped, those under
-    way taken. (A process pool's batches sent are run even when this process exits: the few in
-    flight, not the whole sweep.)"""
+def _drain(pool, tasks, workers: int, take, cancel: threading.Event, sending) -> str | None:
+    """Send the batches to ``pool``, at most ``IN_FLIGHT`` per worker at a time, within the
+    context ``sending`` (a process pool's starts its workers), and ``take`` their results as they
+    come; on ``cancel`` the batches not started are dropped, those under way taken. (A process
+    pool's batches sent are run even when this process exits: the few in flight, not the whole
+    sweep.)"""
     waiting, pending = list(reversed(tasks)), set()
 
     def send() -> None:
-        with processes.held_interrupts():
+        with sending():
             while waiting and len(pending) < IN_FLIGHT * workers and not cancel.is_set():
                 pending.add(pool.submit(batch.run, waiting.pop()))
 
