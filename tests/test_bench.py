@@ -184,6 +184,9 @@ def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeyp
     assert len(landed) == 24 and min(landed) >= 1, landed
     assert figures["cylinder"]["hybrid_all_s"] > 0.0 and figures["cylinder"]["glued_all_s"] > 0.0
     assert figures["cylinder"]["workers"] >= 1
+    assert figures["cylinder"]["processes"] is False   # (six runs: too few to repay starting processes)
+    assert "| cylinder | " in _targets(hybrid_sweeps={"cylinder": figures["cylinder"]}) and "| threads |" in _targets(
+        hybrid_sweeps={"cylinder": figures["cylinder"]})
     met = {**figures["cylinder"], "ratio": 3.0, "ratio_all": 3.5, "ratio_dask": 3.5}
     assert "missed" not in _targets(hybrid_sweeps={"cylinder": met})
     missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio": 5.0}}).splitlines()
