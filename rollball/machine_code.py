@@ -159,11 +159,13 @@ class Arguments:
         elif ndim == 0:
             self.slots[i] = int(value)
         else:
-            if not (isinstance(value, np.ndarray) and value.ndim == ndim and value.dtype == dtype
-                    and value.flags.c_contiguous and value.flags.aligned):
+            flags = value.flags if isinstance(value, np.ndarray) else None
+            if not (flags is not None and value.ndim == ndim and value.dtype == dtype and flags.c_contiguous
+                    and flags.aligned):
                 raise TypeError(f"{self.name}: {key} must be a C-contiguous {kind} of {dtype}")
             slots = self.slots
-            slots[i], slots[i + 1], slots[i + 2] = _address(value), value.shape[0], value.shape[1] if ndim == 2 else 1
+            slots[i], slots[i + 1], slots[i + 2] = (_address(value, flags.writeable), value.shape[0],
+                                                    value.shape[1] if ndim == 2 else 1)
         self.kept[key] = value
 
     def __call__(self) -> None:
@@ -173,13 +175,12 @@ class Arguments:
 _SLOTS, _FLOATS = ctypes.c_int64 * interface.ENTRY_SLOTS, ctypes.c_double * interface.ENTRY_SLOTS
 
 
-def _address(array: np.ndarray) -> int:
+def _address(array: np.ndarray, writeable: bool) -> int:
     """The address of an array's first element: through ctypes' view of a writable buffer (a
     quarter of the time numpy's ``ctypes.data`` takes), else (read-only, empty) numpy's."""
-    try:
+    if writeable and array.size:
         return ctypes.addressof(ctypes.c_char.from_buffer(array))
-    except (TypeError, ValueError):
-        return array.ctypes.data
+    return array.ctypes.data
 
 
 @functools.cache

@@ -517,6 +517,9 @@ class ModeMachine:
         ring = 1e-6 * (1.0 + abs(x) + abs(y))
         d = run.landscape.evaluate(x + ring * RING_COS, y + ring * RING_SIN, run.scene.parameter_values)
         normals = unit_normal(d).T.tolist()   # (a pair with a normal not finite: a NaN apart, not counted)
+        first = normals[0]
+        if all(math.dist(first, b) < 0.49e-2 for b in normals[1:]):   # (no pair is 10⁻² apart then)
+            return False
         return any(math.dist(a, b) > 1e-2 for i, a in enumerate(normals) for b in normals[i + 1:])
 
     def _pivot_force(self, start: FreeState, x: float, y: float) -> float:

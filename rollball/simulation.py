@@ -106,24 +106,38 @@ def initial_momentum(d: np.ndarray, vx, vy, spin, r, m) -> np.ndarray:
     d: the landscape's (f, f_x, f_y, ...) at the contact point (``Landscape.evaluate``);
     vx, vy: horizontal centre velocity (vz follows from tangency); spin: angular velocity
     about the normal; r, m: the ball. Elementwise, so one start or a whole array of starts
-    give bit-identical values.
+    give bit-identical values (one start in Python's floats: the same numbers, sooner).
     """
+    n1, n2, n3 = _normal(d)
+    if d.ndim == 1:
+        d, vx, vy, spin, r, m = d.tolist(), float(vx), float(vy), float(spin), float(r), float(m)
     fx, fy = d[1], d[2]
-    n1, n2, n3 = unit_normal(d)
     c1, c2, c3 = vx, vy, fx * vx + fy * vy
     o1 = (n2 * c3 - n3 * c2) / r + spin * n1  # omega = N x c' / r + spin N
     o2 = (n3 * c1 - n1 * c3) / r + spin * n2
     o3 = (n1 * c2 - n2 * c1) / r + spin * n3
-    return rolling_momentum(d, o1, o2, o3, r, m)
+    return _momentum(n1, n2, n3, o1, o2, o3, r, m)
 
 
 def rolling_momentum(d: np.ndarray, o1, o2, o3, r, m) -> np.ndarray:
     """The angular momentum about the contact point of a ball rolling with angular velocity
     (o1, o2, o3): v = T ω = m r² (7/5 ω − N (N·ω)) (docs/design.md §1), elementwise."""
-    n1, n2, n3 = unit_normal(d)
+    if d.ndim == 1:
+        o1, o2, o3, r, m = float(o1), float(o2), float(o3), float(r), float(m)
+    return _momentum(*_normal(d), o1, o2, o3, r, m)
+
+
+def _normal(d: np.ndarray):
+    """The unit normal's three components: Python's floats for one point, else arrays."""
+    n = unit_normal(d)
+    return n.tolist() if n.ndim == 1 else n
+
+
+def _momentum(n1, n2, n3, o1, o2, o3, r, m) -> np.ndarray:
     no = n1 * o1 + n2 * o2 + n3 * o3
     mr2 = m * r * r
-    return np.stack([mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)])
+    v = mr2 * (1.4 * o1 - n1 * no), mr2 * (1.4 * o2 - n2 * no), mr2 * (1.4 * o3 - n3 * no)
+    return np.array(v) if isinstance(no, float) else np.stack(v)
 
 
 def initial_state(landscape: Landscape, scene: Scene) -> tuple[np.ndarray, np.ndarray]:

@@ -358,11 +358,11 @@ def test_kernel_machine_code_that_cannot_be_kept_says_so_not_first_run_only(monk
 
 
 def test_an_arrays_address_is_its_first_elements():
-    """``machine_code._address`` (ctypes' view of the buffer, numpy's ``ctypes.data`` where that
-    cannot be taken): the same address for a writable array, a view into one, a read-only array
-    and an empty one."""
+    """``machine_code._address`` (ctypes' view of a writable buffer, numpy's ``ctypes.data`` for a
+    read-only or empty one): the same address for a writable array, a view into one, a read-only
+    array and an empty one."""
     a = np.arange(12.0).reshape(3, 4)
     frozen = a.copy()
     frozen.flags.writeable = False
     for array in (a, a[1:], a[:, :2].copy(), frozen, a[:0], np.zeros(0, dtype=np.int64)):
-        assert machine_code._address(array) == array.ctypes.data
+        assert machine_code._address(array, array.flags.writeable) == array.ctypes.data
