@@ -77,6 +77,8 @@ def recording(scene: Scene, *, method: str | None = None, dt: float | None = Non
 
 def _positive(name: str, value, key: str | None = None) -> float:
     """A finite number > 0 (and whatever the scene rule for ``key`` adds) as a float."""
+    if type(value) is float and 0.0 < value < math.inf and not key:   # (a scene's own values: at once)
+        return value
     if isinstance(value, bool) or not isinstance(value, (numbers.Real, decimal.Decimal)):
         raise ValueError(f"{name} must be a number, not {type(value).__name__}")
     try:

@@ -23,7 +23,7 @@ from ..run_size import step_count
 from ..scene import Scene, SceneError
 from ..simulation import Simulation, initial_momentum
 from ..tableaus import METHODS, MethodKind, get_method
-from ..trajectory import Status
+from ..trajectory import CENTER, VELOCITY, Status
 from .grid import KEYS, PARAMETER_PREFIX, Grid, value_of, with_values
 from .outcomes import (INVALID, NOT_RUN, O_END_MODE, O_FIRST_GRIP, O_FIRST_SLIP, O_LANDINGS, O_REST_TIME, O_REST_X,
                        O_REST_Y, OUTCOMES)
@@ -146,10 +146,10 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
     out = np.full(len(OUTCOMES), np.nan)
     rows = len(traj)
     if rows:
-        (vx, vy, vz), centre = traj.velocity.T, traj.center
-        step = centre[1:] - centre[:-1]   # (the sums of squares in the order np.linalg.norm takes them)
-        dx, dy, dz = step.T
-        path = float(np.sum(np.sqrt(dx * dx + dy * dy + dz * dz)))
+        # the centre's and the velocity's columns, each made contiguous at once (one pass over the rows)
+        cx, cy, cz, vx, vy, vz = traj.data[:, CENTER.start:VELOCITY.stop].T.copy()
+        dx, dy, dz = np.diff(cx), np.diff(cy), np.diff(cz)
+        path = float(np.sum(np.sqrt(dx * dx + dy * dy + dz * dz)))   # (the squares summed as np.linalg.norm does)
         out[:len(kernel.OUTCOMES)] = (traj.t[-1], np.nan if traj.liftoff_time is None else traj.liftoff_time,
                                       traj.contact[-1, 0], traj.contact[-1, 1], traj.energy_drift,
                                       float(np.min(traj.normal_force)),
