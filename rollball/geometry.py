@@ -30,12 +30,16 @@ def unit_normal(d: np.ndarray) -> np.ndarray:
     """N = (-f_x, -f_y, 1) / sqrt(1 + f_x² + f_y²), shape (3,) + grid shape (one point: in
     Python's floats, the same numbers in a fifth of the time)."""
     if d.ndim == 1:
-        fx, fy = float(d[1]), float(d[2])
-        W = math.sqrt(1.0 + fx * fx + fy * fy)
-        return np.array([-fx / W, -fy / W, 1.0 / W])
+        return np.array(unit_normal_of(float(d[1]), float(d[2])))
     fx, fy = d[1], d[2]
     W = np.sqrt(1.0 + fx * fx + fy * fy)
     return np.stack([-fx / W, -fy / W, 1.0 / W])
+
+
+def unit_normal_of(fx: float, fy: float) -> tuple[float, float, float]:
+    """``unit_normal`` of one point from its slopes, in Python's floats (the same numbers)."""
+    W = math.sqrt(1.0 + fx * fx + fy * fy)
+    return -fx / W, -fy / W, 1.0 / W
 
 
 def rotation(u) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 from . import kernel, sliding
 from .drag_flight import new_flight
 from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, rest_speed
-from .geometry import rotation, unit_normal
+from .geometry import rotation, unit_normal, unit_normal_of
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
 from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
@@ -516,7 +516,8 @@ class ModeMachine:
         run = self.run
         ring = 1e-6 * (1.0 + abs(x) + abs(y))
         d = run.landscape.evaluate(x + ring * RING_COS, y + ring * RING_SIN, run.scene.parameter_values)
-        normals = unit_normal(d).T.tolist()   # (a pair with a normal not finite: a NaN apart, not counted)
+        # (``unit_normal``'s numbers, in Python's floats; a pair with a normal not finite: a NaN apart, not counted)
+        normals = [unit_normal_of(fx, fy) for fx, fy in zip(d[1].tolist(), d[2].tolist())]
         first = normals[0]
         if all(math.dist(first, b) < 0.49e-2 for b in normals[1:]):   # (no pair is 10⁻² apart then)
             return False

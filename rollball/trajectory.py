@@ -304,8 +304,14 @@ class Trajectory:
 
     @property
     def energy_drift(self) -> float:
-        """max |E(t) - E(0)| relative to |E(0)|, or to m g r where |E(0)| is smaller."""
-        return float(np.max(np.abs(self.energy_error()))) if len(self) else 0.0
+        """max |E(t) - E(0)| relative to |E(0)|, or to m g r where |E(0)| is smaller: the largest of
+        ``energy_error``'s sizes, to the last bit (a difference from E(0) + D(0) rounds monotonically,
+        so its largest size is at the largest or the smallest E + D; a NaN anywhere gives NaN)."""
+        if not len(self):
+            return 0.0
+        total = self.energy + self.dissipated
+        first = total[0]
+        return float(np.max(np.abs(np.array([total.max() - first, total.min() - first]))) / self.energy_scale)
 
     def orthogonality_error(self) -> np.ndarray:
         """||R^T R - I|| (Frobenius) for every row."""
