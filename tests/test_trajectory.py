@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from rollball import COLUMNS, Simulation, Status, read_csv, simulate
+from rollball.kernel.interface import ROW_SIZE
 from rollball.run_size import step_count
+from rollball.trajectory import DISSIPATED, ENERGY, Trajectory
 
 
 def test_step_count():
@@ -237,3 +239,23 @@ def test_modes_and_transitions_reach_the_csv(scene_factory, tmp_path):
     path = tmp_path / "modes.csv"
     flown.to_csv(path)
     assert list(read_csv(path, extra=True)[1]["mode"]) == ["rolling", "flying", "sliding"]
+
+
+def test_the_energy_drift_is_the_largest_energy_error_to_the_last_bit():
+    """``energy_drift`` (from the largest and smallest E + D) is the largest size of
+    ``energy_error`` (every row's), bit for bit, NaN where a row is NaN or an infinity cancels,
+    on random columns of every scale and with infinities, the first row's too."""
+    rng = np.random.default_rng(0)
+    for trial in range(2000):
+        n = int(rng.integers(1, 30))
+        data = np.zeros((n, ROW_SIZE))
+        data[:, ENERGY] = rng.normal(size=n) * 10 ** rng.uniform(-3, 3)
+        data[:, DISSIPATED] = rng.normal(size=n) * 10 ** rng.uniform(-3, 3)
+        if trial % 7 == 0:
+            data[rng.integers(n), ENERGY] = rng.choice([np.nan, np.inf, -np.inf])
+        if trial % 11 == 0:
+            data[0, ENERGY] = rng.choice([np.nan, np.inf, -np.inf])
+        traj = Trajectory(data)
+        with np.errstate(invalid="ignore"):
+            drift, every = traj.energy_drift, float(np.max(np.abs(traj.energy_error())))
+        assert drift == every or (np.isnan(drift) and np.isnan(every)), (trial, drift, every)
