@@ -15,7 +15,7 @@ import numpy as np
 from . import __version__, kernel, machine_code, sliding
 from .run_size import MAX_ROWS, MAX_STEPS, step_count
 from .energy_check import energy_check
-from .geometry import unit_normal
+from .geometry import unit_normal, unit_normal_of
 from .landscape import Landscape, landscape_of
 from .mode_machine import STIFF_METHOD, STIFF_TOLERANCE, ModeMachine, friction_of
 from .modes import Mode
@@ -131,8 +131,7 @@ def rolling_momentum(d: np.ndarray, o1, o2, o3, r, m) -> np.ndarray:
 
 def _normal(d: np.ndarray):
     """The unit normal's three components: Python's floats for one point, else arrays."""
-    n = unit_normal(d)
-    return n.tolist() if n.ndim == 1 else n
+    return unit_normal_of(float(d[1]), float(d[2])) if d.ndim == 1 else unit_normal(d)
 
 
 def _momentum(n1, n2, n3, o1, o2, o3, r, m) -> np.ndarray:

@@ -206,6 +206,8 @@ def _drain(pool, tasks, workers: int, take, cancel: threading.Event, sending) ->
     waiting, pending = list(reversed(tasks)), set()
 
     def send() -> None:
+        if not waiting or cancel.is_set() or len(pending) >= IN_FLIGHT * workers:
+            return   # (nothing to send: ``sending`` not entered, a process pool's trackers not asked)
         with sending():
             while waiting and len(pending) < IN_FLIGHT * workers and not cancel.is_set():
                 pending.add(pool.submit(batch.run, waiting.pop()))
