@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from .dense import omega_polynomial, turn
 from .interface import (
-    CLASSIC_SIZE, I_DENSE, I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, PROBE_SIZE, P_TURN, RESISTED_CLASSIC_SIZE,
-    RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE, SLIDING_RESISTED_CLASSIC_SIZE,
-    SLIDING_RESISTED_MK_SIZE, SLIDING_SIZES)
+    CLASSIC_SIZE, I_DENSE, I_EVALS, I_STEPS, MK_SIZE, MOTION_SIZE, PROBE_SIZE, P_TURN, QUADRATURES,
+    RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE,
+    SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE, SLIDING_SIZES)
 from .lowlevel import COLD, JIT, STEP
 from .physics import (FULL, STAGE, _finite, _finite_matrix, _finite_row, dynamics, motion_size, rates, rodrigues,
                       shape_of, sliding_dynamics, sliding_size)
@@ -34,6 +34,9 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
     m = SLIDING_MOTION_SIZE if sliding else MOTION_SIZE   # the motion; the orientation after it
     orientation = n > m
     rhs = sliding_dynamics if sliding else dynamics
+    # the stages' states: without the dissipation's quadratures, which no rate reads (the step's end has them)
+    staged = n - QUADRATURES if n in (RESISTED_MK_SIZE, RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE,
+                                      SLIDING_RESISTED_CLASSIC_SIZE) else n
 
     @STEP
     def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
@@ -48,7 +51,7 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
         after the evaluation at zn and the dense-output stages (rows of W after ``last``).
         """
         for i in range(1, last):
-            combine(n, z, h, W, i, K, i, Y)
+            combine(staged, z, h, W, i, K, i, Y)
             rhs(fn, d, p, Y, 1.0 if mk else 0.0, K, i, pn, STAGE)
         ints[I_EVALS] += last - 1
         combine(n, z, h, W, last, K, last, zn)

@@ -21,7 +21,7 @@ from .interface import (
     P_RESISTANCE, P_TURN, P_UNIT, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
 from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, slip_deceleration,
-                      spin_side, turning_point)
+                      spin_side, TURN_TIME, turning_point)
 from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -119,9 +119,23 @@ def turn_stiff(d, p, probe, K, h, n, margin):
     e1, e2, e3 = K[0, 2], K[0, 3], K[0, 4]
     en = e1 * n1 + e2 * n2 + e3 * n3
     k = p[3]
-    return turning_point(t1, t2, t3, k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3),
-                         p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]),
-                         margin * p[P_UNIT], margin * h)
+    r1, r2, r3 = k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3)
+    unit, reach = margin * p[P_UNIT], margin * h
+    if far_from_turning(ts * ts, r1 * r1 + r2 * r2 + r3 * r3, unit, reach):
+        return False
+    return turning_point(t1, t2, t3, r1, r2, r3, p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]),
+                         unit, reach)
+
+
+@JIT
+def far_from_turning(tt, rate2, unit, h):
+    """Whether omega_t (|t|² = tt), changing at a rate of |r|² = rate2, is surely not at a turning
+    point (``turning_point`` false) by products alone, as it is at nearly every step: where
+    |r| h <= |t| / 3 the line t + r tau stays at least 2|t|/3 from 0 within the step, and where
+    also |r| TURN_TIME unit <= |t| / 4 its direction turns at most at |r| |t| / (4 |t|² / 9), under
+    1 / (TURN_TIME unit) with room for any rounding (NaN and overflow answer False: then
+    ``turning_point`` judges)."""
+    return 9.0 * rate2 * h * h <= tt and 16.0 * rate2 * (TURN_TIME * unit) ** 2 <= tt
 
 
 SIDE_TURNS = 64   # sides turned in a row at most (in one step; the pairs: since a step ended whole), then static

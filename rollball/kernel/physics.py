@@ -223,26 +223,28 @@ def rolling_couples(p, fa, s1, s2, s3, spin_side, n1, n2, n3, o1, o2, o3, v1, v2
     and the pull on v.N (the rate v.N would have without spin friction, = (2/5) m r² times that of
     omega.N)."""
     r, k = p[0], p[P_AIR]
-    # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F
+    on = o1 * n1 + o2 * n2 + o3 * n3
+    t1, t2, t3 = o1 - on * n1, o2 - on * n2, o3 - on * n3   # omega's tangential part, N x (omega x N) = N x w
+    # the air: F = -k |c'| c', c' = r omega x N = r w; its moment about the contact point r N x F = -k |c'| r² t
     speed, ts = 0.0, -1.0
     if k != 0.0:   # (no air: nothing to add)
         ts = math.sqrt(w1 * w1 + w2 * w2 + w3 * w3)   # |omega x N| = |omega_t|: the rolling couple's too
         speed = r * ts
-        a = -k * speed * r   # F = a w
-        e1 = e1 + r * a * (n2 * w3 - n3 * w2)
-        e2 = e2 + r * a * (n3 * w1 - n1 * w3)
-        e3 = e3 + r * a * (n1 * w2 - n2 * w1)
+        a = -k * speed * r * r
+        e1, e2, e3 = e1 + a * t1, e2 + a * t2, e3 + a * t3
     # spin friction: the pull on omega.N is that on v.N, (v.N)' = v'.N + v.N'
-    on = o1 * n1 + o2 * n2 + o3 * n3
     pull = e1 * n1 + e2 * n2 + e3 * n3 + v1 * d1 + v2 * d2 + v3 * d3
     ms = spin_couple(p[P_SPIN] * r * fa, spin_side, pull)
     e1, e2, e3 = e1 + ms * n1, e2 + ms * n2, e3 + ms * n3
-    # rolling resistance against omega's tangential part, pulled by v''s
+    # rolling resistance against omega's tangential part, pulled (where it has no side: static) by v''s
     m1, m2, m3 = 0.0, 0.0, 0.0
     if p[P_RESISTANCE] != 0.0:   # (none: a couple of 0)
-        en = e1 * n1 + e2 * n2 + e3 * n3
-        m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, s1, s2, s3,
-                                    e1 - en * n1, e2 - en * n2, e3 - en * n3, ts)
+        cap = p[P_RESISTANCE] * r * fa
+        if s1 != 0.0 or s2 != 0.0 or s3 != 0.0:   # (the pull unread: not taken)
+            m1, m2, m3 = rolling_couple(cap, t1, t2, t3, s1, s2, s3, 0.0, 0.0, 0.0, ts)
+        else:
+            en = e1 * n1 + e2 * n2 + e3 * n3
+            m1, m2, m3 = rolling_couple(cap, t1, t2, t3, s1, s2, s3, e1 - en * n1, e2 - en * n2, e3 - en * n3, ts)
     return e1 + m1, e2 + m2, e3 + m3, m1, m2, m3, ms, on, speed, pull
 
 
