@@ -193,8 +193,18 @@ def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeyp
     assert figures["cylinder"]["processes"] is False   # (six runs: too few to repay starting processes)
     assert "| cylinder | " in _targets(hybrid_sweeps={"cylinder": figures["cylinder"]}) and "| threads |" in _targets(
         hybrid_sweeps={"cylinder": figures["cylinder"]})
-    met = {**figures["cylinder"], "ratio": 3.0, "ratio_all": 3.5, "ratio_dask": 3.5}
+    for suffix in ("", "_all", "_dask"):   # (one sweep of each: its own fastest)
+        assert figures["cylinder"]["fastest_ratio" + suffix] == pytest.approx(figures["cylinder"]["ratio" + suffix])
+    met = {**figures["cylinder"], "ratio": 3.0, "ratio_all": 3.5, "ratio_dask": 3.5, "fastest_ratio": 3.1,
+           "fastest_ratio_all": 3.6, "fastest_ratio_dask": 3.6}
     assert "missed" not in _targets(hybrid_sweeps={"cylinder": met})
+    for key in ("fastest_ratio", "fastest_ratio_all", "fastest_ratio_dask"):   # (either statistic above: marked)
+        missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, key: 4.2}}).splitlines()
+                  if "missed" in line]
+        assert len(missed) == 1 and "| cylinder |" in missed[0] and "4.2×" in missed[0], key
+    before = {key: value for key, value in met.items() if not key.startswith("fastest")}   # (a bench.json of before)
+    assert "missed" not in _targets(hybrid_sweeps={"cylinder": before}) and "| – |" in _targets(
+        hybrid_sweeps={"cylinder": before})
     missed = [line for line in _targets(hybrid_sweeps={"cylinder": {**met, "ratio": 5.0}}).splitlines()
               if "missed" in line]
     assert len(missed) == 1 and "| cylinder | 6 |" in missed[0]

@@ -283,7 +283,8 @@ def hybrid_costs(repeats: int) -> dict:
 def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
     """CPU time of a sweep of ``runs`` runs of each example that flies, over its start speed vx
     (±5 %: every run lifts off), on one worker, against the same sweep glued (the compiled batch
-    path), the two in turn: medians and the median of the ratios; and the same sweeps' wall time
+    path), the two in turn: medians, the median of the ratios and the ratio of the fastest sweeps
+    (``fastest_ratio``, as ``dissipation_cost``'s; ``_all`` and ``_dask`` likewise); and the same sweeps' wall time
     on every core (a sweep's default, ``local_workers`` of them: ``workers``, ``hybrid_all_s``,
     ``glued_all_s``, ``ratio_all``), the hybrid one on worker processes (its runs, one
     ``Simulation`` a point, hold the interpreter's lock between their kernel calls), the glued one
@@ -304,10 +305,11 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
         sweep(scene, vary, **where)
         return time.perf_counter() - started
 
-    def in_turn(scene, glued, vary, timed, **where) -> tuple[float, float, float]:
+    def in_turn(scene, glued, vary, timed, **where) -> tuple[float, float, float, float]:
         pairs = [(timed(scene, vary, **where), timed(glued, vary, **where)) for _ in range(repeats)]
         hybrid, plain = (np.array(column) for column in zip(*pairs))
-        return float(np.median(hybrid)), float(np.median(plain)), float(np.median(hybrid / np.maximum(plain, 1e-9)))
+        return (float(np.median(hybrid)), float(np.median(plain)), float(np.median(hybrid / np.maximum(plain, 1e-9))),
+                float(hybrid.min() / max(plain.min(), 1e-9)))
 
     out, scenes = {}, {}
     for name in HYBRID:
@@ -317,13 +319,15 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
         scenes[name] = scene, glued, vary
         cpu(scene, vary), cpu(glued, vary)   # (compiled, the landscape too)
         figures = out[name] = {"runs": runs, "workers": local_workers()}
-        figures["hybrid_s"], figures["glued_s"], figures["ratio"] = in_turn(scene, glued, vary, cpu)
+        figures["hybrid_s"], figures["glued_s"], figures["ratio"], figures["fastest_ratio"] = in_turn(
+            scene, glued, vary, cpu)
         processes.close()
         started = time.perf_counter()
         figures["processes"] = sweep(scene, vary).processes   # (too small a sweep stays on threads)
         figures["hybrid_first_s"] = time.perf_counter() - started
         wall(glued, vary)
-        figures["hybrid_all_s"], figures["glued_all_s"], figures["ratio_all"] = in_turn(scene, glued, vary, wall)
+        (figures["hybrid_all_s"], figures["glued_all_s"], figures["ratio_all"],
+         figures["fastest_ratio_all"]) = in_turn(scene, glued, vary, wall)
     processes.close()
     with _local_cluster(local_workers()) as cluster:   # (afterwards: an idle cluster takes some CPU time)
         for name, (scene, glued, vary) in scenes.items() if cluster is not None else ():
@@ -331,8 +335,8 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
             wall(scene, vary, **where), wall(glued, vary, **where)   # (each worker compiles the landscape)
             figures = out[name]
             figures["dask_workers"] = len(cluster.workers)
-            figures["hybrid_dask_s"], figures["glued_dask_s"], figures["ratio_dask"] = in_turn(
-                scene, glued, vary, wall, **where)
+            (figures["hybrid_dask_s"], figures["glued_dask_s"], figures["ratio_dask"],
+             figures["fastest_ratio_dask"]) = in_turn(scene, glued, vary, wall, **where)
     return out
 
 
