@@ -9,8 +9,8 @@ from .interface import (
     RESISTED_CLASSIC_SIZE, RESISTED_MK_SIZE, SLIDING_CLASSIC_SIZE, SLIDING_MK_SIZE, SLIDING_MOTION_SIZE,
     SLIDING_RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE, SLIDING_SIZES)
 from .lowlevel import COLD, JIT, STEP
-from .physics import (FULL, STAGE, _finite, _finite_matrix, _finite_row, dynamics, motion_size, rates, rodrigues,
-                      shape_of, sliding_dynamics, sliding_size)
+from .physics import (FULL, STAGE, _finite, _finite_matrix, _finite_row, dynamics, motion_size, rates,
+                      resisted_size, rodrigues, shape_of, sliding_dynamics, sliding_size)
 
 
 @JIT
@@ -35,8 +35,7 @@ def _trial_step(n: int, mk: bool, defer: bool = False):
     orientation = n > m
     rhs = sliding_dynamics if sliding else dynamics
     # the stages' states: without the dissipation's quadratures, which no rate reads (the step's end has them)
-    staged = n - QUADRATURES if n in (RESISTED_MK_SIZE, RESISTED_CLASSIC_SIZE, SLIDING_RESISTED_MK_SIZE,
-                                      SLIDING_RESISTED_CLASSIC_SIZE) else n
+    staged = n - QUADRATURES if resisted_size.py_func(n) else n
 
     @STEP
     def trial_step(fn, d, p, W, P, h, z, R, K, last, Y, zn, Rn, pn, ints):
