@@ -336,8 +336,10 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
             continue
         valid = step_events(fn, d, p, S, True, n, t, hs, z, R, K, last, SP, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
-        kk = rows_inside(fn, d, p, SP, t, hs, valid if valid >= 0.0 else 1.0, z, R, K, rows, ints, Ye, Re, pe, dt,
-                         before, kk, k_end, every, phase)
+        # (rows before a side's turn placed by the method's own step to it: that step's dense output)
+        hd = valid * hs if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE and ints[I_HELD] == 1 else hs
+        kk = rows_inside(fn, d, p, SP, t, hd, 1.0 if hd != hs else valid if valid >= 0.0 else 1.0, z, R, K, rows,
+                         ints, Ye, Re, pe, dt, before, kk, k_end, every, phase)
         if valid >= 0.0 and ints[I_TRANSITION] == T_SIDE:   # on from the state there
             resume(fn, d, p, hs, SP, valid, z, R, K, probe, ints, zn, Rn, pn)
             turns += 1
