@@ -129,13 +129,13 @@ def sides_turn(p, d, n, pn):
     length n carrying the dissipation (``couple_reference``'s sides in d): T_REST where a rolling
     ball's omega_t, against its rolling resistance (c_rr > 0), reached 0; T_SIDE where a sliding
     ball's did, or the spin omega.N against a spin friction (mu_s > 0), or where the spin couple is
-    static a rolling ball's pull on omega.N reached its limit (``spin_excess``); 0 for none."""
+    static the pull on omega.N reached its limit (``spin_excess``); 0 for none."""
     if p[P_RESISTANCE] > 0.0 and (d[D_SIDE] != 0.0 or d[D_SIDE + 1] != 0.0 or d[D_SIDE + 2] != 0.0):
         if turn_along(pn, d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]) <= 0.0:
             return T_SIDE if sliding_size(n) else T_REST
     if p[P_SPIN] > 0.0 and d[D_SIDE + 3] != 0.0 and spin_of(pn) * d[D_SIDE + 3] <= 0.0:
         return T_SIDE
-    if p[P_SPIN] > 0.0 and d[D_SIDE + 3] == 0.0 and not sliding_size(n) and spin_excess(p, pn) >= 0.0:
+    if p[P_SPIN] > 0.0 and d[D_SIDE + 3] == 0.0 and spin_excess(p, pn) >= 0.0:
         return T_SIDE
     return 0
 
@@ -493,12 +493,12 @@ def dipping(p, n, h, probe, pn, info):
 
 @JIT
 def spin_stops(p, d, n, h, probe):
-    """Whether a rolling ball's kinetic spin couple (its side d[D_SIDE + 3]) would, at the rate v.N
+    """Whether a kinetic spin couple (its side d[D_SIDE + 3]) would, at the rate omega.N
     has at the step's start (probe), take omega.N to 0 within the step of h: the pull may then turn
     it back inside the step, both ends on the side of the start, past a zero the ends do not show
     (``locate_transition`` searches the dense output for it, ``dip_bracket``; bit 4 of ``dipping``'s)."""
     side = d[D_SIDE + 3]
-    if side == 0.0 or p[P_SPIN] == 0.0 or sliding_size(n):
+    if side == 0.0 or p[P_SPIN] == 0.0:
         return False
     rate = probe[PROBE_SPIN_PULL] - side * spin_limit(p, probe[PROBE_FORCE])
     return rate * side < 0.0 and 0.4 * p[5] * abs(spin_of(probe)) < h * abs(rate)
@@ -679,7 +679,7 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
                 if b < best:
                     best, kind, event = b, T_SIDE if sliding_size(n) else T_REST, TURN_EVENT
                     b_end, g_end = 1.0, gb
-        if p[P_SPIN] > 0.0 and (s[7] != 0.0 or not sliding_size(n)):
+        if p[P_SPIN] > 0.0:
             spin = SPIN_EVENT if s[7] != 0.0 else LIMIT_EVENT   # (a static couple: its limit)
             ga, gb = condition(spin, p, s, probe), condition(spin, p, s, pn)
             found = ga < 0.0 <= gb

@@ -296,7 +296,7 @@ PROBE_HEIGHT = 8   # f(x, y)
 PROBE_FIT_LO = 9   # r * smallest principal curvature (< 0 where the surface bends away)
 PROBE_NEED = 10    # |F_t|: the tangential force rolling needs (with this omega; 0 while mu is inf)
 PROBE_SLIP = 11    # the slip velocity of the ball's material point at the contact (3; rolling: 0)
-PROBE_SPIN_PULL = 14   # the pull on a rolling ball's v.N (the rate it would have without spin friction; else 0)
+PROBE_SPIN_PULL = 14   # the pull on omega.N, times (2/5) m r² (its rate without spin friction; rolling: v.N's; else 0)
 PROBE_SLIP_PULL = 15   # a sliding ball's B, the slip's acceleration with friction off, tangential (3; rolling: 0)
 PROBE_SIZE = 18
 

@@ -180,7 +180,7 @@ def spin_couple(cap, side, pull):
 
 @JIT
 def spin_excess(p, pe):
-    """How far the pull on a rolling ball's v.N (probe pe) exceeds what the static spin couple can
+    """How far the pull on omega.N (probe pe; a rolling ball's on v.N) exceeds what the static spin couple can
     hold, |pull| - mu_s r F_n (``spin_couple``'s cap, F_n as ``rolling_losses`` takes it): where it
     reaches 0 inside a step whose spin couple is static, the couple's law has a kink (static to
     kinetic), which is located on the step's dense output (``events.locate_transition``)."""
@@ -197,11 +197,11 @@ def spin_limit(p, fn_):
 @JIT
 def spin_side(p, n, pe, side):
     """The spin couple's side for a step from a state of length n with probe pe: ``side``
-    (``couple_sides``'), or, where that is 0 on a rolling ball whose pull on omega.N is at the
+    (``couple_sides``'), or, where that is 0 on a ball whose pull on omega.N is at the
     static couple's limit or beyond (``spin_excess``), the pull's sign: the kinetic couple, the
     ball starting to spin the way it is pulled (docs/design.md §1, "Dissipation")."""
     pull = pe[PROBE_SPIN_PULL]
-    if side == 0.0 and p[P_SPIN] > 0.0 and pull != 0.0 and not sliding_size(n) and spin_excess(p, pe) >= 0.0:
+    if side == 0.0 and p[P_SPIN] > 0.0 and pull != 0.0 and spin_excess(p, pe) >= 0.0:
         return 1.0 if pull > 0.0 else -1.0
     return side
 
@@ -492,9 +492,10 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     K[row, 6] = q * (n3 * s1 - n1 * s3)
     K[row, 7] = q * (n1 * s2 - n2 * s1)
     K[row, 8] = f * us
+    pull = 0.0   # the pull on omega.N, times (2/5) m r² (``sliding_losses``)
     if resisted:
-        sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2, n3, f * r * (n2 * s3 - n3 * s2),
-                       f * r * (n3 * s1 - n1 * s3), f * r * (n1 * s2 - n2 * s1))
+        pull = sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2, n3, d1, d2, d3,
+                              f * r * (n2 * s3 - n3 * s2), f * r * (n3 * s1 - n1 * s3), f * r * (n1 * s2 - n2 * s1))
     if n == SLIDING_MOTION_SIZE:  # no orientation carried
         pass
     elif mk != 0.0 and p[P_TURN] > 0.0:  # the pairs: omega is the motion's, R follows it (``turn``)
@@ -514,20 +515,26 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
         t1, t2, t3 = rolling_need(p, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, o1, o2, o3, resisted)
         probe[PROBE_NEED] = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
         probe[PROBE_SLIP], probe[PROBE_SLIP + 1], probe[PROBE_SLIP + 2] = u1, u2, u3
-        probe[PROBE_SPIN_PULL] = 0.0   # (the sliding friction pulls on omega.N not at all)
+        probe[PROBE_SPIN_PULL] = pull
         probe[PROBE_SLIP_PULL], probe[PROBE_SLIP_PULL + 1], probe[PROBE_SLIP_PULL + 2] = b1, b2, b3
 
 
 @JIT
-def sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2, n3, f1, f2, f3):
+def sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2, n3, d1, d2, d3, f1, f2, f3):
     """Add to the sliding ball's rates K[row] the air's drag F_air = air c' (on c'') and the couples
     of rolling resistance and spin friction (on omega', ``rolling_couple`` and ``spin_couple``, F.N
-    as ``fa``; f = (2/5) m r² omega' of the sliding friction, the pull on omega's tangential part),
-    and write the rates of the energy each takes into K[row, n - 3:n] (docs/design.md §1, "Dissipation")."""
+    as ``fa``; f = (2/5) m r² omega' of the sliding friction), and write the rates of the energy each
+    takes into K[row, n - 3:n] (docs/design.md §1, "Dissipation"). A static couple holds its part of
+    omega at 0 in the turning tangent plane (N' = d): the spin's pull is (2/5) m r² omega.N' (the
+    friction's and the rolling couple's moments lie in the plane), the rolling couple's
+    f - (2/5) m r² (omega.N) N' (omega_t' = omega'_t - (omega.N) N' where omega_t is 0). Returns the
+    spin's pull."""
     r, m, mr2 = p[0], p[1], p[5]
-    ms = spin_couple(p[P_SPIN] * r * fa, d[D_SIDE + 3], 0.0)   # (sliding friction pulls on omega.N not at all)
+    pull = 0.4 * mr2 * (o1 * d1 + o2 * d2 + o3 * d3)
+    ms = spin_couple(p[P_SPIN] * r * fa, d[D_SIDE + 3], pull)
+    q = 0.4 * mr2 * on
     m1, m2, m3 = rolling_couple(p[P_RESISTANCE] * r * fa, o1 - on * n1, o2 - on * n2, o3 - on * n3, d[D_SIDE],
-                                d[D_SIDE + 1], d[D_SIDE + 2], f1, f2, f3, -1.0)
+                                d[D_SIDE + 1], d[D_SIDE + 2], f1 - q * d1, f2 - q * d2, f3 - q * d3, -1.0)
     a = air / m
     K[row, 2] += a * c1
     K[row, 3] += a * c2
@@ -537,8 +544,9 @@ def sliding_losses(p, d, K, row, n, fa, air, c1, c2, c3, o1, o2, o3, on, n1, n2,
     K[row, 6] += q * (m2 + ms * n2)
     K[row, 7] += q * (m3 + ms * n3)
     K[row, n - 3] = -(m1 * o1 + m2 * o2 + m3 * o3)
-    K[row, n - 2] = -ms * on
+    K[row, n - 2] = 0.0 if d[D_SIDE + 3] == 0.0 and ms == -pull else -ms * on   # (as ``rolling_losses``)
     K[row, n - 1] = -air * (c1 * c1 + c2 * c2 + c3 * c3)
+    return pull
 
 
 @JIT
