@@ -35,10 +35,10 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from hybrid_reference import (ATOL, GRIP_SPEED, ONSET_SPEED, ROLLING_TOLERANCE, RTOL, HybridReference, Landscape,
-                              Model, Transition, _centre_of, _check_landing, _cross, _dot, _impact)
+                              Model, Transition, _centre_of, _check_landing, _cross, _dot, _impact,
+                              _Solution, first_landing, states)
 
 ROLLING, SLIDING, ONSET, FLYING, RESTING = "rolling", "sliding", "onset", "flying", "resting"
 REST_SPEED = 1e-10     # m/s: the stop is located where r |ω_t| falls to this, then extrapolated to 0
@@ -222,14 +222,6 @@ class DissipativeModel(Model):
         return events, names
 
 
-class _Solution:
-    def __init__(self, model):
-        self.model = model
-        self.segments = []
-        self.transitions = []
-        self.drift = 0.0
-
-
 def _segment(sol, mode, spin, t0, s0, t_end):
     model = sol.model
     funcs, names = model.dissipative_events(mode, spin)
@@ -296,22 +288,7 @@ def _flight(sol, t0, s0, t_end):
         s[:6], s[9], s[10], s[15] = y[:6], x, yy, y[6]
         return s
 
-    tau = 1e-6
-    while gap(t0 + tau) < 1e-9 * r:
-        tau *= 2.0
-        if tau > 0.05:
-            raise RuntimeError(f"the ball does not leave the surface at t = {t0}")
-    t = t0 + tau
-    h = gap(t)
-    landed = None
-    while t < t_end:
-        speed = np.linalg.norm(path(t)[3:6]) + g * 5e-3
-        dt = min(max(0.5 * h / speed, 1e-6), 5e-3, t_end - t)
-        h1 = gap(t + dt)
-        if h1 <= 0.0:
-            landed = brentq(gap, t, t + dt, xtol=1e-16, rtol=1e-15, maxiter=200)
-            break
-        t, h = t + dt, h1
+    landed = first_landing(gap, lambda t: np.linalg.norm(path(t)[3:6]), t0, t_end, r, g)
     if landed is not None:
         _check_landing(model, path(landed)[:3], last[0])
     t1 = landed if landed is not None else t_end
@@ -434,16 +411,7 @@ def reference(scene, t_end: float, times) -> tuple[HybridReference, np.ndarray]:
     text = scene if isinstance(scene, str) else scene.dumps()
     sol = _solved(text, float(t_end))
     times = np.asarray(times, dtype=float)
-    rows = np.empty((len(times), N_STATE))
-    modes = []
-    for i, t in enumerate(times):
-        for t0, t1, mode, dense in sol.segments:
-            if t0 <= t <= t1:
-                rows[i] = dense(t)
-                modes.append(mode)
-                break
-        else:
-            raise ValueError(f"time {t} is outside the reference's run")
+    rows, modes = states(sol, times)
     ref = HybridReference(times, rows[:, :3], rows[:, 9:11], rows[:, 3:6], rows[:, 6:9], np.array(modes),
                           tuple(sol.transitions), float(t_end), sol.drift)
     return ref, rows[:, 11:16]

@@ -291,6 +291,19 @@ def _flight(sol: _Solution, t0, s0, t_end):
         last[0] = (x, y)
         return np.concatenate([c, v0 + gvec * tau, w0, [x, y]])
 
+    landed = first_landing(gap, lambda t: np.linalg.norm(v0 + gvec * (t - t0)), t0, t_end, r, g)
+    if landed is not None:
+        _check_landing(model, centre(landed), last[0])
+    t1 = landed if landed is not None else t_end
+    dense = _FlightDense(model, t0, c0, v0, w0, (s0[9], s0[10]))
+    sol.segments.append((t0, t1, FLYING, dense))
+    s1 = state(t1)
+    return t1, s1, landed is not None
+
+
+def first_landing(gap, speed, t0, t_end, r, g):
+    """The first root of a flight's ``gap`` (t) after t0, by brentq, the gap sampled in steps of half
+    the gap over the centre's ``speed`` (t); None where there is none before t_end."""
     # clear the surface: the gap grows from 0 (like τ³ after a lift-off, τ after a rebound)
     tau = 1e-6
     while gap(t0 + tau) < 1e-9 * r:
@@ -299,22 +312,13 @@ def _flight(sol: _Solution, t0, s0, t_end):
             raise RuntimeError(f"the ball does not leave the surface at t = {t0}")
     t = t0 + tau
     h = gap(t)
-    landed = None
     while t < t_end:
-        speed = np.linalg.norm(v0 + gvec * (t - t0)) + g * 5e-3
-        dt = min(max(0.5 * h / speed, 1e-6), 5e-3, t_end - t)
+        dt = min(max(0.5 * h / (speed(t) + g * 5e-3), 1e-6), 5e-3, t_end - t)
         h1 = gap(t + dt)
         if h1 <= 0.0:
-            landed = brentq(gap, t, t + dt, xtol=1e-16, rtol=1e-15, maxiter=200)
-            break
+            return brentq(gap, t, t + dt, xtol=1e-16, rtol=1e-15, maxiter=200)
         t, h = t + dt, h1
-    if landed is not None:
-        _check_landing(model, centre(landed), last[0])
-    t1 = landed if landed is not None else t_end
-    dense = _FlightDense(model, t0, c0, v0, w0, (s0[9], s0[10]))
-    sol.segments.append((t0, t1, FLYING, dense))
-    s1 = state(t1)
-    return t1, s1, landed is not None
+    return None
 
 
 def _check_landing(model, c, foot):
@@ -455,19 +459,24 @@ def reference(scene, t_end: float, times) -> HybridReference:
     return evaluate(_solved(text, float(t_end)), t_end, times)
 
 
-def evaluate(sol: _Solution, t_end, times) -> HybridReference:
-    """A solution (``solve``'s, uncached) at ``times``."""
-    times = np.asarray(times, dtype=float)
-    rows = np.empty((len(times), 11))
-    modes = []
-    for i, t in enumerate(times):
+def states(sol: _Solution, times: np.ndarray) -> tuple[np.ndarray, list]:
+    """A solution's states at ``times`` (a row each) and its modes there."""
+    rows, modes = [], []
+    for t in times:
         for t0, t1, mode, dense in sol.segments:
             if t0 <= t <= t1:
-                rows[i] = dense(t)
+                rows.append(dense(t))
                 modes.append(mode)
                 break
         else:
-            raise ValueError(f"time {t} is outside the reference's run [0, {t_end}]")
+            raise ValueError(f"time {t} is outside the reference's run [0, {sol.segments[-1][1]}]")
+    return np.array(rows), modes
+
+
+def evaluate(sol: _Solution, t_end, times) -> HybridReference:
+    """A solution (``solve``'s, uncached) at ``times``."""
+    times = np.asarray(times, dtype=float)
+    rows, modes = states(sol, times)
     return HybridReference(times, rows[:, :3], rows[:, 9:11], rows[:, 3:6], rows[:, 6:9],
                            np.array(modes), tuple(sol.transitions), float(t_end), sol.drift)
 
