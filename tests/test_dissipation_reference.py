@@ -133,10 +133,6 @@ def test_every_fixed_step_method_converges_at_its_order(name, method):
     assert np.all(errors[-1] < 1e-8), errors
     # (a figure already at the reference's floor, 1e-12, shows no order)
     fitted = np.log2(errors[1] / errors[2])
-    if name == "well":   # the rest's time: not yet in its asymptotic range at these steps (docs/design.md
-        # §1, "Dissipation": a stop pulled sideways), but falling by 16 or more over the two halvings
-        assert errors[0, 1] / errors[2, 1] > 16 or errors[2, 1] < 1e-12, errors
-        errors, fitted = errors[:, [0, 2]], fitted[[0, 2]]
     assert np.all((fitted > order - 1.2) | (errors[2] < 1e-12)), (errors, fitted)
 
 

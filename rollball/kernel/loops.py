@@ -95,6 +95,13 @@ def slip_stiff(d, p, probe, h, margin):
     return turning_point(u1, u2, u3, r1, r2, r3, a, margin * unit, margin * h)
 
 
+# Where the rolling couple outweighs the pull (|G| < C), omega_t comes to 0 in about |omega_t| / (C - G.w),
+# its direction's derivatives growing as that time shrinks: a stretch of the pair's steps takes the
+# last STOP_TIME sqrt(r/g) (C |omega_t| below it) whatever the step, so that the fixed steps before
+# it see derivatives bounded independently of h (docs/design.md §1, "Dissipation").
+STOP_TIME = 0.25
+
+
 @JIT
 def turn_stiff(d, p, probe, K, h, n, margin):
     """Whether a rolling ball's omega_t at the step's start (w0 = d[D_SIDE:D_SIDE + 3],
@@ -104,7 +111,8 @@ def turn_stiff(d, p, probe, K, h, n, margin):
     (``turning_point``, with w0' = k v'_t from K[0], k = 5/(7 m r^2)): near a stop it relaxes
     towards the pull's at the rate |pull| / |omega_t|, as a starting slip's does
     (``slip_reference``), and at a turning point it turns about within |omega_t,min| / |w0'|, which
-    no fixed step follows at its order: ``advance`` takes such steps with an embedded pair
+    no fixed step follows at its order; or where the couple outweighs the pull, |w0| < C STOP_TIME
+    sqrt(r/g): a stop ahead (``STOP_TIME``). ``advance`` takes such steps with an embedded pair
     (``stiff_step``). ``margin``: the bound's time and the reach times it (1 to enter a stretch
     of such steps, EXIT_MARGIN to stay in it: a step the fixed steps go on from is not stiff to them)."""
     if sliding_size(n) or p[P_RESISTANCE] == 0.0:
@@ -113,7 +121,8 @@ def turn_stiff(d, p, probe, K, h, n, margin):
     ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
     if ts == 0.0:
         return False
-    if 1.4 * p[1] * p[0] * ts < p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) * h:
+    cap = p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0])   # C
+    if ts < cap * h:
         return True
     n1, n2, n3 = probe[0], probe[1], probe[2]
     e1, e2, e3 = K[0, 2], K[0, 3], K[0, 4]
@@ -121,6 +130,11 @@ def turn_stiff(d, p, probe, K, h, n, margin):
     k = p[3]
     r1, r2, r3 = k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3)
     unit, reach = margin * p[P_UNIT], margin * h
+    if unit < math.inf and ts < cap * STOP_TIME * unit:   # a stop ahead within a time independent of h
+        c = cap / ts
+        g1, g2, g3 = r1 + c * t1, r2 + c * t2, r3 + c * t3   # the pull: omega_t' without the couple
+        if g1 * g1 + g2 * g2 + g3 * g3 < cap * cap:
+            return True
     if far_from_turning(ts * ts, r1 * r1 + r2 * r2 + r3 * r3, unit, reach):
         return False
     return turning_point(t1, t2, t3, r1, r2, r3, p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]),
