@@ -164,11 +164,11 @@ class DissipativeModel(Model):
                 wd[0], wd[1], wd[2], a1, a2,
                 slide, 0.0, -_dot(M, w), -Ms * on, self.k * speed ** 3]
 
-    def spin_side(self, s):
-        """The spin couple's side at s: sign(ω·N), or where that is 0 the pull's sign beyond the
-        static couple's limit, else 0 (static)."""
+    def spin_side(self, s, at_zero=False):
+        """The spin couple's side at s: sign(ω·N), or where that is 0 (``at_zero``: there, up to
+        round-off) the pull's sign beyond the static couple's limit, else 0 (static)."""
         N, Nd, Fn, _, _, _, _, on, _, _ = self.terms(s)
-        if on != 0.0:
+        if on != 0.0 and not at_zero:
             return 1.0 if on > 0.0 else -1.0
         pull = self.spin_pull((s[6], s[7], s[8]), Nd)
         if abs(pull) > self.mu_s * self.r * abs(Fn):
@@ -356,8 +356,8 @@ def solve(scene_json: str, t_end: float) -> _Solution:
         elif event == "onset":
             mode = SLIDING
         elif event == "spin_zero":
-            s[6:9] -= float(s[6:9] @ N) * N    # ω·N = 0 exactly: the side is decided anew
-            spin = model.spin_side(s)
+            s[6:9] -= float(s[6:9] @ N) * N    # ω·N = 0: the side is decided anew, by the pull
+            spin = model.spin_side(s, at_zero=True)
         elif event == "spin_free":   # the pull at the static couple's limit: kinetic on its side
             spin = math.copysign(1.0, model.spin_pull(s[6:9], model.terms(s)[1]))
         elif event == "grip":

@@ -91,8 +91,13 @@ SCENES = {
     # a tilted well: rolls to a stop at about 4.2 s, spins in place and rests at 4.652 s
     "well": (_scene("0.4*x^2 + 0.25*y^2 + 0.05*x*y", Start(x=0.5, y=-0.4, vx=-0.3, vy=0.5, spin=3.0), 6.0,
                     air=AIR, friction=0.5, rolling_resistance=0.06, spin_friction=0.02), 6.0),
+    # a billiard shot in a bowl, no spin: both couples static at the start, the rolling couple's turning
+    # the ball at once (μ > c_rr) while the spin couple holds ω·N at 0; grips at 0.323 s
+    "billiard": (_scene("0.3*x^2 + 0.2*y^2 - 0.05*x*y", Start(x=-0.6, y=0.3, vx=1.5, vy=0.4, omega=(0.0, 0.0, 0.0)),
+                        2.0, air=AIR, friction=0.2, rolling_resistance=0.03, spin_friction=0.05), 2.0),
 }
-KINDS = {"bowl": ["slip", "grip"], "step": ["slip", "liftoff"] + ["landing"] * 12, "well": ["rest"]}
+KINDS = {"bowl": ["slip", "grip"], "step": ["slip", "liftoff"] + ["landing"] * 12, "well": ["rest"],
+         "billiard": ["grip"]}
 SPACING = 0.02   # the compared rows: a multiple of every step below
 # method -> (order, three steps)
 FIXED = {"rk4": (4, (0.01, 0.005, 0.0025)), "lawson5": (5, (0.02, 0.01, 0.005)),

@@ -96,6 +96,7 @@ def slip_stiff(d, p, probe, h, margin):
 
 
 # Where the rolling couple outweighs the pull (|G| < C), omega_t comes to 0 in about |omega_t| / (C - G.w),
+# (a sliding ball's omega_t, starting from 0 or passing it, likewise near its zero)
 # its direction's derivatives growing as that time shrinks: a stretch of the pair's steps takes the
 # last STOP_TIME sqrt(r/g) (C |omega_t| below it) whatever the step, so that the fixed steps before
 # it see derivatives bounded independently of h (docs/design.md §1, "Dissipation").
@@ -104,7 +105,7 @@ STOP_TIME = 0.25
 
 @JIT
 def turn_stiff(d, p, probe, K, h, n, margin):
-    """Whether a rolling ball's omega_t at the step's start (w0 = d[D_SIDE:D_SIDE + 3],
+    """Whether a ball's omega_t at the step's start (w0 = d[D_SIDE:D_SIDE + 3],
     ``couple_reference``'s) is stiff for a fixed step of h (docs/design.md §1, "Dissipation"): its
     rolling resistance would stop it within the step, |w0| < C h with C = c_rr r F_n / (7/5 m r^2);
     or its direction would turn within the step faster than a bound independent of h
@@ -112,33 +113,44 @@ def turn_stiff(d, p, probe, K, h, n, margin):
     towards the pull's at the rate |pull| / |omega_t|, as a starting slip's does
     (``slip_reference``), and at a turning point it turns about within |omega_t,min| / |w0'|, which
     no fixed step follows at its order; or where the couple outweighs the pull, |w0| < C STOP_TIME
-    sqrt(r/g): a stop ahead (``STOP_TIME``). ``advance`` takes such steps with an embedded pair
+    sqrt(r/g): a stop ahead (``STOP_TIME``); or where omega_t is 0 and the ball starts to turn (its
+    direction relaxing from the pull's). A sliding ball's omega_t (its rate omega'_t, C = c_rr r F_n /
+    (2/5 m r^2)) is judged by the static start, the turn bound, and its nearness to 0: |w0| below
+    its rate times STOP_TIME sqrt(r/g) (its direction's derivatives grow as 1 / the time from its zero).
+    ``advance`` takes such steps with an embedded pair
     (``stiff_step``). ``margin``: the bound's time and the reach times it (1 to enter a stretch
     of such steps, EXIT_MARGIN to stay in it: a step the fixed steps go on from is not stiff to them)."""
-    if sliding_size(n) or p[P_RESISTANCE] == 0.0:
+    if p[P_RESISTANCE] == 0.0:
         return False
+    sliding = sliding_size(n)
     t1, t2, t3 = d[D_SIDE], d[D_SIDE + 1], d[D_SIDE + 2]
     ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
-    if ts == 0.0:
-        return False
-    cap = p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0])   # C
-    if ts < cap * h:
-        return True
+    if ts == 0.0:   # static: stiff where the ball starts to turn (a rolling ball's run from rest is pulled
+        # on; a sliding ball's friction turns it where mu exceeds c_rr): omega_t's direction relaxes from the pull's
+        return not sliding or p[P_MU] > p[P_RESISTANCE]
+    cap = p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / ((0.4 if sliding else 1.4) * p[1] * p[0])   # C
     n1, n2, n3 = probe[0], probe[1], probe[2]
-    e1, e2, e3 = K[0, 2], K[0, 3], K[0, 4]
+    if sliding:   # (a sliding ball's omega_t reaching 0 turns the couple's side, T_SIDE, placed in the step)
+        e1, e2, e3 = K[0, 5], K[0, 6], K[0, 7]
+        k = 1.0
+    else:
+        if ts < cap * h:
+            return True
+        e1, e2, e3 = K[0, 2], K[0, 3], K[0, 4]
+        k = p[3]
     en = e1 * n1 + e2 * n2 + e3 * n3
-    k = p[3]
     r1, r2, r3 = k * (e1 - en * n1), k * (e2 - en * n2), k * (e3 - en * n3)
     unit, reach = margin * p[P_UNIT], margin * h
-    if unit < math.inf and ts < cap * STOP_TIME * unit:   # a stop ahead within a time independent of h
+    if sliding and unit < math.inf and ts * ts < (r1 * r1 + r2 * r2 + r3 * r3) * (STOP_TIME * unit) ** 2:
+        return True   # (near a zero of omega_t, within STOP_TIME sqrt(r/g) of it at its rate: h aside)
+    if not sliding and unit < math.inf and ts < cap * STOP_TIME * unit:   # a stop ahead, h aside
         c = cap / ts
         g1, g2, g3 = r1 + c * t1, r2 + c * t2, r3 + c * t3   # the pull: omega_t' without the couple
         if g1 * g1 + g2 * g2 + g3 * g3 < cap * cap:
             return True
     if far_from_turning(ts * ts, r1 * r1 + r2 * r2 + r3 * r3, unit, reach):
         return False
-    return turning_point(t1, t2, t3, r1, r2, r3, p[P_RESISTANCE] * abs(probe[PROBE_FORCE]) / (1.4 * p[1] * p[0]),
-                         unit, reach)
+    return turning_point(t1, t2, t3, r1, r2, r3, cap, unit, reach)
 
 
 @JIT

@@ -151,8 +151,9 @@ def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3, ts):
     start, ``couple_sides``: past its zero inside the step the couple goes on smoothly, and the zero
     is located on the step's dense output); where r is zero (the ball does not roll at the step's
     start), the static couple -q that holds omega_t at 0 against the pull q (the rate the angular
-    momentum's tangential part would have without the couple), or -cap q/|q| where q exceeds cap:
-    the ball starts to roll the way it is pulled. ``ts``: |t| where the caller has it (the air's
+    momentum's tangential part would have without the couple), or where q exceeds cap the ball starts
+    to roll the way it is pulled: -cap q/|q| at omega_t = 0, -cap t/|t| where t (along q) is not.
+    ``ts``: |t| where the caller has it (the air's
     speed reads it), else negative (taken here where it is needed)."""
     if r1 != 0.0 or r2 != 0.0 or r3 != 0.0:
         if ts < 0.0:
@@ -164,6 +165,13 @@ def rolling_couple(cap, t1, t2, t3, r1, r2, r3, q1, q2, q3, ts):
     qs = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
     if qs <= cap:
         return -q1, -q2, -q3
+    # the ball starts to turn the way it is pulled: against its own omega_t once that is not 0 (inside
+    # the step: its direction relaxes from the pull's, as a starting slip's does), along the pull at 0
+    if ts < 0.0:
+        ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+    if ts > 0.0 and t1 * q1 + t2 * q2 + t3 * q3 > 0.0:
+        c = -cap / ts
+        return c * t1, c * t2, c * t3
     return -cap * q1 / qs, -cap * q2 / qs, -cap * q3 / qs
 
 
