@@ -425,8 +425,9 @@ def passed_beside(p, n, probe, pn):
     with friction off). There the exact slip falls at a rate of at least that difference all along
     and reaches 0 in finite time (a grip); a rise is the step's own error carrying u past 0 on one
     side of it (u.u0 still positive, so ``mode_changes`` sees no grip), and the pair's next steps
-    would chatter about 0 until one of them crossed it. ``locate_transition`` grips where the
-    step's dense output passes closest to 0 (``dip_bracket`` on MISS_EVENT)."""
+    would chatter about 0 until one of them crossed it. ``locate_transition`` grips where the slip
+    at the step's start reaches 0 at its relaxed rate (``grip_ahead``), or, where that reaches past
+    the step, where the step's dense output passes closest to 0 (``dip_bracket`` on MISS_EVENT)."""
     if not sliding_size(n):
         return False
     u0 = probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2
@@ -434,6 +435,22 @@ def passed_beside(p, n, probe, pn):
     if not 0.0 < u0 < u1:
         return False
     return holds(p, probe) and holds(p, pn)
+
+
+@JIT
+def grip_ahead(p, probe, h, closest):
+    """Where in a step of h that passed its slip's zero beside it (``passed_beside``) the slip
+    reaches 0: at the rate (7/2) mu F_n / m - |B| from the step's start (probe), the rate at which the
+    exact slip falls once its direction has relaxed to B's (its part across B relaxes at the rate
+    (7/2) mu F_n / (m |u|), fast near 0: within a step there, the pair's stages follow it only
+    roughly and carry u round 0, so the dense output's closest approach, ``closest``, can come early
+    by a share of the step); ``closest`` where that rate is not positive or reaches past the step."""
+    u = math.sqrt(probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2)
+    b = math.sqrt(probe[PROBE_SLIP_PULL] ** 2 + probe[PROBE_SLIP_PULL + 1] ** 2 + probe[PROBE_SLIP_PULL + 2] ** 2)
+    rate = slip_deceleration(p, probe) - b
+    if rate > 0.0 and u < rate * h:
+        return u / (rate * h)
+    return closest
 
 
 @JIT
@@ -646,12 +663,15 @@ def locate_transition(fn, d, p, W, t, h, z, R, K, last, P, probe, Y, zn, Rn, pn,
         gb = -(s[0] * pn[PROBE_SLIP] + s[1] * pn[PROBE_SLIP + 1] + s[2] * pn[PROBE_SLIP + 2])
         if ga < 0.0 <= gb:
             a, b = locate(GRIP_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, 0.0, ga, 1.0, gb, ints)
+            if refine == 0.0 and (pe[PROBE_SLIP] ** 2 + pe[PROBE_SLIP + 1] ** 2 + pe[PROBE_SLIP + 2] ** 2) > 1e-4 * -ga:
+                # (a pair's slip crossed the plane of its start beside 0, above a hundredth of |u0|: carried round)
+                b = grip_ahead(p, probe, h, b)
             if b < best:
                 best, kind, event = b, T_GRIP, GRIP_EVENT
                 b_end, g_end = 1.0, gb
         elif refine == 0.0 and passed_beside(p, n, probe, pn):   # (an embedded pair's step)
             zero = dip_bracket(MISS_EVENT, fn, d, p, z, R, h, P, K, Ye, Re, pe, s, ga, ints, out)
-            b = out[2] if zero else out[0]   # (the slip exactly 0 there, or closest to it)
+            b = out[2] if zero else grip_ahead(p, probe, h, out[0])
             if b < best:
                 best, kind, event = b, T_GRIP, GRIP_EVENT
     elif mu < math.inf:
