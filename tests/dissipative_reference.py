@@ -38,7 +38,7 @@ from scipy.integrate import solve_ivp
 
 from hybrid_reference import (ATOL, GRIP_SPEED, ONSET_SPEED, ROLLING_TOLERANCE, RTOL, HybridReference, Landscape,
                               Model, Transition, _centre_of, _check_landing, _cross, _dot, _impact,
-                              _Solution, first_landing, states)
+                              AFTER, _Solution, after, first_landing, states)
 
 ROLLING, SLIDING, ONSET, FLYING, RESTING = "rolling", "sliding", "onset", "flying", "resting"
 REST_SPEED = 1e-10     # m/s: the stop is located where r |ω_t| falls to this, then extrapolated to 0
@@ -347,14 +347,8 @@ def solve(scene_json: str, t_end: float) -> _Solution:
         if event is None:
             break
         N = np.array(model.land.frame(s[9], s[10])[3])
-        if event == "liftoff":
-            sol.transitions.append(Transition(t, "liftoff", s[9], s[10]))
-            mode = FLYING
-        elif event == "slip":
-            sol.transitions.append(Transition(t, "slip", s[9], s[10]))
-            mode = ONSET
-        elif event == "onset":
-            mode = SLIDING
+        if event in AFTER:
+            mode = after(sol, event, t, s)
         elif event == "spin_zero":
             s[6:9] -= float(s[6:9] @ N) * N    # ω·N = 0: the side is decided anew, by the pull
             spin = model.spin_side(s, at_zero=True)

@@ -375,6 +375,18 @@ def _impact(model: Model, s):
     return out, stuck, rebounds
 
 
+# A contact segment's event that changes the mode and nothing else: the mode after it
+AFTER = {"liftoff": FLYING, "slip": ONSET, "onset": SLIDING}
+RECORDED = ("liftoff", "slip")   # (a slip's onset ends a stretch of the solution, not a transition)
+
+
+def after(sol: _Solution, event: str, t: float, s) -> str:
+    """The mode after ``event`` (one of AFTER's) at t in state s, the transition recorded."""
+    if event in RECORDED:
+        sol.transitions.append(Transition(t, event, s[9], s[10]))
+    return AFTER[event]
+
+
 def solve(scene_json: str, t_end: float) -> _Solution:
     from rollball import Scene
     scene = Scene.loads(scene_json)
@@ -419,14 +431,8 @@ def solve(scene_json: str, t_end: float) -> _Solution:
         t, s, event = _contact_segment(sol, mode, t, s, t_end)
         if event is None:
             break
-        if event == "liftoff":
-            sol.transitions.append(Transition(t, "liftoff", s[9], s[10]))
-            mode = FLYING
-        elif event == "slip":
-            sol.transitions.append(Transition(t, "slip", s[9], s[10]))
-            mode = ONSET
-        elif event == "onset":
-            mode = SLIDING
+        if event in AFTER:
+            mode = after(sol, event, t, s)
         elif event == "grip":
             # |u| = GRIP_SPEED: extrapolate linearly to |u| = 0 (an error of order GRIP_SPEED²)
             d = np.array(model.rhs(SLIDING, s))

@@ -96,10 +96,10 @@ def slip_stiff(d, p, probe, h, margin):
 
 
 # Where the rolling couple outweighs the pull (|G| < C), omega_t comes to 0 in about |omega_t| / (C - G.w),
-# (a sliding ball's omega_t, starting from 0 or passing it, likewise near its zero)
 # its direction's derivatives growing as that time shrinks: a stretch of the pair's steps takes the
 # last STOP_TIME sqrt(r/g) (C |omega_t| below it) whatever the step, so that the fixed steps before
-# it see derivatives bounded independently of h (docs/design.md §1, "Dissipation").
+# it see derivatives bounded independently of h (docs/design.md §1, "Dissipation"). A sliding ball's
+# omega_t, starting from 0 or passing it, is the pair's likewise within STOP_TIME sqrt(r/g) of its zero.
 STOP_TIME = 0.25
 
 
