@@ -37,8 +37,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from hybrid_reference import (ATOL, GRIP_SPEED, ONSET_SPEED, ROLLING_TOLERANCE, RTOL, HybridReference, Landscape,
-                              Model, Transition, _centre_of, _check_landing, _cross, _dot, _impact,
-                              AFTER, _Solution, after, first_landing, states)
+                              Model, Transition, _centre_of, _check_landing, _cross, _dot, _impact, _tangential,
+                              AFTER, _Solution, after, first_landing, segment, states)
 
 ROLLING, SLIDING, ONSET, FLYING, RESTING = "rolling", "sliding", "onset", "flying", "resting"
 REST_SPEED = 1e-10     # m/s: the stop is located where r |ω_t| falls to this, then extrapolated to 0
@@ -57,29 +57,13 @@ class DissipativeModel(Model):
         """What the right-hand sides need at state s: N, Ṅ, F_n, A without the rolling couple,
         u, α′, ω_t, ω·N, F_air."""
         m, r, g = self.m, self.r, self.g
-        v, w = (s[3], s[4], s[5]), (s[6], s[7], s[8])
-        _, fx, fy, N, Nx, Ny, _ = self.land.frame(s[9], s[10])
-        cx = (1.0 + r * Nx[0], r * Nx[1], fx + r * Nx[2])
-        cy = (r * Ny[0], 1.0 + r * Ny[1], fy + r * Ny[2])
-        e11, e12, e22 = _dot(cx, cx), _dot(cx, cy), _dot(cy, cy)
-        b1, b2 = _dot(cx, v), _dot(cy, v)
-        det = e11 * e22 - e12 * e12
-        a1, a2 = (e22 * b1 - e12 * b2) / det, (e11 * b2 - e12 * b1) / det
-        Nd = (Nx[0] * a1 + Ny[0] * a2, Nx[1] * a1 + Ny[1] * a2, Nx[2] * a1 + Ny[2] * a2)
+        v, w, N, Nd, (a1, a2) = self.kinematics(s)
         speed = math.sqrt(_dot(v, v))
         Fa = (-self.k * speed * v[0], -self.k * speed * v[1], -self.k * speed * v[2])
         Fn = m * (g * N[2] - _dot(v, Nd)) - _dot(Fa, N)
         wxNd = _cross(w, Nd)
         q = (-r * wxNd[0] + Fa[0] / m, -r * wxNd[1] + Fa[1] / m, -g - r * wxNd[2] + Fa[2] / m)
-        qn = _dot(q, N)
-        A = (q[0] - qn * N[0], q[1] - qn * N[1], q[2] - qn * N[2])
-        wxN = _cross(w, N)
-        u = (v[0] - r * wxN[0], v[1] - r * wxN[1], v[2] - r * wxN[2])
-        un = _dot(u, N)
-        u = (u[0] - un * N[0], u[1] - un * N[1], u[2] - un * N[2])
-        on = _dot(w, N)
-        wt = (w[0] - on * N[0], w[1] - on * N[1], w[2] - on * N[2])
-        return N, Nd, Fn, A, u, (a1, a2), wt, on, Fa, speed
+        return N, Nd, Fn, _tangential(q, N), self.slip(v, w, N), (a1, a2), _tangential(w, N), _dot(w, N), Fa, speed
 
     def rolling_couple(self, Fn, wt):
         size = math.sqrt(_dot(wt, wt))
@@ -224,20 +208,8 @@ class DissipativeModel(Model):
 
 def _segment(sol, mode, spin, t0, s0, t_end):
     model = sol.model
-    funcs, names = model.dissipative_events(mode, spin)
-    res = solve_ivp(lambda t, s: model.rhs(mode, spin, s), (t0, t_end), s0, method="DOP853",
-                    rtol=RTOL, atol=ATOL, dense_output=True, events=funcs)
-    if res.status < 0:
-        raise RuntimeError(f"{mode} from t = {t0}: {res.message}")
-    t1, event = res.t[-1], None
-    for name, te in zip(names, res.t_events):
-        if len(te) and te[0] <= t1:
-            t1, event = te[0], name
-    s1 = res.sol(t1) if event else res.y[:, -1]
-    sol.segments.append((t0, t1, SLIDING if mode == ONSET else mode, res.sol))
-    c = _centre_of(model, s1[9], s1[10])
-    sol.drift = max(sol.drift, math.dist(c, s1[:3]))
-    return t1, np.array(s1), event
+    return segment(sol, mode, lambda t, s: model.rhs(mode, spin, s), model.dissipative_events(mode, spin), t0, s0,
+                   t_end)
 
 
 class _Still:

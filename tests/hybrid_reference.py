@@ -90,6 +90,12 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
+def _tangential(a, N):
+    """a's part in the tangent plane of the unit normal N."""
+    an = _dot(a, N)
+    return (a[0] - an * N[0], a[1] - an * N[1], a[2] - an * N[2])
+
+
 # -- the ball in contact ------------------------------------------------------------------------
 
 class Model:
@@ -97,9 +103,9 @@ class Model:
         self.land, self.r, self.m, self.g = landscape, radius, mass, gravity
         self.mu, self.e = friction, restitution
 
-    def contact_terms(self, s):
-        """Everything the contact's right-hand side needs at state s = (c, ċ, ω, α)."""
-        r, g = self.r, self.g
+    def kinematics(self, s):
+        """At state s = (c, ċ, ω, α): ċ, ω, the unit normal N, Ṅ and α′ (from ċ = C′ α′)."""
+        r = self.r
         v, w = (s[3], s[4], s[5]), (s[6], s[7], s[8])
         _, fx, fy, N, Nx, Ny, _ = self.land.frame(s[9], s[10])
         cx = (1.0 + r * Nx[0], r * Nx[1], fx + r * Nx[2])   # C' = phi_alpha + r N_alpha
@@ -109,16 +115,22 @@ class Model:
         det = e11 * e22 - e12 * e12
         a1, a2 = (e22 * b1 - e12 * b2) / det, (e11 * b2 - e12 * b1) / det
         Nd = (Nx[0] * a1 + Ny[0] * a2, Nx[1] * a1 + Ny[1] * a2, Nx[2] * a1 + Ny[2] * a2)
+        return v, w, N, Nd, (a1, a2)
+
+    def contact_terms(self, s):
+        """Everything the contact's right-hand side needs at state s = (c, ċ, ω, α)."""
+        r, g = self.r, self.g
+        v, w, N, Nd, (a1, a2) = self.kinematics(s)
         Fn = self.m * (g * N[2] - _dot(v, Nd))
         wxNd = _cross(w, Nd)
         q = (-r * wxNd[0], -r * wxNd[1], -g - r * wxNd[2])     # g - r ω × Ṅ
-        qn = _dot(q, N)
-        B = (q[0] - qn * N[0], q[1] - qn * N[1], q[2] - qn * N[2])
+        return N, Fn, _tangential(q, N), self.slip(v, w, N), (a1, a2)
+
+    def slip(self, v, w, N):
+        """The slip velocity u = ċ − r ω × N of the ball's point at the contact, in the tangent plane."""
         wxN = _cross(w, N)
-        u = (v[0] - r * wxN[0], v[1] - r * wxN[1], v[2] - r * wxN[2])
-        un = _dot(u, N)
-        u = (u[0] - un * N[0], u[1] - un * N[1], u[2] - un * N[2])
-        return N, Fn, B, u, (a1, a2)
+        r = self.r
+        return _tangential((v[0] - r * wxN[0], v[1] - r * wxN[1], v[2] - r * wxN[2]), N)
 
     def rhs(self, mode, s):
         m, r = self.m, self.r
@@ -248,9 +260,16 @@ def _centre_of(model, x, y):
 
 def _contact_segment(sol: _Solution, mode, t0, s0, t_end):
     model = sol.model
-    funcs, names = model.events(mode)
-    res = solve_ivp(lambda t, s: model.rhs(mode, s), (t0, t_end), s0, method="DOP853",
-                    rtol=RTOL, atol=ATOL, dense_output=True, events=funcs)
+    return segment(sol, mode, lambda t, s: model.rhs(mode, s), model.events(mode), t0, s0, t_end)
+
+
+def segment(sol: _Solution, mode, rhs, events, t0, s0, t_end):
+    """A stretch of the solution in a contact ``mode`` from s0 at t0, by DOP853 on ``rhs`` (t, s)
+    to the first of ``events`` (functions, names) or t_end; returns (t, state there, event name or
+    None)."""
+    model = sol.model
+    funcs, names = events
+    res = solve_ivp(rhs, (t0, t_end), s0, method="DOP853", rtol=RTOL, atol=ATOL, dense_output=True, events=funcs)
     if res.status < 0:
         raise RuntimeError(f"{mode} from t = {t0}: {res.message}")
     t1, event = res.t[-1], None
