@@ -63,9 +63,12 @@ class OffLandscape(Exception):
         self.point = (float(center[0]), float(center[1])) if point is None else (float(point[0]), float(point[1]))
 
 
-def rest_speed(radius: float, gravity: float) -> float:
-    """The slowest rebound that still flies (m/s): apex REST_HEIGHT · r above the surface."""
-    return math.sqrt(2.0 * gravity * REST_HEIGHT * radius)
+def rest_speed(radius, gravity):
+    """The slowest rebound that still flies (m/s): apex REST_HEIGHT · r above the surface (floats
+    or arrays of them: a sweep's runs)."""
+    if isinstance(radius, float) and isinstance(gravity, float):
+        return math.sqrt(2.0 * gravity * REST_HEIGHT * radius)
+    return np.sqrt(2.0 * gravity * REST_HEIGHT * radius)
 
 
 @dataclass(frozen=True)
@@ -115,6 +118,23 @@ class Bounces:
     foot: tuple[float, float]
     sticking: bool
     landing: tuple | None
+
+
+def bounce_scratch(tape: int, hints: int = 0, tips: int = 0) -> dict[str, np.ndarray]:
+    """The scratch of ``kernel.bounces.bounces`` (``kernel.interface.FLIGHT_SCRATCH``) for rows of
+    up to KEPT_ROWS flights' rows, a landscape whose tape has ``tape`` rows and so many ``hints`` and
+    ``tips`` (their arrays, to be filled)."""
+    k, size = 2 + BEST_SAMPLES + hints, KEPT_ROWS
+    return dict(
+        hints=np.empty((hints, 3)), tips=np.empty((tips, 3)), landed=np.empty((kernel.BOUNCES_CHAIN, 5)),
+        refer=np.empty(size, dtype=np.int64), hit=np.empty(kernel.HIT_SIZE), times=np.empty(LANDING_BATCH),
+        guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)), normals=np.empty((1, 3)),
+        distances=np.empty(1), below=np.empty(1), sampled=np.empty(1), spacings=np.empty(1),
+        nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)), start_feet=np.empty((k, 2)),
+        start_normals=np.empty((k, 3)), start_distances=np.empty(k), row_times=np.empty(size),
+        row_centers=np.empty((size, 3)), row_velocities=np.empty((size, 3)), row_feet=np.empty((size, 2)),
+        row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6),
+        bounds=np.empty((tape, 2)))
 
 
 class Surface:
@@ -317,23 +337,13 @@ class Surface:
         refers are searched here (``refer_rows``); rows at times before ``feet_after`` are written
         without their foot (``kernel.flight_rows``)."""
         hints, tips = np.array(self.hints, dtype=float).reshape(-1, 3), np.array(self.tips, dtype=float).reshape(-1, 3)
-        k, size = 2 + BEST_SAMPLES + len(hints), KEPT_ROWS
         call = self.landscape.packed(self.values, ("bounces", len(hints), len(tips), self.reach_default), lambda fn: (
             machine_code.Arguments(
                 "bounces", fn=fn, state=np.empty(10), R=np.empty((3, 3)), gravity=0.0,
                 radius=0.0, mass=0.0, restitution=0.0, friction=0.0, rest=0.0, t_end=0.0, step=0.0, every=1,
-                enough=-1, dissipated=0.0, hints=np.empty((len(hints), 3)), tips=np.empty((len(tips), 3)),
-                reach_default=self.reach_default, iterations=FOOT_ITERATIONS,
-                out=np.empty(kernel.OUT_BOUNCES), landed=np.empty((kernel.BOUNCES_CHAIN, 5)),
-                rows=np.empty((size, ROW_SIZE)), refer=np.empty(size, dtype=np.int64), hit=np.empty(kernel.HIT_SIZE),
-                times=np.empty(LANDING_BATCH), guess=np.empty(2), centers=np.empty((1, 3)), feet=np.empty((1, 2)),
-                normals=np.empty((1, 3)), distances=np.empty(1), below=np.empty(1), sampled=np.empty(1),
-                spacings=np.empty(1), nearest=np.empty((1, 2 * BEST_SAMPLES)), start_centers=np.empty((k, 3)),
-                start_feet=np.empty((k, 2)), start_normals=np.empty((k, 3)), start_distances=np.empty(k),
-                row_times=np.empty(size),
-                row_centers=np.empty((size, 3)), row_velocities=np.empty((size, 3)), row_feet=np.empty((size, 2)),
-                row_normals=np.empty((size, 3)), row_distances=np.empty(size), turn=np.empty((3, 3)), d=np.empty(6),
-                tape=self.landscape.tape, bounds=np.empty((len(self.landscape.tape), 2)), feet_after=-math.inf)))
+                enough=-1, dissipated=0.0, reach_default=self.reach_default, iterations=FOOT_ITERATIONS,
+                out=np.empty(kernel.OUT_BOUNCES), rows=np.empty((KEPT_ROWS, ROW_SIZE)), tape=self.landscape.tape,
+                feet_after=-math.inf, **bounce_scratch(len(self.landscape.tape), len(hints), len(tips)))))
         kept = call.kept
         state = kept["state"]
         state[0], state[1:4], state[4:7], state[7:10] = start.t, start.center, start.velocity, start.omega

@@ -355,8 +355,9 @@ class ModeMachine:
                 and not any(np.array_equal(point, known) for known in self.surface.tips)):
             self.surface.tips.append(point)
         normal = run._probe_normal()
-        velocity = start.velocity - float(np.dot(start.velocity, normal)) * normal
-        start = dataclasses.replace(start, velocity=velocity)
+        v, n = start.velocity, normal   # (the sweeps' batch loop's numbers, ``kernel.batch.leave``)
+        along = float(v[0]) * float(n[0]) + float(v[1]) * float(n[1]) + float(v[2]) * float(n[2])
+        start = dataclasses.replace(start, velocity=v - along * n)
         if info[kernel.F_LIFT_KINK] == 1.0 and t > start.t:
             # a ridge's kink: the run's last state is the last one before it (the kink is located
             # between it and the step's end); the ball is on the surface up to the kink, so it
@@ -514,7 +515,7 @@ class ModeMachine:
         the unit normals on a ring of that radius about it differ by more than 10⁻² (a smooth
         surface's by about its curvature times 10⁻⁶)."""
         run = self.run
-        ring = 1e-6 * (1.0 + abs(x) + abs(y))
+        ring = kernel.TIP_RING * (1.0 + abs(x) + abs(y))
         d = run.landscape.evaluate(x + ring * RING_COS, y + ring * RING_SIN, run.scene.parameter_values)
         # (``unit_normal``'s numbers, in Python's floats; a pair with a normal not finite: a NaN apart, not counted)
         normals = [unit_normal_of(fx, fy) for fx, fy in zip(d[1].tolist(), d[2].tolist())]

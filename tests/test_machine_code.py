@@ -286,7 +286,7 @@ def test_the_kernel_package_is_layered_without_import_circles():
     import ast
 
     layers = ["interface", "lowlevel", "physics", "dense", "recording", "explicit", "collocation", "steps", "bounds",
-              "feet", "landing", "flight_rows", "bounces", "events", "unpacking", "loops", "entries"]
+              "feet", "landing", "flight_rows", "bounces", "events", "unpacking", "loops", "batch", "entries"]
     folder = resources.files("rollball").joinpath("kernel")
     assert sorted(layers + ["__init__"]) == sorted(p.name[:-3] for p in folder.iterdir() if p.name.endswith(".py"))
     for i, name in enumerate(layers):

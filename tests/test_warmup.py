@@ -177,7 +177,7 @@ def test_numba_compiled_each_kernel_function_once_when_the_shipped_code_was_made
     assert len(steps) == 13
     assert all(len(times) == 1 for times in compiled.values())   # (one dispatcher each)
     # (the adaptive loop is inlined into its entry point)
-    assert {"rollball.kernel.loops.advance", "rollball.kernel.loops.advance_batch"} <= set(compiled), sorted(compiled)
+    assert {"rollball.kernel.loops.advance", "rollball.kernel.batch.advance_batch"} <= set(compiled), sorted(compiled)
     # the right-hand side is compiled once (and inlined by LLVM); the other per-stage helpers are
     # inlined by numba, not compiled alone; few functions in all
     assert "rollball.kernel.physics.dynamics" in compiled and "rollball.kernel.explicit.combine" not in compiled

@@ -124,9 +124,9 @@ def _targets(t: dict) -> list[str]:
                   f"{_missed(h['ratio'] <= HYBRID_GOAL)} | ≤ {HYBRID_GOAL:g}× |" for name, h in t["hybrid"].items()]
     sweeps = t.get("hybrid_sweeps")
     if sweeps:
-        lines += ["", "A sweep of an example that changes mode over its start speed (±5 %, one worker; each run "
-                      "a `Simulation`) against the same sweep glued (the compiled batch path), CPU time, medians, "
-                      "the two in turn; and the ratio of the fastest sweeps:", "",
+        lines += ["", "A sweep of an example that changes mode over its start speed (±5 %, one worker; the batch "
+                      "loop rolls and flies its runs, leaving what it cannot finish to a `Simulation`) against the "
+                      "same sweep glued, CPU time, medians, the two in turn; and the ratio of the fastest sweeps:", "",
                   "| scene | runs | changes mode | glued | ratio | ratio of the fastest | goal |",
                   "|---|---|---|---|---|---|---|"]
         lines += [f"| {name} | {h['runs']} | {h['hybrid_s']:.2f} s | {h['glued_s']:.2f} s | "
@@ -134,11 +134,11 @@ def _targets(t: dict) -> list[str]:
         every = [(name, h) for name, h in sweeps.items() if "ratio_all" in h]
         if every:
             lines += ["", f"The same sweeps on every core ({every[0][1]['workers']} workers, a sweep's default: "
-                          "worker processes for the runs that change mode, which hold the interpreter's lock "
-                          "between their kernel calls, where the sweep is large enough to repay starting them, "
-                          "else threads, as for the glued runs), wall time, medians, the two in turn, the worker "
-                          "processes started by a sweep before (the first such sweep, which starts them, in its "
-                          "own column); and the ratio of the fastest sweeps:", "",
+                          "threads, as for the glued runs, where the batch loop runs them; worker processes for "
+                          "runs through `Simulation`, which hold the interpreter's lock between their kernel calls, "
+                          "where the sweep is large enough to repay starting them), wall time, medians, the two in "
+                          "turn, the worker processes started by a sweep before (the first sweep, which would start "
+                          "them, in its own column); and the ratio of the fastest sweeps:", "",
                       "| scene | changes mode | on | glued | ratio | ratio of the fastest | goal | first sweep |",
                       "|---|---|---|---|---|---|---|---|"]
             lines += [f"| {name} | {h['hybrid_all_s']:.2f} s | {'processes' if h.get('processes') else 'threads'} | "

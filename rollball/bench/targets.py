@@ -286,10 +286,10 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
     path), the two in turn: medians, the median of the ratios and the ratio of the fastest sweeps
     (``fastest_ratio``, as ``dissipation_cost``'s; ``_all`` and ``_dask`` likewise); and the same sweeps' wall time
     on every core (a sweep's default, ``local_workers`` of them: ``workers``, ``hybrid_all_s``,
-    ``glued_all_s``, ``ratio_all``), the hybrid one on worker processes (its runs, one
-    ``Simulation`` a point, hold the interpreter's lock between their kernel calls), the glued one
-    on threads; ``hybrid_first_s``: the first hybrid sweep on every core, which starts the worker
-    processes (the others find them started, as sweeps in a row do). Where Dask distributed is
+    ``glued_all_s``, ``ratio_all``), each where the sweep puts it (``processes``: worker processes
+    for runs through ``Simulation``, threads where the batch loop runs them);
+    ``hybrid_first_s``: the first hybrid sweep on every core, which would start worker processes
+    (the others find them started, as sweeps in a row do). Where Dask distributed is
     installed, the same on a Dask cluster of ``local_workers`` processes on this machine
     (``dask_workers``, ``hybrid_dask_s``, ``glued_dask_s``, ``ratio_dask``)."""
     from ..sweeps import processes, sweep   # (sweeps load on demand)

@@ -27,7 +27,8 @@ norm, acceptance), ``bounds`` (the landscape's bounds over a box, from its tape)
 ball's closest surface points), ``landing``, ``flight_rows`` and ``bounces`` (a flight's landing
 search, its rows, its impact and, in vacuum, flight after flight), ``events`` (locating lift-off,
 breaks, the fold, the changes of contact mode), ``unpacking`` (slots and scratch, generated),
-``loops`` (the stepping loops), ``entries`` (the entry points).
+``loops`` (the stepping loops), ``batch`` (a sweep's batch of runs: rolling, and flying in
+vacuum), ``entries`` (the entry points).
 """
 
 # The names the rest of the core reads the kernel by (it imports rollball.kernel and

@@ -5,12 +5,13 @@ compiles nothing."""
 
 from __future__ import annotations
 
+from .batch import advance_batch
 from .bounces import bounces, impact
 from .bounds import bound_boxes
 from .feet import nearest_feet
 from .flight_rows import flight_rows
 from .landing import land
-from .loops import advance, advance_adaptive, advance_batch
+from .loops import advance, advance_adaptive
 from .physics import closest_points, evaluate_points
 from .unpacking import ENTRY_SIGNATURE, make_entry
 

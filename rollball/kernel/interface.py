@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-VERSION = 3   # of the slot convention and the landscape's record below (kernel.json records it)
+VERSION = 4   # of the slot convention and the landscape's record below (kernel.json records it)
 
 # -- the entry points' arguments -------------------------------------------------------------------
 #
@@ -24,11 +24,21 @@ VERSION = 3   # of the slot convention and the landscape's record below (kernel.
 ADDRESS, INT, FLOAT = "address", "int", "float"   # one slot each (address: the landscape's record)
 VECTOR, MATRIX, INTS = "vector", "matrix", "ints"  # three slots each
 NUMBER_KINDS = (ADDRESS, INT, FLOAT)
-ENTRY_SLOTS = 128
+ENTRY_SLOTS = 192
 
 # The arrays of a run every loop takes (``run_arrays`` makes them).
 RUN_ARRAYS = (("z", VECTOR), ("R", MATRIX), ("K", MATRIX), ("probe", VECTOR), ("rows", MATRIX), ("ints", INTS),
               ("info", VECTOR), ("work", VECTOR))
+
+# The scratch of a flight in vacuum (``bounces.bounces``: its landing search's, its rows' and its
+# impact's), which the sweeps' batch loop hands it too; ``flight.bounce_scratch`` makes them.
+FLIGHT_SCRATCH = (("hints", MATRIX), ("tips", MATRIX), ("landed", MATRIX), ("refer", INTS), ("hit", VECTOR),
+                  ("times", VECTOR), ("guess", VECTOR), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX),
+                  ("distances", VECTOR), ("below", VECTOR), ("sampled", VECTOR), ("spacings", VECTOR),
+                  ("nearest", MATRIX), ("start_centers", MATRIX), ("start_feet", MATRIX), ("start_normals", MATRIX),
+                  ("start_distances", VECTOR), ("row_times", VECTOR), ("row_centers", MATRIX),
+                  ("row_velocities", MATRIX), ("row_feet", MATRIX), ("row_normals", MATRIX),
+                  ("row_distances", VECTOR), ("turn", MATRIX), ("d", VECTOR), ("bounds", MATRIX))
 
 # advance takes, beside its fixed method, the embedded pair (S, SE, SP, s_kind, s_exp: as
 # advance_adaptive's W, E, P, err_kind, err_exp) that takes its stiff steps at the tolerance s_tol
@@ -51,8 +61,10 @@ ENTRIES = {
                          ("err_kind", INT), ("err_exp", FLOAT), ("t_start", FLOAT), ("t_end", FLOAT),
                          ("record_dt", FLOAT), ("rtol", FLOAT), ("atol", FLOAT), ("max_steps", INT), *RUN_ARRAYS),
     "advance_batch": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("Z0", MATRIX), ("PARAMS", MATRIX),
-                      ("DT", VECTOR), ("T_END", VECTOR), ("N_STEPS", INTS), ("status", INTS), ("out", MATRIX),
-                      *RUN_ARRAYS, ("acc", VECTOR)),
+                      ("DT", VECTOR), ("T_END", VECTOR), ("N_STEPS", INTS), ("BOUNCE", MATRIX), ("status", INTS),
+                      ("out", MATRIX), *RUN_ARRAYS, ("acc", VECTOR), ("p", VECTOR), ("tape", MATRIX),
+                      *(("flight", VECTOR), ("turned", MATRIX), ("flown", VECTOR), ("flown_rows", MATRIX)),
+                      *FLIGHT_SCRATCH),
     "evaluate_points": (("fn", ADDRESS), ("xs", VECTOR), ("ys", VECTOR), ("out", MATRIX), ("d", VECTOR)),
     "closest_points": (("fn", ADDRESS), ("centers", MATRIX), ("feet", MATRIX), ("normals", MATRIX),
                        ("distances", VECTOR), ("iterations", INT), ("d", VECTOR)),
@@ -518,14 +530,33 @@ def grid_steps_before(t_start: float, spacing: float) -> int:
 # where ``simulate`` ends the same scene, every step recorded into a buffer of BATCH_CHUNK rows
 # that is folded into the run's outcomes and reused: memory does not grow with the steps.
 
+#
+# A run that flies (p[P_FLY] 1) whose contact only rolls (mu inf) and flies in vacuum goes on in the
+# batch loop as the mode machine goes on (``kernel.batch``): from a lift-off in the tangent plane,
+# the flights of ``bounces.bounces`` (BOUNCE[b]: the restitution and the slowest rebound that
+# flies), then rolling again from where the ball settles. Where the mode machine would do more
+# than that (a kink's or a tip's lift-off, a flight the search refers, a slip, a stop, a failure),
+# the loop stops the run with the status REFERRED: Python runs it through ``Simulation``.
+
 NOT_RUN = 11                  # a run of a batch not run yet (sweeps also mark refused runs, 10)
+REFERRED = 12                 # a run of a batch left to the mode machine (``Simulation``)
 BATCH_CHUNK = 256             # steps folded into a run's outcomes at a time
 BATCH_ROWS = BATCH_CHUNK + 2  # the buffer: the last row folded, a chunk, a stop's row
-BATCH_ACCUMULATORS = 5        # acc: E0, max |E - E0|, min F.N, max speed, path length
+# acc, a run's accumulators over its rows (``batch.fold_rows``): the first row's E + D, the largest
+# and smallest E + D, min F.N, max speed, path length, the last row's time, contact (2) and centre
+# (3), the rows folded, 1 where the last row flies
+(A_FIRST, A_HIGH, A_LOW, A_FORCE, A_SPEED, A_PATH, A_T, A_CONTACT, A_CENTER, A_ROWS, A_FLYING,
+ BATCH_ACCUMULATORS) = 0, 1, 2, 3, 4, 5, 6, 7, 9, 12, 13, 14
 # One row of outcomes per run, in this order.
 OUTCOMES = ("t_reached", "liftoff_time", "x_end", "y_end", "energy_drift", "min_normal_force",
             "max_speed", "path_length")
 O_T, O_LIFTOFF, O_X, O_Y, O_DRIFT, O_MIN_FORCE, O_MAX_SPEED, O_PATH = range(len(OUTCOMES))
+# The batch loop's out has two columns more: the landings, and 1 where the run ends in flight.
+O_LANDINGS, O_FLIES = len(OUTCOMES), len(OUTCOMES) + 1
+BATCH_OUT = len(OUTCOMES) + 2
+# The liftoff's contact point is looked at on a ring of this radius (× (1 + |x| + |y|)) as the
+# mode machine looks for a tip there; unit normals on it this far apart leave the run to it.
+TIP_RING, TIP_SUSPECT = 1e-6, 5e-3
 
 
 def description() -> dict:

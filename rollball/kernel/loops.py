@@ -1,5 +1,5 @@
-"""The stepping loops: fixed steps (``advance``), an embedded pair with step-size control
-(``advance_adaptive``), and a sweep's batch of fixed-step runs (``advance_batch``)."""
+"""The stepping loops: fixed steps (``advance``) and an embedded pair with step-size control
+(``advance_adaptive``). (A sweep's batch of fixed-step runs: ``batch``.)"""
 
 from __future__ import annotations
 
@@ -11,12 +11,9 @@ from .dense import state_at
 from .events import TIP_REACH, contact_watched, fold_search, record_valid, step_events, tip_liftoff, tip_stop
 from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, pair_step
 from .interface import (
-    BATCH_CHUNK, D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_LIFTOFF, F_TIME, I_LAST_RECORDED,
-    I_NONFINITE, I_REJECTED,
-    I_RETRY, I_ROWS, I_STATUS, I_STEPS, MOTION_SIZE, NONFINITE, NOT_RUN, OK, O_DRIFT, O_LIFTOFF,
-    O_MAX_SPEED, O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_FORCE, PROBE_SLIP, PROBE_SLIP_PULL, P_FLY, P_MU,
-    ROW_CENTER, ROW_ENERGY,
-    ROW_FORCE, ROW_SIZE, ROW_VELOCITY, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
+    D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
+    I_RETRY, I_ROWS, I_STATUS, I_STEPS, MOTION_SIZE, NONFINITE, OK, PROBE_FORCE, PROBE_SLIP, PROBE_SLIP_PULL,
+    P_FLY, P_MU, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
     TRANSITION, T_GRIP, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
     P_RESISTANCE, P_TURN, P_UNIT, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
@@ -669,63 +666,3 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             break
     info[F_TIME], info[F_H] = t, h
     ints[I_RETRY] = 1 if retry else 0
-TINY = 2.2250738585072014e-308  # the smallest normal double
-
-
-@JIT
-def fold_rows(rows, first, count, acc):
-    """Fold rows[first:count] into a run's accumulators acc = E0, max |E - E0|, min F.N, max
-    speed, path length; rows[first - 1] is the row before them (first 0 starts them)."""
-    if first == 0:
-        acc[0], acc[1], acc[2], acc[3], acc[4] = rows[0, ROW_ENERGY], 0.0, math.inf, 0.0, 0.0
-    for i in range(first, count):
-        acc[1] = max(acc[1], abs(rows[i, ROW_ENERGY] - acc[0]))
-        acc[2] = min(acc[2], rows[i, ROW_FORCE])
-        v = ROW_VELOCITY
-        acc[3] = max(acc[3], math.sqrt(rows[i, v] ** 2 + rows[i, v + 1] ** 2 + rows[i, v + 2] ** 2))
-        if i > 0:
-            c = ROW_CENTER
-            acc[4] += math.sqrt((rows[i, c] - rows[i - 1, c]) ** 2 + (rows[i, c + 1] - rows[i - 1, c + 1]) ** 2
-                                + (rows[i, c + 2] - rows[i - 1, c + 2]) ** 2)
-
-
-@COLD
-def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, status, out, z, R, K, probe, rows, ints, info,
-                  work, acc):
-    """Run every run of a batch whose status is NOT_RUN, without the GIL; write its status and
-    outcomes (O_T ...). Per run b: Z0[b] the initial motion state, PARAMS[b] the parameters
-    (``parameters``), DT[b], T_END[b], N_STEPS[b] the fixed steps; W, P the explicit method.
-    z (MOTION_SIZE), R, K, probe, rows (BATCH_ROWS), ints, info, work, acc (5): scratch."""
-    n = MOTION_SIZE
-    for b in range(Z0.shape[0]):
-        if status[b] != NOT_RUN:
-            continue
-        p = PARAMS[b]
-        for q in range(n):
-            z[q] = Z0[b, q]
-        for q in range(ints.shape[0]):
-            ints[q] = 0
-        for q in range(info.shape[0]):
-            info[q] = math.nan
-        for q in range(out.shape[1]):
-            out[b, q] = math.nan
-        first = 0
-        while ints[I_STATUS] == RUNNING:
-            # (np.int64: a literal int would compile advance anew for it)
-            advance(fn, W, P, p, DT[b], 0.0, T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R, K, probe,
-                    rows, ints, info, work, EXPLICIT, W, W, P, np.int64(0), 0.0, 0.0)   # (p[P_STIFF] 0: no pair)
-            count = ints[I_ROWS]
-            if count == 0:  # the initial state is not finite: nothing to report
-                break
-            fold_rows(rows, first, count, acc)
-            for c in range(ROW_SIZE):  # the last row, the one before the next chunk's
-                rows[0, c] = rows[count - 1, c]
-            ints[I_ROWS], first = 1, 1
-        status[b] = ints[I_STATUS]
-        if first == 0:
-            continue
-        o = out[b]
-        o[O_T], o[O_X], o[O_Y] = rows[0, 0], rows[0, 1], rows[0, 2]
-        o[O_LIFTOFF] = info[F_LIFTOFF]
-        o[O_DRIFT] = acc[1] / max(abs(acc[0]), p[0] * p[1] * p[2], TINY)
-        o[O_MIN_FORCE], o[O_MAX_SPEED], o[O_PATH] = acc[2], acc[3], acc[4]

@@ -50,6 +50,8 @@ STEP = njit(cache=False, nogil=True, error_model="numpy", forceinline=True, fast
 # EXACT: no contraction into fused multiply-adds, so that a function computes what the same
 # formula in numpy computes, bit for bit (the closest surface points of a flight, ``closest_points``).
 EXACT = njit(cache=False, nogil=True, error_model="numpy", _nrt=False)
+# INLINE_EXACT: EXACT's arithmetic, inlined by numba where it is called (no compile of its own).
+INLINE_EXACT = njit(cache=False, nogil=True, error_model="numpy", inline="always", _nrt=False)
 
 
 @intrinsic

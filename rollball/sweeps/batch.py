@@ -2,7 +2,10 @@
 
 ``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
 scenes, computes the initial states for the whole batch at once and runs them all in one
-call of the compiled batch loop (``kernel.loops.advance_batch``, which releases the GIL). The same
+call of the compiled batch loop (``kernel.batch.advance_batch``, which releases the GIL): the
+2011 model's runs, and those of a ball that rolls and flies in vacuum; a run the loop leaves to
+the mode machine, and every run of a scene whose ball can slip or come to rest, goes through
+``Simulation`` (``run_one``). The same
 batch gives the same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
 first batch, and keeps it for the rest.
 """
@@ -18,7 +21,8 @@ import numpy as np
 
 from .. import kernel, machine_code
 from ..landscape import landscape_of
-from ..modes import ROLLING, SLIDING, Change
+from ..flight import KEPT_ROWS, bounce_scratch, rest_speed
+from ..modes import FLYING, ROLLING, SLIDING, Change
 from ..run_size import step_count
 from ..scene import Scene, SceneError
 from ..simulation import Simulation, initial_momentum
@@ -60,8 +64,9 @@ class Result:
 
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
-    """Every sweepable key's value per run: the varied column or the scene's own value."""
-    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX) and key not in DISSIPATION_KEYS]   # (they roll)
+    """Every key's value per run the batch loop reads: the varied column or the scene's own value."""
+    keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX) and key not in DISSIPATION_KEYS]
+    keys.append(RESTITUTION)
     keys += [PARAMETER_PREFIX + name for name in scene.parameter_names]
     return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
             for key in keys}
@@ -117,6 +122,7 @@ def _landscape(scene: Scene):
 
 
 CONTACT_PREFIX = "contact."
+RESTITUTION = "contact.restitution"   # (the one contact key the batch loop reads: its runs' friction is null)
 
 
 # Keys that give a rolling ball a loss of energy, and so a rest (scene version 4).
@@ -124,11 +130,23 @@ DISSIPATION_KEYS = ("contact.rolling_resistance", "contact.spin_friction", "air.
 
 
 def changes_mode(scene: Scene, keys=()) -> bool:
-    """Whether the runs go through ``Simulation`` rather than the batch loop, which runs the 2011
-    model only (a ball rolling for ever): the scene's contact can change mode, or it dissipates
-    (it may come to rest), or a sweep varying ``keys`` gives it a friction or a dissipation."""
+    """Whether the runs' contact can change mode (the 2011 model's ball rolls for ever): it can
+    fly, or slip, or it dissipates (it may come to rest), or a sweep varying ``keys`` gives it a
+    friction or a dissipation."""
     return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued") or (
         scene.dissipates or "contact.friction" in keys or any(key in DISSIPATION_KEYS for key in keys))
+
+
+def compiled(scene: Scene, keys=()) -> bool:
+    """Whether the batch loop runs the runs itself (``kernel.batch``): the 2011 model, or a ball
+    that only rolls and flies in vacuum (friction null and not varied, ``fly``, no dissipation);
+    else each run goes through ``Simulation``. (The loop leaves a run it cannot finish so to
+    ``Simulation`` too: REFERRED.)"""
+    if not changes_mode(scene, keys):
+        return True
+    return (scene.contact.friction is None and "contact.friction" not in keys
+            and scene.contact.after_liftoff == "fly" and not scene.dissipates
+            and not any(key in DISSIPATION_KEYS for key in keys))
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
@@ -149,7 +167,8 @@ def run_one(scene: Scene) -> tuple[int, np.ndarray]:
         # the centre's and the velocity's columns, each made contiguous at once (one pass over the rows)
         cx, cy, cz, vx, vy, vz = traj.data[:, CENTER.start:VELOCITY.stop].T.copy()
         dx, dy, dz = np.diff(cx), np.diff(cy), np.diff(cz)
-        path = float(np.sum(np.sqrt(dx * dx + dy * dy + dz * dz)))   # (the squares summed as np.linalg.norm does)
+        # (the squares summed as np.linalg.norm does; the steps in order, as the batch loop sums them)
+        path = float(np.cumsum(np.sqrt(dx * dx + dy * dy + dz * dz))[-1]) if rows > 1 else 0.0
         out[:len(kernel.OUTCOMES)] = (traj.t[-1], np.nan if traj.liftoff_time is None else traj.liftoff_time,
                                       traj.contact[-1, 0], traj.contact[-1, 1], traj.energy_drift,
                                       float(np.min(traj.normal_force)),
@@ -177,12 +196,9 @@ def run(task: Task) -> Result:
     messages = validate(scene, grid, values)
     status = np.full(runs, NOT_RUN, dtype=np.int64)
     status[list(messages)] = INVALID
-    if changes_mode(scene, grid.keys):
+    if not compiled(scene, grid.keys):
         outcomes = np.full((runs, len(OUTCOMES)), np.nan)
-        for i in range(runs):
-            if status[i] != INVALID:
-                varied = _varied(scene, grid.keys, tuple(float(v) for v in values[i]))  # (valid: checked above)
-                status[i], outcomes[i] = run_one(varied)
+        _run_each(scene, grid, values, np.flatnonzero(status != INVALID), status, outcomes)
         return Result(task.lo, status.astype(np.int8), outcomes,
                       {task.lo + i: text for i, text in messages.items()})
     c = _columns(scene, grid, values)
@@ -201,7 +217,10 @@ def run(task: Task) -> Result:
             d = landscape.evaluate(c["start.x"][these], c["start.y"][these], values_k)
             z0[these, 2:5] = initial_momentum(d, c["start.vx"][these], c["start.vy"][these], c["start.spin"][these],
                                               r[these], m[these]).T
-        p = np.ascontiguousarray(kernel.parameters(r, m, c["gravity"]).T)
+        flies = changes_mode(scene, grid.keys)   # (as ``Simulation`` gives a run whose contact changes mode)
+        p = np.ascontiguousarray(kernel.parameters(r, m, c["gravity"], fly=flies, stiff=flies).T)
+        restitution = c[RESTITUTION]
+        bounce = np.stack([restitution, rest_speed(r, c["gravity"])], axis=1)
     dt, t_end = c["integrator.dt"], c["duration"]
     n_steps = np.ones(runs, dtype=np.int64)
     pairs = np.stack([dt, t_end], axis=1)
@@ -212,8 +231,11 @@ def run(task: Task) -> Result:
                 n_steps[inverse.ravel() == i] = step_count(float(h), float(t))
             except ValueError:  # too many steps: refused by validate, not run
                 pass
-    outcomes = np.full((runs, len(kernel.OUTCOMES)), np.nan)   # the batch loop's
+    outcomes = np.full((runs, kernel.BATCH_OUT), np.nan)   # the batch loop's
     W, _, D = method.kernel_arrays()
+    tape = landscape.tape
+    flight = dict(tape=tape, flight=np.empty(10), turned=np.empty((3, 3)), flown=np.empty(kernel.OUT_BOUNCES),
+                  flown_rows=np.empty((KEPT_ROWS, kernel.ROW_SIZE)), **bounce_scratch(len(tape)))
     for k, values_k in enumerate(sets):
         these = np.flatnonzero(of_set == k)
         whole = len(these) == runs   # (no copies for a sweep of one set of values)
@@ -222,14 +244,26 @@ def run(task: Task) -> Result:
         part_status, part_outcomes = part(status), part(outcomes)
         machine_code.call("advance_batch", fn=record.ctypes.data, W=W, P=D, Z0=part(z0), PARAMS=part(p),
                           DT=part(np.ascontiguousarray(dt)), T_END=part(np.ascontiguousarray(t_end)),
-                          N_STEPS=part(n_steps), status=part_status, out=part_outcomes,
-                          acc=np.empty(kernel.BATCH_ACCUMULATORS),
+                          N_STEPS=part(n_steps), BOUNCE=part(bounce), status=part_status, out=part_outcomes,
+                          acc=np.empty(kernel.BATCH_ACCUMULATORS), p=np.empty(kernel.P_SIZE), **flight,
                           **kernel.run_arrays(kernel.MOTION_SIZE, len(W), kernel.BATCH_ROWS))
         if not whole:
             status[these], outcomes[these] = part_status, part_outcomes
-    # the 2011 model rolls throughout: it never lands nor slips
-    outcomes = np.column_stack([outcomes, np.full((runs, len(OUTCOMES) - len(kernel.OUTCOMES)), np.nan)])
+    # the batch loop's runs roll, and fly (no slip, no rest): the contact's outcomes from its columns
     done = status != INVALID
-    outcomes[done, O_END_MODE], outcomes[done, O_LANDINGS] = ROLLING, 0.0
+    flying = outcomes[:, kernel.O_FLIES] == 1.0
+    contact = np.full((runs, len(OUTCOMES) - len(kernel.OUTCOMES)), np.nan)
+    contact[done, O_END_MODE - len(kernel.OUTCOMES)] = np.where(flying[done], FLYING, ROLLING)
+    contact[done, O_LANDINGS - len(kernel.OUTCOMES)] = outcomes[done, kernel.O_LANDINGS]
+    outcomes = np.column_stack([outcomes[:, :len(kernel.OUTCOMES)], contact])
+    # the runs it left to the mode machine
+    _run_each(scene, grid, values, np.flatnonzero(status == kernel.REFERRED), status, outcomes)
     messages = {task.lo + i: text for i, text in messages.items()}
     return Result(task.lo, status.astype(np.int8), outcomes, messages)
+
+
+def _run_each(scene: Scene, grid: Grid, values: np.ndarray, runs, status: np.ndarray, outcomes: np.ndarray) -> None:
+    """Run each of ``runs`` (rows of ``values``, valid) through ``Simulation`` (``run_one``)."""
+    for i in runs:
+        varied = _varied(scene, grid.keys, tuple(float(v) for v in values[i]))  # (valid: checked above)
+        status[i], outcomes[i] = run_one(varied)

@@ -1,9 +1,9 @@
 """Worker processes for the sweeps whose runs hold the interpreter's lock.
 
-A run whose contact changes mode (it slips, flies or comes to rest) goes through
-``Simulation``, whose Python holds the GIL between its kernel calls (a quarter to a half of a
-run on the examples that fly): on threads such runs wait on each other (a sweep on two cores
-ran 1.2–1.3 times as fast as on one). Those sweeps run their batches in worker processes
+A run whose contact can slip or come to rest goes through ``Simulation``, whose Python holds
+the GIL between its kernel calls (a quarter to a half of a run that flies, when flights went
+that way too): on threads such runs wait on each other (a sweep on two cores ran 1.2–1.3 times
+as fast as on one). Those sweeps run their batches in worker processes
 instead: a loky process pool, one per worker count, shared by the sweeps of this process
 whatever thread runs them. Its workers are started afresh (fork and exec: nothing of this
 process, its threads or its Qt, is copied, and a script's main module is not run again); each

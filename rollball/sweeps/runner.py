@@ -1,9 +1,9 @@
 """Running a sweep: the grid cut into batches, run on local threads or a Dask cluster.
 
 Locally, a pool of threads runs the batches: the compiled loop releases the GIL, so the
-threads run on all cores at once, sharing one compiled landscape. Runs whose contact changes
-mode go through ``Simulation``, whose Python holds the GIL: their batches run in worker
-processes (``processes``), each compiling the landscape once. With a scheduler
+threads run on all cores at once, sharing one compiled landscape. Runs whose contact can slip
+or come to rest go through ``Simulation``, whose Python holds the GIL: their batches run in
+worker processes (``processes``), each compiling the landscape once. With a scheduler
 address the batches go to a Dask distributed cluster (``client.map`` over the batches,
 results taken ``as_completed``); each worker process compiles the landscape on its first
 batch. A batch is sized to take a few tenths of a second (Dask's advice: tasks of 100 ms or
@@ -148,7 +148,7 @@ def sweep(scene: Scene, vary, *, workers: int | None = None, scheduler: str | No
     started = time.perf_counter()
     if scheduler is None:
         table.workers = workers or local_workers()
-        hold_lock = (batch.changes_mode(scene, grid.keys)
+        hold_lock = (not batch.compiled(scene, grid.keys)
                      and grid.size * run_evaluations(scene, grid) >= PROCESS_EVALUATIONS)
         table.processes, table.error = _run_local(_tasks(scene, grid, table.workers), table.workers, take,
                                                   cancel, hold_lock)
