@@ -42,8 +42,20 @@ MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it 
 # of the grid at a time (twice as many while it cannot go on), to the first step on its grid where
 # it can.
 STIFF_METHOD = "dop853"
-STIFF_TOLERANCE = 1e-13   # (a rest after a turning point slower than 10⁻⁴ m/s moves 10³ times its error)
+# The tolerance of a run whose couples can bring the ball to rest: a rest after a turning point
+# slower than 10⁻⁴ m/s moves 10³ times its error. Without them the stretches are a slip's, whose
+# grip moves by about a hundredth of the tolerance (10⁻¹⁴ s on the bench's slipping bowl from
+# 10⁻¹³ to 10⁻¹²), at a third fewer evaluations; at 10⁻¹¹ gauss6's finest grips in
+# tests/test_hybrid_convergence.py stop converging (docs/design.md §8).
+STIFF_TOLERANCE = 1e-13
+SLIP_TOLERANCE = 1e-12
 STIFF_WINDOW = 16
+
+
+def stiff_tolerance(contact) -> float:
+    """The stiff stretches' tolerance (rtol and atol) for a run with this ``Contact``: STIFF_TOLERANCE
+    where rolling resistance or spin friction can stop the ball, else SLIP_TOLERANCE."""
+    return STIFF_TOLERANCE if contact.rolling_resistance or contact.spin_friction else SLIP_TOLERANCE
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
 RING_COS, RING_SIN = np.cos(np.arange(8) * (np.pi / 4)), np.sin(np.arange(8) * (np.pi / 4))   # (``_at_tip``)
 SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
@@ -544,7 +556,7 @@ class ModeMachine:
         itself) stopped before a step where the slip's direction is stiff, or a rolling ball's
         ω_t's against rolling resistance (kernel.T_STIFF): that direction relaxes
         at the rate |B| / |u| (the pull's |G| / |ω_t|) and turns with B (G), which no fixed step can
-        follow at its order. That stretch is taken by STIFF_METHOD at STIFF_TOLERANCE (every
+        follow at its order. That stretch is taken by STIFF_METHOD at ``stiff_tolerance`` (every
         transition in it too, a rest where ω_t reaches 0), recording every step of the run's grid;
         the fixed steps go on from the first grid time where the ball is in another mode, or its
         direction is no longer stiff: its rows and transitions up to there are the run's."""
@@ -556,8 +568,9 @@ class ModeMachine:
             t1 = (kernel.grid_steps_before(t, run.dt) + window) * run.dt
             if not run.t_end - t1 > kernel.GRID_SLIVER * run.dt:
                 t1 = run.t_end
-            stretch = run.from_state(state, t, mode, t_end=t1, method=STIFF_METHOD, rtol=STIFF_TOLERANCE,
-                                     atol=STIFF_TOLERANCE, record_dt=run.dt)
+            tolerance = stiff_tolerance(run.scene.contact)
+            stretch = run.from_state(state, t, mode, t_end=t1, method=STIFF_METHOD, rtol=tolerance,
+                                     atol=tolerance, record_dt=run.dt)
             rows, modes = stretch.rows, stretch.modes
             if stretch.status is not Status.OK:   # (its rows and transitions so far are the run's)
                 self._adopt(stretch, len(rows) - 1)

@@ -17,7 +17,7 @@ from .run_size import MAX_ROWS, MAX_STEPS, step_count
 from .energy_check import energy_check
 from .geometry import unit_normal, unit_normal_of
 from .landscape import Landscape, landscape_of
-from .mode_machine import STIFF_METHOD, STIFF_TOLERANCE, ModeMachine, friction_of
+from .mode_machine import STIFF_METHOD, ModeMachine, friction_of, stiff_tolerance
 from .modes import Mode
 from .scene import CONSTRAINTS, Scene, start_slip
 from .tableaus import METHODS, MethodKind, get_method
@@ -319,7 +319,7 @@ class Simulation:
                 n_steps=n_steps, every=self.record_every, max_steps=1, **arrays,
                 stepping=kernel.IMPLICIT if self.tableau.kind is MethodKind.IMPLICIT else kernel.EXPLICIT,
                 S=self._S, SE=self._SE, SP=self._SP, s_kind=len(self._SE) - 1,
-                s_exp=METHODS[STIFF_METHOD].error_exponent, s_tol=STIFF_TOLERANCE)
+                s_exp=METHODS[STIFF_METHOD].error_exponent, s_tol=stiff_tolerance(self.scene.contact))
 
     @property
     def done(self) -> bool:
