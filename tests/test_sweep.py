@@ -89,6 +89,31 @@ def test_the_batch_loop_flies_lands_and_rolls_on_as_the_mode_machine_does(monkey
         np.testing.assert_allclose(table.outcomes[i], expected, rtol=1e-13, atol=1e-16, err_msg=f"run {i}")
 
 
+# flights that end otherwise than by a landing: a ball that never comes back (the surface falls
+# away faster than the parabola), one that meets a spike 0.5 mm wide (does_not_fit), a smooth drop
+HARD_FLIGHTS = [("-10*x^2", 0.0, 5.0, {"ok"}), ("0.5*exp(-x^2) + 0.4*exp(-((x-1.1)/0.0005)^2)", -1.5, 3.0,
+                                                {"does_not_fit"}),
+                ("-5*(1+tanh(50*x))", -1.0, 3.0, {"ok"})]
+
+
+@pytest.mark.parametrize("landscape, x, vx, statuses", HARD_FLIGHTS, ids=["never_lands", "spike", "drop"])
+def test_the_batch_loops_flights_end_as_the_mode_machines_do(landscape, x, vx, statuses):
+    """A sweep's flights that never land, meet a feature narrower than the landing search's reach,
+    or fall off a steep smooth drop end with the status and outcomes of the same runs through
+    ``Simulation`` (``run_one``), whichever of the two ran them."""
+    from rollball.sweeps import batch
+
+    scene = Scene.from_dict({**LIFTOFF.to_dict(), "landscape": landscape, "duration": 2.0,
+                             "start": {**LIFTOFF.to_dict()["start"], "x": x, "vx": vx}})
+    assert batch.compiled(scene, ("start.vx",))
+    table = sweep(scene, {"start.vx": [0.95 * vx, vx, 1.05 * vx]}, workers=1)
+    assert set(table["status"]) == statuses
+    for i, values in enumerate(table.grid.values()):
+        code, expected = batch.run_one(with_values(scene, table.keys, values))
+        assert table.codes[i] == code
+        np.testing.assert_allclose(table.outcomes[i], expected, rtol=1e-13, atol=1e-16, err_msg=f"run {i}")
+
+
 def test_a_run_the_batch_loop_cannot_finish_is_left_to_the_mode_machine(monkeypatch):
     """A ball that reaches a ridge's kink (where the mode machine may turn it over the edge) is
     left to ``Simulation``, the run that does not reach it is the batch loop's; either gives
