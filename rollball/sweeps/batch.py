@@ -129,24 +129,26 @@ RESTITUTION = "contact.restitution"   # (the one contact key the batch loop read
 DISSIPATION_KEYS = ("contact.rolling_resistance", "contact.spin_friction", "air.density", "air.drag_coefficient")
 
 
+def _slips_or_rests(scene: Scene, keys=()) -> bool:
+    """Whether the runs' ball can slip (a friction, or one varied) or come to rest (a dissipation,
+    or one varied)."""
+    return (scene.contact.friction is not None or "contact.friction" in keys or scene.dissipates
+            or any(key in DISSIPATION_KEYS for key in keys))
+
+
 def changes_mode(scene: Scene, keys=()) -> bool:
     """Whether the runs' contact can change mode (the 2011 model's ball rolls for ever): it can
     fly, or slip, or it dissipates (it may come to rest), or a sweep varying ``keys`` gives it a
     friction or a dissipation."""
-    return not (scene.contact.friction is None and scene.contact.after_liftoff == "glued") or (
-        scene.dissipates or "contact.friction" in keys or any(key in DISSIPATION_KEYS for key in keys))
+    return scene.contact.after_liftoff != "glued" or _slips_or_rests(scene, keys)
 
 
 def compiled(scene: Scene, keys=()) -> bool:
     """Whether the batch loop runs the runs itself (``kernel.batch``): the 2011 model, or a ball
-    that only rolls and flies in vacuum (friction null and not varied, ``fly``, no dissipation);
-    else each run goes through ``Simulation``. (The loop leaves a run it cannot finish so to
-    ``Simulation`` too: REFERRED.)"""
-    if not changes_mode(scene, keys):
-        return True
-    return (scene.contact.friction is None and "contact.friction" not in keys
-            and scene.contact.after_liftoff == "fly" and not scene.dissipates
-            and not any(key in DISSIPATION_KEYS for key in keys))
+    that only rolls and flies in vacuum (friction null and not varied, no dissipation); else each
+    run goes through ``Simulation``. (The loop leaves a run it cannot finish so to ``Simulation``
+    too: REFERRED.)"""
+    return not _slips_or_rests(scene, keys)
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
