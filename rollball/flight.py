@@ -66,8 +66,6 @@ class OffLandscape(Exception):
 def rest_speed(radius, gravity):
     """The slowest rebound that still flies (m/s): apex REST_HEIGHT · r above the surface (floats
     or arrays of them: a sweep's runs)."""
-    if isinstance(radius, float) and isinstance(gravity, float):
-        return math.sqrt(2.0 * gravity * REST_HEIGHT * radius)
     return np.sqrt(2.0 * gravity * REST_HEIGHT * radius)
 
 

@@ -51,17 +51,18 @@ STIFF_TOLERANCE = 1e-13
 SLIP_TOLERANCE = 1e-12
 STIFF_WINDOW = 16
 
-
-def stiff_tolerance(contact) -> float:
-    """The stiff stretches' tolerance (rtol and atol) for a run with this ``Contact``: STIFF_TOLERANCE
-    where rolling resistance or spin friction can stop the ball, else SLIP_TOLERANCE."""
-    return STIFF_TOLERANCE if contact.rolling_resistance or contact.spin_friction else SLIP_TOLERANCE
 SIDE = 1e-7   # × (1 + |x| + |y|): where the far face of a ridge is evaluated past its edge
 RING_COS, RING_SIN = np.cos(np.arange(8) * (np.pi / 4)), np.sin(np.arange(8) * (np.pi / 4))   # (``_at_tip``)
 SPIN_ROUND_OFF = 1e-12   # a held ball's r |ω·N| below this share of the run's largest speed (or √(g r)) is no spin
 # What ``ModeMachine._bounces`` leaves ``_fly`` to do: nothing (DONE), or search the current
 # flight's landing with flight.py's own search (SEARCH)
 DONE, SEARCH = object(), object()
+
+
+def stiff_tolerance(contact) -> float:
+    """The stiff stretches' tolerance (rtol and atol) for a run with this ``Contact``: STIFF_TOLERANCE
+    where rolling resistance or spin friction can stop the ball, else SLIP_TOLERANCE."""
+    return STIFF_TOLERANCE if contact.rolling_resistance or contact.spin_friction else SLIP_TOLERANCE
 
 
 def friction_of(contact) -> float:
