@@ -228,22 +228,41 @@ def slow_slip(p, rtol):
     return math.sqrt(rtol * p[2] * p[0])
 
 
-# A grip an embedded pair's step located with a slip left of more than this share of the slip at the
-# step's start (and more than ``slow_slip``) was crossed unresolved: the step is taken again, shorter
-GRIP_LEFT = 0.1
+# ``grip_slip``'s share: the slip a grip an embedded pair's step located may leave, in units of rtol sqrt(g r)
+GRIP_SLIP = 100.0
 
 
 @JIT
-def grip_left(probe, pe, slow):
-    """Whether a grip located on an embedded pair's step (probe: the step's start, pe: the grip's
-    state) left a slip the step did not resolve: above ``slow`` (``slow_slip``) and above GRIP_LEFT
-    of the start's. The grip is where the slip's component along its start's reaches 0; a step that
-    crossed the slip's zero with the friction's direction turning within it unresolved ends with u
-    sideways to u0 and large (dop853 at rtol 1e-4 took the tilted bowl's last 50 ms of sliding in one
-    step and "gripped" at its end with 0.039 m/s left of 0.105, 1e-2 s late)."""
-    u0 = probe[PROBE_SLIP] ** 2 + probe[PROBE_SLIP + 1] ** 2 + probe[PROBE_SLIP + 2] ** 2
-    ub = pe[PROBE_SLIP] ** 2 + pe[PROBE_SLIP + 1] ** 2 + pe[PROBE_SLIP + 2] ** 2
-    return ub > slow * slow and ub > GRIP_LEFT * GRIP_LEFT * u0
+def grip_slip(p, rtol):
+    """The most slip a grip located on an embedded pair's step may leave (``grip_left``): GRIP_SLIP
+    rtol sqrt(g r), at most ``slow_slip`` (the two meet at rtol 1e-4). Where a slip falls to 0, its
+    direction turns towards B's ever faster as |u| falls (with |B| below the friction's rate its
+    derivatives grow as powers of 1/|u|), and a step that holds the zero passes it sideways by about
+    what the grip leaves; the grip's time is then off by a share of that over the slip's rate. (Left
+    up to ``slow_slip``, dop853 at rtol 1e-10 gripped a bowl thrown sideways with 1.6e-6 m/s left,
+    4.4e-8 s late, where its tolerance allows about 1e-11 s.)"""
+    return min(slow_slip(p, rtol), GRIP_SLIP * rtol * math.sqrt(p[2] * p[0]))
+
+
+@JIT
+def slip_left(pe):
+    """|u|² at a state with probe pe: what a grip located there leaves of the slip."""
+    return pe[PROBE_SLIP] ** 2 + pe[PROBE_SLIP + 1] ** 2 + pe[PROBE_SLIP + 2] ** 2
+
+
+@JIT
+def grip_left(pe, most, before):
+    """Whether a grip located on an embedded pair's step (pe: the grip's state) left a slip the step
+    did not resolve, to be taken again with a step half as long: more than ``most`` (``grip_slip``),
+    and at most half what the last grip taken again in this call of the loop left (``before``, squared;
+    inf for none). The grip is where the slip's component along
+    its start's reaches 0; a step that crossed the slip's zero with the friction's direction turning
+    within it unresolved ends with u sideways to u0 and large (dop853 at rtol 1e-4 took the tilted
+    bowl's last 50 ms of sliding in one step and "gripped" at its end with 0.039 m/s left of 0.105,
+    1e-2 s late), and a shorter step leaves less. A slip that does not shrink as the step does is the
+    run's own error, not the step's: the grip stays."""
+    ub = slip_left(pe)
+    return ub > most * most and ub <= 0.25 * before
 
 
 @JIT
@@ -589,7 +608,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
             return
     watch = contact_watched(p, n)
     turns = 0   # (the couples' sides turned since the last step that ended whole: SIDE_TURNS at most, ``resume``)
-    cap = slow_slip(p, rtol)
+    cap, most = slow_slip(p, rtol), grip_slip(p, rtol)
+    before = math.inf   # the slip the last grip taken again in this call left, squared (``grip_left``)
     skipped = grid_before(t_start, record_dt) if record_dt > 0.0 else 0   # row i >= 1 at (i + skipped) record_dt
     t, h = info[F_TIME], info[F_H]
     retry = ints[I_RETRY] == 1  # right after a rejection the step may shrink but not grow (Hairer's rule)
@@ -608,7 +628,8 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         t_new = t_end if land else t + hs
         valid = step_events(fn, d, p, W, True, n, t, hs, z, R, K, last, P, probe, Y, zn, Rn, pn, ints, info,
                             False, Ye, Re, pe, sa, sb, sm, EXPLICIT, watch)
-        if valid >= 0.0 and ints[I_TRANSITION] == T_GRIP and grip_left(probe, pe, cap):   # taken again, shorter
+        if valid >= 0.0 and ints[I_TRANSITION] == T_GRIP and grip_left(pe, most, before):   # taken again, shorter
+            before = slip_left(pe)
             ints[I_STATUS], ints[I_TRANSITION], ints[I_HELD], ints[I_DENSE] = RUNNING, 0, 0, -1
             ints[I_REJECTED] += 1
             retry, h = True, 0.5 * hs
