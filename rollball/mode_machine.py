@@ -22,7 +22,7 @@ from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, re
 from .geometry import rotation, unit_normal, unit_normal_of
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
-from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, past_edge, turn_over
+from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, edge_force, past_edge, turn_over
 from .run_size import MAX_ROWS
 from .tip import Tip, foot_on_face, onto_face, turn_about
 from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R,
@@ -378,6 +378,8 @@ class ModeMachine:
             start = self._to_kink(start, t, normal, before)
             if before is Mode.ROLLING and self._turn_over(start, x, y):
                 return
+            if before is Mode.SLIDING and self._slides_onto_edge(start, t, x, y):
+                return
         self.mode = Mode.FLYING
         self.flight = self._new_flight(start)
 
@@ -395,16 +397,11 @@ class ModeMachine:
         False where it leaves the edge at once (it flies from ``start``)."""
         run = self.run
         scene = run.scene
-        values = scene.parameter_values
-        point = np.array([x, y, float(run.landscape.evaluate(x, y, values)[0])])
-        heading = start.velocity[:2] / max(float(np.linalg.norm(start.velocity[:2])), 1e-300)
-        scale = 1.0 + abs(x) + abs(y)
-        beyond = unit_normal(run.landscape.evaluate(x + SIDE * scale * heading[0], y + SIDE * scale * heading[1],
-                                                    values))
-        arm = start.center - point
-        ridge_line = Ridge.between(point, arm / float(np.linalg.norm(arm)), beyond)
-        if ridge_line is None or not np.isfinite(beyond).all():
+        found = self._ridge(start, x, y)
+        if found is None:
             return False
+        ridge_line, beyond = found
+        scale = 1.0 + abs(x) + abs(y)
         ball = scene.ball
         turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
                          friction=friction_of(scene.contact), t_end=run.t_end,
@@ -419,6 +416,40 @@ class ModeMachine:
         state = sliding.BallState(float(foot[0]), float(foot[1]), on.velocity, on.omega, on.R, self.dissipated,
                                   self.causes)
         run._start_kernel_run(state, on.t, slides=False, repeat=False)
+        return True
+
+    def _ridge(self, start: FreeState, x: float, y: float) -> tuple[Ridge, np.ndarray] | None:
+        """The ridge whose edge the ball at ``start`` reached at (x, y) (``Ridge``: the near face's
+        normal along the arm from the edge to the centre), and the far face's unit normal, a little
+        past the edge along the ball's heading; None where the two faces make no ridge."""
+        run = self.run
+        values = run.scene.parameter_values
+        point = np.array([x, y, float(run.landscape.evaluate(x, y, values)[0])])
+        heading = start.velocity[:2] / max(float(np.linalg.norm(start.velocity[:2])), 1e-300)
+        scale = 1.0 + abs(x) + abs(y)
+        beyond = unit_normal(run.landscape.evaluate(x + SIDE * scale * heading[0], y + SIDE * scale * heading[1],
+                                                    values))
+        arm = start.center - point
+        ridge_line = Ridge.between(point, arm / float(np.linalg.norm(arm)), beyond)
+        if ridge_line is None or not np.isfinite(beyond).all():
+            return None
+        return ridge_line, beyond
+
+    def _slides_onto_edge(self, start: FreeState, t: float, x: float, y: float) -> bool:
+        """Whether a sliding ball reaching a ridge's edge at (x, y) at ``start`` is too slow to leave
+        it (``ridge.edge_force`` above 0): a real ball would turn over the edge rubbing on it, which
+        the model does not follow, and the run stops there (``ridge_pivot``), as at a tip
+        (``pivot``); a flight from the edge would land on it at once."""
+        found = self._ridge(start, x, y)
+        if found is None:
+            return False
+        ball = self.run.scene.ball
+        force = edge_force(found[0], start, radius=ball.radius, mass=ball.mass, gravity=self.run.scene.gravity)
+        if force is None or not force > 0.0:
+            return False
+        self._no_liftoff()
+        self.off = Failure(Reason.RIDGE_PIVOT, t, x, y, force)
+        self.run.status = Status.DOES_NOT_FIT
         return True
 
     def _end_turn(self, turn, began: float, slip: Reason) -> bool:

@@ -86,6 +86,23 @@ def _parts(y, ridge: Ridge, r: float):
     return s, ds, theta, dtheta, beta, e, e1, omega
 
 
+def _turn_rate(ridge: Ridge, start: FreeState, r: float) -> float:
+    """θ̇ of the ball at ``start`` on the near face's circle about the edge: its velocity across the
+    edge over r."""
+    return float(np.dot(start.velocity, ridge.direction(0.0)[1])) / r
+
+
+def edge_force(ridge: Ridge, start: FreeState, *, radius: float, mass: float, gravity: float) -> float | None:
+    """F·e the ball at ``start`` (on the near face's circle about the edge) needs on the edge to turn
+    over it as the turn begins, m (g₀ e_z − r θ̇²): above 0 it is too slow to leave the edge, and
+    turns over it (``turn_over``; a sliding ball stops the run there, ``ridge_pivot``); None where it
+    moves away from the far face (θ̇ ≤ 0: no turn over this edge)."""
+    dtheta = _turn_rate(ridge, start, radius)
+    if not dtheta > 0.0:
+        return None
+    return mass * (gravity * ridge.direction(0.0)[0][2] - radius * dtheta * dtheta)
+
+
 def contact_events(forces, mu: float):
     """The events that end a turn about an edge or a tip, for scipy's solve_ivp: the normal force
     reaching 0 (a lift-off) and the tangential force reaching μ times it (a slip; never with μ
@@ -113,12 +130,12 @@ def turn_over(ridge: Ridge, start: FreeState, *, radius: float, mass: float, gra
     g = np.array([0.0, 0.0, -g0])
     arm = start.center - ridge.point
     s0 = float(np.dot(arm, ridge.along))
-    e0, e1 = ridge.direction(0.0)
-    dtheta0 = float(np.dot(start.velocity, e1)) / r
-    if not dtheta0 > 0.0 or not g0 * e0[2] - r * dtheta0 * dtheta0 > 0.0:
+    force = edge_force(ridge, start, radius=r, mass=mass, gravity=g0)
+    if force is None or not force > 0.0:
         return None
+    dtheta0 = _turn_rate(ridge, start, r)
     ds0 = float(np.dot(start.velocity, ridge.along))
-    beta0 = float(np.dot(start.omega, e0))
+    beta0 = float(np.dot(start.omega, ridge.direction(0.0)[0]))
 
     def rates(_, y):
         s, ds, theta, dtheta, beta, e, e1, omega = _parts(y, ridge, r)

@@ -104,6 +104,10 @@ FLIGHT_REASONS = {
                    "the ball turning over a ridge at {where} would need more friction than μ F·N to roll over "
                    "its edge (F·N = {value:.3g} N): a real ball would slide over it, which the model does not "
                    "follow"),
+    "ridge_pivot": ("does_not_fit", "the normal force the ball would need on the ridge's edge there (N)",
+                    "the ball reaches a ridge of the surface at {where} sliding, too slowly to leave its edge: a "
+                    "real ball would turn over the edge with F·N = {value:.3g} N, rubbing on it, which the model "
+                    "does not follow"),
     "tip_slip": ("does_not_fit", "the normal force on the tip there (N)",
                  "the ball turning over a tip of the surface at {where} (the tip of a cone, or a like point) would "
                  "need more friction than μ F·N to roll over it (F·N = {value:.3g} N): a real ball would slide "

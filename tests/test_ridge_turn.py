@@ -138,3 +138,40 @@ def test_where_friction_cannot_hold_the_turn_the_run_stops_and_says_so():
     stopped = simulate(roof(vx, friction=0.99 * needed, duration=0.6))
     assert stopped.status == "does_not_fit" and stopped.failure.reason == "ridge_slip", stopped.message
     assert "ridge" in stopped.message and "more friction" in stopped.message
+
+
+def _sliding_up(v1: float, mu: float = 0.01) -> tuple[Scene, float]:
+    """The roof with a ball started sliding up its near face (ω = 0) that reaches the edge at v1,
+    still sliding (its slip falls at g sin α + (7/2) μ g cos α, its speed at g (sin α + μ cos α)),
+    and the time it does."""
+    alpha = math.atan(UP)
+    a = G * (math.sin(alpha) + mu * math.cos(alpha))
+    v0 = math.sqrt(v1 * v1 + 2.0 * a * 0.3 / math.cos(alpha))
+    scene = Scene(f"min({UP}*x, -{DOWN}*x)", gravity=G, ball=Ball(RADIUS, 1.0),
+                  start=Start(-0.3, 0.0, v0 * math.cos(alpha), 0.0, omega=(0.0, 0.0, 0.0)),
+                  integrator=Integrator("rk4", True, 1e-3), duration=1.0, contact=Contact(mu, 0.0, "fly"))
+    return scene, (v0 - v1) / a
+
+
+@pytest.mark.parametrize("method", ["rk4", "lawson5", "gauss6", "dopri5", "dop853"])
+def test_a_ball_sliding_onto_an_edge_too_slowly_to_leave_it_stops_and_says_so(method):
+    """A sliding ball that reaches the edge at v1 with v1²/r < g cos α would turn over it rubbing on
+    it, which the model does not follow: the run stops there (``ridge_pivot``), naming the normal
+    force the turn needs, m (g cos α − v1²/r) (at v1 = 0.5 m/s: 7.02 N). Before, it "lifted off"
+    and "landed" at the same instant, the energy jumping by 1.4 % and the run ending ok with a
+    warning that blamed the step. Faster than √(g r cos α) it leaves the edge and lands on the far face."""
+    scene, t_edge = _sliding_up(0.5)
+    step = {"dt": 1e-3} if method in ("rk4", "lawson5", "gauss6") else {"rtol": 1e-10, "atol": 1e-10}
+    run = simulate(scene, method=method, **step)
+    assert run.status == "does_not_fit" and run.failure.reason == "ridge_pivot", run.message
+    assert "sliding, too slowly to leave its edge" in run.message
+    assert not run.transitions and set(run.mode) == {"sliding"}   # (sliding from its start)
+    assert abs(run.failure.time - t_edge) < 1e-8 and abs(run.failure.x) < 1e-9
+    expected = G * math.cos(math.atan(UP)) - 0.5 ** 2 / RADIUS
+    assert abs(run.failure.value - expected) < 1e-6, (run.failure.value, expected)
+    fast, t_fast = _sliding_up(1.2)
+    flies = simulate(fast, method=method, **step)
+    kinds = [c.kind for c in flies.transitions]
+    assert flies.status == "ok" and kinds[:2] == ["liftoff", "landing"], (flies.message, kinds)
+    assert abs(flies.transitions[0].time - t_fast) < 1e-8
+    assert flies.transitions[1].time - flies.transitions[0].time > 0.01 and flies.transitions[1].x > 0.0
