@@ -22,7 +22,7 @@ from .flight import Flight, FreeState, OffLandscape, Surface, energy, impact, re
 from .geometry import rotation, unit_normal, unit_normal_of
 from .modes import AFTER, Change, Mode
 from .resting import Spin, holds
-from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, edge_force, past_edge, turn_over
+from .ridge import END, LIFTOFF, SLIP, TIME, Ridge, edge_force, edge_return, past_edge, turn_over
 from .run_size import MAX_ROWS
 from .tip import Tip, foot_on_face, onto_face, turn_about
 from .trajectory import (CAUSES, CENTER, CONTACT, DISSIPATED, ENERGY, FLIGHT_REASONS, NORMAL_FORCE, OMEGA, R,
@@ -380,6 +380,8 @@ class ModeMachine:
                 return
             if before is Mode.SLIDING and self._slides_onto_edge(start, t, x, y):
                 return
+            if self._lands_on_edge(start, x, y):
+                return
         self.mode = Mode.FLYING
         self.flight = self._new_flight(start)
 
@@ -449,6 +451,23 @@ class ModeMachine:
             return False
         self._no_liftoff()
         self.off = Failure(Reason.RIDGE_PIVOT, t, x, y, force)
+        self.run.status = Status.DOES_NOT_FIT
+        return True
+
+    def _lands_on_edge(self, start: FreeState, x: float, y: float) -> bool:
+        """Whether the ball leaving a ridge's edge at (x, y) at ``start`` comes down on that edge
+        again before it is past it (``ridge.edge_return``: it left the edge only just, F·e a little
+        below 0): a landing on an edge, which the model does not follow (its flight's landing search
+        measures the faces, and found a landing later on the edge that was not one). The run stops at
+        the lift-off (``edge_landing``, the flight's time to the edge in the failure's value)."""
+        found = self._ridge(start, x, y)
+        if found is None:
+            return False
+        scene = self.run.scene
+        back = edge_return(found[0], start, gravity=scene.gravity)
+        if back is None:
+            return False
+        self.off = Failure(Reason.EDGE_LANDING, start.t, x, y, back)
         self.run.status = Status.DOES_NOT_FIT
         return True
 

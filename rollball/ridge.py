@@ -103,6 +103,29 @@ def edge_force(ridge: Ridge, start: FreeState, *, radius: float, mass: float, gr
     return mass * (gravity * ridge.direction(0.0)[0][2] - radius * dtheta * dtheta)
 
 
+def edge_return(ridge: Ridge, start: FreeState, *, gravity: float) -> float | None:
+    """Where the ball at ``start``, leaving the edge on the parabola (F·e ≤ 0, ``edge_force``), comes
+    down on the edge again before it is past it: its centre r from the edge line again while the
+    edge is the surface's nearest point (the direction from the edge to the centre between the
+    faces' normals, 0 < θ < θ₂). With w(τ) = A + B τ + C τ² the centre's offset across the edge line
+    (A = r e₀, B ⊥ A its velocity across, C half of gravity across), |w|² − r² = τ² (|C|² τ² + 2 B·C τ
+    + |B|² + 2 A·C), the first root τ > 0 of the quadratic: the time after ``start`` it returns in
+    (None where the ball clears the edge)."""
+    across = np.eye(3) - np.outer(ridge.along, ridge.along)
+    A, B = across @ (start.center - ridge.point), across @ start.velocity
+    C = 0.5 * (across @ np.array([0.0, 0.0, -gravity]))
+    a, b, c = float(C @ C), 2.0 * float(B @ C), float(B @ B) + 2.0 * float(A @ C)
+    if not (a > 0.0 and c >= 0.0 and b < 0.0) or b * b < 4.0 * a * c:
+        return None
+    tau = (-b - math.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)   # (the smaller positive root: c >= 0, b < 0)
+    if not tau > 0.0:
+        return None
+    w = A + B * tau + C * tau * tau
+    e0, e1 = ridge.direction(0.0)
+    theta = math.atan2(float(w @ e1), float(w @ e0))
+    return tau if 0.0 < theta < ridge.turn else None
+
+
 def contact_events(forces, mu: float):
     """The events that end a turn about an edge or a tip, for scipy's solve_ivp: the normal force
     reaching 0 (a lift-off) and the tangential force reaching μ times it (a slip; never with μ

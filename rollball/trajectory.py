@@ -108,6 +108,10 @@ FLIGHT_REASONS = {
                     "the ball reaches a ridge of the surface at {where} sliding, too slowly to leave its edge: a "
                     "real ball would turn over the edge with F·N = {value:.3g} N, rubbing on it, which the model "
                     "does not follow"),
+    "edge_landing": ("does_not_fit", "the time the flight would take to come down on the edge (s)",
+                     "the ball leaves a ridge's edge at {where} so slowly that it comes down on that edge again "
+                     "{value:.3g} s later, before it is past it: a landing on an edge, which the model does not "
+                     "follow"),
     "tip_slip": ("does_not_fit", "the normal force on the tip there (N)",
                  "the ball turning over a tip of the surface at {where} (the tip of a cone, or a like point) would "
                  "need more friction than μ F·N to roll over it (F·N = {value:.3g} N): a real ball would slide "

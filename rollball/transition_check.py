@@ -159,8 +159,8 @@ def check_transitions(run) -> TransitionCheck | None:
         sequence = [c.kind for c in run.transitions[: index + 1] if c.time > t_row]
         k = len(sequence)
         t_stop = min(change.time + MARGIN_STEPS * average, end)
-        if t_stop <= change.time:
-            t_stop = end
+        if t_stop <= change.time:   # (a run that stopped at the change: its retakes look past it, as far as they need)
+            t_stop = min(change.time + MARGIN_STEPS * average, run.t_end)
         if run.adaptive:
             steps = tuple(max(run.rtol / TIGHTER ** level, MIN_TOLERANCE) for level in range(3))
             results = [list(run.transitions)] + [
