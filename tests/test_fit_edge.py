@@ -129,3 +129,20 @@ def test_a_jump_of_the_curvature_into_the_no_fit_region_stops_the_ball_there(met
     assert traj.status is Status.DOES_NOT_FIT and traj.failure.reason is Reason.NO_FIT
     assert traj.failure.time == pytest.approx(0.25, abs=tolerance)
     assert traj.contact[-1, 1] == pytest.approx(0.0, abs=1e-9) and traj.contact[-1, 1] <= 0.0
+
+
+BUMPS = Scene("1.98*sin(3*x)*cos(2*y)", start=Start(-0.41, 0.13, 0.91, -0.32, 0.1), duration=2.0)
+
+
+@pytest.mark.parametrize("method, rtol", [("dopri5", 1e-8), ("dopri5", 1e-10), ("dop853", 1e-8), ("dop853", 1e-10)])
+def test_the_pairs_stop_at_the_edge_they_cannot_step_past_as_not_fitting(method, rtol):
+    """Bumps whose crests bend more than 1/r: the ball runs up to the edge r·κ = 1 at 1.21246 s
+    (rk4 and dopri5 at 1e-8 stop there, the edge passed by a step's end). Where the pairs instead
+    shrink their steps against the singular equations until they fall below round-off, r·κ at the
+    last state is within ``loops.FIT_NEAR`` of 1 (measured 1 − 1.4e-6 to 1 − 7.7e-7): the stop is
+    the ball's not fitting there, not "the equations are (nearly) singular" (``nonfinite``) as it was."""
+    traj = simulate(BUMPS, method=method, rtol=rtol, atol=rtol)
+    assert traj.status is Status.DOES_NOT_FIT and traj.failure.reason is Reason.NO_FIT, traj.message
+    assert traj.failure.time == pytest.approx(1.21246, abs=1e-5)
+    d = landscape_for(BUMPS.landscape).evaluate(traj.failure.x, traj.failure.y)
+    assert fit_ratio(d, BUMPS.ball.radius) == pytest.approx(1.0, abs=1e-4)

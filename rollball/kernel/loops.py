@@ -13,7 +13,8 @@ from .explicit import STEP_NOT_CONVERGED, carry_orientation, dense_stages, pair_
 from .interface import (
     D_SLIP, EXPLICIT, F_EVENT_X, F_EVENT_Y, F_FOLD, F_H, F_TIME, I_LAST_RECORDED, I_NONFINITE, I_REJECTED,
     I_RETRY, I_ROWS, I_STATUS, I_STEPS, MOTION_SIZE, NONFINITE, OK, PROBE_FORCE, PROBE_SLIP, PROBE_SLIP_PULL,
-    P_FLY, P_MU, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED,
+    P_FLY, P_MU, RUNNING, R_NOT_CONVERGED, R_ORIENTATION, R_STEP_UNDERFLOW, R_UNDEFINED, DOES_NOT_FIT, R_NO_FIT,
+    PROBE_FIT,
     TRANSITION, T_GRIP, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
     P_RESISTANCE, P_TURN, P_UNIT, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
@@ -265,6 +266,26 @@ def grip_left(pe, most, before):
     return ub > most * most and ub <= 0.25 * before
 
 
+# A step that fell below round-off where the ball all but does not fit (r·κ within this of 1 at the
+# step's start: the equations are singular at r·κ = 1) met that edge, and the run stops as past it
+FIT_NEAR = 1e-4
+
+
+@JIT
+def underflow(fn, d, p, ints, info, t, z, K, hs, h, probe):
+    """Stop a run whose step fell below round-off at t (``hs`` the step tried, ``h`` the one it came
+    to; probe: the state at t): at a tip or kink there (``tip_stop``); where r·κ there is within
+    FIT_NEAR of 1, as the ball's not fitting (R_NO_FIT, as a step's end past that edge says: the
+    pairs shrank their steps to nothing against it, where a fixed step or a longer one lands past it);
+    else R_STEP_UNDERFLOW."""
+    if tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
+        return
+    if probe[PROBE_FIT] >= 1.0 - FIT_NEAR:
+        _fail(ints, info, DOES_NOT_FIT, R_NO_FIT, t, z[0], z[1], probe[PROBE_FIT])
+    else:
+        _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+
+
 @JIT
 def pair_try(fn, d, p, W, E, P, err_kind, err_exp, rtol, atol, t, hs, cap, free, z, R, K, last, probe, rows, ints, info,
              Y, zn, Rn, pn, watch):
@@ -293,8 +314,7 @@ def pair_try(fn, d, p, W, E, P, err_kind, err_exp, rtol, atol, t, hs, cap, free,
     if ints[I_NONFINITE] >= NONFINITE_TRIES:
         _fail(ints, info, NONFINITE, R_ORIENTATION if bad == 2 else R_UNDEFINED, t, z[0], z[1], 0.0)
     elif h <= MIN_STEP * max(1.0, abs(t)):
-        if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
-            _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+        underflow(fn, d, p, ints, info, t, z, K, hs, h, probe)
     else:
         return err, h
     record_last(rows, ints, t, z, R, probe, p)
@@ -403,8 +423,7 @@ def stiff_step(fn, S, SE, SP, s_kind, s_exp, tol, p, t0, h, hp, z, R, K, probe, 
             out = hp
             break
         if hp <= MIN_STEP * max(1.0, abs(t)):
-            if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
-                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], hp)
+            underflow(fn, d, p, ints, info, t, z, K, hs, hp, probe)
             record_last(rows, ints, t, z, R, probe, p)
             break
     return out
@@ -678,8 +697,7 @@ def advance_adaptive(fn, W, E, P, p, err_kind, err_exp, t_start, t_end, record_d
         h = max(h, grown) if land else grown
         retry = False
         if h <= MIN_STEP * max(1.0, abs(t)):  # creeping up to a singularity (Zeno)
-            if not tip_stop(fn, d, ints, info, t, z[0], z[1], reach_of(K, hs, z), speed_of(K), p[P_FLY]):
-                _fail(ints, info, NONFINITE, R_STEP_UNDERFLOW, t, z[0], z[1], h)
+            underflow(fn, d, p, ints, info, t, z, K, hs, h, probe)
             record_last(rows, ints, t, z, R, probe, p)
             break
         if t == t_end:
