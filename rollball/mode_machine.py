@@ -376,12 +376,15 @@ class ModeMachine:
             # between it and the step's end); the ball is on the surface up to the kink, so it
             # rolls (slides) there along the tangent plane and the flight starts at the kink
             start = self._to_kink(start, t, normal, before)
-            if before is Mode.ROLLING and self._turn_over(start, x, y):
-                return
-            if before is Mode.SLIDING and self._slides_onto_edge(start, t, x, y):
-                return
-            if self._lands_on_edge(start, x, y):
-                return
+            found = self._ridge(start, x, y)   # (None: no ridge there to turn over or come down on)
+            if found is not None:
+                ridge_line, beyond = found
+                if before is Mode.ROLLING and self._turn_over(start, x, y, ridge_line, beyond):
+                    return
+                if before is Mode.SLIDING and self._slides_onto_edge(start, t, x, y, ridge_line):
+                    return
+                if self._lands_on_edge(start, x, y, ridge_line):
+                    return
         self.mode = Mode.FLYING
         self.flight = self._new_flight(start)
 
@@ -392,17 +395,14 @@ class ModeMachine:
             self.first_liftoff = None
         return lift
 
-    def _turn_over(self, start: FreeState, x: float, y: float) -> bool:
+    def _turn_over(self, start: FreeState, x: float, y: float, ridge_line: Ridge, beyond: np.ndarray) -> bool:
         """A rolling ball at a ridge's edge (x, y) at ``start``: where it is too slow to leave the
         edge it turns over it (``ridge.turn_over``), and then rolls on the far face, rolls back
         on the near one, flies off the edge, or stops where the friction cannot hold the turn;
-        False where it leaves the edge at once (it flies from ``start``)."""
+        False where it leaves the edge at once (it flies from ``start``). ``ridge_line`` and ``beyond``:
+        ``_ridge``'s."""
         run = self.run
         scene = run.scene
-        found = self._ridge(start, x, y)
-        if found is None:
-            return False
-        ridge_line, beyond = found
         scale = 1.0 + abs(x) + abs(y)
         ball = scene.ball
         turn = turn_over(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=scene.gravity,
@@ -437,16 +437,13 @@ class ModeMachine:
             return None
         return ridge_line, beyond
 
-    def _slides_onto_edge(self, start: FreeState, t: float, x: float, y: float) -> bool:
-        """Whether a sliding ball reaching a ridge's edge at (x, y) at ``start`` is too slow to leave
-        it (``ridge.edge_force`` above 0): a real ball would turn over the edge rubbing on it, which
-        the model does not follow, and the run stops there (``ridge_pivot``), as at a tip
+    def _slides_onto_edge(self, start: FreeState, t: float, x: float, y: float, ridge_line: Ridge) -> bool:
+        """Whether a sliding ball reaching the edge of ``ridge_line`` at (x, y) at ``start`` is too slow
+        to leave it (``ridge.edge_force`` above 0): a real ball would turn over the edge rubbing on it,
+        which the model does not follow, and the run stops there (``ridge_pivot``), as at a tip
         (``pivot``); a flight from the edge would land on it at once."""
-        found = self._ridge(start, x, y)
-        if found is None:
-            return False
         ball = self.run.scene.ball
-        force = edge_force(found[0], start, radius=ball.radius, mass=ball.mass, gravity=self.run.scene.gravity)
+        force = edge_force(ridge_line, start, radius=ball.radius, mass=ball.mass, gravity=self.run.scene.gravity)
         if force is None or not force > 0.0:
             return False
         self._no_liftoff()
@@ -454,17 +451,13 @@ class ModeMachine:
         self.run.status = Status.DOES_NOT_FIT
         return True
 
-    def _lands_on_edge(self, start: FreeState, x: float, y: float) -> bool:
-        """Whether the ball leaving a ridge's edge at (x, y) at ``start`` comes down on that edge
+    def _lands_on_edge(self, start: FreeState, x: float, y: float, ridge_line: Ridge) -> bool:
+        """Whether the ball leaving the edge of ``ridge_line`` at (x, y) at ``start`` comes down on that edge
         again before it is past it (``ridge.edge_return``: it left the edge only just, F·e a little
         below 0): a landing on an edge, which the model does not follow (its flight's landing search
         measures the faces, and found a landing later on the edge that was not one). The run stops at
         the lift-off (``edge_landing``, the flight's time to the edge in the failure's value)."""
-        found = self._ridge(start, x, y)
-        if found is None:
-            return False
-        scene = self.run.scene
-        back = edge_return(found[0], start, gravity=scene.gravity)
+        back = edge_return(ridge_line, start, gravity=self.run.scene.gravity)
         if back is None:
             return False
         self.off = Failure(Reason.EDGE_LANDING, start.t, x, y, back)
