@@ -44,8 +44,8 @@ MAX_AT_ONCE = 16   # changes of mode at one instant after which a run stops (it 
 STIFF_METHOD = "dop853"
 # The tolerance of a run whose couples can bring the ball to rest: a rest after a turning point
 # slower than 10⁻⁴ m/s moves 10³ times its error. Without them the stretches are a slip's, whose
-# grip moves by about a hundredth of the tolerance (10⁻¹⁴ s on the bench's slipping bowl from
-# 10⁻¹³ to 10⁻¹²), at a third fewer evaluations; at 10⁻¹¹ gauss6's finest grips in
+# grip moves by less than the tolerance (1.6·10⁻¹³ s on the bench's slipping bowl from 10⁻¹³ to
+# 10⁻¹²), at a fifth fewer evaluations; at 10⁻¹¹ gauss6's finest grips in
 # tests/test_hybrid_convergence.py stop converging (docs/design.md §8).
 STIFF_TOLERANCE = 1e-13
 SLIP_TOLERANCE = 1e-12

@@ -11,6 +11,7 @@ from rollball.bench import Config, report, run, targets
 from rollball.bench.cstep import CStep
 from rollball.cli import main
 from rollball.comparison import default_runs
+from rollball.examples import EXAMPLES_DIR
 
 
 def test_small_work_precision_report(tmp_path):
@@ -171,7 +172,7 @@ def test_a_sweep_that_changes_mode_is_timed_against_the_same_sweep_glued(monkeyp
     """``hybrid_sweeps``: the sweep of the example really flies (its runs land) where the glued one
     runs the batch path, and the report marks a ratio above its goal."""
     from rollball.sweeps import batch
-    monkeypatch.setattr(targets, "HYBRID", ("cylinder",))
+    monkeypatch.setattr(targets, "_hybrid_scenes", lambda: {"cylinder": Scene.load(EXAMPLES_DIR / "cylinder.json")})
     landed = []
     run = batch.run
 

@@ -263,10 +263,12 @@ def test_the_slips_stiff_stretches_keep_rk4s_order_on_the_grip():
 
 def test_a_slips_stretches_are_taken_at_the_slip_tolerance_where_no_couple_can_stop_the_ball(monkeypatch):
     """Without rolling resistance and spin friction the stiff stretches are a slip's, taken at
-    SLIP_TOLERANCE (10⁻¹²): the bowl's grip moves by less than 10⁻¹³ s from the stretches at
-    STIFF_TOLERANCE (10⁻¹⁴ measured), for a third fewer evaluations (14 690 against 23 659 at rk4's
-    dt 0.001); with either couple the stretches stay at STIFF_TOLERANCE (a rest after a slow
-    turning point is ill-conditioned)."""
+    SLIP_TOLERANCE (10⁻¹²): the bowl's grip moves by less than 10⁻¹² s from the stretches at
+    STIFF_TOLERANCE (1.6·10⁻¹³ and 3.6·10⁻¹³ measured, both within 6·10⁻¹³ s of the reference's),
+    for a fifth fewer evaluations (8 361 against 10 798 at rk4's dt 0.001; before the slip's
+    direction was taken on the slow motion to first order, 14 690 against 23 659 and a move of
+    10⁻¹⁴ s); with either couple the stretches stay at STIFF_TOLERANCE (a rest after a slow turning
+    point is ill-conditioned)."""
     from rollball import mode_machine
     from rollball.scene import Contact as C
 
@@ -281,9 +283,9 @@ def test_a_slips_stretches_are_taken_at_the_slip_tolerance_where_no_couple_can_s
             patched.setattr(mode_machine, "SLIP_TOLERANCE", mode_machine.STIFF_TOLERANCE)
             tight = simulate(scene, method="rk4", munthe_kaas=munthe_kaas, dt=0.001, t_end=t_end)
         assert [c.kind for c in loose.transitions] == [c.kind for c in tight.transitions] == ["slip", "grip"]
-        assert abs(loose.transitions[-1].time - tight.transitions[-1].time) < 1e-13
+        assert abs(loose.transitions[-1].time - tight.transitions[-1].time) < 1e-12
         assert abs(loose.transitions[-1].time - grip) < 1e-11
-        assert loose.evaluations < 0.75 * tight.evaluations, (loose.evaluations, tight.evaluations)
+        assert loose.evaluations < 0.8 * tight.evaluations, (loose.evaluations, tight.evaluations)
 
 
 @pytest.mark.parametrize("name", sorted(SCENES))

@@ -22,9 +22,10 @@ from rollball.sweeps.outcomes import OUTCOMES
 from rollball.trajectory import MODES
 
 LIFTOFF = Scene.load(EXAMPLES_DIR / "liftoff.json")
-# liftoff where the ball could slip: its runs go through ``Simulation``, which holds the GIL (processes)
+# liftoff where the ball could slip and rolling resistance could stop it: its runs go through
+# ``Simulation``, which holds the GIL (processes)
 SLIPPING = Scene.from_dict({**LIFTOFF.to_dict(), "contact": {"friction": 0.5, "restitution": 0.0,
-                                                             "after_liftoff": "fly"}})
+                                                             "after_liftoff": "fly", "rolling_resistance": 0.001}})
 
 
 def _outcomes_of(traj):
@@ -81,12 +82,58 @@ def test_the_batch_loop_flies_lands_and_rolls_on_as_the_mode_machine_does(monkey
     assert np.isfinite(table["liftoff_time"]).any() and (table["landings"] > 0).any()
     if name == "ridge_jump":   # (bounces: the restitution read per run)
         assert table["landings"].max() >= 3 and table["landings"][0] == 1
+    _gives_what_simulation_gives(table, scene, one, ("liftoff_time", "end_mode", "landings"), rtol=1e-13, atol=1e-16)
+
+
+def _gives_what_simulation_gives(table, scene, one, exact, *, rtol, atol):
+    """Each run of ``table`` (a sweep of ``scene``) has the status and outcomes of its run through
+    ``Simulation`` (``one``: ``batch.run_one``), the ``exact`` ones to the bit, the rest within rtol, atol."""
+    exact = [OUTCOMES.index(name) for name in exact]
     for i, values in enumerate(table.grid.values()):
         code, expected = one(with_values(scene, table.keys, values))
         assert table.codes[i] == code
-        exact = [OUTCOMES.index(name) for name in ("liftoff_time", "end_mode", "landings")]
         np.testing.assert_array_equal(table.outcomes[i][exact], expected[exact], err_msg=f"run {i}")
-        np.testing.assert_allclose(table.outcomes[i], expected, rtol=1e-13, atol=1e-16, err_msg=f"run {i}")
+        np.testing.assert_allclose(table.outcomes[i], expected, rtol=rtol, atol=atol, err_msg=f"run {i}")
+
+
+# Scenes whose ball slips from rolling and grips in vacuum: the batch loop slides (and flies) their
+# runs itself: the bench's tilted bowl thrown sideways (a slip in 3-D, a grip), the incline from rest
+# over the friction (no slip, a slip at once), the cylinder with friction (slips, then flies),
+# liftoff with little friction (slips, flies, lands sliding or rolling, grips)
+BOWL = Scene("1.5*x^2 + 0.9*y^2 + 0.3*x*y", start=Start(x=-0.1, y=0.1, vx=1.2, vy=-0.6),
+             contact=Contact(friction=0.2), duration=0.9)
+INCLINE = Scene(f"{math.tan(math.radians(30.0))!r}*x", start=Start(0.0, 0.0, 0.0, 0.0, 0.0), duration=0.2,
+                contact=Contact(None, 0.0, "glued"))
+SLIDING = [(BOWL, {"start.vx": [1.0, 1.2, 1.4], "contact.friction": [0.15, 0.2, 0.6]}, 0),
+           (INCLINE, {"contact.friction": [0.1, 0.16, 0.17, 0.3]}, 0),
+           (dataclasses.replace(Scene.load(EXAMPLES_DIR / "cylinder.json"), contact=Contact(friction=0.3)),
+            {"duration": [0.3, 1.5]}, 0),
+           (dataclasses.replace(LIFTOFF, contact=Contact(friction=0.5, restitution=0.0, after_liftoff="fly")),
+            {"start.vx": [4.5, 6.0], "contact.friction": [0.02, 0.05, 0.1]}, 0)]
+
+
+@pytest.mark.parametrize("scene, vary, referrals", SLIDING, ids=["bowl", "incline", "cylinder", "liftoff"])
+def test_the_batch_loop_slips_and_grips_as_the_mode_machine_does(monkeypatch, scene, vary, referrals):
+    """Runs that slip from rolling, slide, grip, fly, land sliding or rolling and go on run in the
+    compiled batch loop, on threads (``referred``: so many left to ``Simulation``), and give what
+    their run through ``Simulation`` gives (``run_one``): the statuses, the end modes, the landings
+    and the first slip's time exactly (the same kernel run up to it), the rest to round-off (the
+    state at a slip or a grip is made in the kernel)."""
+    from rollball.sweeps import batch
+
+    one, referred = batch.run_one, []
+    monkeypatch.setattr(batch, "run_one", lambda varied: referred.append(varied) or one(varied))
+    table = sweep(scene, vary, workers=2)
+    assert len(referred) == referrals and not table.processes and set(table["status"]) == {"ok"}
+    assert np.isfinite(table["first_slip_time"]).any()
+    if "contact.friction" in vary and "start.vx" in vary and scene is not BOWL:   # (liftoff: every run lands,
+        # and at friction 0.02 the landing leaves it sliding to the end)
+        assert (table["landings"] == 1).all() and (table["end_mode"][::3] == MODES.index("sliding")).all()
+    if scene is BOWL:   # (at friction 0.15 the runs end sliding, at 0.2 they grip, at 0.6 they only roll)
+        np.testing.assert_array_equal(table["end_mode"], [1, 0, 0] * 3)
+        assert np.isfinite(table["first_grip_time"][1::3]).all() and np.isnan(table["first_slip_time"][2::3]).all()
+    _gives_what_simulation_gives(table, scene, one, ("end_mode", "landings", "first_slip_time"), rtol=1e-10,
+                                 atol=1e-13)
 
 
 # flights that end otherwise than by a landing: a ball that never comes back (the surface falls
@@ -378,8 +425,8 @@ def test_ctrl_c_in_a_terminal_stops_a_sweep_on_worker_processes_keeping_the_fini
     import psutil
 
     out = tmp_path / "out"
-    command = [sys.executable, "-m", "rollball", "sweep", str(EXAMPLES_DIR / "liftoff.json"),   # (a ball that can slip)
-               "--vary", "start.vx=3:6:100000", "--vary", "contact.friction=0.5:0.5:1", "--workers", "2",
+    command = [sys.executable, "-m", "rollball", "sweep", str(EXAMPLES_DIR / "liftoff.json"),   # (one that can rest)
+               "--vary", "start.vx=3:6:100000", "--vary", "contact.rolling_resistance=0.001:0.001:1", "--workers", "2",
                "--out", str(out)]
     process = subprocess.Popen(command, start_new_session=True, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True,

@@ -118,14 +118,16 @@ def _targets(t: dict) -> list[str]:
     if t.get("hybrid"):
         lines += ["", "A run that changes mode against the same scene glued to its surface (CPU time per run, "
                       "medians, the two in turn; a flight in vacuum compiled, bounce after bounce: landing search, "
-                      "rows and impacts; the other changes of mode in Python):", "",
+                      "rows and impacts; slips and grips in the kernel's runs, the other changes of mode in "
+                      "Python):", "",
                   "| scene | changes mode | glued | ratio | goal |", "|---|---|---|---|---|"]
         lines += [f"| {name} | {h['hybrid_ms']:.1f} ms | {h['glued_ms']:.1f} ms | **{h['ratio']:.1f}×**"
                   f"{_missed(h['ratio'] <= HYBRID_GOAL)} | ≤ {HYBRID_GOAL:g}× |" for name, h in t["hybrid"].items()]
     sweeps = t.get("hybrid_sweeps")
     if sweeps:
-        lines += ["", "A sweep of an example that changes mode over its start speed (±5 %, one worker; the batch "
-                      "loop rolls and flies its runs, leaving what it cannot finish to a `Simulation`) against the "
+        lines += ["", "A sweep of a scene that changes mode over its start speed (±5 %, one worker; the batch "
+                      "loop rolls, flies, slips and grips its runs, leaving what it cannot finish to a `Simulation`) "
+                      "against the "
                       "same sweep glued, CPU time, medians, the two in turn; and the ratio of the fastest sweeps:", "",
                   "| scene | runs | changes mode | glued | ratio | ratio of the fastest | goal |",
                   "|---|---|---|---|---|---|---|"]

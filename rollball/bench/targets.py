@@ -247,6 +247,15 @@ HYBRID_GOAL = 4.0   # a run that changes mode costs at most this many times the 
 SLIPPING = Scene("1.5*x^2 + 0.9*y^2 + 0.3*x*y", duration=0.9)   # the convergence tests' bowl
 
 
+def _hybrid_scenes() -> dict[str, Scene]:
+    """The examples that fly (their own contact), and a ball thrown across a tilted bowl with
+    friction 0.2 (a slip from rolling in 3-D, then a grip; rk4 at dt 1e-3)."""
+    scenes = {name: Scene.load(EXAMPLES_DIR / f"{name}.json") for name in HYBRID}
+    bowl = dataclasses.replace(SLIPPING, start=dataclasses.replace(SLIPPING.start, x=-0.1, y=0.1, vx=1.2, vy=-0.6))
+    scenes["bowl, slip and grip"] = dataclasses.replace(bowl, contact=dataclasses.replace(bowl.contact, friction=0.2))
+    return scenes
+
+
 def _run_cpu(scene: Scene) -> float:
     """CPU time of one run of the scene (its energy and transition checks left out)."""
     run = Simulation(scene)
@@ -266,11 +275,8 @@ def hybrid_costs(repeats: int) -> dict:
     null, after_liftoff "glued": the 2011 model's one kernel run), the two in turn, medians and the
     median of the ratios: the examples that fly, and a ball thrown across a tilted bowl with
     friction 0.2 (a slip from rolling in 3-D, then a grip; rk4 at dt 1e-3)."""
-    scenes = {name: Scene.load(EXAMPLES_DIR / f"{name}.json") for name in HYBRID}
-    bowl = dataclasses.replace(SLIPPING, start=dataclasses.replace(SLIPPING.start, x=-0.1, y=0.1, vx=1.2, vy=-0.6))
-    scenes["bowl, slip and grip"] = dataclasses.replace(bowl, contact=dataclasses.replace(bowl.contact, friction=0.2))
     out = {}
-    for name, scene in scenes.items():
+    for name, scene in _hybrid_scenes().items():
         glued = _glued(scene)
         _run_cpu(scene), _run_cpu(glued)   # (compiled, the landscape too)
         pairs = [(_run_cpu(scene), _run_cpu(glued)) for _ in range(repeats)]
@@ -281,10 +287,11 @@ def hybrid_costs(repeats: int) -> dict:
 
 
 def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
-    """CPU time of a sweep of ``runs`` runs of each example that flies, over its start speed vx
-    (±5 %: every run lifts off), on one worker, against the same sweep glued (the compiled batch
-    path), the two in turn: medians, the median of the ratios and the ratio of the fastest sweeps
-    (``fastest_ratio``, as ``dissipation_cost``'s; ``_all`` and ``_dask`` likewise); and the same sweeps' wall time
+    """CPU time of a sweep of ``runs`` runs of each example that flies and of the slipping bowl
+    (``_hybrid_scenes``), over its start speed vx (±5 %: every run lifts off, or slips and grips),
+    on one worker, against the same sweep glued (the compiled batch path), the two in turn: medians,
+    the median of the ratios and the ratio of the fastest sweeps (``fastest_ratio``, as
+    ``dissipation_cost``'s; ``_all`` and ``_dask`` likewise); and the same sweeps' wall time
     on every core (a sweep's default, ``local_workers`` of them: ``workers``, ``hybrid_all_s``,
     ``glued_all_s``, ``ratio_all``), each where the sweep puts it (``processes``: worker processes
     for runs through ``Simulation``, threads where the batch loop runs them);
@@ -312,8 +319,7 @@ def hybrid_sweeps(repeats: int, runs: int = 200) -> dict:
                 float(hybrid.min() / max(plain.min(), 1e-9)))
 
     out, scenes = {}, {}
-    for name in HYBRID:
-        scene = Scene.load(EXAMPLES_DIR / f"{name}.json")
+    for name, scene in _hybrid_scenes().items():
         vary = {"start.vx": np.linspace(0.95 * scene.start.vx, 1.05 * scene.start.vx, runs)}
         glued = _glued(scene)
         scenes[name] = scene, glued, vary

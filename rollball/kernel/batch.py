@@ -15,6 +15,7 @@ import numpy as np
 from .bounces import bounces
 from .interface import (
     A_CENTER, A_CONTACT, A_FIRST, A_FLYING, A_FORCE, A_HIGH, A_LOW, A_PATH, A_ROWS, A_SPEED, A_T, BATCH_CHUNK,
+    F_EVENT_T, O_FIRST_GRIP, O_FIRST_SLIP, O_SLIDES, S_DISSIPATED, S_OMEGA, S_VELOCITY, T_GRIP, T_SLIP,
     BOUNCES_CONTINUE, BOUNCES_REFER, BOUNCES_ROOM, BOUNCES_SETTLED, EXPLICIT, FOOT_ITERATIONS, F_H, F_LIFT_KINK,
     F_LIFTOFF, I_ROWS, I_STATUS, I_TRANSITION, NOT_RUN, OK, O_DRIFT, O_FLIES, O_LANDINGS, O_LIFTOFF, O_MAX_SPEED,
     O_MIN_FORCE, O_PATH, O_T, O_X, O_Y, PROBE_N, P_DISSIPATED, P_FLY, P_MU, REFERRED, ROW_CENTER, ROW_CONTACT,
@@ -108,19 +109,88 @@ def settle(fn, d, p, flight, x, y, z):
     z[4] = spin * flight[9] + arm * (n1 * v2 - n2 * v1)
 
 
+@INLINE_EXACT
+def slip_from(probe, p, z, zs):
+    """zs, the sliding state a slip starts from (``sliding.stopped_state`` and ``start_arrays``): the
+    rolling state z's contact point, its omega = 5 / (7 m r²) (v + 5/2 (N.v) N) (``rolling_omega``,
+    N the probe's), the centre velocity r omega x N and the energy dissipated before, u zero."""
+    n1, n2, n3 = probe[PROBE_N], probe[PROBE_N + 1], probe[PROBE_N + 2]
+    r, m = p[0], p[1]
+    v1, v2, v3 = z[2], z[3], z[4]
+    k = 5.0 / (7.0 * m * r * r)
+    along = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
+    o1, o2, o3 = k * (v1 + along * n1), k * (v2 + along * n2), k * (v3 + along * n3)
+    for q in range(zs.shape[0]):
+        zs[q] = 0.0
+    zs[0], zs[1] = z[0], z[1]
+    zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2] = (r * (o2 * n3 - o3 * n2), r * (o3 * n1 - o1 * n3),
+                                                              r * (o1 * n2 - o2 * n1))
+    zs[S_OMEGA], zs[S_OMEGA + 1], zs[S_OMEGA + 2] = o1, o2, o3
+    zs[S_DISSIPATED] = p[P_DISSIPATED]
+
+
+@INLINE_EXACT
+def land_sliding(flight, x, y, lost, zs):
+    """zs for sliding on from (x, y) in the state ``flight`` holds just after a landing whose
+    friction did not stop the contact point (its centre velocity and omega; D ``lost``), u zero."""
+    for q in range(zs.shape[0]):
+        zs[q] = 0.0
+    zs[0], zs[1] = x, y
+    for q in range(3):
+        zs[S_VELOCITY + q], zs[S_OMEGA + q] = flight[4 + q], flight[7 + q]
+    zs[S_DISSIPATED] = lost
+
+
+@INLINE_EXACT
+def slide_on(zs):
+    """A sliding state taken on as the start of the next sliding run (a slip that turned about at its
+    zero, ``ModeMachine.stopped``): its centre velocity, omega and D as they are, u zero."""
+    for q in range(S_DISSIPATED + 1, zs.shape[0]):
+        zs[q] = 0.0
+
+
+@INLINE_EXACT
+def grip_from(fn, d, p, zs, z):
+    """z, the rolling state a grip starts from: the sliding state zs's contact point and its angular
+    momentum about it (``settle``'s, from its centre velocity and omega); the energy dissipated into
+    p[P_DISSIPATED]."""
+    landscape(fn, zs[0], zs[1], data_pointer(d))
+    w = math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
+    n1, n2, n3 = -d[1] / w, -d[2] / w, 1.0 / w
+    r, m = p[0], p[1]
+    spin, arm = 0.4 * m * r * r, m * r
+    v1, v2, v3 = zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2]
+    for q in range(z.shape[0]):
+        z[q] = 0.0
+    z[0], z[1] = zs[0], zs[1]
+    z[2] = spin * zs[S_OMEGA] + arm * (n2 * v3 - n3 * v2)
+    z[3] = spin * zs[S_OMEGA + 1] + arm * (n3 * v1 - n1 * v3)
+    z[4] = spin * zs[S_OMEGA + 2] + arm * (n1 * v2 - n2 * v1)
+    p[P_DISSIPATED] = zs[S_DISSIPATED]
+
+
 @EXACT   # (its own arithmetic, the helpers' inlined, without fused multiply-adds)
 def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out, z, R, K, probe, rows, ints, info,
-                  work, acc, p, tape, flight, turned, flown, flown_rows, hints, tips, landed, refer, hit, times, guess,
-                  centers, feet, normals, distances, below, sampled, spacings, nearest, start_centers, start_feet,
-                  start_normals, start_distances, row_times, row_centers, row_velocities, row_feet, row_normals,
-                  row_distances, turn, d, bounds):
+                  work, zs, Ks, S, SE, SP, s_kind, s_exp, s_tol, acc, p, tape, flight, turned, flown, flown_rows,
+                  hints, tips, landed, refer, hit, times, guess, centers, feet, normals, distances, below, sampled,
+                  spacings, nearest, start_centers, start_feet, start_normals, start_distances, row_times,
+                  row_centers, row_velocities, row_feet, row_normals, row_distances, turn, d, bounds):
     """Run every run of a batch whose status is NOT_RUN, without the GIL; write its status and
     outcomes (O_T ... O_FLIES). Per run b: Z0[b] the initial motion state, PARAMS[b] the parameters
     (``parameters``), DT[b], T_END[b], N_STEPS[b] the fixed steps, BOUNCE[b] the restitution and the
     slowest rebound that flies (read where p[P_FLY] is 1); W, P the explicit method; tape the
     landscape's. A run the mode machine is to take has the status REFERRED. z (MOTION_SIZE), R, K,
     probe, rows (BATCH_ROWS), ints, info, work, acc (BATCH_ACCUMULATORS), p (P_SIZE): scratch; the
-    rest, a flight's (``bounces``: flight its state, turned its R, flown its out, flown_rows its rows)."""
+    rest, a flight's (``bounces``: flight its state, turned its R, flown its out, flown_rows its rows).
+
+    Where mu is finite (PARAMS' P_MU) z and K are a Munthe-Kaas rolling state's (MK_SIZE) and zs, Ks
+    a sliding one's (SLIDING_MK_SIZE), K and Ks with the stage rows of W and of the stiff pair S, SE,
+    SP (s_kind, s_exp, s_tol: ``advance``'s) too: a slip goes on sliding from the state there
+    (``slip_from``) and a grip rolling (``grip_from``), as the mode machine goes on
+    (``ModeMachine.stopped``), each kernel run's first row the last one's again, left out, and a
+    landing whose friction did not stop the contact point sliding (``land_sliding``); out's
+    O_FIRST_SLIP, O_FIRST_GRIP and O_SLIDES (1 where the run ends sliding). A change at the time
+    of the one before is the mode machine's (REFERRED)."""
     for b in range(Z0.shape[0]):
         if status[b] != NOT_RUN:
             continue
@@ -135,18 +205,23 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
             out[b, q] = math.nan
         acc[A_ROWS] = 0.0
         first_liftoff, landings, t_start = math.nan, 0.0, 0.0
+        first_slip, first_grip, changed, sliding, skip = math.nan, math.nan, -math.inf, False, 0
         code = RUNNING
-        while code == RUNNING:   # a kernel run from t_start, rolling
+        while code == RUNNING:   # a kernel run from t_start, rolling (or sliding)
             for q in range(ints.shape[0]):
                 ints[q] = 0
             for q in range(info.shape[0]):
                 info[q] = math.nan
             info[F_H] = DT[b]
-            first = 0
+            first = skip   # (after a slip or a grip, the first row is the last one's again)
             while ints[I_STATUS] == RUNNING:
                 # (np.int64: a literal int would compile advance anew for it)
-                advance(fn, W, P, p, DT[b], t_start, T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z, R,
-                        K, probe, rows, ints, info, work, EXPLICIT, W, W, P, np.int64(0), 0.0, 0.0)   # (no pair)
+                if sliding:
+                    advance(fn, W, P, p, DT[b], t_start, T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), zs,
+                            R, Ks, probe, rows, ints, info, work, EXPLICIT, S, SE, SP, s_kind, s_exp, s_tol)
+                else:
+                    advance(fn, W, P, p, DT[b], t_start, T_END[b], N_STEPS[b], np.int64(1), np.int64(BATCH_CHUNK), z,
+                            R, K, probe, rows, ints, info, work, EXPLICIT, S, SE, SP, s_kind, s_exp, s_tol)
                 count = ints[I_ROWS]
                 if count == 0:  # the initial state is not finite: nothing to report
                     break
@@ -157,14 +232,37 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
             if math.isnan(first_liftoff):
                 first_liftoff = info[F_LIFTOFF]
             code = ints[I_STATUS]
+            if code == TRANSITION and (ints[I_TRANSITION] == T_SLIP or ints[I_TRANSITION] == T_GRIP):
+                t = info[F_EVENT_T]
+                if t == changed or ints[I_ROWS] == 0:   # (changes at one time: the mode machine's to judge)
+                    code = REFERRED
+                    break
+                changed, skip = t, 1
+                if ints[I_TRANSITION] == T_GRIP:
+                    grip_from(fn, d, p, zs, z)
+                    sliding = False
+                    if math.isnan(first_grip):
+                        first_grip = t
+                elif sliding:
+                    slide_on(zs)
+                else:
+                    slip_from(probe, p, z, zs)
+                    sliding = True
+                    if math.isnan(first_slip):
+                        first_slip = t
+                t_start, code = t, RUNNING
+                if not T_END[b] - t > 1e-12 * T_END[b]:
+                    code = OK
+                continue
             if p[P_FLY] == 0.0 or code == OK:
                 break
             if not (code == TRANSITION and ints[I_TRANSITION] == T_LIFTOFF and info[F_LIFT_KINK] == 0.0
-                    and p[P_MU] == math.inf and first == 1
+                    and first == 1
                     and not near_tip(fn, d, rows[0, ROW_CONTACT], rows[0, ROW_CONTACT + 1], row_normals)):
                 code = REFERRED
                 break
             leave(rows[0], probe, flight, turned)
+            sliding = False
             lost = rows[0, ROW_DISSIPATED]
             how = BOUNCES_CONTINUE
             while how == BOUNCES_CONTINUE:
@@ -187,9 +285,13 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
                 code = REFERRED
             elif how != BOUNCES_SETTLED or not T_END[b] - flight[0] > 1e-12 * T_END[b]:
                 code = OK   # flying at the end, or settled at it
-            else:   # rolling on from the landing (mu inf: the contact point sticks)
-                settle(fn, d, p, flight, flown[4], flown[5], z)
-                p[P_DISSIPATED], t_start, code = lost, flight[0], RUNNING
+            else:   # on from the landing: rolling where the friction stopped the contact point, else sliding
+                sliding = flown[6] == 0.0
+                if sliding:
+                    land_sliding(flight, flown[4], flown[5], lost, zs)
+                else:
+                    settle(fn, d, p, flight, flown[4], flown[5], z)
+                p[P_DISSIPATED], t_start, code, skip = lost, flight[0], RUNNING, 0
         status[b] = code
         if code == REFERRED or acc[A_ROWS] == 0.0:
             continue
@@ -200,3 +302,4 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
         o[O_DRIFT] = max(high, low) / max(abs(acc[A_FIRST]), p[P_MG] * p[0], TINY)
         o[O_MIN_FORCE], o[O_MAX_SPEED], o[O_PATH] = acc[A_FORCE], acc[A_SPEED], acc[A_PATH]
         o[O_LANDINGS], o[O_FLIES] = landings, acc[A_FLYING]
+        o[O_FIRST_SLIP], o[O_FIRST_GRIP], o[O_SLIDES] = first_slip, first_grip, 1.0 if sliding else 0.0

@@ -62,7 +62,9 @@ ENTRIES = {
                          ("record_dt", FLOAT), ("rtol", FLOAT), ("atol", FLOAT), ("max_steps", INT), *RUN_ARRAYS),
     "advance_batch": (("fn", ADDRESS), ("W", MATRIX), ("P", MATRIX), ("Z0", MATRIX), ("PARAMS", MATRIX),
                       ("DT", VECTOR), ("T_END", VECTOR), ("N_STEPS", INTS), ("BOUNCE", MATRIX), ("status", INTS),
-                      ("out", MATRIX), *RUN_ARRAYS, ("acc", VECTOR), ("p", VECTOR), ("tape", MATRIX),
+                      ("out", MATRIX), *RUN_ARRAYS, ("zs", VECTOR), ("Ks", MATRIX), ("S", MATRIX), ("SE", MATRIX),
+                      ("SP", MATRIX), ("s_kind", INT), ("s_exp", FLOAT), ("s_tol", FLOAT), ("acc", VECTOR),
+                      ("p", VECTOR), ("tape", MATRIX),
                       *(("flight", VECTOR), ("turned", MATRIX), ("flown", VECTOR), ("flown_rows", MATRIX)),
                       *FLIGHT_SCRATCH),
     "evaluate_points": (("fn", ADDRESS), ("xs", VECTOR), ("ys", VECTOR), ("out", MATRIX), ("d", VECTOR)),
@@ -534,9 +536,13 @@ def grid_steps_before(t_start: float, spacing: float) -> int:
 # A run that flies (p[P_FLY] 1) whose contact only rolls (mu inf) and flies in vacuum goes on in the
 # batch loop as the mode machine goes on (``kernel.batch``): from a lift-off in the tangent plane,
 # the flights of ``bounces.bounces`` (BOUNCE[b]: the restitution and the slowest rebound that
-# flies), then rolling again from where the ball settles. Where the mode machine would do more
-# than that (a kink's or a tip's lift-off, a flight the search refers, a slip, a stop, a failure),
-# the loop stops the run with the status REFERRED: Python runs it through ``Simulation``.
+# flies), then rolling again from where the ball settles. A run whose mu is finite (in vacuum, no
+# couple that can stop it) is a Munthe-Kaas one (MK_SIZE, SLIDING_MK_SIZE while it slides) and
+# goes on from a slip sliding and from a grip rolling, its stiff stretches the stiff pair's, and
+# from a landing whose friction did not stop the contact point sliding, as the mode machine goes on.
+# Where the mode machine would do more than that (a kink's or a tip's lift-off, a flight the search
+# refers, changes at one time, a stop, a failure), the loop stops the run with the status REFERRED:
+# Python runs it through ``Simulation``.
 
 NOT_RUN = 11                  # a run of a batch not run yet (sweeps also mark refused runs, 10)
 REFERRED = 12                 # a run of a batch left to the mode machine (``Simulation``)
@@ -551,9 +557,10 @@ BATCH_ROWS = BATCH_CHUNK + 2  # the buffer: the last row folded, a chunk, a stop
 OUTCOMES = ("t_reached", "liftoff_time", "x_end", "y_end", "energy_drift", "min_normal_force",
             "max_speed", "path_length")
 O_T, O_LIFTOFF, O_X, O_Y, O_DRIFT, O_MIN_FORCE, O_MAX_SPEED, O_PATH = range(len(OUTCOMES))
-# The batch loop's out has two columns more: the landings, and 1 where the run ends in flight.
-O_LANDINGS, O_FLIES = len(OUTCOMES), len(OUTCOMES) + 1
-BATCH_OUT = len(OUTCOMES) + 2
+# The batch loop's out has five columns more: the landings, 1 where the run ends in flight, the
+# first slip's and the first grip's time (NaN: none) and 1 where the run ends sliding.
+O_LANDINGS, O_FLIES, O_FIRST_SLIP, O_FIRST_GRIP, O_SLIDES = range(len(OUTCOMES), len(OUTCOMES) + 5)
+BATCH_OUT = len(OUTCOMES) + 5
 # The liftoff's contact point is looked at on a ring of this radius (× (1 + |x| + |y|)) as the
 # mode machine looks for a tip there; unit normals on it this far apart leave the run to it.
 TIP_RING, TIP_SUSPECT = 1e-6, 5e-3

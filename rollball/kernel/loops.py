@@ -18,8 +18,8 @@ from .interface import (
     TRANSITION, T_GRIP, T_STIFF, F_EVENT_T, I_TRANSITION, P_STIFF, D_SIDE, I_DENSE, I_EVALS, I_HELD, PROBE_OMEGA,
     P_RESISTANCE, P_TURN, P_UNIT, T_REST, T_SIDE, MIN_STEP, EXIT_MARGIN, SLIP_TIME, TURN_SHARE, grid_steps_before)
 from .lowlevel import COLD, JIT
-from .physics import (couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size, slip_deceleration,
-                      spin_side, TURN_TIME, turning_point)
+from .physics import (SLOW_POWER, couple_sides, evaluate, motion_size, resisted_size, shape_of, sliding_size,
+                      slip_deceleration, slow_corrected, spin_side, TURN_TIME, turning_point)
 from .recording import _fail, hold, record, record_last, start
 from .steps import (MAX_FACTOR, MIN_FACTOR, NONFINITE_TRIES, SAFETY, accept, error_norm,
                     next_step_factor, take_step)
@@ -224,8 +224,18 @@ def resume(fn, d, p, h, P, theta, z, R, K, probe, ints, zn, Rn, pn):
 @JIT
 def slow_slip(p, rtol):
     """The slip speed below which an adaptive pair takes a slip's direction as the slow
-    motion's: sqrt(rtol) sqrt(g r), where that direction's error (of order |u| times its turning
-    rate over |B|) costs of order rtol in the speeds."""
+    motion's: rtol^SLOW_POWER sqrt(g r) where it is taken to first order in |u|
+    (``physics.slow_corrected``; ``physics.slow_lag`` says how far below), else sqrt(rtol) sqrt(g r)
+    (``first_slip``)."""
+    if slow_corrected(p):
+        return rtol ** SLOW_POWER * math.sqrt(p[2] * p[0])
+    return first_slip(p, rtol)
+
+
+@JIT
+def first_slip(p, rtol):
+    """sqrt(rtol) sqrt(g r): where the slip's direction taken as B's (its error of order |u| times
+    its turning rate over |B|) costs of order rtol in the speeds."""
     return math.sqrt(rtol * p[2] * p[0])
 
 
@@ -236,13 +246,13 @@ GRIP_SLIP = 100.0
 @JIT
 def grip_slip(p, rtol):
     """The most slip a grip located on an embedded pair's step may leave (``grip_left``): GRIP_SLIP
-    rtol sqrt(g r), at most ``slow_slip`` (the two meet at rtol 1e-4). Where a slip falls to 0, its
+    rtol sqrt(g r), at most ``first_slip`` (the two meet at rtol 1e-4). Where a slip falls to 0, its
     direction turns towards B's ever faster as |u| falls (with |B| below the friction's rate its
     derivatives grow as powers of 1/|u|), and a step that holds the zero passes it sideways by about
     what the grip leaves; the grip's time is then off by a share of that over the slip's rate. (Left
     up to ``slow_slip``, dop853 at rtol 1e-10 gripped a bowl thrown sideways with 1.6e-6 m/s left,
     4.4e-8 s late, where its tolerance allows about 1e-11 s.)"""
-    return min(slow_slip(p, rtol), GRIP_SLIP * rtol * math.sqrt(p[2] * p[0]))
+    return min(first_slip(p, rtol), GRIP_SLIP * rtol * math.sqrt(p[2] * p[0]))
 
 
 @JIT

@@ -390,9 +390,109 @@ def slip_deceleration(p, pe):
     return 3.5 * p[P_MU] * abs(pe[PROBE_FORCE]) / p[1]
 
 
+@JIT
+def slow_corrected(p):
+    """Whether a growing slip's slow direction is taken to first order in |u| (``slow_direction``),
+    its B a function of the state alone: no rolling resistance or spin friction (whose couples
+    turn with omega's own direction) and gravity to measure B's rate in. Else B-hat itself."""
+    return p[P_RESISTANCE] == 0.0 and p[P_SPIN] == 0.0 and p[P_UNIT] < math.inf
+
+
 # A slip speed below this fraction of the ball's speeds (|c'|, r |omega|) is zero: the slip of a
 # sliding run that starts from rolling, in round-off (its direction is then the one it starts in).
 SLIP_ZERO = 1e-12
+
+
+@JIT
+def slow_lag(p, slow, us, lag):
+    """Whether a growing slip of speed ``us`` below ``slow`` (``loops.slow_slip``: rtol^(1/4)
+    sqrt(g r)) whose slow direction lags B-hat by ``lag`` (rad, ``slow_direction``) is taken on
+    the slow motion: below sqrt(rtol g r), where B-hat itself would do, or where the lag is at
+    most rtol^LAG_POWER (the first-order direction's error is of the order of its square)."""
+    unit = math.sqrt(abs(p[2]) * p[0])
+    rtol = (slow / unit) ** (1.0 / SLOW_POWER)
+    return us < math.sqrt(rtol) * unit or lag <= rtol ** LAG_POWER
+
+
+# The slip speed below which an adaptive pair's slip may be on the slow motion where its direction is
+# taken to first order (``loops.slow_slip``), in units of sqrt(g r): rtol to this power
+SLOW_POWER = 0.25
+# The lag a slow slip's direction may have (``slow_lag``): rtol to this power
+LAG_POWER = 1.0 / 3.0
+
+# The time step (in units of sqrt(r/g)) of the difference that measures B's rate along the slow
+# motion (``slow_direction``): B varies on that unit, so its rate is good to about 1e-7 relative.
+SLOW_SHIFT = 1e-7
+
+
+@COLD
+def slow_direction(fn, d, p, z, a1, a2, fn_, f, n1, n2, n3, b1, b2, b3, bs, us):
+    """The direction of a growing slip of speed ``us`` on the slow motion (docs/design.md §8, "the
+    slip's direction where it is stiff"), to first order in us: its direction e relaxes towards B's
+    at the rate |B| / us while B turns, so it lags B-hat by the angle us |B-hat'| / (|B| + us'),
+    us' = |B| - a: e = B-hat - us P(B') / (|B| (2 |B| - a)), P the projection across B-hat in the
+    tangent plane, a = 7/2 f / m. B' is the difference of B (``slow_pull``) over SLOW_SHIFT
+    sqrt(r/g) along the motion whose slip points along B-hat. Returns e and the lag's angle.
+    Overwrites d's landscape values (the caller's to restore). Where the shifted state gives no
+    finite B, B-hat and an infinite lag."""
+    m, g0 = p[1], p[2]
+    s1, s2, s3 = b1 / bs, b2 / bs, b3 / bs
+    e = SLOW_SHIFT * p[P_UNIT]
+    q = 2.5 * f / p[4]
+    x, y = z[0] + e * a1, z[1] + e * a2
+    c1 = z[2] + e * (fn_ * n1 - f * s1) / m
+    c2 = z[3] + e * (fn_ * n2 - f * s2) / m
+    c3 = z[4] + e * ((fn_ * n3 - f * s3) / m - g0)
+    o1 = z[5] + e * q * (n2 * s3 - n3 * s2)
+    o2 = z[6] + e * q * (n3 * s1 - n1 * s3)
+    o3 = z[7] + e * q * (n1 * s2 - n2 * s1)
+    q1, q2, q3 = slow_pull(fn, d, p, x, y, c1, c2, c3, o1, o2, o3)
+    q1, q2, q3 = (q1 - b1) / e, (q2 - b2) / e, (q3 - b3) / e
+    qn = q1 * n1 + q2 * n2 + q3 * n3
+    q1, q2, q3 = q1 - qn * n1, q2 - qn * n2, q3 - qn * n3
+    qs = q1 * s1 + q2 * s2 + q3 * s3
+    q1, q2, q3 = q1 - qs * s1, q2 - qs * s2, q3 - qs * s3
+    k = us / (bs * max(2.0 * bs - 3.5 * f / m, bs))
+    t1, t2, t3 = s1 - k * q1, s2 - k * q2, s3 - k * q3
+    ts = math.sqrt(t1 * t1 + t2 * t2 + t3 * t3)
+    if not (ts > 0.0 and ts < math.inf):
+        return s1, s2, s3, math.inf
+    return t1 / ts, t2 / ts, t3 / ts, k * math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
+
+
+@JIT
+def slow_pull(fn, d, p, x, y, c1, c2, c3, o1, o2, o3):
+    """B, a sliding ball's slip acceleration with friction off in the tangent plane, at contact
+    point (x, y) with centre velocity c' and angular velocity omega, as ``sliding_dynamics`` has
+    it where no rolling couple acts: -r omega x N' alpha' - g z-hat, with the air's drag."""
+    r, m, g0 = p[0], p[1], p[2]
+    _, _, _, _, _, _, n1, n2, n3, _, _, d1, d2, d3 = sliding_contact(fn, d, r, x, y, c1, c2, c3)
+    air = -p[P_AIR] * math.sqrt(c1 * c1 + c2 * c2 + c3 * c3) / m
+    b1 = -r * (o2 * d3 - o3 * d2) + air * c1
+    b2 = -r * (o3 * d1 - o1 * d3) + air * c2
+    b3 = -g0 - r * (o1 * d2 - o2 * d1) + air * c3
+    bn = b1 * n1 + b2 * n2 + b3 * n3
+    return b1 - bn * n1, b2 - bn * n2, b3 - bn * n3
+
+
+@JIT
+def sliding_contact(fn, d, r, x, y, c1, c2, c3):
+    """The landscape at a sliding ball's contact point (x, y) (into d), its slopes and curvatures,
+    1 / sqrt(1 + fx² + fy²), the unit normal N, and for the centre velocity c' the contact point's
+    alpha' = E^-1 C'^T c' (2) and N' alpha' (3) (``frame``)."""
+    landscape(fn, x, y, data_pointer(d))
+    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
+    iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
+    n1, n2, n3 = -fx * iW, -fy * iW, iW
+    (Nx1, Nx2, Nx3, Ny1, Ny2, Ny3, Cx1, Cx2, Cx3, Cy1, Cy2, Cy3, E11, E12, E22,
+     idet) = frame(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3)
+    # alpha' = E^-1 C'^T c'
+    b1 = Cx1 * c1 + Cx2 * c2 + Cx3 * c3
+    b2 = Cy1 * c1 + Cy2 * c2 + Cy3 * c3
+    a1 = (E22 * b1 - E12 * b2) * idet
+    a2 = (E11 * b2 - E12 * b1) * idet
+    d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
+    return fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, a1, a2, d1, d2, d3
 
 
 @COLD  # (called, not inlined: the sliding steps are rarer than rolling's, and the kernel's code stays smaller)
@@ -412,20 +512,9 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     step's stages and dense output stay those of a smooth motion and the grip (u.u0 = 0) is
     located on them to the method's order (the run stops there)."""
     r, m, g0, mr, mu = p[0], p[1], p[2], p[4], p[P_MU]
-    landscape(fn, z[0], z[1], data_pointer(d))
-    fx, fy, fxx, fxy, fyy = d[1], d[2], d[3], d[4], d[5]
-    iW = 1.0 / math.sqrt(1.0 + fx * fx + fy * fy)
-    n1, n2, n3 = -fx * iW, -fy * iW, iW
     c1, c2, c3 = z[2], z[3], z[4]
     o1, o2, o3 = z[5], z[6], z[7]
-    (Nx1, Nx2, Nx3, Ny1, Ny2, Ny3, Cx1, Cx2, Cx3, Cy1, Cy2, Cy3, E11, E12, E22,
-     idet) = frame(r, fx, fy, fxx, fxy, fyy, iW, n1, n2, n3)
-    # alpha' = E^-1 C'^T c'
-    b1 = Cx1 * c1 + Cx2 * c2 + Cx3 * c3
-    b2 = Cy1 * c1 + Cy2 * c2 + Cy3 * c3
-    a1 = (E22 * b1 - E12 * b2) * idet
-    a2 = (E11 * b2 - E12 * b1) * idet
-    d1, d2, d3 = Nx1 * a1 + Ny1 * a2, Nx2 * a1 + Ny2 * a2, Nx3 * a1 + Ny3 * a2
+    fx, fy, fxx, fxy, fyy, iW, n1, n2, n3, a1, a2, d1, d2, d3 = sliding_contact(fn, d, r, z[0], z[1], c1, c2, c3)
     fn_ = m * (g0 * n3 - (d1 * c1 + d2 * c2 + d3 * c3))   # F_n = m (-(N' alpha').c' - N.g)
     n = K.shape[1]
     resisted = resisted_size(n)
@@ -475,12 +564,22 @@ def sliding_dynamics(fn, d, p, z, mk, K, row, probe, full):
     rn = r1 * n1 + r2 * n2 + r3 * n3   # (held in the tangent plane here, which turns within the step)
     r1, r2, r3 = r1 - rn * n1, r2 - rn * n2, r3 - rn * n3
     rn = math.sqrt(r1 * r1 + r2 * r2 + r3 * r3)
-    if (zero or (us < slow and (rn == 0.0 or bs * m > 3.5 * f))) and bs > 0.0:
+    slows = (zero or (us < slow and (rn == 0.0 or bs * m > 3.5 * f))) and bs > 0.0
+    s1, s2, s3 = 0.0, 0.0, 0.0
+    if slows and not zero and slow < math.inf and slow_corrected(p):
+        # to first order in |u|, where its lag behind B-hat is small enough (``slow_lag``)
+        h0 = d[0]
+        s1, s2, s3, lag = slow_direction(fn, d, p, z, a1, a2, fn_, f, n1, n2, n3, b1, b2, b3, bs, us)
+        d[0], d[1], d[2], d[3], d[4], d[5] = h0, fx, fy, fxx, fxy, fyy
+        slows = slow_lag(p, slow, us, lag)
+    elif slows:
+        s1, s2, s3 = b1 / bs, b2 / bs, b3 / bs
+    if slows:
         # a slip starting (zero at the step's start, or growing while its direction is stiff, the
         # adaptive pairs): its direction relaxes towards B's at the rate |B| / |u| and then turns
-        # with it; taken as B's direction at this state (the slow motion the exact one follows),
-        # smooth through the step (docs/design.md §8, "the slip's direction where it is stiff")
-        s1, s2, s3 = b1 / bs, b2 / bs, b3 / bs
+        # with it; taken as the slow motion's the exact one follows (B's direction at this state,
+        # or ``slow_direction``), smooth through the step (docs/design.md §8, "the slip's direction
+        # where it is stiff")
         us = u1 * s1 + u2 * s2 + u3 * s3
     elif not zero:
         side = us

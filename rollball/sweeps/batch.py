@@ -3,9 +3,9 @@
 ``run(task)`` is what a local thread or a Dask worker executes: it validates the varied
 scenes, computes the initial states for the whole batch at once and runs them all in one
 call of the compiled batch loop (``kernel.batch.advance_batch``, which releases the GIL): the
-2011 model's runs, and those of a ball that rolls and flies in vacuum; a run the loop leaves to
-the mode machine, and every run of a scene whose ball can slip or come to rest, goes through
-``Simulation`` (``run_one``). The same
+2011 model's runs, and those of a ball that rolls, slips, grips and flies in vacuum; a run the
+loop leaves to the mode machine, and every run of a scene whose ball can come to rest (or starts
+with an omega that slips), goes through ``Simulation`` (``run_one``). The same
 batch gives the same numbers bit for bit wherever it runs. A process compiles the landscape once, on its
 first batch, and keeps it for the rest.
 """
@@ -25,6 +25,7 @@ from ..flight import KEPT_ROWS, bounce_scratch, rest_speed
 from ..modes import FLYING, ROLLING, SLIDING, Change
 from ..run_size import step_count
 from ..scene import Scene, SceneError
+from ..mode_machine import FRICTION_CAP, STIFF_METHOD, stiff_tolerance
 from ..simulation import Simulation, initial_momentum
 from ..tableaus import METHODS, MethodKind, get_method
 from ..trajectory import CENTER, VELOCITY, Status
@@ -64,9 +65,10 @@ class Result:
 
 
 def _columns(scene: Scene, grid: Grid, values: np.ndarray) -> dict[str, np.ndarray]:
-    """Every key's value per run the batch loop reads: the varied column or the scene's own value."""
+    """Every key's value per run the batch loop reads: the varied column or the scene's own value
+    (a null friction inf)."""
     keys = [key for key in KEYS if not key.startswith(CONTACT_PREFIX) and key not in DISSIPATION_KEYS]
-    keys.append(RESTITUTION)
+    keys += [RESTITUTION, FRICTION]
     keys += [PARAMETER_PREFIX + name for name in scene.parameter_names]
     return {key: values[:, grid.keys.index(key)] if key in grid.keys else np.full(len(values), value_of(scene, key))
             for key in keys}
@@ -122,7 +124,7 @@ def _landscape(scene: Scene):
 
 
 CONTACT_PREFIX = "contact."
-RESTITUTION = "contact.restitution"   # (the one contact key the batch loop reads: its runs' friction is null)
+RESTITUTION, FRICTION = "contact.restitution", "contact.friction"   # (the contact keys the batch loop reads)
 
 
 # Keys that give a rolling ball a loss of energy, and so a rest (scene version 4).
@@ -145,10 +147,16 @@ def changes_mode(scene: Scene, keys=()) -> bool:
 
 def compiled(scene: Scene, keys=()) -> bool:
     """Whether the batch loop runs the runs itself (``kernel.batch``): the 2011 model, or a ball
-    that only rolls and flies in vacuum (friction null and not varied, no dissipation); else each
-    run goes through ``Simulation``. (The loop leaves a run it cannot finish so to ``Simulation``
-    too: REFERRED.)"""
-    return not _slips_or_rests(scene, keys)
+    that rolls, slips, grips and flies in vacuum (no dissipation, a start that rolls); else each run
+    goes through ``Simulation``. (The loop leaves a run it cannot finish so to ``Simulation`` too:
+    REFERRED.)"""
+    rests = scene.dissipates or any(key in DISSIPATION_KEYS for key in keys)
+    return not rests and (scene.start.omega is None or not _slips(scene, keys))
+
+
+def _slips(scene: Scene, keys=()) -> bool:
+    """Whether the runs' ball can slip: a friction, or one varied."""
+    return scene.contact.friction is not None or FRICTION in keys
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
@@ -211,16 +219,23 @@ def run(task: Task) -> Result:
     sets, of_set = np.unique(parameter_values, axis=0, return_inverse=True)
     of_set = of_set.ravel()
     r, m = c["ball.radius"], c["ball.mass"]
+    # (a ball that can slip: Munthe-Kaas states, as ``Simulation``'s, whose stiff stretches the pair takes)
+    slips = _slips(scene, grid.keys)
+    size = kernel.MK_SIZE if slips else kernel.MOTION_SIZE
     with np.errstate(all="ignore"):  # refused runs may hold any value; they are not run
-        z0 = np.empty((runs, kernel.MOTION_SIZE))
+        z0 = np.zeros((runs, size))
         z0[:, 0], z0[:, 1] = c["start.x"], c["start.y"]
         for k, values_k in enumerate(sets):
             these = of_set == k
             d = landscape.evaluate(c["start.x"][these], c["start.y"][these], values_k)
             z0[these, 2:5] = initial_momentum(d, c["start.vx"][these], c["start.vy"][these], c["start.spin"][these],
                                               r[these], m[these]).T
-        flies = changes_mode(scene, grid.keys)   # (as ``Simulation`` gives a run whose contact changes mode)
-        p = np.ascontiguousarray(kernel.parameters(r, m, c["gravity"], fly=flies, stiff=flies).T)
+        # (as ``Simulation._parameters`` gives a run whose contact changes mode)
+        segmented, flies = changes_mode(scene, grid.keys), scene.contact.after_liftoff == "fly"
+        mu = c[FRICTION]   # (``mode_machine.friction_of``: inf, or at most FRICTION_CAP)
+        friction = np.where(mu < np.inf, np.minimum(mu, FRICTION_CAP), np.inf)
+        p = np.ascontiguousarray(kernel.parameters(r, m, c["gravity"], friction=friction, fly=flies,
+                                                   stiff=segmented).T)
         restitution = c[RESTITUTION]
         bounce = np.stack([restitution, rest_speed(r, c["gravity"])], axis=1)
     dt, t_end = c["integrator.dt"], c["duration"]
@@ -235,6 +250,11 @@ def run(task: Task) -> Result:
                 pass
     outcomes = np.full((runs, kernel.BATCH_OUT), np.nan)   # the batch loop's
     W, _, D = method.kernel_arrays()
+    S, SE, SP = METHODS[STIFF_METHOD].kernel_arrays()
+    stages = max(len(W), len(S)) if slips else len(W)
+    stiff = dict(zs=np.zeros(kernel.SLIDING_MK_SIZE), Ks=np.zeros((kernel.stage_rows(stages), kernel.SLIDING_MK_SIZE)),
+                 S=S, SE=SE, SP=SP, s_kind=len(SE) - 1, s_exp=METHODS[STIFF_METHOD].error_exponent,
+                 s_tol=stiff_tolerance(scene.contact))
     tape = landscape.tape
     flight = dict(tape=tape, flight=np.empty(10), turned=np.empty((3, 3)), flown=np.empty(kernel.OUT_BOUNCES),
                   flown_rows=np.empty((KEPT_ROWS, kernel.ROW_SIZE)), **bounce_scratch(len(tape)))
@@ -247,16 +267,19 @@ def run(task: Task) -> Result:
         machine_code.call("advance_batch", fn=record.ctypes.data, W=W, P=D, Z0=part(z0), PARAMS=part(p),
                           DT=part(np.ascontiguousarray(dt)), T_END=part(np.ascontiguousarray(t_end)),
                           N_STEPS=part(n_steps), BOUNCE=part(bounce), status=part_status, out=part_outcomes,
-                          acc=np.empty(kernel.BATCH_ACCUMULATORS), p=np.empty(kernel.P_SIZE), **flight,
-                          **kernel.run_arrays(kernel.MOTION_SIZE, len(W), kernel.BATCH_ROWS))
+                          acc=np.empty(kernel.BATCH_ACCUMULATORS), p=np.empty(kernel.P_SIZE), **flight, **stiff,
+                          **kernel.run_arrays(size, stages, kernel.BATCH_ROWS))
         if not whole:
             status[these], outcomes[these] = part_status, part_outcomes
-    # the batch loop's runs roll, and fly (no slip, no rest): the contact's outcomes from its columns
+    # the batch loop's runs roll, slip, grip and fly (no rest): the contact's outcomes from its columns
     done = status != INVALID
-    flying = outcomes[:, kernel.O_FLIES] == 1.0
+    flying, sliding = outcomes[:, kernel.O_FLIES] == 1.0, outcomes[:, kernel.O_SLIDES] == 1.0
     contact = np.full((runs, len(OUTCOMES) - len(kernel.OUTCOMES)), np.nan)
-    contact[done, O_END_MODE - len(kernel.OUTCOMES)] = np.where(flying[done], FLYING, ROLLING)
-    contact[done, O_LANDINGS - len(kernel.OUTCOMES)] = outcomes[done, kernel.O_LANDINGS]
+    contact[done, O_END_MODE - len(kernel.OUTCOMES)] = np.where(flying[done], FLYING,
+                                                                np.where(sliding[done], SLIDING, ROLLING))
+    for column, of in ((O_LANDINGS, kernel.O_LANDINGS), (O_FIRST_SLIP, kernel.O_FIRST_SLIP),
+                       (O_FIRST_GRIP, kernel.O_FIRST_GRIP)):
+        contact[done, column - len(kernel.OUTCOMES)] = outcomes[done, of]
     outcomes = np.column_stack([outcomes[:, :len(kernel.OUTCOMES)], contact])
     # the runs it left to the mode machine
     _run_each(scene, grid, values, np.flatnonzero(status == kernel.REFERRED), status, outcomes)

@@ -1,9 +1,9 @@
 """What a sweep reports per run: its status and a row of outcomes.
 
-The runs of the 2011 model, and of a ball that rolls and flies in vacuum, are the kernel's
-(``kernel.batch.advance_batch``: each run stepped by ``simulate``'s own fixed-step loop, its
-flights by the mode machine's, in batches without the GIL); a scene whose contact can slip or
-come to rest runs each run through ``Simulation`` (``batch.run``). Here are the names of the outcomes and
+The runs of the 2011 model, and of a ball that rolls, slips, grips and flies in vacuum, are the
+kernel's (``kernel.batch.advance_batch``: each run stepped by ``simulate``'s own fixed-step loop,
+its flights by the mode machine's, in batches without the GIL); a scene whose ball can come to
+rest runs each run through ``Simulation`` (``batch.run``). Here are the names of the outcomes and
 the statuses a sweep adds to the kernel's.
 """
 
