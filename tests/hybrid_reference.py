@@ -22,7 +22,7 @@ is closed form (c a parabola, ω constant); the landing is the first root of the
 dist(c(t), surface) − r, the distance by Newton's method on the foot, found by brentq. The
 impact is an impulse at the contact (normal: u_n → −e u_n; tangential: sticking if
 |(2/7) m u_t| ≤ μ J_n, else J_t = −μ J_n û_t); a rebound slower than v_rest = √(2 g₀ 10⁻⁶ r)
-stays in contact.
+stays in contact. A start where F_n < 0 (the surface cannot hold the ball) lifts off at t = 0.
 
 ``reference(scene, t_end, times)`` returns a ``HybridReference``; the solution of a scene is
 computed once per process (cached by the scene's JSON and t_end). ``python tests/hybrid_reference.py``
@@ -433,6 +433,9 @@ def solve(scene_json: str, t_end: float) -> _Solution:
             mode = ONSET
     else:
         mode = SLIDING
+    if model.contact_terms(s)[1] < 0.0:   # F_n < 0: the surface cannot hold the ball, which leaves it at once
+        sol.transitions.append(Transition(0.0, "liftoff", st.x, st.y))
+        mode = FLYING
     t = 0.0
     while t < t_end:
         if mode == FLYING:

@@ -140,6 +140,23 @@ def test_reference_cylinder_lifts_off_at_ten_seventeenths():
     assert abs(dt) < 1e-10 and abs(dx) < 1e-11 and abs(dv) < 1e-11
 
 
+def test_reference_leaves_at_once_a_surface_that_cannot_hold_the_ball_at_the_start():
+    """A start on a crest faster than the surface can hold (F_n < 0): a lift-off at t = 0 and a
+    flight, as RollBall has it (held-out scene of 2 December, where the reference slid on glued to
+    the surface and gripped 0.368 s in while RollBall flew 0.23 m away); both land and grip at the
+    same times (measured: within 3e-15 s, the centre at the end within 8e-13 m)."""
+    scene = Scene(landscape="-0.59*(1 + tanh(0.77*5*x)) + 0.18*y",
+                  start=Start(x=-0.33, y=-0.19, vx=1.82, vy=-0.31, omega=(-7.5, -7.6, 0.7)),
+                  contact=Contact(friction=0.5, restitution=0.0))
+    ref = reference(scene, 1.0, [1.0])
+    run = simulate(scene, method="dop853", rtol=1e-12, atol=1e-12, t_end=1.0)
+    assert [c.kind for c in ref.transitions] == [c.kind for c in run.transitions] == ["liftoff", "landing", "grip"]
+    assert ref.transitions[0].time == run.transitions[0].time == 0.0
+    for mine, theirs in zip(run.transitions[1:], ref.transitions[1:]):
+        assert abs(mine.time - theirs.time) < 1e-12, (mine, theirs)
+    assert np.linalg.norm(run.center[-1] - ref.center[0]) < 1e-10
+
+
 def test_reference_keeps_the_centre_on_its_contact_point():
     """c is integrated, and α carried with it: they stay consistent (c = C(α)) at every segment's end."""
     for name, (scene, t_end) in SCENES.items():
