@@ -180,6 +180,8 @@ class SweepDialog(QtWidgets.QDialog):
         self.plot.setBackground("w")
         self.plot_item = self.plot.addPlot(row=0, col=0)
         self.plot_item.showGrid(x=True, y=True, alpha=0.2)
+        for side in ("left", "bottom"):   # (the labels carry the units: no "(x0.001)" scale on a friction's 0.1–0.6)
+            self.plot_item.getAxis(side).enableAutoSIPrefix(False)
         self.image = pg.ImageItem(axisOrder="row-major")
         self.curve = pg.PlotDataItem(symbol="o", symbolSize=5, pen=pg.mkPen("#1f77b4"))
         self.colorbar = pg.ColorBarItem(colorMap=pg.colormap.get("viridis"), interactive=False, width=14)

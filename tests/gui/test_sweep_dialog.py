@@ -142,6 +142,9 @@ def test_friction_and_restitution_are_swept_with_their_own_ranges(qtbot, window)
     table = dialog.table
     assert table.keys == ("contact.friction",) and table.done.all() and set(table["status"]) == {"ok"}
     np.testing.assert_array_equal(table["first_slip_time"], 0.0)   # struck without spin: it slides at once
+    # the axes read the friction's own values, 0.1 to 0.4 (no "(x0.001)" and ticks 100 to 400)
+    bottom = dialog.plot_item.getAxis("bottom")
+    assert "x0." not in bottom.labelString() and bottom.scale == 1.0
     dialog.close()
 
 
