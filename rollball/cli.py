@@ -153,8 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "(default liftoff_time; basin: a colour per minimum)")
     where = sweep.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_positive_int, metavar="N",
-                       help="local workers (default: every core): threads, or processes for the "
-                            "runs whose contact changes mode")
+                       help="local workers (default: every core): threads, or processes for "
+                            "runs that can come to rest (each one a Simulation)")
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
                             "(needs pip install 'rollball[dask]')")
