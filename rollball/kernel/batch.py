@@ -93,80 +93,49 @@ def leave(row, probe, flight, turned):
 
 
 @INLINE_EXACT
-def settle(fn, d, p, flight, x, y, z):
-    """z for rolling on from (x, y) in the state ``flight`` holds just after a landing (t, centre, ċ,
-    ω): the angular momentum about the contact point, (2/5) m r² ω + m r N × ċ
-    (``sliding.BallState.momentum``, N the unit normal there)."""
+def rolling_from(fn, d, p, x, y, v1, v2, v3, o1, o2, o3, z):
+    """z for rolling on from (x, y) with centre velocity v and angular velocity omega (a landing, a
+    grip): the angular momentum about the contact point, (2/5) m r² omega + m r N × v
+    (``sliding.BallState.momentum``, N the unit normal there), u zero."""
     landscape(fn, x, y, data_pointer(d))
     w = math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
     n1, n2, n3 = -d[1] / w, -d[2] / w, 1.0 / w
     r, m = p[0], p[1]
     spin, arm = 0.4 * m * r * r, m * r
-    v1, v2, v3 = flight[4], flight[5], flight[6]
+    for q in range(z.shape[0]):
+        z[q] = 0.0
     z[0], z[1] = x, y
-    z[2] = spin * flight[7] + arm * (n2 * v3 - n3 * v2)
-    z[3] = spin * flight[8] + arm * (n3 * v1 - n1 * v3)
-    z[4] = spin * flight[9] + arm * (n1 * v2 - n2 * v1)
+    z[2] = spin * o1 + arm * (n2 * v3 - n3 * v2)
+    z[3] = spin * o2 + arm * (n3 * v1 - n1 * v3)
+    z[4] = spin * o3 + arm * (n1 * v2 - n2 * v1)
+
+
+@INLINE_EXACT
+def sliding_from(x, y, v1, v2, v3, o1, o2, o3, dissipated, zs):
+    """zs for sliding on from (x, y) with centre velocity v, angular velocity omega and the energy
+    dissipated so far (a slip, a landing whose friction did not stop the contact point), u zero
+    (``sliding.start_arrays``)."""
+    for q in range(zs.shape[0]):
+        zs[q] = 0.0
+    zs[0], zs[1] = x, y
+    zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2] = v1, v2, v3
+    zs[S_OMEGA], zs[S_OMEGA + 1], zs[S_OMEGA + 2] = o1, o2, o3
+    zs[S_DISSIPATED] = dissipated
 
 
 @INLINE_EXACT
 def slip_from(probe, p, z, zs):
-    """zs, the sliding state a slip starts from (``sliding.stopped_state`` and ``start_arrays``): the
-    rolling state z's contact point, its omega = 5 / (7 m r²) (v + 5/2 (N.v) N) (``rolling_omega``,
-    N the probe's), the centre velocity r omega x N and the energy dissipated before, u zero."""
+    """zs, the sliding state a slip starts from (``sliding.stopped_state``): the rolling state z's
+    contact point, its omega = 5 / (7 m r²) (v + 5/2 (N.v) N) (``rolling_omega``, N the probe's),
+    the centre velocity r omega x N and the energy dissipated before."""
     n1, n2, n3 = probe[PROBE_N], probe[PROBE_N + 1], probe[PROBE_N + 2]
     r, m = p[0], p[1]
     v1, v2, v3 = z[2], z[3], z[4]
     k = 5.0 / (7.0 * m * r * r)
     along = 2.5 * (n1 * v1 + n2 * v2 + n3 * v3)
     o1, o2, o3 = k * (v1 + along * n1), k * (v2 + along * n2), k * (v3 + along * n3)
-    for q in range(zs.shape[0]):
-        zs[q] = 0.0
-    zs[0], zs[1] = z[0], z[1]
-    zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2] = (r * (o2 * n3 - o3 * n2), r * (o3 * n1 - o1 * n3),
-                                                              r * (o1 * n2 - o2 * n1))
-    zs[S_OMEGA], zs[S_OMEGA + 1], zs[S_OMEGA + 2] = o1, o2, o3
-    zs[S_DISSIPATED] = p[P_DISSIPATED]
-
-
-@INLINE_EXACT
-def land_sliding(flight, x, y, lost, zs):
-    """zs for sliding on from (x, y) in the state ``flight`` holds just after a landing whose
-    friction did not stop the contact point (its centre velocity and omega; D ``lost``), u zero."""
-    for q in range(zs.shape[0]):
-        zs[q] = 0.0
-    zs[0], zs[1] = x, y
-    for q in range(3):
-        zs[S_VELOCITY + q], zs[S_OMEGA + q] = flight[4 + q], flight[7 + q]
-    zs[S_DISSIPATED] = lost
-
-
-@INLINE_EXACT
-def slide_on(zs):
-    """A sliding state taken on as the start of the next sliding run (a slip that turned about at its
-    zero, ``ModeMachine.stopped``): its centre velocity, omega and D as they are, u zero."""
-    for q in range(S_DISSIPATED + 1, zs.shape[0]):
-        zs[q] = 0.0
-
-
-@INLINE_EXACT
-def grip_from(fn, d, p, zs, z):
-    """z, the rolling state a grip starts from: the sliding state zs's contact point and its angular
-    momentum about it (``settle``'s, from its centre velocity and omega); the energy dissipated into
-    p[P_DISSIPATED]."""
-    landscape(fn, zs[0], zs[1], data_pointer(d))
-    w = math.sqrt(1.0 + d[1] * d[1] + d[2] * d[2])
-    n1, n2, n3 = -d[1] / w, -d[2] / w, 1.0 / w
-    r, m = p[0], p[1]
-    spin, arm = 0.4 * m * r * r, m * r
-    v1, v2, v3 = zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2]
-    for q in range(z.shape[0]):
-        z[q] = 0.0
-    z[0], z[1] = zs[0], zs[1]
-    z[2] = spin * zs[S_OMEGA] + arm * (n2 * v3 - n3 * v2)
-    z[3] = spin * zs[S_OMEGA + 1] + arm * (n3 * v1 - n1 * v3)
-    z[4] = spin * zs[S_OMEGA + 2] + arm * (n1 * v2 - n2 * v1)
-    p[P_DISSIPATED] = zs[S_DISSIPATED]
+    sliding_from(z[0], z[1], r * (o2 * n3 - o3 * n2), r * (o3 * n1 - o1 * n3), r * (o1 * n2 - o2 * n1), o1, o2, o3,
+                 p[P_DISSIPATED], zs)
 
 
 @EXACT   # (its own arithmetic, the helpers' inlined, without fused multiply-adds)
@@ -186,9 +155,9 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
     Where mu is finite (PARAMS' P_MU) z and K are a Munthe-Kaas rolling state's (MK_SIZE) and zs, Ks
     a sliding one's (SLIDING_MK_SIZE), K and Ks with the stage rows of W and of the stiff pair S, SE,
     SP (s_kind, s_exp, s_tol: ``advance``'s) too: a slip goes on sliding from the state there
-    (``slip_from``) and a grip rolling (``grip_from``), as the mode machine goes on
+    (``slip_from``) and a grip rolling (``rolling_from``), as the mode machine goes on
     (``ModeMachine.stopped``), each kernel run's first row the last one's again, left out, and a
-    landing whose friction did not stop the contact point sliding (``land_sliding``); out's
+    landing whose friction did not stop the contact point sliding (``sliding_from``); out's
     O_FIRST_SLIP, O_FIRST_GRIP and O_SLIDES (1 where the run ends sliding). A change at the time
     of the one before is the mode machine's (REFERRED)."""
     for b in range(Z0.shape[0]):
@@ -238,13 +207,15 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
                     code = REFERRED
                     break
                 changed, skip = t, 1
-                if ints[I_TRANSITION] == T_GRIP:
-                    grip_from(fn, d, p, zs, z)
-                    sliding = False
+                if ints[I_TRANSITION] == T_GRIP:   # (rolling on with the slide's D, as a landing's)
+                    rolling_from(fn, d, p, zs[0], zs[1], zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2],
+                                 zs[S_OMEGA], zs[S_OMEGA + 1], zs[S_OMEGA + 2], z)
+                    p[P_DISSIPATED], sliding = zs[S_DISSIPATED], False
                     if math.isnan(first_grip):
                         first_grip = t
-                elif sliding:
-                    slide_on(zs)
+                elif sliding:   # (a slip that turned about at its zero slides on as it is)
+                    sliding_from(zs[0], zs[1], zs[S_VELOCITY], zs[S_VELOCITY + 1], zs[S_VELOCITY + 2], zs[S_OMEGA],
+                                 zs[S_OMEGA + 1], zs[S_OMEGA + 2], zs[S_DISSIPATED], zs)
                 else:
                     slip_from(probe, p, z, zs)
                     sliding = True
@@ -288,9 +259,11 @@ def advance_batch(fn, W, P, Z0, PARAMS, DT, T_END, N_STEPS, BOUNCE, status, out,
             else:   # on from the landing: rolling where the friction stopped the contact point, else sliding
                 sliding = flown[6] == 0.0
                 if sliding:
-                    land_sliding(flight, flown[4], flown[5], lost, zs)
+                    sliding_from(flown[4], flown[5], flight[4], flight[5], flight[6], flight[7], flight[8], flight[9],
+                                 lost, zs)
                 else:
-                    settle(fn, d, p, flight, flown[4], flown[5], z)
+                    rolling_from(fn, d, p, flown[4], flown[5], flight[4], flight[5], flight[6], flight[7], flight[8],
+                                 flight[9], z)
                 p[P_DISSIPATED], t_start, code, skip = lost, flight[0], RUNNING, 0
         status[b] = code
         if code == REFERRED or acc[A_ROWS] == 0.0:

@@ -132,10 +132,18 @@ DISSIPATION_KEYS = ("contact.rolling_resistance", "contact.spin_friction", "air.
 
 
 def _slips_or_rests(scene: Scene, keys=()) -> bool:
-    """Whether the runs' ball can slip (a friction, or one varied) or come to rest (a dissipation,
-    or one varied)."""
-    return (scene.contact.friction is not None or "contact.friction" in keys or scene.dissipates
-            or any(key in DISSIPATION_KEYS for key in keys))
+    """Whether the runs' ball can slip (``_slips``) or come to rest (``_rests``)."""
+    return _slips(scene, keys) or _rests(scene, keys)
+
+
+def _slips(scene: Scene, keys=()) -> bool:
+    """Whether the runs' ball can slip: a friction, or one varied."""
+    return scene.contact.friction is not None or FRICTION in keys
+
+
+def _rests(scene: Scene, keys=()) -> bool:
+    """Whether the runs' ball can come to rest: a dissipation, or one varied."""
+    return scene.dissipates or any(key in DISSIPATION_KEYS for key in keys)
 
 
 def changes_mode(scene: Scene, keys=()) -> bool:
@@ -150,13 +158,7 @@ def compiled(scene: Scene, keys=()) -> bool:
     that rolls, slips, grips and flies in vacuum (no dissipation, a start that rolls); else each run
     goes through ``Simulation``. (The loop leaves a run it cannot finish so to ``Simulation`` too:
     REFERRED.)"""
-    rests = scene.dissipates or any(key in DISSIPATION_KEYS for key in keys)
-    return not rests and (scene.start.omega is None or not _slips(scene, keys))
-
-
-def _slips(scene: Scene, keys=()) -> bool:
-    """Whether the runs' ball can slip: a friction, or one varied."""
-    return scene.contact.friction is not None or FRICTION in keys
+    return not _rests(scene, keys) and (scene.start.omega is None or not _slips(scene, keys))
 
 
 _CODES = {Status.OK: kernel.OK, Status.DOES_NOT_FIT: kernel.DOES_NOT_FIT, Status.NONFINITE: kernel.NONFINITE}
